@@ -1,0 +1,108 @@
+// Speed figures of the simulator and the planners (README: "Figures").
+//   ./build/release/overtake_bench                       all
+//   ./build/release/overtake_bench --benchmark_filter=WorldStep
+
+#include <benchmark/benchmark.h>
+
+#include <memory>
+
+#include "overtake/app/commands.hpp"
+#include "overtake/core/units.hpp"
+#include "overtake/planner/policy.hpp"
+#include "overtake/sim/world.hpp"
+
+namespace {
+
+using namespace overtake;
+
+const app::Track& default_track() {
+  static const auto track = app::load_track(std::nullopt);
+  return *track;
+}
+
+// A path along the middle lane at a steady 21 m/s, `n` points from the ego's position.
+std::vector<core::Vec2> lane_path(const sim::World& w, int n) {
+  std::vector<core::Vec2> path;
+  const double s0 = w.ego().frenet.s_m;
+  for (int i = 1; i <= n; ++i) path.push_back(w.line().to_cartesian({s0 + 0.42 * i, 6.0}));
+  return path;
+}
+
+// One world step: 12 cars decide and move, the ego moves, collisions, the referee.
+void BM_WorldStep(benchmark::State& state) {
+  const auto& track = default_track();
+  const app::Config config = app::default_config();
+  const auto profile = state.range(0) == 0 ? sim::TrafficProfile::faithful : sim::TrafficProfile::calm;
+  sim::World world(track.map, track.line, config.world, profile, 1);
+  world.apply_path(lane_path(world, 1000));
+  for (auto _ : state) {
+    if (world.queue().size() < 3) {
+      state.PauseTiming();
+      world.apply_path(lane_path(world, 1000));
+      state.ResumeTiming();
+    }
+    world.step();
+  }
+  state.SetItemsProcessed(state.iterations());
+  state.SetLabel(state.range(0) == 0 ? "faithful" : "calm");
+}
+BENCHMARK(BM_WorldStep)->Arg(0)->Arg(1);
+
+// The telemetry snapshot a planner gets each cycle (with wire rounding).
+void BM_Telemetry(benchmark::State& state) {
+  const auto& track = default_track();
+  sim::World world(track.map, track.line, app::default_config().world, sim::TrafficProfile::faithful, 1);
+  world.apply_path(lane_path(world, 50));
+  for (auto _ : state) benchmark::DoNotOptimize(world.telemetry());
+}
+BENCHMARK(BM_Telemetry);
+
+// Projection of a point onto the reference line, with and without a hint.
+void BM_ToFrenet(benchmark::State& state) {
+  const auto& line = default_track().line;
+  const bool hinted = state.range(0) != 0;
+  double s = 100.0;
+  for (auto _ : state) {
+    const core::Vec2 p = line.to_cartesian({s, 6.0});
+    benchmark::DoNotOptimize(hinted ? line.to_frenet(p, s - 0.4) : line.to_frenet(p));
+    s += 7.3;
+    if (s > line.length_m()) s -= line.length_m();
+  }
+  state.SetLabel(hinted ? "hinted" : "global");
+}
+BENCHMARK(BM_ToFrenet)->Arg(1)->Arg(0);
+
+// One walkthrough planning cycle on a live telemetry.
+void BM_WalkthroughPlan(benchmark::State& state) {
+  const auto& track = default_track();
+  const app::Config config = app::default_config();
+  sim::World world(track.map, track.line, config.world, sim::TrafficProfile::faithful, 1);
+  auto policy = planner::make_policy("walkthrough", track.line, config.planner);
+  for (int i = 0; i < 500; ++i) {  // get up to speed so that the path is reused
+    world.apply_path(policy->plan(world.telemetry()));
+    world.step();
+    world.step();
+  }
+  const core::Telemetry t = world.telemetry();
+  for (auto _ : state) benchmark::DoNotOptimize(policy->plan(t));
+}
+BENCHMARK(BM_WalkthroughPlan);
+
+// A whole 30-minute drive with the walkthrough policy: wall time and ratio to real time.
+void BM_Drive30Minutes(benchmark::State& state) {
+  app::DriveOptions o;
+  o.minutes = 30.0;
+  o.traffic = state.range(0) == 0 ? "faithful" : "calm";
+  double simulated_s = 0.0;
+  for (auto _ : state) {
+    const auto r = app::drive(o);
+    simulated_s += r.report.duration_s;
+  }
+  state.counters["x_real_time"] = benchmark::Counter(simulated_s, benchmark::Counter::kIsRate);
+  state.SetLabel(o.traffic);
+}
+BENCHMARK(BM_Drive30Minutes)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->Iterations(1);
+
+}  // namespace
+
+BENCHMARK_MAIN();

@@ -1,0 +1,498 @@
+#include "overtake/app/bench.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <ctime>
+#include <fstream>
+#include <map>
+#include <mutex>
+#include <set>
+#include <sstream>
+#include <thread>
+#include <unistd.h>
+
+#include "overtake/app/commands.hpp"
+#include "overtake/app/io.hpp"
+#include "overtake/core/hash.hpp"
+#include "overtake/core/units.hpp"
+#include "overtake/sim/referee.hpp"
+
+#ifndef OVERTAKE_GIT_REVISION
+#define OVERTAKE_GIT_REVISION "unknown"
+#endif
+
+namespace overtake::app {
+namespace {
+
+using nlohmann::json;
+
+constexpr int kMaxJobs = 256;
+constexpr const char* kRunsFile = "runs.jsonl";
+constexpr const char* kManifestFile = "bench.json";
+
+std::string host_name() {
+  char buf[256] = {};
+  if (::gethostname(buf, sizeof buf - 1) != 0) return "unknown";
+  return buf;
+}
+
+std::string utc_now() {
+  const std::time_t now = std::time(nullptr);
+  std::tm tm{};
+  gmtime_r(&now, &tm);
+  char buf[32];
+  std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", &tm);
+  return buf;
+}
+
+std::uint64_t parse_u64(const std::string& s, const std::string& whole) {
+  if (s.empty() || s.find_first_not_of("0123456789") != std::string::npos || s.size() > 19) {
+    throw UsageError("--seeds: '" + whole + "' is not a list of seeds like 1-20 or 1,4,9");
+  }
+  return std::stoull(s);
+}
+
+// The manifest: what defines a sweep (everything but the shard).
+json manifest_of(const BenchSpec& spec, const Track& track, const Config& config, std::size_t total) {
+  return {{"policies", spec.policies},
+          {"traffic", spec.traffic},
+          {"seeds", spec.seeds},
+          {"minutes", spec.minutes},
+          {"steps_per_call", spec.steps_per_call},
+          {"map", {{"path", track.map.source}, {"hash", core::hex64(track.map.content_hash)}}},
+          {"params_hash", config_hash(config)},
+          {"combinations", total},
+          {"shard", std::to_string(spec.shard_index) + "/" + std::to_string(spec.shard_count)}};
+}
+
+json sweep_identity(json manifest) {
+  manifest.erase("shard");
+  return manifest;
+}
+
+// Reads runs.jsonl; a line that does not parse (a run cut off by a kill) is dropped.
+std::vector<json> read_runs(const std::filesystem::path& file, std::size_t* dropped = nullptr) {
+  std::vector<json> runs;
+  std::ifstream in(file);
+  std::string line;
+  std::size_t bad = 0;
+  while (std::getline(in, line)) {
+    if (line.empty()) continue;
+    try {
+      json j = json::parse(line);
+      if (j.contains("index")) runs.push_back(std::move(j));
+      else ++bad;
+    } catch (const json::parse_error&) {
+      ++bad;
+    }
+  }
+  if (dropped) *dropped = bad;
+  return runs;
+}
+
+std::string runs_text(std::vector<json> runs) {
+  std::sort(runs.begin(), runs.end(), [](const json& a, const json& b) {
+    return a["index"].get<std::size_t>() < b["index"].get<std::size_t>();
+  });
+  std::string out;
+  for (const json& r : runs) out += r.dump() + "\n";
+  return out;
+}
+
+double median(std::vector<double> v) {
+  if (v.empty()) return 0.0;
+  std::sort(v.begin(), v.end());
+  const std::size_t n = v.size();
+  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+std::string fmt(double v, int decimals) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.*f", decimals, v);
+  return buf;
+}
+
+const std::vector<std::string>& incident_types() {
+  static const std::vector<std::string> types = [] {
+    std::vector<std::string> t;
+    for (std::size_t i = 0; i < sim::kIncidentTypeCount; ++i) {
+      t.emplace_back(sim::to_string(static_cast<sim::IncidentType>(i)));
+    }
+    return t;
+  }();
+  return types;
+}
+
+void write_outputs(const std::filesystem::path& out, const std::vector<json>& runs,
+                   const json& manifest, BenchOutcome& outcome) {
+  write_file_atomic(out / kRunsFile, runs_text(runs));
+  const json rows = summarize_bench(runs, manifest["policies"].get<std::vector<std::string>>(),
+                                    manifest["traffic"].get<std::vector<std::string>>());
+  write_file_atomic(out / "summary.csv", summary_csv(rows));
+  outcome.summary_markdown = summary_markdown(rows);
+  write_file_atomic(out / "summary.md", outcome.summary_markdown);
+  outcome.runs_done = runs.size();
+}
+
+}  // namespace
+
+std::vector<std::uint64_t> parse_seed_list(const std::string& text) {
+  std::vector<std::uint64_t> seeds;
+  std::stringstream ss(text);
+  std::string part;
+  while (std::getline(ss, part, ',')) {
+    const auto dash = part.find('-');
+    if (dash == std::string::npos) {
+      seeds.push_back(parse_u64(part, text));
+      continue;
+    }
+    const std::uint64_t lo = parse_u64(part.substr(0, dash), text);
+    const std::uint64_t hi = parse_u64(part.substr(dash + 1), text);
+    if (hi < lo) throw UsageError("--seeds: the range '" + part + "' is empty (" + std::to_string(lo) + " > " + std::to_string(hi) + ")");
+    if (hi - lo > 1000000) throw UsageError("--seeds: the range '" + part + "' is too large");
+    for (std::uint64_t s = lo; s <= hi; ++s) seeds.push_back(s);
+  }
+  if (seeds.empty()) throw UsageError("--seeds: no seeds given (e.g. --seeds 1-20)");
+  std::set<std::uint64_t> unique(seeds.begin(), seeds.end());
+  if (unique.size() != seeds.size()) throw UsageError("--seeds: '" + text + "' names a seed twice");
+  return seeds;
+}
+
+std::pair<int, int> parse_shard(const std::string& text) {
+  const auto slash = text.find('/');
+  try {
+    if (slash == std::string::npos) throw std::invalid_argument("no slash");
+    std::size_t used_i = 0, used_n = 0;
+    const int i = std::stoi(text.substr(0, slash), &used_i);
+    const int n = std::stoi(text.substr(slash + 1), &used_n);
+    if (used_i != slash || used_n != text.size() - slash - 1) throw std::invalid_argument("junk");
+    if (n < 1 || i < 1 || i > n) {
+      throw UsageError("--shard: '" + text + "' is out of range (I/N needs 1 <= I <= N)");
+    }
+    return {i, n};
+  } catch (const std::logic_error&) {
+    throw UsageError("--shard: '" + text + "' is not of the form I/N (e.g. 2/8)");
+  }
+}
+
+std::vector<BenchCombo> bench_combinations(const BenchSpec& spec) {
+  std::vector<BenchCombo> out;
+  for (const auto& p : spec.policies) {
+    for (const auto& t : spec.traffic) {
+      for (const auto s : spec.seeds) out.push_back({out.size(), p, t, s});
+    }
+  }
+  return out;
+}
+
+BenchOutcome run_bench(const BenchSpec& spec, const std::atomic<bool>* stop,
+                       const std::function<void(const BenchProgress&)>& progress) {
+  // Everything is checked before the first run.
+  if (spec.policies.empty()) throw UsageError("--policies: no policy given");
+  if (spec.traffic.empty()) throw UsageError("--traffic: no traffic profile given");
+  if (spec.seeds.empty()) throw UsageError("--seeds: no seeds given");
+  if (spec.jobs < 1 || spec.jobs > kMaxJobs) {
+    throw UsageError("--jobs must be between 1 and " + std::to_string(kMaxJobs) + " (got " + std::to_string(spec.jobs) + ")");
+  }
+  if (spec.shard_count < 1 || spec.shard_index < 1 || spec.shard_index > spec.shard_count) {
+    throw UsageError("--shard: " + std::to_string(spec.shard_index) + "/" + std::to_string(spec.shard_count) + " is out of range");
+  }
+  for (const auto& p : spec.policies) {
+    DriveOptions o;
+    o.policy = p;
+    o.minutes = spec.minutes;
+    o.steps_per_call = spec.steps_per_call;
+    validate_drive_options(o);
+  }
+  for (const auto& t : spec.traffic) {
+    DriveOptions o;
+    o.traffic = t;
+    validate_drive_options(o);
+  }
+  const Config config = load_config(spec.config);
+  const auto track = load_track(spec.map);
+  const auto all = bench_combinations(spec);
+  const json manifest = manifest_of(spec, *track, config, all.size());
+
+  std::error_code ec;
+  std::filesystem::create_directories(spec.out, ec);
+  if (ec) throw std::runtime_error(spec.out.string() + ": cannot create the output folder (" + ec.message() + ")");
+  const auto runs_path = spec.out / kRunsFile;
+  const auto manifest_path = spec.out / kManifestFile;
+  std::vector<json> kept;
+  if (std::filesystem::exists(runs_path) || std::filesystem::exists(manifest_path)) {
+    if (!spec.resume) {
+      throw UsageError("--out: " + spec.out.string() + " already holds bench results; use --resume to continue it, or another --out");
+    }
+    json old;
+    try {
+      old = json::parse(read_file(manifest_path));
+    } catch (const std::exception& e) {
+      throw UsageError("--resume: " + manifest_path.string() + " is missing or unreadable (" + e.what() + ")");
+    }
+    if (old != manifest) {
+      throw UsageError("--resume: " + spec.out.string() + " holds a different bench (policies, traffic, seeds, minutes, map, parameters or shard differ)");
+    }
+    std::size_t dropped = 0;
+    kept = read_runs(runs_path, &dropped);
+    if (dropped) std::fprintf(stderr, "bench: dropped %zu incomplete line(s) of %s\n", dropped, runs_path.c_str());
+    write_file_atomic(runs_path, runs_text(kept));
+  }
+  write_file_atomic(manifest_path, manifest.dump(2) + "\n");
+
+  std::set<std::size_t> done_indices;
+  for (const json& r : kept) done_indices.insert(r["index"].get<std::size_t>());
+  std::vector<BenchCombo> todo;
+  for (const auto& c : all) {
+    const bool mine = static_cast<int>(c.index % static_cast<std::size_t>(spec.shard_count)) == spec.shard_index - 1;
+    if (mine && !done_indices.count(c.index)) todo.push_back(c);
+  }
+  std::size_t shard_total = 0;
+  for (const auto& c : all) {
+    if (static_cast<int>(c.index % static_cast<std::size_t>(spec.shard_count)) == spec.shard_index - 1) ++shard_total;
+  }
+
+  std::ofstream append(runs_path, std::ios::app);
+  if (!append) throw std::runtime_error(runs_path.string() + ": cannot write");
+  std::mutex mu;
+  std::vector<json> fresh;
+  std::atomic<std::size_t> next{0};
+  std::atomic<bool> failed{false};
+  std::string failure;
+  const std::string git = OVERTAKE_GIT_REVISION;
+  const std::string host = host_name();
+  BenchProgress prog{kept.size(), shard_total, 0.0, 0.0, 0.0};
+  const auto wall0 = std::chrono::steady_clock::now();
+  std::atomic<bool> local_stop{false};
+  auto stopping = [&] { return local_stop.load() || (stop && stop->load()); };
+
+  std::atomic<int> running{0};
+  auto worker = [&] {
+    struct Done {
+      std::atomic<int>& n;
+      ~Done() { --n; }
+    } done{running};
+    while (!stopping()) {
+      const std::size_t i = next.fetch_add(1);
+      if (i >= todo.size()) return;
+      const BenchCombo& c = todo[i];
+      DriveOptions o;
+      o.minutes = spec.minutes;
+      o.seed = c.seed;
+      o.traffic = c.traffic;
+      o.policy = c.policy;
+      o.steps_per_call = spec.steps_per_call;
+      const auto t0 = std::chrono::steady_clock::now();
+      DriveResult r;
+      try {
+        r = drive_on(*track, config, o, {}, stop);
+      } catch (const std::exception& e) {
+        std::lock_guard lock(mu);
+        failure = "run " + c.policy + "/" + c.traffic + "/seed " + std::to_string(c.seed) + ": " + e.what();
+        failed = true;
+        local_stop = true;
+        return;
+      }
+      if (r.report.ended_early == "stopped") return;  // interrupted: not a finished run
+      json line = report_to_json(r.report, r.provenance);
+      line["index"] = c.index;
+      line["provenance"] = {{"git_revision", git}, {"host", host}};
+      line["timing"]["wall_s"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      line["timing"]["finished_at"] = utc_now();
+      std::lock_guard lock(mu);
+      append << line.dump() << "\n";
+      append.flush();
+      fresh.push_back(std::move(line));
+      ++prog.done;
+      prog.simulated_m += r.report.distance_m;
+      prog.simulated_s += r.report.duration_s;
+    }
+  };
+
+  const int threads = std::min<int>(spec.jobs, static_cast<int>(std::max<std::size_t>(todo.size(), 1)));
+  running = threads;
+  std::vector<std::thread> pool;
+  pool.reserve(static_cast<std::size_t>(threads));
+  for (int t = 0; t < threads; ++t) pool.emplace_back(worker);
+  while (running.load() > 0) {
+    if (progress) {
+      std::lock_guard lock(mu);
+      prog.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
+      progress(prog);
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  }
+  for (auto& th : pool) th.join();
+  append.close();
+  if (failed) throw std::runtime_error(failure);
+
+  BenchOutcome outcome;
+  outcome.runs_new = fresh.size();
+  outcome.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
+  outcome.simulated_s = prog.simulated_s;
+  std::vector<json> runs = kept;
+  runs.insert(runs.end(), std::make_move_iterator(fresh.begin()), std::make_move_iterator(fresh.end()));
+  if (progress) {
+    prog.wall_s = outcome.wall_s;
+    progress(prog);
+  }
+  outcome.interrupted = stop && stop->load() && runs.size() < shard_total;
+  write_outputs(spec.out, runs, manifest, outcome);
+  return outcome;
+}
+
+BenchOutcome merge_bench(const std::vector<std::filesystem::path>& dirs, const std::filesystem::path& out) {
+  if (dirs.empty()) throw UsageError("merge: name the bench output folders to join");
+  std::optional<json> identity;
+  json manifest;
+  std::vector<json> runs;
+  std::set<std::size_t> seen;
+  for (const auto& dir : dirs) {
+    json m;
+    try {
+      m = json::parse(read_file(dir / kManifestFile));
+    } catch (const std::exception& e) {
+      throw UsageError("merge: " + (dir / kManifestFile).string() + " is missing or unreadable (" + e.what() + ")");
+    }
+    if (!identity) {
+      identity = sweep_identity(m);
+      manifest = m;
+    } else if (sweep_identity(m) != *identity) {
+      throw UsageError("merge: " + dir.string() + " comes from a different bench configuration than " +
+                       dirs.front().string() + " (policies, traffic, seeds, minutes, map or parameters differ)");
+    }
+    for (json& r : read_runs(dir / kRunsFile)) {
+      const auto idx = r["index"].get<std::size_t>();
+      if (!seen.insert(idx).second) {
+        throw UsageError("merge: run " + std::to_string(idx) + " appears twice (in " + dir.string() + " and another folder)");
+      }
+      runs.push_back(std::move(r));
+    }
+  }
+  const auto total = manifest["combinations"].get<std::size_t>();
+  if (runs.size() != total) {
+    throw UsageError("merge: the folders hold " + std::to_string(runs.size()) + " of the sweep's " +
+                     std::to_string(total) + " runs; a shard is missing or unfinished");
+  }
+  std::error_code ec;
+  std::filesystem::create_directories(out, ec);
+  if (ec) throw std::runtime_error(out.string() + ": cannot create the output folder (" + ec.message() + ")");
+  manifest["shard"] = "1/1";
+  write_file_atomic(out / kManifestFile, manifest.dump(2) + "\n");
+  BenchOutcome outcome;
+  write_outputs(out, runs, manifest, outcome);
+  return outcome;
+}
+
+json summarize_bench(const std::vector<json>& runs, const std::vector<std::string>& policies,
+                     const std::vector<std::string>& traffic) {
+  json rows = json::array();
+  for (const auto& p : policies) {
+    for (const auto& t : traffic) {
+      std::vector<const json*> mine;
+      for (const json& r : runs) {
+        if (r["config"]["policy"] == p && r["config"]["traffic"] == t) mine.push_back(&r);
+      }
+      if (mine.empty()) continue;
+      double miles = 0.0, seconds = 0.0, peak_acc = 0.0, peak_jerk = 0.0, strict_acc = 0.0,
+             strict_jerk = 0.0, worst_p99 = 0.0;
+      std::vector<double> free_miles, p50s;
+      std::map<std::string, double> counts;
+      for (const json* r : mine) {
+        miles += (*r)["distance_miles"].get<double>();
+        seconds += (*r)["duration_s"].get<double>();
+        free_miles.push_back((*r)["best_incident_free_miles"].get<double>());
+        for (const auto& type : incident_types()) counts[type] += (*r)["incident_counts"][type].get<double>();
+        const json& pk = (*r)["peak"];
+        peak_acc = std::max(peak_acc, pk["acceleration_mps2"].get<double>());
+        peak_jerk = std::max(peak_jerk, pk["jerk_mps3"].get<double>());
+        strict_acc = std::max(strict_acc, pk["strict_acceleration_mps2"].get<double>());
+        strict_jerk = std::max(strict_jerk, pk["strict_jerk_mps3"].get<double>());
+        p50s.push_back((*r)["timing"]["p50_us"].get<double>());
+        worst_p99 = std::max(worst_p99, (*r)["timing"]["p99_us"].get<double>());
+      }
+      json per100 = json::object();
+      double total_incidents = 0.0;
+      for (const auto& type : incident_types()) {
+        per100[type] = miles > 0 ? 100.0 * counts[type] / miles : 0.0;
+        total_incidents += counts[type];
+      }
+      rows.push_back({{"policy", p},
+                      {"traffic", t},
+                      {"runs", mine.size()},
+                      {"total_miles", miles},
+                      {"mean_speed_mph", seconds > 0 ? miles * core::kMetresPerMile / seconds * core::kMphPerMps : 0.0},
+                      {"incidents", total_incidents},
+                      {"incidents_per_100mi", miles > 0 ? 100.0 * total_incidents / miles : 0.0},
+                      {"incidents_per_100mi_by_type", per100},
+                      {"incident_free_miles_median", median(free_miles)},
+                      {"incident_free_miles_worst", *std::min_element(free_miles.begin(), free_miles.end())},
+                      {"peak_acceleration_mps2", peak_acc},
+                      {"peak_jerk_mps3", peak_jerk},
+                      {"peak_strict_acceleration_mps2", strict_acc},
+                      {"peak_strict_jerk_mps3", strict_jerk},
+                      {"timing", {{"planner_p50_us_median", median(p50s)}, {"planner_p99_us_worst", worst_p99}}}});
+    }
+  }
+  return rows;
+}
+
+std::string summary_csv(const json& rows) {
+  auto join = [](const std::vector<std::string>& fields) {
+    std::string line;
+    for (const auto& f : fields) {
+      if (!line.empty()) line += ',';
+      line += f;
+    }
+    line += '\n';
+    return line;
+  };
+  std::vector<std::string> header{"policy", "traffic", "runs", "total_miles", "mean_speed_mph", "incidents",
+                                  "incidents_per_100mi"};
+  for (const auto& type : incident_types()) header.push_back(type + std::string("_per_100mi"));
+  for (const char* h : {"incident_free_miles_median", "incident_free_miles_worst", "peak_acceleration_mps2",
+                        "peak_jerk_mps3", "peak_strict_acceleration_mps2", "peak_strict_jerk_mps3",
+                        "planner_p50_us_median", "planner_p99_us_worst"}) {
+    header.emplace_back(h);
+  }
+  std::string out = join(header);
+  for (const json& r : rows) {
+    std::vector<std::string> f{r["policy"].get<std::string>(), r["traffic"].get<std::string>(),
+                               std::to_string(r["runs"].get<std::size_t>()), fmt(r["total_miles"], 3),
+                               fmt(r["mean_speed_mph"], 3), fmt(r["incidents"], 0),
+                               fmt(r["incidents_per_100mi"], 3)};
+    for (const auto& type : incident_types()) f.push_back(fmt(r["incidents_per_100mi_by_type"][type], 3));
+    for (const char* k : {"incident_free_miles_median", "incident_free_miles_worst", "peak_acceleration_mps2",
+                          "peak_jerk_mps3", "peak_strict_acceleration_mps2", "peak_strict_jerk_mps3"}) {
+      f.push_back(fmt(r[k], 3));
+    }
+    f.push_back(fmt(r["timing"]["planner_p50_us_median"], 1));
+    f.push_back(fmt(r["timing"]["planner_p99_us_worst"], 1));
+    out += join(f);
+  }
+  return out;
+}
+
+std::string summary_markdown(const json& rows) {
+  std::string out =
+      "| policy | traffic | runs | miles | mean mph | incidents /100 mi | collision | speeding | max acc | "
+      "max jerk | outside lane | incident-free mi (median / worst) | peak acc / jerk (rubric) | "
+      "peak acc / jerk (strict) | planner us (p50 / p99) |\n"
+      "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|---|---|---|\n";
+  for (const json& r : rows) {
+    const json& by = r["incidents_per_100mi_by_type"];
+    out += "| " + r["policy"].get<std::string>() + " | " + r["traffic"].get<std::string>() + " | " +
+           std::to_string(r["runs"].get<std::size_t>()) + " | " + fmt(r["total_miles"], 1) + " | " +
+           fmt(r["mean_speed_mph"], 2) + " | " + fmt(r["incidents_per_100mi"], 1);
+    for (const auto& type : incident_types()) out += " | " + fmt(by[type], 1);
+    out += " | " + fmt(r["incident_free_miles_median"], 2) + " / " + fmt(r["incident_free_miles_worst"], 2) +
+           " | " + fmt(r["peak_acceleration_mps2"], 1) + " / " + fmt(r["peak_jerk_mps3"], 1) + " | " +
+           fmt(r["peak_strict_acceleration_mps2"], 1) + " / " + fmt(r["peak_strict_jerk_mps3"], 1) + " | " +
+           fmt(r["timing"]["planner_p50_us_median"], 0) + " / " + fmt(r["timing"]["planner_p99_us_worst"], 0) + " |\n";
+  }
+  return out;
+}
+
+}  // namespace overtake::app

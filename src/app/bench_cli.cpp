@@ -1,0 +1,152 @@
+// The `overtake bench` and `overtake bench merge` command lines.
+
+#include <csignal>
+#include <cstdio>
+#include <iostream>
+#include <thread>
+
+#include "overtake/app/bench.hpp"
+#include "overtake/app/cli.hpp"
+#include "overtake/app/commands.hpp"
+#include "overtake/core/units.hpp"
+
+namespace overtake::app {
+namespace {
+
+constexpr int kExitInterrupted = 130;
+
+// Set by SIGINT/SIGTERM during a bench; a signal handler can only reach static storage.
+std::atomic<bool>& interrupt_flag() {
+  static std::atomic<bool> flag{false};
+  return flag;
+}
+
+extern "C" void on_interrupt(int) { interrupt_flag().store(true); }
+
+std::vector<std::string> split_list(const std::string& text) {
+  std::vector<std::string> out;
+  std::string cur;
+  for (char c : text) {
+    if (c == ',') {
+      if (!cur.empty()) out.push_back(cur);
+      cur.clear();
+    } else if (c != ' ') {
+      cur += c;
+    }
+  }
+  if (!cur.empty()) out.push_back(cur);
+  return out;
+}
+
+std::string duration_text(double s) {
+  char buf[32];
+  if (s >= 3600) std::snprintf(buf, sizeof buf, "%dh%02dm", static_cast<int>(s / 3600), static_cast<int>(s / 60) % 60);
+  else if (s >= 60) std::snprintf(buf, sizeof buf, "%dm%02ds", static_cast<int>(s / 60), static_cast<int>(s) % 60);
+  else std::snprintf(buf, sizeof buf, "%ds", static_cast<int>(s));
+  return buf;
+}
+
+void draw_progress(const BenchProgress& p, double total_sim_s) {
+  constexpr int kWidth = 24;
+  const double frac = p.total ? static_cast<double>(p.done) / static_cast<double>(p.total) : 1.0;
+  const int filled = static_cast<int>(frac * kWidth);
+  std::string bar(static_cast<std::size_t>(filled), '#');
+  bar.resize(kWidth, '.');
+  std::string eta = "--";
+  if (p.simulated_s > 0 && total_sim_s > p.simulated_s) {
+    eta = duration_text(p.wall_s * (total_sim_s - p.simulated_s) / p.simulated_s);
+  } else if (p.done >= p.total) {
+    eta = "0s";
+  }
+  std::fprintf(stderr, "\r  [%s] %zu/%zu runs  %9.1f mi simulated  elapsed %s  ETA %s   ", bar.c_str(), p.done,
+               p.total, core::metres_to_miles(p.simulated_m), duration_text(p.wall_s).c_str(), eta.c_str());
+  std::fflush(stderr);
+}
+
+}  // namespace
+
+Subcommand register_bench(CLI::App& app) {
+  struct State {
+    BenchSpec spec;
+    std::string policies = "walkthrough";
+    std::string seeds = "1-20";
+    std::string traffic = "faithful,calm";
+    std::string map, config, out = "bench-out", shard;
+    bool quiet = false;
+    std::vector<std::string> merge_dirs;
+    std::string merge_out;
+  };
+  auto st = std::make_shared<State>();
+  st->spec.jobs = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  auto* cmd = app.add_subcommand(
+      "bench",
+      "Run every combination of policies x traffic profiles x seeds in parallel and summarise them\n"
+      "(runs.jsonl, summary.csv, summary.md in --out). `overtake bench merge` joins shards.");
+  cmd->add_option("--policies", st->policies, "Comma-separated policies")->capture_default_str();
+  cmd->add_option("--seeds", st->seeds, "Seeds: a range and/or list, e.g. 1-20 or 1,5,9-12")->capture_default_str();
+  cmd->add_option("--minutes", st->spec.minutes, "Simulated minutes per run")->capture_default_str();
+  cmd->add_option("--traffic", st->traffic, "Comma-separated traffic profiles (faithful, calm)")->capture_default_str();
+  cmd->add_option("--map", st->map, "Map file; default: the built-in track")->check(CLI::ExistingFile);
+  cmd->add_option("--config", st->config, "JSON parameter overrides")->check(CLI::ExistingFile);
+  cmd->add_option("--steps-per-call", st->spec.steps_per_call, "Fixed steps per reply; default: drawn 1-3 by seed");
+  cmd->add_option("--jobs,-j", st->spec.jobs, "Runs in parallel (default: all cores)")->capture_default_str();
+  cmd->add_option("--out,-o", st->out, "Output folder")->capture_default_str();
+  cmd->add_option("--shard", st->shard, "Run only slice I of N (e.g. 3/8) of the combinations");
+  cmd->add_flag("--resume", st->spec.resume, "Continue an interrupted bench in --out, skipping finished runs");
+  cmd->add_flag("--quiet,-q", st->quiet, "No progress bar or summary");
+  auto* merge = cmd->add_subcommand("merge", "Join the output folders of the shards of one bench into --out.");
+  merge->add_option("dirs", st->merge_dirs, "Shard output folders")->required()->check(CLI::ExistingDirectory);
+  merge->add_option("--out,-o", st->merge_out, "Folder for the joined output")->required();
+
+  return {cmd, [st, merge] {
+            if (merge->parsed()) {
+              const BenchOutcome o = merge_bench(
+                  std::vector<std::filesystem::path>(st->merge_dirs.begin(), st->merge_dirs.end()), st->merge_out);
+              std::cout << "merged " << o.runs_done << " runs into " << st->merge_out << "\n\n" << o.summary_markdown;
+              return kExitOk;
+            }
+            BenchSpec spec = st->spec;
+            spec.policies = split_list(st->policies);
+            spec.traffic = split_list(st->traffic);
+            spec.seeds = parse_seed_list(st->seeds);
+            if (!st->map.empty()) spec.map = st->map;
+            if (!st->config.empty()) spec.config = st->config;
+            spec.out = st->out;
+            if (!st->shard.empty()) std::tie(spec.shard_index, spec.shard_count) = parse_shard(st->shard);
+            const double total_sim_s = spec.minutes * 60.0 *
+                                        static_cast<double>(bench_combinations(spec).size()) / spec.shard_count;
+            const bool draw = !st->quiet && stderr_is_terminal();
+            interrupt_flag() = false;
+            auto old_int = std::signal(SIGINT, on_interrupt);
+            auto old_term = std::signal(SIGTERM, on_interrupt);
+            BenchOutcome o;
+            try {
+              o = run_bench(spec, &interrupt_flag(), [&](const BenchProgress& p) {
+                if (draw) draw_progress(p, total_sim_s);
+              });
+            } catch (...) {
+              std::signal(SIGINT, old_int);
+              std::signal(SIGTERM, old_term);
+              if (draw) std::fprintf(stderr, "\n");
+              throw;
+            }
+            std::signal(SIGINT, old_int);
+            std::signal(SIGTERM, old_term);
+            if (draw) std::fprintf(stderr, "\n");
+            if (o.interrupted) {
+              std::cerr << "bench: interrupted; " << o.runs_done << " finished runs kept in "
+                        << (spec.out / "runs.jsonl").string() << "; rerun with --resume to finish\n";
+              return kExitInterrupted;
+            }
+            if (!st->quiet) {
+              std::cout << o.summary_markdown << "\n";
+              const double hours_per_minute = o.wall_s > 0 ? (o.simulated_s / 3600.0) / (o.wall_s / 60.0) : 0.0;
+              std::printf("%zu runs (%zu new) in %.1f s on %d jobs: %.1f simulated hours per wall-clock minute\n",
+                          o.runs_done, o.runs_new, o.wall_s, spec.jobs, hours_per_minute);
+              std::cout << "written: " << spec.out.string() << "/{runs.jsonl,summary.csv,summary.md,bench.json}\n";
+            }
+            return kExitOk;
+          }};
+}
+
+}  // namespace overtake::app

@@ -1,0 +1,209 @@
+#include <CLI/CLI.hpp>
+#include <chrono>
+#include <cstdio>
+#include <iostream>
+#include <unistd.h>
+
+#include "overtake/app/cli.hpp"
+#include "overtake/app/commands.hpp"
+#include "overtake/app/io.hpp"
+#include "overtake/core/hash.hpp"
+#include "overtake/core/track.hpp"
+#include "overtake/core/units.hpp"
+#include "overtake/planner/policy.hpp"
+
+namespace overtake::app {
+namespace {
+
+// One status line on a terminal, redrawn at most ten times a second; silent otherwise.
+class ProgressLine {
+ public:
+  explicit ProgressLine(bool enabled) : enabled_(enabled && stderr_is_terminal()) {}
+  ~ProgressLine() { clear(); }
+  ProgressLine(const ProgressLine&) = delete;
+  ProgressLine& operator=(const ProgressLine&) = delete;
+
+  void update(double t_s, double total_s, double distance_m) {
+    if (!enabled_) return;
+    const auto now = std::chrono::steady_clock::now();
+    if (now - last_ < std::chrono::milliseconds(100)) return;
+    last_ = now;
+    const double wall_s = std::chrono::duration<double>(now - start_).count();
+    std::fprintf(stderr, "\r  %6.1f / %.1f min simulated   %7.2f mi   %6.0fx real time ", t_s / 60.0,
+                 total_s / 60.0, core::metres_to_miles(distance_m), wall_s > 0 ? t_s / wall_s : 0.0);
+    std::fflush(stderr);
+    shown_ = true;
+  }
+  void clear() {
+    if (!shown_) return;
+    std::fprintf(stderr, "\r%80s\r", "");
+    std::fflush(stderr);
+    shown_ = false;
+  }
+
+ private:
+  bool enabled_;
+  bool shown_ = false;
+  std::chrono::steady_clock::time_point start_ = std::chrono::steady_clock::now();
+  std::chrono::steady_clock::time_point last_{};
+};
+
+std::string policy_help() {
+  std::string out = "Policy to drive with. Available:";
+  for (const auto& p : planner::list_policies()) out += "\n  " + p.name + ": " + p.summary;
+  return out;
+}
+
+int cmd_drive(const DriveOptions& opts, const std::optional<std::filesystem::path>& json_out,
+              bool quiet) {
+  ProgressLine progress(!quiet);
+  const double total_s = opts.minutes * 60.0;
+  const auto wall0 = std::chrono::steady_clock::now();
+  const DriveResult result =
+      drive(opts, [&](double t, double dist) { progress.update(t, total_s, dist); });
+  const double wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
+  progress.clear();
+  std::cout << format_scorecard(result.report, result.provenance);
+  if (!quiet) {
+    std::printf("  wall time          %.2f s (%.0fx real time)\n", wall_s,
+                wall_s > 0 ? result.report.duration_s / wall_s : 0.0);
+  }
+  std::cout.flush();
+  if (json_out) {
+    write_file_atomic(*json_out, report_to_json(result.report, result.provenance).dump(2) + "\n");
+    if (!quiet) std::cout << "  report written to " << json_out->string() << "\n";
+  }
+  return result.report.ended_early.empty() ? 0 : kExitFailure;
+}
+
+int cmd_track(const core::TrackSpec& spec, const std::optional<std::filesystem::path>& out_path,
+              bool quiet) {
+  const auto waypoints = core::generate_track(spec);
+  const std::string text = core::format_map(waypoints);
+  const std::string name = out_path ? out_path->string() : "generated track";
+  const core::Map map = core::parse_map(text, name);
+  const core::TrackReport check = core::check_track(map, spec);
+  if (!check.problems.empty()) {
+    std::string msg = "generated track fails its checks:";
+    for (const auto& p : check.problems) msg += "\n  - " + p;
+    throw std::runtime_error(msg);
+  }
+  if (out_path) {
+    write_file_atomic(*out_path, text);
+  } else {
+    std::cout << text;
+  }
+  if (!quiet) {
+    std::fprintf(stderr,
+                 "track: seed %llu, %zu waypoints, loop %.1f m, spacing %.1f-%.1f m, tightest "
+                 "lane radius %.0f m%s%s\n",
+                 static_cast<unsigned long long>(spec.seed), map.waypoints.size(), map.loop_length_m,
+                 check.min_spacing_m, check.max_spacing_m, check.min_radius_m,
+                 out_path ? ", written to " : "", out_path ? out_path->string().c_str() : "");
+  }
+  return 0;
+}
+
+}  // namespace
+
+bool stderr_is_terminal() { return ::isatty(STDERR_FILENO) != 0; }
+
+Subcommand register_drive(CLI::App& app) {
+  struct State {
+    DriveOptions opts;
+    std::string map, config, json;
+    bool quiet = false;
+  };
+  auto st = std::make_shared<State>();
+  auto* cmd = app.add_subcommand(
+      "drive", "Drive a car around the highway among traffic and print its scorecard.");
+  cmd->add_option("--map", st->map, "Map file (x y s dx dy per line); default: the built-in track")
+      ->check(CLI::ExistingFile);
+  cmd->add_option("--minutes", st->opts.minutes, "Simulated minutes to drive")->capture_default_str();
+  cmd->add_option("--seed", st->opts.seed, "Seed of the traffic and latency draws")->capture_default_str();
+  cmd->add_option("--traffic", st->opts.traffic,
+                  "Traffic profile: faithful (the original's rules) or calm (IDM + MOBIL)")
+      ->capture_default_str();
+  cmd->add_option("--policy", st->opts.policy, policy_help())->capture_default_str();
+  cmd->add_option("--steps-per-call", st->opts.steps_per_call,
+                  "World steps per planner reply (1-1000); default: drawn from 1-3 per call by the seed");
+  cmd->add_option("--json", st->json, "Also write the report as JSON to this file");
+  cmd->add_option("--config", st->config,
+                  "JSON file overriding any of the default parameters (see `overtake config`)")
+      ->check(CLI::ExistingFile);
+  cmd->add_flag("--quiet,-q", st->quiet, "No progress line or extra messages");
+  return {cmd, [st] {
+            if (!st->map.empty()) st->opts.map = st->map;
+            if (!st->config.empty()) st->opts.config = st->config;
+            std::optional<std::filesystem::path> json_out;
+            if (!st->json.empty()) json_out = st->json;
+            return cmd_drive(st->opts, json_out, st->quiet);
+          }};
+}
+
+Subcommand register_track(CLI::App& app) {
+  struct State {
+    core::TrackSpec spec;
+    std::string out;
+    bool quiet = false;
+  };
+  auto st = std::make_shared<State>();
+  auto* cmd = app.add_subcommand("track", "Generate a closed highway loop map in the original file format.");
+  cmd->add_option("--seed", st->spec.seed, "Seed of the track's shape")->capture_default_str();
+  cmd->add_option("--length-m", st->spec.length_m, "Loop length in metres, about")->capture_default_str();
+  cmd->add_option("-o,--output", st->out, "Write the map here (default: standard output)");
+  cmd->add_flag("--quiet,-q", st->quiet, "No summary line");
+  return {cmd, [st] {
+            std::optional<std::filesystem::path> out;
+            if (!st->out.empty()) out = st->out;
+            return cmd_track(st->spec, out, st->quiet);
+          }};
+}
+
+Subcommand register_config(CLI::App& app) {
+  auto file = std::make_shared<std::string>();
+  auto* cmd = app.add_subcommand(
+      "config", "Print the parameters in effect as JSON (the defaults, or with --config applied).");
+  cmd->add_option("--config", *file, "JSON file overriding any default parameters")
+      ->check(CLI::ExistingFile);
+  return {cmd, [file] {
+            std::optional<std::filesystem::path> path;
+            if (!file->empty()) path = *file;
+            std::cout << config_to_json(load_config(path)).dump(2) << "\n";
+            return kExitOk;
+          }};
+}
+
+int run_cli(int argc, const char* const* argv) {
+  CLI::App app{
+      "overtake: a headless highway simulator with the rules of the Udacity Term 3 simulator,\n"
+      "and planners to drive it. Run `overtake <command> --help` for a command's options."};
+  app.require_subcommand(1);
+  app.set_version_flag("--version", "overtake 0.1.0");
+  const std::vector<Subcommand> commands{register_drive(app), register_track(app),
+                                         register_config(app), register_bench(app),
+                                         register_serve(app), register_sim(app)};
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e) == 0 ? kExitOk : kExitUsage;
+  }
+  for (const Subcommand& c : commands) {
+    if (!c.command->parsed()) continue;
+    try {
+      return c.run();
+    } catch (const UsageError& e) {
+      std::cerr << "overtake: " << e.what() << "\n";
+      return kExitUsage;
+    } catch (const std::invalid_argument& e) {
+      std::cerr << "overtake: " << e.what() << "\n";
+      return kExitUsage;
+    } catch (const std::exception& e) {
+      std::cerr << "overtake: " << e.what() << "\n";
+      return kExitFailure;
+    }
+  }
+  return kExitUsage;
+}
+
+}  // namespace overtake::app

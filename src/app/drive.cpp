@@ -1,0 +1,97 @@
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+#include "overtake/app/commands.hpp"
+#include "overtake/app/resources.hpp"
+#include "overtake/core/hash.hpp"
+#include "overtake/planner/policy.hpp"
+#include "overtake/sim/world.hpp"
+
+namespace overtake::app {
+namespace {
+
+constexpr double kMaxMinutes = 7.0 * 24.0 * 60.0;
+constexpr const char* kDefaultTrackName = "tracks/default.csv";
+
+std::string policy_list() {
+  std::string out;
+  for (const auto& p : planner::list_policies()) out += (out.empty() ? "" : ", ") + p.name;
+  return out;
+}
+
+}  // namespace
+
+void validate_drive_options(const DriveOptions& opts) {
+  if (!(opts.minutes > 0.0) || opts.minutes > kMaxMinutes || !std::isfinite(opts.minutes)) {
+    std::ostringstream os;
+    os << "--minutes must be more than 0 and at most " << kMaxMinutes << " (got " << opts.minutes << ")";
+    throw UsageError(os.str());
+  }
+  if (opts.steps_per_call < 0 || opts.steps_per_call > 1000) {
+    throw UsageError("--steps-per-call must be between 1 and 1000 (got " +
+                     std::to_string(opts.steps_per_call) + ")");
+  }
+  if (!sim::parse_traffic_profile(opts.traffic)) {
+    throw UsageError("--traffic: unknown profile '" + opts.traffic + "' (available: faithful, calm)");
+  }
+  const auto policies = planner::list_policies();
+  const bool known = std::any_of(policies.begin(), policies.end(),
+                                 [&](const planner::PolicyInfo& p) { return p.name == opts.policy; });
+  if (!known) {
+    throw UsageError("--policy: unknown policy '" + opts.policy + "' (available: " + policy_list() + ")");
+  }
+}
+
+std::shared_ptr<const Track> load_track(const std::optional<std::filesystem::path>& path) {
+  core::Map map;
+  if (path) {
+    map = core::load_map_file(*path);
+  } else {
+    const auto text = resources::embedded_file(kDefaultTrackName);
+    if (!text) throw core::MapError("the built-in default track is missing from this build");
+    map = core::parse_map(*text, "builtin:default");
+  }
+  core::ReferenceLine line(map);
+  return std::make_shared<const Track>(Track{std::move(map), std::move(line)});
+}
+
+DriveResult drive_on(const Track& track, const Config& config, const DriveOptions& opts,
+                     const std::function<void(double, double)>& progress,
+                     const std::atomic<bool>* stop) {
+  validate_drive_options(opts);
+  const auto profile = sim::parse_traffic_profile(opts.traffic);
+  auto policy = planner::make_policy(opts.policy, track.line, config.planner);
+
+  sim::World world(track.map, track.line, config.world, *profile, opts.seed);
+  sim::RunOptions run;
+  run.duration_s = opts.minutes * 60.0;
+  if (opts.steps_per_call > 0) run.steps_per_call = opts.steps_per_call;
+  run.seed = opts.seed;
+  run.progress = progress;
+  run.stop = stop;
+  planner::Policy& pol = *policy;
+  DriveResult result;
+  result.report = sim::run_drive(world, [&pol](const core::Telemetry& t) { return pol.plan(t); }, run);
+
+  RunProvenance& p = result.provenance;
+  p.seed = opts.seed;
+  p.policy = opts.policy;
+  p.traffic = std::string(sim::to_string(*profile));
+  p.map_path = track.map.source;
+  p.map_hash = core::hex64(track.map.content_hash);
+  p.params_hash = config_hash(config);
+  p.steps_per_call = opts.steps_per_call;
+  p.min_steps_per_call = config.world.min_steps_per_call;
+  p.max_steps_per_call = config.world.max_steps_per_call;
+  p.minutes = opts.minutes;
+  return result;
+}
+
+DriveResult drive(const DriveOptions& opts, const std::function<void(double, double)>& progress) {
+  const Config config = load_config(opts.config);
+  const auto track = load_track(opts.map);
+  return drive_on(*track, config, opts, progress);
+}
+
+}  // namespace overtake::app

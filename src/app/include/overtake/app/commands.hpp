@@ -1,0 +1,71 @@
+#pragma once
+// The subcommands of `overtake`, callable without the command line (tests, bench).
+
+#include <atomic>
+#include <cstdint>
+#include <filesystem>
+#include <functional>
+#include <memory>
+#include <optional>
+#include <stdexcept>
+#include <string>
+
+#include "overtake/app/config.hpp"
+#include "overtake/app/report.hpp"
+#include "overtake/core/map.hpp"
+#include "overtake/core/reference_line.hpp"
+#include "overtake/sim/run.hpp"
+
+namespace overtake::app {
+
+/// A bad flag value or combination; the message names the flag.
+class UsageError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+/// A loaded map and its reference line (the line does not refer to the map; the world does).
+struct Track {
+  core::Map map;
+  core::ReferenceLine line;
+};
+
+/// The map file at `path`, or the built-in default track. Throws core::MapError.
+[[nodiscard]] std::shared_ptr<const Track> load_track(const std::optional<std::filesystem::path>& path);
+
+/// Options of `overtake drive`.
+struct DriveOptions {
+  std::optional<std::filesystem::path> map;
+  double minutes = 30.0;
+  std::uint64_t seed = 1;
+  std::string traffic = "faithful";
+  std::string policy = "walkthrough";
+  int steps_per_call = 0;  ///< 0: drawn per call by the seed
+  std::optional<std::filesystem::path> config;
+};
+
+/// Checks flag values and names (UsageError naming the flag).
+void validate_drive_options(const DriveOptions& opts);
+
+/// A finished drive.
+struct DriveResult {
+  sim::RunReport report;
+  RunProvenance provenance;
+};
+
+/// Checks the options (UsageError naming the flag), loads everything and runs the drive.
+/// `progress` (may be empty) is called now and then with simulated time and distance.
+[[nodiscard]] DriveResult drive(const DriveOptions& opts,
+                                const std::function<void(double t_s, double distance_m)>& progress = {});
+
+/// Like drive(), with the map and config already loaded.
+/// `stop` (may be null) ends the run early when set.
+[[nodiscard]] DriveResult drive_on(const Track& track, const Config& config, const DriveOptions& opts,
+                                   const std::function<void(double t_s, double distance_m)>& progress = {},
+                                   const std::atomic<bool>* stop = nullptr);
+
+/// The `overtake` command line. Returns the process exit code: 0 success, 1 failure, 2 bad
+/// usage.
+[[nodiscard]] int run_cli(int argc, const char* const* argv);
+
+}  // namespace overtake::app

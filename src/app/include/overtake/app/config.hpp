@@ -1,0 +1,51 @@
+#pragma once
+// The project's configuration: every module's params struct, read from JSON. The shipped
+// defaults (config/overtake.json, built into the binary) equal the structs' defaults; a
+// user file given with --config overrides any subset of keys.
+
+#include <filesystem>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <string_view>
+
+#include <nlohmann/json.hpp>
+
+#include "overtake/core/road.hpp"
+#include "overtake/planner/params.hpp"
+#include "overtake/sim/params.hpp"
+
+namespace overtake::app {
+
+/// All parameters.
+struct Config {
+  core::RoadParams road;
+  sim::WorldParams world;
+  planner::PlannerParams planner;
+  friend bool operator==(const Config&, const Config&) = default;
+};
+
+/// A config file or value that cannot be used; the message names the file and key.
+class ConfigError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+/// Applies the keys present in `j` (any subset) on top of `base`. Unknown keys, wrong types
+/// and invalid values are errors naming `source` and the key. The road is copied into the
+/// world's and planner's params.
+[[nodiscard]] Config apply_config_json(Config base, const nlohmann::json& j, std::string_view source);
+
+/// The shipped defaults (the built-in config/overtake.json).
+[[nodiscard]] Config default_config();
+
+/// Defaults, then the user's file when given.
+[[nodiscard]] Config load_config(const std::optional<std::filesystem::path>& user_file);
+
+/// Every key of the config as JSON (the format of config/overtake.json).
+[[nodiscard]] nlohmann::json config_to_json(const Config& c);
+
+/// Hash of the config's JSON, for provenance.
+[[nodiscard]] std::string config_hash(const Config& c);
+
+}  // namespace overtake::app

@@ -1,0 +1,34 @@
+#pragma once
+// A run's report as JSON (the interface users script against; keys as in simulator.md) and
+// as a human scorecard.
+
+#include <cstdint>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "overtake/sim/run.hpp"
+
+namespace overtake::app {
+
+/// What was run, for the report's `config` key.
+struct RunProvenance {
+  std::uint64_t seed = 1;
+  std::string policy;
+  std::string traffic;
+  std::string map_path;
+  std::string map_hash;
+  std::string params_hash;
+  int steps_per_call = 0;  ///< 0: drawn per call from the configured range
+  int min_steps_per_call = 1;
+  int max_steps_per_call = 3;
+  double minutes = 0.0;
+};
+
+/// The JSON report. Deterministic for a given run apart from the `timing` key.
+[[nodiscard]] nlohmann::json report_to_json(const sim::RunReport& r, const RunProvenance& p);
+
+/// A human-readable scorecard (several lines, ending with a newline).
+[[nodiscard]] std::string format_scorecard(const sim::RunReport& r, const RunProvenance& p);
+
+}  // namespace overtake::app

@@ -1,0 +1,3 @@
+#include "overtake/app/commands.hpp"
+
+int main(int argc, char** argv) { return overtake::app::run_cli(argc, argv); }

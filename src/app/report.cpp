@@ -1,0 +1,128 @@
+#include "overtake/app/report.hpp"
+
+#include <cstdio>
+#include <sstream>
+
+#include "overtake/core/units.hpp"
+
+namespace overtake::app {
+namespace {
+
+using nlohmann::json;
+
+const char* value_unit(sim::IncidentType t) {
+  switch (t) {
+    case sim::IncidentType::collision: return "car_id";
+    case sim::IncidentType::speeding: return "mph";
+    case sim::IncidentType::max_acceleration: return "m/s^2";
+    case sim::IncidentType::max_jerk: return "m/s^3";
+    case sim::IncidentType::outside_lane: return "d_m";
+  }
+  return "";
+}
+
+double report_value(const sim::Incident& i) {
+  return i.type == sim::IncidentType::speeding ? core::mps_to_mph(i.value) : i.value;
+}
+
+std::string steps_text(const RunProvenance& p) {
+  if (p.steps_per_call > 0) return std::to_string(p.steps_per_call);
+  return "random " + std::to_string(p.min_steps_per_call) + "-" + std::to_string(p.max_steps_per_call);
+}
+
+std::string printf_string(const char* format, auto... args) {
+  char buf[512];
+  std::snprintf(buf, sizeof buf, format, args...);
+  return buf;
+}
+
+}  // namespace
+
+json report_to_json(const sim::RunReport& r, const RunProvenance& p) {
+  json j = json::object();
+  j["distance_miles"] = core::metres_to_miles(r.distance_m);
+  j["duration_s"] = r.duration_s;
+  j["mean_speed_mph"] = core::mps_to_mph(r.mean_speed_mps);
+  j["best_incident_free_miles"] = core::metres_to_miles(r.best_incident_free_m);
+  json counts = json::object();
+  for (std::size_t i = 0; i < sim::kIncidentTypeCount; ++i) {
+    counts[std::string(sim::to_string(static_cast<sim::IncidentType>(i)))] = r.incident_counts[i];
+  }
+  j["incident_counts"] = counts;
+  json incidents = json::array();
+  for (const sim::Incident& i : r.incidents) {
+    incidents.push_back({{"type", sim::to_string(i.type)},
+                         {"t_s", i.t_s},
+                         {"s_m", i.s_m},
+                         {"lane", i.lane},
+                         {"value", report_value(i)},
+                         {"unit", value_unit(i.type)}});
+  }
+  j["incidents"] = incidents;
+  j["peak"] = {{"speed_mph", core::mps_to_mph(r.peak.speed_mps)},
+               {"acceleration_mps2", r.peak.acceleration_mps2},
+               {"jerk_mps3", r.peak.jerk_mps3},
+               {"strict_acceleration_mps2", r.peak.strict_acceleration_mps2},
+               {"strict_jerk_mps3", r.peak.strict_jerk_mps3}};
+  j["lane_changes"] = r.lane_changes;
+  j["time_in_lane_s"] = r.time_in_lane_s;
+  j["planner_cycles"] = r.planner_cycles;
+  j["ended_early"] = r.ended_early.empty() ? json(nullptr) : json(r.ended_early);
+  j["timing"] = {{"p50_us", r.timing.p50_us}, {"p99_us", r.timing.p99_us}, {"max_us", r.timing.max_us}};
+  j["config"] = {{"seed", p.seed},
+                 {"policy", p.policy},
+                 {"traffic", p.traffic},
+                 {"map", {{"path", p.map_path}, {"hash", p.map_hash}}},
+                 {"steps_per_call", steps_text(p)},
+                 {"minutes", p.minutes},
+                 {"params_hash", p.params_hash}};
+  return j;
+}
+
+std::string format_scorecard(const sim::RunReport& r, const RunProvenance& p) {
+  std::ostringstream os;
+  os << "overtake drive: policy " << p.policy << ", " << p.traffic << " traffic, seed " << p.seed
+     << ", map " << p.map_path << "\n";
+  if (!r.ended_early.empty()) os << "  ENDED EARLY: " << r.ended_early << "\n";
+  os << printf_string("  simulated         %8.1f min   distance %8.2f mi   mean speed %6.2f mph\n",
+                      r.duration_s / 60.0, core::metres_to_miles(r.distance_m),
+                      core::mps_to_mph(r.mean_speed_mps));
+  os << printf_string("  best incident-free %7.2f mi    lane changes %d\n",
+                      core::metres_to_miles(r.best_incident_free_m), r.lane_changes);
+  int total = 0;
+  for (int c : r.incident_counts) total += c;
+  os << "  incidents          " << total << " (";
+  for (std::size_t i = 0; i < sim::kIncidentTypeCount; ++i) {
+    os << (i ? ", " : "") << sim::to_string(static_cast<sim::IncidentType>(i)) << " "
+       << r.incident_counts[i];
+  }
+  os << ")\n";
+  os << printf_string("  peak, rubric       speed %.2f mph   acceleration %.2f m/s^2   jerk %.2f m/s^3\n",
+                      core::mps_to_mph(r.peak.speed_mps), r.peak.acceleration_mps2, r.peak.jerk_mps3);
+  os << printf_string("  peak, strict 0.1 s acceleration %.2f m/s^2   jerk %.2f m/s^3\n",
+                      r.peak.strict_acceleration_mps2, r.peak.strict_jerk_mps3);
+  os << "  time per lane     ";
+  for (std::size_t l = 0; l < r.time_in_lane_s.size(); ++l) {
+    const double pct = r.duration_s > 0 ? 100.0 * r.time_in_lane_s[l] / r.duration_s : 0.0;
+    os << printf_string(" %zu: %5.1f%%", l, pct);
+  }
+  os << "\n";
+  os << printf_string("  planner time       p50 %.1f us   p99 %.1f us   max %.1f us   (%ld cycles)\n",
+                      r.timing.p50_us, r.timing.p99_us, r.timing.max_us, r.planner_cycles);
+  constexpr std::size_t kShown = 10;
+  if (!r.incidents.empty()) {
+    os << "  first incidents:\n";
+    for (std::size_t i = 0; i < r.incidents.size() && i < kShown; ++i) {
+      const sim::Incident& inc = r.incidents[i];
+      os << printf_string("    t %8.2f s   s %8.1f m   lane %d   %-16s %.3f %s\n", inc.t_s, inc.s_m,
+                          inc.lane, std::string(sim::to_string(inc.type)).c_str(),
+                          report_value(inc), value_unit(inc.type));
+    }
+    if (r.incidents.size() > kShown) {
+      os << "    ... and " << r.incidents.size() - kShown << " more (see --json)\n";
+    }
+  }
+  return os.str();
+}
+
+}  // namespace overtake::app

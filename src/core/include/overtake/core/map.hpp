@@ -1,0 +1,59 @@
+#pragma once
+// Highway map files in the original format: one waypoint per line, `x y s dx dy`
+// (divider position in metres, distance along the road in metres, unit normal pointing
+// away from the divider). The road is a closed loop.
+
+#include <filesystem>
+#include <stdexcept>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace overtake::core {
+
+/// One line of a map file.
+struct Waypoint {
+  double x_m = 0.0;
+  double y_m = 0.0;
+  double s_m = 0.0;
+  double dx = 0.0;  ///< unit normal, away from the divider
+  double dy = 0.0;
+  friend bool operator==(const Waypoint&, const Waypoint&) = default;
+};
+
+/// A validated closed-loop map.
+struct Map {
+  std::vector<Waypoint> waypoints;
+  /// Loop length: the last waypoint's s plus the distance from it back to the first.
+  double loop_length_m = 0.0;
+  /// Where it came from (a path, or a name such as `builtin:default`), for messages.
+  std::string source;
+  /// FNV-1a hash of the file's bytes, for provenance.
+  std::uint64_t content_hash = 0;
+};
+
+/// A map file that cannot be used; the message names the file, the line and the fault.
+class MapError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+/// Limits a map must meet.
+struct MapRules {
+  std::size_t min_waypoints = 4;
+  double normal_tolerance = 0.01;      ///< |(dx, dy)| within 1 +- this
+  double min_point_spacing_m = 0.01;   ///< two waypoints closer than this are duplicates
+};
+
+/// Parses and validates map text. `source` names the file in error messages. Throws
+/// MapError on the first fault; never returns a partial map.
+[[nodiscard]] Map parse_map(std::string_view text, std::string_view source,
+                            const MapRules& rules = {});
+
+/// Reads and parses a map file. Throws MapError (also when the file cannot be read).
+[[nodiscard]] Map load_map_file(const std::filesystem::path& path, const MapRules& rules = {});
+
+/// Map text in the original format, one waypoint per line.
+[[nodiscard]] std::string format_map(const std::vector<Waypoint>& waypoints);
+
+}  // namespace overtake::core

@@ -1,0 +1,64 @@
+#pragma once
+// The smooth, closed reference line of a map (periodic cubic splines x(s), y(s) through the
+// waypoints) with Frenet <-> Cartesian conversion. s wraps at the loop length.
+
+#include <optional>
+#include <vector>
+
+#include "overtake/core/geometry.hpp"
+#include "overtake/core/map.hpp"
+#include "overtake/core/spline.hpp"
+
+namespace overtake::core {
+
+/// The reference line's local frame at one s.
+struct RoadFrame {
+  Vec2 position;         ///< on the divider (d = 0)
+  Vec2 tangent;          ///< unit, direction of travel
+  Vec2 normal;           ///< unit, away from the divider (increasing d)
+  double heading_rad = 0.0;
+  double curvature_1pm = 0.0;  ///< signed curvature of the d = 0 line, positive for a left turn
+  double ds_scale = 1.0;       ///< metres travelled on the divider line per unit of s
+};
+
+/// The map's reference line. Immutable after construction; cheap queries.
+class ReferenceLine {
+ public:
+  /// Builds the line; throws MapError when the map's points do not make a usable loop.
+  explicit ReferenceLine(const Map& map);
+
+  [[nodiscard]] double length_m() const { return length_m_; }
+  /// s of the first waypoint; s values wrap into [start_s_m, start_s_m + length_m).
+  [[nodiscard]] double start_s_m() const { return start_s_m_; }
+
+  /// s wrapped into [start_s_m, start_s_m + length_m).
+  [[nodiscard]] double wrap_s(double s_m) const;
+  /// Signed distance along the road from `from_s_m` to `to_s_m`, the shorter way round:
+  /// positive when `to` is ahead. In (-length/2, length/2].
+  [[nodiscard]] double s_ahead(double from_s_m, double to_s_m) const;
+
+  [[nodiscard]] RoadFrame frame(double s_m) const;
+  [[nodiscard]] Vec2 to_cartesian(FrenetPoint p) const;
+  /// Projects a point onto the line. `s_hint_m` (a nearby s, e.g. last step's) makes it
+  /// faster; without it, or when the hint leads astray, the whole loop is searched.
+  [[nodiscard]] FrenetPoint to_frenet(Vec2 p, std::optional<double> s_hint_m = {}) const;
+
+  /// Curvature (1/m, positive for a left turn) of the line at lateral offset d.
+  [[nodiscard]] double curvature_at(double s_m, double d_m) const;
+  /// Map velocity of a point moving with ds/dt = s_dot and dd/dt = d_dot at (s, d).
+  [[nodiscard]] Vec2 velocity(FrenetPoint p, double s_dot, double d_dot) const;
+  /// ds/dt of a point at (s, d) moving along the lane at `speed_mps`.
+  [[nodiscard]] double s_rate(FrenetPoint p, double speed_mps) const;
+
+ private:
+  [[nodiscard]] double refine(Vec2 p, double s0) const;
+  PiecewiseCubic x_;
+  PiecewiseCubic y_;
+  double start_s_m_ = 0.0;
+  double length_m_ = 0.0;
+  double side_ = 1.0;  // +1: normal to the right of travel, -1: to the left
+  std::vector<double> sample_s_;  // dense samples for global projection
+  std::vector<Vec2> sample_xy_;
+};
+
+}  // namespace overtake::core

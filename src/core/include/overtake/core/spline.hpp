@@ -1,0 +1,60 @@
+#pragma once
+// Cubic splines: a natural one for planners' local paths, a periodic one for the closed
+// reference line.
+
+#include <optional>
+#include <span>
+#include <vector>
+
+namespace overtake::core {
+
+/// Value and first three derivatives of a spline at one parameter.
+struct SplineSample {
+  double value = 0.0;
+  double d1 = 0.0;
+  double d2 = 0.0;
+  double d3 = 0.0;
+};
+
+/// Cubic polynomial pieces over increasing knots: piece i is
+/// c0 + c1 u + c2 u^2 + c3 u^3 with u = t - knot[i].
+class PiecewiseCubic {
+ public:
+  /// Natural cubic spline (zero second derivative at both ends) through (t[i], y[i]).
+  /// nullopt when there are fewer than 2 points, sizes differ, a value is not finite or the
+  /// knots do not strictly increase.
+  [[nodiscard]] static std::optional<PiecewiseCubic> natural(std::span<const double> t,
+                                                             std::span<const double> y);
+
+  /// Periodic cubic spline through (t[i], y[i]) with period `period` (> t.back() - t[0]):
+  /// the curve closes smoothly from the last point back to the first. nullopt on fewer than
+  /// 3 points or knots that do not strictly increase within one period.
+  [[nodiscard]] static std::optional<PiecewiseCubic> periodic(std::span<const double> t,
+                                                              std::span<const double> y,
+                                                              double period);
+
+  /// Index of the piece that holds t (clamped to the first or last piece).
+  [[nodiscard]] std::size_t piece(double t) const;
+  /// Evaluates piece `i` at t (no wrapping).
+  [[nodiscard]] SplineSample eval_piece(std::size_t i, double t) const;
+  /// Evaluates at t; outside the knots the end pieces are extended.
+  [[nodiscard]] SplineSample eval(double t) const { return eval_piece(piece(t), t); }
+  [[nodiscard]] double operator()(double t) const { return eval(t).value; }
+
+  [[nodiscard]] double front() const { return knots_.front(); }
+  /// The end of the last piece (for a periodic spline: first knot + period).
+  [[nodiscard]] double back() const { return knots_.back(); }
+  [[nodiscard]] std::span<const double> knots() const { return knots_; }
+
+ private:
+  struct Piece {
+    double c0, c1, c2, c3;
+  };
+  static PiecewiseCubic from_second_derivatives(std::span<const double> t,
+                                                std::span<const double> y,
+                                                std::span<const double> m);
+  std::vector<double> knots_;  // pieces + 1 entries
+  std::vector<Piece> pieces_;
+};
+
+}  // namespace overtake::core

@@ -1,0 +1,32 @@
+#include "overtake/planner/policy.hpp"
+
+#include "overtake/planner/seed_policies.hpp"
+#include "overtake/planner/walkthrough.hpp"
+
+namespace overtake::planner {
+
+std::vector<PolicyInfo> list_policies() {
+  return {
+      {"walkthrough",
+       "keep lane, ramp to 49.5 mph, slow behind a car closer than 30 m, spline path (the "
+       "project walkthrough the seed planners start from)"},
+      {"seed000", "write-up 000: per-lane gaps and speeds, speed-dependent minimum gaps"},
+      {"seed001", "write-up 001: lane change after 40 cycles of slowing, 35 m gap check"},
+      {"seed002", "write-up 002: 30 m ahead / 5 m behind proximity per lane, 80-point path"},
+      {"seed003", "write-up 003: prioritised rules, strong acceleration, return to the middle lane"},
+      {"seed004", "write-up 004: 20 m / 10 m free-lane test, speed matching, 45 m anchor"},
+  };
+}
+
+std::unique_ptr<Policy> make_policy(std::string_view name, const core::ReferenceLine& line,
+                                    const PlannerParams& params) {
+  if (name == "walkthrough") return std::make_unique<WalkthroughPolicy>(line, params);
+  if (name == "seed000") return std::make_unique<Seed000Policy>(line, params);
+  if (name == "seed001") return std::make_unique<Seed001Policy>(line, params);
+  if (name == "seed002") return std::make_unique<Seed002Policy>(line, params);
+  if (name == "seed003") return std::make_unique<Seed003Policy>(line, params);
+  if (name == "seed004") return std::make_unique<Seed004Policy>(line, params);
+  return nullptr;
+}
+
+}  // namespace overtake::planner

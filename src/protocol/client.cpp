@@ -1,0 +1,480 @@
+// The simulator's side of the protocol: a websocket client with deadlines, the lock-step
+// PlannerFn and the real-time loop.
+
+#include "overtake/protocol/client.hpp"
+
+#include <algorithm>
+#include <cctype>
+#include <charconv>
+#include <cstdio>
+#include <cmath>
+#include <deque>
+#include <thread>
+
+#include <boost/asio/connect.hpp>
+#include <boost/asio/io_context.hpp>
+#include <boost/asio/ip/tcp.hpp>
+#include <boost/beast/core.hpp>
+#include <boost/beast/websocket.hpp>
+
+namespace overtake::protocol {
+namespace {
+
+namespace net = boost::asio;
+namespace beast = boost::beast;
+namespace websocket = beast::websocket;
+using tcp = net::ip::tcp;
+using beast::error_code;
+
+constexpr auto kRetryDelay = std::chrono::milliseconds(100);
+constexpr auto kAttemptTimeout = std::chrono::seconds(2);
+constexpr auto kCloseTimeout = std::chrono::milliseconds(500);
+constexpr double kProgressEveryS = 10.0;
+
+std::string seconds_text(std::chrono::milliseconds ms) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%g s", static_cast<double>(ms.count()) / 1000.0);
+  return buf;
+}
+
+}  // namespace
+
+// ---- URL --------------------------------------------------------------------------------
+
+Result<PlannerUrl> parse_planner_url(std::string_view url) {
+  const auto lower_prefix = [&](std::string_view prefix) {
+    if (url.size() < prefix.size()) return false;
+    for (std::size_t i = 0; i < prefix.size(); ++i) {
+      if (std::tolower(static_cast<unsigned char>(url[i])) != prefix[i]) return false;
+    }
+    return true;
+  };
+  if (lower_prefix("wss://")) return Error{"wss:// (TLS) is not supported; use ws://"};
+  if (!lower_prefix("ws://")) return Error{"expected ws://HOST:PORT/..., got " + excerpt(url)};
+  std::string_view rest = url.substr(5);
+  PlannerUrl out;
+  if (!rest.empty() && rest[0] == '[') {
+    const auto close = rest.find(']');
+    if (close == std::string_view::npos) return Error{"unclosed '[' in the host of " + excerpt(url)};
+    out.host = std::string(rest.substr(1, close - 1));
+    rest = rest.substr(close + 1);
+  } else {
+    const auto end = rest.find_first_of(":/?");
+    out.host = std::string(rest.substr(0, end));
+    rest = end == std::string_view::npos ? std::string_view{} : rest.substr(end);
+  }
+  if (out.host.empty()) return Error{"no host in " + excerpt(url)};
+  if (!rest.empty() && rest[0] == ':') {
+    const auto end = rest.find_first_of("/?");
+    const std::string_view port = rest.substr(1, end == std::string_view::npos ? end : end - 1);
+    unsigned value = 0;
+    const auto r = std::from_chars(port.data(), port.data() + port.size(), value);
+    if (port.empty() || r.ec != std::errc{} || r.ptr != port.data() + port.size() || value == 0 ||
+        value > 65535) {
+      return Error{"bad port " + excerpt(port) + " in " + excerpt(url)};
+    }
+    out.port = std::string(port);
+    rest = end == std::string_view::npos ? std::string_view{} : rest.substr(end);
+  }
+  if (!rest.empty()) out.target = rest[0] == '?' ? "/" + std::string(rest) : std::string(rest);
+  return out;
+}
+
+std::string to_string(const PlannerUrl& url) {
+  const bool v6 = url.host.find(':') != std::string::npos;
+  return "ws://" + (v6 ? "[" + url.host + "]" : url.host) + ":" + url.port + url.target;
+}
+
+// ---- connection -------------------------------------------------------------------------
+
+struct PlannerConnection::Impl {
+  net::io_context ioc;  // first: destroyed last, after everything its handlers refer to
+  ClientOptions opts;
+  std::unique_ptr<websocket::stream<tcp::socket>> ws;
+  beast::flat_buffer rd;
+  std::deque<ReceivedFrame> frames;
+  std::string out;
+  error_code read_error;
+  bool reading = false;
+  bool writing = false;
+  bool open = false;
+
+  // Runs handlers until `done()` or the deadline; returns done().
+  template <class Done>
+  bool run_until(const Done& done, Clock::time_point deadline) {
+    while (!done()) {
+      if (ioc.stopped()) ioc.restart();
+      if (ioc.run_one_until(deadline) == 0) {
+        if (Clock::now() >= deadline || ioc.stopped()) return done();  // late, or nothing pending
+      }
+    }
+    return true;
+  }
+
+  void start_read() {
+    reading = true;
+    ws->async_read(rd, [this](const error_code& ec, std::size_t) {
+      reading = false;
+      if (ec) {
+        read_error = ec;
+        open = false;
+        return;
+      }
+      frames.push_back({beast::buffers_to_string(rd.data()), ws->got_binary()});
+      rd.clear();
+      start_read();
+    });
+  }
+
+  void drop() {
+    open = false;
+    if (ws) {
+      error_code ignored;
+      ws->next_layer().close(ignored);
+    }
+  }
+
+  [[nodiscard]] std::string lost_reason() const {
+    const error_code& ec = read_error;
+    if (ec == websocket::error::closed) return "the planner closed the connection";
+    if (ec == websocket::error::message_too_big) {
+      return "the planner sent a frame larger than " + std::to_string(opts.max_frame_bytes) + " bytes";
+    }
+    if (ec == net::error::eof || ec == net::error::connection_reset || ec == net::error::broken_pipe) {
+      return "the planner dropped the connection (" + ec.message() + ")";
+    }
+    if (!ec) return "the connection is closed";
+    return "the connection to the planner failed (" + ec.message() + ")";
+  }
+
+  // One attempt: TCP connect and the upgrade. Returns an empty string or why it failed.
+  std::string attempt(const PlannerUrl& url, Clock::time_point deadline) {
+    error_code ec;
+    tcp::resolver resolver(ioc);
+    const auto endpoints = resolver.resolve(url.host, url.port, ec);
+    if (ec) return "cannot resolve " + url.host + " (" + ec.message() + ")";
+
+    ws = std::make_unique<websocket::stream<tcp::socket>>(ioc);
+    bool done = false;
+    net::async_connect(ws->next_layer(), endpoints, [&](const error_code& e, const tcp::endpoint&) {
+      ec = e;
+      done = true;
+    });
+    if (!run_until([&] { return done; }, deadline)) {
+      drop();
+      run_until([&] { return done; }, Clock::now() + kCloseTimeout);
+      return "connecting timed out";
+    }
+    if (ec) return ec.message();
+    ws->next_layer().set_option(tcp::no_delay(true), ec);
+
+    // The original's request: no User-Agent, Origin, cookies, subprotocol or extensions.
+    ws->set_option(websocket::permessage_deflate{});
+    ws->set_option(websocket::stream_base::decorator(
+        [](websocket::request_type& req) { req.erase(beast::http::field::user_agent); }));
+    ws->read_message_max(opts.max_frame_bytes);
+    ws->auto_fragment(false);
+    done = false;
+    const std::string host = (url.host.find(':') != std::string::npos ? "[" + url.host + "]" : url.host) +
+                             ":" + url.port;
+    ws->async_handshake(host, url.target, [&](const error_code& e) {
+      ec = e;
+      done = true;
+    });
+    if (!run_until([&] { return done; }, deadline)) {
+      drop();
+      run_until([&] { return done; }, Clock::now() + kCloseTimeout);
+      return "the websocket upgrade timed out";
+    }
+    if (ec) {
+      drop();
+      return "the websocket upgrade failed (" + ec.message() + ")";
+    }
+    open = true;
+    start_read();
+    return {};
+  }
+};
+
+PlannerConnection::PlannerConnection(const PlannerUrl& url, const ClientOptions& options)
+    : impl_(std::make_unique<Impl>()) {
+  impl_->opts = options;
+  const auto deadline = Clock::now() + options.connect_timeout;
+  for (;;) {
+    const auto attempt_deadline = std::min(deadline, Clock::now() + kAttemptTimeout);
+    const std::string why = impl_->attempt(url, attempt_deadline);
+    if (why.empty()) return;
+    if (Clock::now() + kRetryDelay >= deadline) {
+      throw ConnectionError("cannot connect to the planner at " + to_string(url) + " within " +
+                            seconds_text(options.connect_timeout) + ": " + why);
+    }
+    std::this_thread::sleep_for(kRetryDelay);
+  }
+}
+
+PlannerConnection::~PlannerConnection() { impl_->drop(); }
+
+void PlannerConnection::send(std::string_view payload, Clock::time_point deadline, bool binary) {
+  Impl& m = *impl_;
+  if (!m.open) throw ConnectionError(m.lost_reason());
+  m.out.assign(payload);
+  m.writing = true;
+  error_code ec;
+  m.ws->binary(binary);
+  m.ws->async_write(net::buffer(m.out), [&m, &ec](const error_code& e, std::size_t) {
+    ec = e;
+    m.writing = false;
+  });
+  if (!m.run_until([&] { return !m.writing; }, deadline)) {
+    m.drop();
+    m.run_until([&] { return !m.writing; }, Clock::now() + kCloseTimeout);
+    throw ConnectionError("the planner does not read: a frame could not be sent in time");
+  }
+  if (ec) {
+    if (!m.read_error) m.read_error = ec;
+    m.drop();
+    throw ConnectionError(m.lost_reason());
+  }
+}
+
+std::optional<ReceivedFrame> PlannerConnection::receive(Clock::time_point deadline) {
+  Impl& m = *impl_;
+  m.run_until([&] { return !m.frames.empty() || !m.reading; }, deadline);
+  if (!m.frames.empty()) {
+    ReceivedFrame f = std::move(m.frames.front());
+    m.frames.pop_front();
+    return f;
+  }
+  if (!m.reading) throw ConnectionError(m.lost_reason());
+  return std::nullopt;
+}
+
+std::vector<ReceivedFrame> PlannerConnection::take_arrived() {
+  Impl& m = *impl_;
+  if (m.ioc.stopped()) m.ioc.restart();
+  m.ioc.poll();
+  std::vector<ReceivedFrame> out(std::make_move_iterator(m.frames.begin()),
+                                 std::make_move_iterator(m.frames.end()));
+  m.frames.clear();
+  return out;
+}
+
+void PlannerConnection::close() noexcept {
+  Impl& m = *impl_;
+  try {
+    if (m.open && !m.writing) {
+      bool done = false;
+      m.ws->async_close(websocket::close_code::normal, [&done](const error_code&) { done = true; });
+      m.run_until([&] { return done && !m.reading; }, Clock::now() + kCloseTimeout);
+    }
+  } catch (...) {  // closing is best effort
+  }
+  m.drop();
+}
+
+bool PlannerConnection::is_open() const { return impl_->open; }
+
+// ---- what the planner sent --------------------------------------------------------------
+
+namespace {
+
+// A frame from the planner, sorted.
+struct Sorted {
+  enum Kind { reply, ping, ignore, fatal } kind = ignore;
+  std::string text;  // reply: the frame; ping: the pong to send; ignore: a note; fatal: why
+};
+
+Sorted sort_planner_frame(const ReceivedFrame& f) {
+  if (f.binary) {
+    return {Sorted::fatal, "malformed reply: a binary frame of " + std::to_string(f.text.size()) + " bytes"};
+  }
+  const Packet p = split_packet(f.text);
+  switch (p.type) {
+    case PacketType::invalid:
+      return {Sorted::fatal, "malformed reply: not an Engine.IO packet: " + excerpt(f.text)};
+    case PacketType::ping:
+      return {Sorted::ping, "3" + std::string(p.data)};
+    case PacketType::close:
+      return {Sorted::fatal, "the planner closed its session (1)"};
+    case PacketType::pong:
+    case PacketType::open:
+    case PacketType::upgrade:
+    case PacketType::noop:
+      return {Sorted::ignore, "ignored a packet from the planner: " + excerpt(f.text)};
+    case PacketType::message:
+      break;
+  }
+  if (!p.data.empty() && p.data[0] == '2') return {Sorted::reply, f.text};
+  if (!p.data.empty() && p.data[0] == '0') return {Sorted::ignore, "ignored the planner's Socket.IO connect (40)"};
+  if (!p.data.empty() && p.data[0] == '1') return {Sorted::fatal, "the planner left (41)"};
+  return {Sorted::fatal, "malformed reply: not a Socket.IO event: " + excerpt(f.text)};
+}
+
+const LogFn& log_of(const ClientOptions& o) {
+  static const LogFn fallback = stderr_log(false);
+  return o.log ? o.log : fallback;
+}
+
+}  // namespace
+
+// ---- lock-step --------------------------------------------------------------------------
+
+RemotePlanner::RemotePlanner(PlannerConnection& connection, const ClientOptions& options)
+    : connection_(connection), options_(options) {}
+
+std::vector<core::Vec2> RemotePlanner::operator()(const core::Telemetry& telemetry) {
+  const LogFn& log = log_of(options_);
+  try {
+    // Anything that came in since the last reply was not asked for.
+    for (const ReceivedFrame& f : connection_.take_arrived()) {
+      const Sorted s = sort_planner_frame(f);
+      if (s.kind == Sorted::reply) {
+        ++extra_replies_;
+        log(LogLevel::warning,
+            "the planner replied twice to one telemetry; the extra reply is ignored: " + excerpt(f.text, 40));
+      } else if (s.kind == Sorted::ping) {
+        connection_.send(s.text, Clock::now() + options_.reply_timeout);
+      } else if (s.kind == Sorted::ignore) {
+        log(LogLevel::info, s.text);
+      } else {
+        throw sim::PlannerFailure(s.text);
+      }
+    }
+
+    buffer_.clear();
+    append_telemetry(buffer_, telemetry);
+    const auto deadline = Clock::now() + options_.reply_timeout;
+    connection_.send(buffer_, deadline);
+    for (;;) {
+      const auto frame = connection_.receive(deadline);
+      if (!frame) {
+        throw sim::PlannerFailure("the planner stalled: no reply within " +
+                                  seconds_text(options_.reply_timeout));
+      }
+      const Sorted s = sort_planner_frame(*frame);
+      if (s.kind == Sorted::fatal) throw sim::PlannerFailure(s.text);
+      if (s.kind == Sorted::ignore) {
+        log(LogLevel::info, s.text);
+        continue;
+      }
+      if (s.kind == Sorted::ping) {
+        connection_.send(s.text, deadline);
+        continue;
+      }
+      auto reply = parse_reply(frame->text, options_.limits);
+      if (!reply) throw sim::PlannerFailure("malformed reply: " + reply.error());
+      if (reply.value().manual) {
+        if (!manual_noted_) {
+          log(LogLevel::info, "the planner answered a full telemetry with manual: the queued path is kept");
+          manual_noted_ = true;
+        }
+        return telemetry.previous_path;
+      }
+      return std::move(reply).value().path;
+    }
+  } catch (const ConnectionError& e) {
+    throw sim::PlannerFailure(e.what());
+  }
+}
+
+// ---- real time --------------------------------------------------------------------------
+
+sim::RunReport run_realtime(sim::World& world, PlannerConnection& connection,
+                            const ClientOptions& options, const sim::RunOptions& run) {
+  const LogFn& log = log_of(options);
+  const sim::WorldParams& p = world.params();
+  const long total_steps = std::lround(run.duration_s / p.step_s);
+  const auto period = std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(p.step_s));
+  sim::LaneTracker lanes(p.road);
+  std::vector<double> cycle_us;
+  std::string ended_early;
+
+  std::string buffer;
+  bool awaiting = false;       // a telemetry is out and unanswered
+  bool awaiting_full = false;  // ... and it was a full one
+  long last_full_step = -1;
+  Clock::time_point sent_at;
+  double next_progress_s = kProgressEveryS;
+
+  const auto send_telemetry = [&](bool full) {
+    sent_at = Clock::now();
+    if (full) {
+      buffer.clear();
+      append_telemetry(buffer, world.telemetry());
+      last_full_step = world.steps();
+    }
+    connection.send(full ? std::string_view(buffer) : kNullTelemetry, sent_at + options.reply_timeout);
+    awaiting = true;
+    awaiting_full = full;
+  };
+
+  auto next_tick = Clock::now() + period;
+  try {
+    try {
+      send_telemetry(true);
+      while (world.steps() < total_steps) {
+        if (run.stop && run.stop->load(std::memory_order_relaxed)) {
+          ended_early = "stopped";
+          break;
+        }
+        // The physics: every step that is due, whatever the planner is doing.
+        bool stepped = false;
+        while (Clock::now() >= next_tick && world.steps() < total_steps) {
+          world.step();
+          lanes.observe(world.ego().frenet.d_m, p.step_s);
+          next_tick += period;
+          stepped = true;
+        }
+        if (stepped && run.progress && world.time_s() >= next_progress_s) {
+          run.progress(world.time_s(), world.referee().distance_m());
+          next_progress_s += kProgressEveryS;
+        }
+        if (world.steps() >= total_steps) break;
+        if (!awaiting && stepped) send_telemetry(true);
+        const auto reply_deadline = sent_at + options.reply_timeout;
+        if (awaiting && Clock::now() >= reply_deadline) {
+          throw sim::PlannerFailure("the planner stalled: no reply within " + seconds_text(options.reply_timeout));
+        }
+
+        const auto frame = connection.receive(awaiting ? std::min(next_tick, reply_deadline) : next_tick);
+        if (!frame) continue;
+        const Sorted s = sort_planner_frame(*frame);
+        if (s.kind == Sorted::fatal) throw sim::PlannerFailure(s.text);
+        if (s.kind == Sorted::ignore) {
+          log(LogLevel::info, s.text);
+          continue;
+        }
+        if (s.kind == Sorted::ping) {
+          connection.send(s.text, Clock::now() + options.reply_timeout);
+          continue;
+        }
+        if (!awaiting) {
+          log(LogLevel::warning, "the planner replied twice to one telemetry; the extra reply is ignored: " +
+                                     excerpt(frame->text, 40));
+          continue;
+        }
+        auto reply = parse_reply(frame->text, options.limits);
+        if (!reply) throw sim::PlannerFailure("malformed reply: " + reply.error());
+        awaiting = false;
+        if (awaiting_full) {
+          cycle_us.push_back(std::chrono::duration<double, std::micro>(Clock::now() - sent_at).count());
+        }
+        if (!reply.value().manual) world.apply_path(std::move(reply).value().path);
+        // Next telemetry: full when anything stepped; null once when nothing did; after the
+        // answer to a null one, the next step sends it.
+        if (world.steps() > last_full_step) {
+          send_telemetry(true);
+        } else if (awaiting_full) {
+          send_telemetry(false);
+        }
+      }
+    } catch (const ConnectionError& e) {
+      throw sim::PlannerFailure(e.what());
+    }
+  } catch (const sim::PlannerFailure& e) {
+    ended_early = std::string("planner failed at t = ") + std::to_string(world.time_s()) + " s: " + e.what();
+  }
+  return sim::summarize(world, lanes, std::move(cycle_us), std::move(ended_early));
+}
+
+}  // namespace overtake::protocol

@@ -1,0 +1,109 @@
+#pragma once
+// The referee: the original's rubric of incidents, plus strict comfort figures.
+
+#include <array>
+#include <cstddef>
+#include <optional>
+#include <string_view>
+#include <vector>
+
+#include "overtake/core/geometry.hpp"
+#include "overtake/core/road.hpp"
+#include "overtake/sim/params.hpp"
+
+namespace overtake::sim {
+
+enum class IncidentType { collision, speeding, max_acceleration, max_jerk, outside_lane };
+inline constexpr std::size_t kIncidentTypeCount = 5;
+
+/// JSON/report name: collision, speeding, max_acceleration, max_jerk, outside_lane.
+[[nodiscard]] std::string_view to_string(IncidentType t);
+
+/// One counted incident.
+struct Incident {
+  IncidentType type = IncidentType::collision;
+  double t_s = 0.0;
+  double s_m = 0.0;
+  int lane = 0;
+  /// What crossed the limit: speed (m/s), acceleration (m/s^2), jerk (m/s^3), d (m; for a
+  /// straddle, the d at the moment it counted), or for a collision the other car's id.
+  double value = 0.0;
+  friend bool operator==(const Incident&, const Incident&) = default;
+};
+
+/// The ego at the end of one step, as the referee sees it.
+struct EgoFrame {
+  double t_s = 0.0;
+  core::Vec2 position;
+  double speed_mps = 0.0;
+  double s_m = 0.0;
+  double d_m = 0.0;
+  /// Id of a car whose footprint overlaps the ego's this step, if any.
+  std::optional<int> collided_with;
+};
+
+/// Peaks under both rule sets (SI).
+struct Peaks {
+  double speed_mps = 0.0;
+  double acceleration_mps2 = 0.0;         ///< rubric: block-averaged total
+  double jerk_mps3 = 0.0;                 ///< rubric: group-averaged
+  double strict_acceleration_mps2 = 0.0;  ///< 0.1 s windows
+  double strict_jerk_mps3 = 0.0;
+  friend bool operator==(const Peaks&, const Peaks&) = default;
+};
+
+/// Watches the ego step by step and counts incidents.
+class Referee {
+ public:
+  Referee(const RefereeParams& params, double step_s, const core::RoadParams& road = {});
+
+  /// Feeds the state after one step. Frames must come once per step, in order.
+  void observe(const EgoFrame& frame);
+
+  [[nodiscard]] const std::vector<Incident>& incidents() const { return incidents_; }
+  [[nodiscard]] std::array<int, kIncidentTypeCount> counts() const;
+  [[nodiscard]] const Peaks& peaks() const { return peaks_; }
+  /// Distance driven (m) since the last incident.
+  [[nodiscard]] double incident_free_m() const { return incident_free_m_; }
+  /// The longest incident-free stretch so far (m), including the current one.
+  [[nodiscard]] double best_incident_free_m() const { return best_incident_free_m_; }
+  [[nodiscard]] double distance_m() const { return distance_m_; }
+
+ private:
+  void count(IncidentType type, const EgoFrame& f, double value);
+  [[nodiscard]] bool latched(IncidentType type) const;
+  /// The position `back` steps before the newest one (0: the newest).
+  [[nodiscard]] core::Vec2 recent(long back) const;
+  void update_rubric(const EgoFrame& f, double curvature);
+  void update_strict();
+
+  RefereeParams p_;
+  double step_s_;
+  core::RoadParams road_;
+  std::vector<Incident> incidents_;
+  Peaks peaks_;
+  double distance_m_ = 0.0;
+  double incident_free_m_ = 0.0;
+  double best_incident_free_m_ = 0.0;
+  std::array<long, kIncidentTypeCount> latch_until_step_{};  // may count again from this step
+  std::array<int, kIncidentTypeCount> counts_{};
+  long step_ = 0;  // index of the frame being observed
+  // rubric acceleration: block accumulation
+  int block_fill_ = 0;
+  double block_speed_sum_ = 0.0;
+  double block_curvature_sum_ = 0.0;
+  std::optional<double> prev_block_mean_speed_;
+  // rubric jerk: group accumulation of block totals
+  int group_fill_ = 0;
+  double group_sum_ = 0.0;
+  std::optional<double> prev_group_mean_;
+  // recent positions for curvature and the strict windows: a ring whose size is a power of
+  // two (allocated once), newest at `ring_head_`; `ring_filled_` of them are valid.
+  std::vector<core::Vec2> ring_;
+  std::size_t ring_mask_ = 0;
+  std::size_t ring_head_ = 0;
+  long ring_filled_ = 0;
+  int straddle_steps_ = 0;
+};
+
+}  // namespace overtake::sim

@@ -1,0 +1,65 @@
+#pragma once
+// The headless world: fixed steps of the ego (perfect controller on its path queue), the
+// traffic, and the referee, deterministic from a seed.
+
+#include <cstdint>
+#include <deque>
+#include <vector>
+
+#include "overtake/core/map.hpp"
+#include "overtake/core/reference_line.hpp"
+#include "overtake/core/telemetry.hpp"
+#include "overtake/sim/params.hpp"
+#include "overtake/sim/referee.hpp"
+#include "overtake/sim/traffic.hpp"
+
+namespace overtake::sim {
+
+/// The ego's exact state.
+struct EgoState {
+  core::Vec2 position;
+  double yaw_rad = 0.0;
+  double speed_mps = 0.0;
+  core::FrenetPoint frenet;
+};
+
+/// One simulated world. The map and line must outlive it.
+class World {
+ public:
+  World(const core::Map& map, const core::ReferenceLine& line, const WorldParams& params,
+        TrafficProfile profile, std::uint64_t seed);
+
+  /// What the planner is told now (rounded as on the wire when the params say so).
+  [[nodiscard]] core::Telemetry telemetry() const;
+  /// Takes a planner's path: rounds it as the original reads it, then trims it by the
+  /// original's rule (path_queue.hpp) and makes the rest the ego's queue.
+  void apply_path(std::vector<core::Vec2> path);
+  /// Advances one step: traffic decides and moves, the ego moves, the referee checks.
+  void step();
+
+  [[nodiscard]] double time_s() const { return static_cast<double>(steps_) * params_.step_s; }
+  [[nodiscard]] long steps() const { return steps_; }
+  [[nodiscard]] const EgoState& ego() const { return ego_; }
+  [[nodiscard]] const std::deque<core::Vec2>& queue() const { return queue_; }
+  [[nodiscard]] const Traffic& traffic() const { return traffic_; }
+  [[nodiscard]] Traffic& traffic_for_testing() { return traffic_; }
+  [[nodiscard]] const Referee& referee() const { return referee_; }
+  [[nodiscard]] const WorldParams& params() const { return params_; }
+  [[nodiscard]] const core::ReferenceLine& line() const { return line_; }
+  /// The ego's footprint in map axes.
+  [[nodiscard]] core::OrientedBox ego_footprint() const;
+
+ private:
+  [[nodiscard]] EgoView ego_view() const;
+  [[nodiscard]] std::optional<int> collision() const;
+
+  const core::ReferenceLine& line_;
+  WorldParams params_;
+  EgoState ego_;
+  std::deque<core::Vec2> queue_;
+  Traffic traffic_;
+  Referee referee_;
+  long steps_ = 0;
+};
+
+}  // namespace overtake::sim

@@ -1,0 +1,162 @@
+#include "overtake/sim/referee.hpp"
+
+#include <algorithm>
+#include <bit>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+namespace overtake::sim {
+namespace {
+
+constexpr std::size_t index_of(IncidentType t) {
+  return static_cast<std::size_t>(t);
+}
+
+/// True when `d_m` lies within `half_width_m` of a lane line between two lanes.
+bool on_inner_line(double d_m, const core::RoadParams& road, double half_width_m) {
+  if (road.lane_count < 2) return false;
+  // The nearest inner line is the only candidate: if any inner line is within the band,
+  // the nearest one is.
+  const double k = std::clamp(std::round(d_m / road.lane_width_m), 1.0,
+                              static_cast<double>(road.lane_count - 1));
+  return std::abs(d_m - k * road.lane_width_m) <= half_width_m;
+}
+
+void require(bool ok, const char* what) {
+  if (!ok) throw std::invalid_argument(std::string("Referee: ") + what);
+}
+
+}  // namespace
+
+std::string_view to_string(IncidentType t) {
+  switch (t) {
+    case IncidentType::collision:
+      return "collision";
+    case IncidentType::speeding:
+      return "speeding";
+    case IncidentType::max_acceleration:
+      return "max_acceleration";
+    case IncidentType::max_jerk:
+      return "max_jerk";
+    case IncidentType::outside_lane:
+      return "outside_lane";
+  }
+  return "unknown";
+}
+
+Referee::Referee(const RefereeParams& params, double step_s, const core::RoadParams& road)
+    : p_(params), step_s_(step_s), road_(road) {
+  require(step_s > 0.0, "step_s must be positive");
+  require(p_.accel_block_steps >= 1, "referee.accel_block_steps must be at least 1");
+  require(p_.jerk_group_blocks >= 1, "referee.jerk_group_blocks must be at least 1");
+  require(p_.latch_steps >= 1, "referee.latch_steps must be at least 1");
+  require(p_.strict_window_steps >= 1, "referee.strict_window_steps must be at least 1");
+  require(road_.lane_width_m > 0.0, "road.lane_width_m must be positive");
+  // Curvature needs 3 positions, the strict jerk 3w + 1.
+  const auto needed = static_cast<std::size_t>(std::max(3, 3 * p_.strict_window_steps + 1));
+  ring_.assign(std::bit_ceil(needed), core::Vec2{});
+  ring_mask_ = ring_.size() - 1;
+}
+
+std::array<int, kIncidentTypeCount> Referee::counts() const {
+  return counts_;
+}
+
+bool Referee::latched(IncidentType type) const {
+  return step_ < latch_until_step_[index_of(type)];
+}
+
+core::Vec2 Referee::recent(long back) const {
+  return ring_[(ring_head_ - static_cast<std::size_t>(back)) & ring_mask_];
+}
+
+void Referee::count(IncidentType type, const EgoFrame& f, double value) {
+  if (latched(type)) return;
+  incidents_.push_back({type, f.t_s, f.s_m, core::lane_of(f.d_m, road_), value});
+  latch_until_step_[index_of(type)] = step_ + p_.latch_steps;
+  ++counts_[index_of(type)];
+  incident_free_m_ = 0.0;
+}
+
+void Referee::observe(const EgoFrame& f) {
+  // Distance, then the new position joins the ring.
+  if (ring_filled_ > 0) {
+    const double moved_m = std::sqrt(core::distance_sq(f.position, recent(0)));
+    distance_m_ += moved_m;
+    incident_free_m_ += moved_m;
+    best_incident_free_m_ = std::max(best_incident_free_m_, incident_free_m_);
+  }
+  ring_head_ = (ring_head_ + 1) & ring_mask_;
+  ring_[ring_head_] = f.position;
+  if (ring_filled_ < static_cast<long>(ring_.size())) ++ring_filled_;
+
+  peaks_.speed_mps = std::max(peaks_.speed_mps, f.speed_mps);
+
+  // Per-step rules.
+  if (f.collided_with) count(IncidentType::collision, f, static_cast<double>(*f.collided_with));
+  if (f.speed_mps > p_.speed_limit_mps) count(IncidentType::speeding, f, f.speed_mps);
+  straddle_steps_ =
+      on_inner_line(f.d_m, road_, p_.line_band_half_width_m) ? straddle_steps_ + 1 : 0;
+  if (f.d_m < p_.min_d_m || f.d_m > p_.max_d_m || straddle_steps_ > p_.straddle_max_steps) {
+    count(IncidentType::outside_lane, f, f.d_m);
+  }
+
+  const double curvature =
+      ring_filled_ >= 3 ? core::menger_curvature(recent(2), recent(1), recent(0)) : 0.0;
+  update_rubric(f, curvature);
+  update_strict();
+  ++step_;
+}
+
+void Referee::update_rubric(const EgoFrame& f, double curvature) {
+  block_speed_sum_ += f.speed_mps;
+  block_curvature_sum_ += curvature;
+  if (++block_fill_ < p_.accel_block_steps) return;
+
+  const double block_s = p_.accel_block_steps * step_s_;
+  const double mean_speed = block_speed_sum_ / p_.accel_block_steps;
+  const double mean_curvature = block_curvature_sum_ / p_.accel_block_steps;
+  block_fill_ = 0;
+  block_speed_sum_ = 0.0;
+  block_curvature_sum_ = 0.0;
+  const std::optional<double> prev_speed = prev_block_mean_speed_;
+  prev_block_mean_speed_ = mean_speed;
+  if (!prev_speed) return;  // the first block has no total
+
+  const double tangential = (mean_speed - *prev_speed) / block_s;
+  const double normal = mean_speed * mean_speed * std::abs(mean_curvature);
+  const double total = std::sqrt(tangential * tangential + normal * normal);
+  peaks_.acceleration_mps2 = std::max(peaks_.acceleration_mps2, total);
+  if (total >= p_.max_accel_mps2) count(IncidentType::max_acceleration, f, total);
+
+  group_sum_ += total;
+  if (++group_fill_ < p_.jerk_group_blocks) return;
+  const double group_mean = group_sum_ / p_.jerk_group_blocks;
+  group_fill_ = 0;
+  group_sum_ = 0.0;
+  const std::optional<double> prev_mean = prev_group_mean_;
+  prev_group_mean_ = group_mean;
+  if (!prev_mean) return;
+
+  const double jerk = std::abs(group_mean - *prev_mean) / (p_.jerk_group_blocks * block_s);
+  peaks_.jerk_mps3 = std::max(peaks_.jerk_mps3, jerk);
+  if (jerk >= p_.max_jerk_mps3) count(IncidentType::max_jerk, f, jerk);
+}
+
+void Referee::update_strict() {
+  const long w = p_.strict_window_steps;
+  if (ring_filled_ < 2 * w + 1) return;
+  const double window_s = static_cast<double>(w) * step_s_;
+  const core::Vec2 p0 = recent(0);
+  const core::Vec2 p1 = recent(w);
+  const core::Vec2 p2 = recent(2 * w);
+  const double accel = core::norm(p0 - 2.0 * p1 + p2) / (window_s * window_s);
+  peaks_.strict_acceleration_mps2 = std::max(peaks_.strict_acceleration_mps2, accel);
+  if (ring_filled_ < 3 * w + 1) return;
+  const core::Vec2 p3 = recent(3 * w);
+  const double jerk = core::norm(p0 - 3.0 * p1 + 3.0 * p2 - p3) / (window_s * window_s * window_s);
+  peaks_.strict_jerk_mps3 = std::max(peaks_.strict_jerk_mps3, jerk);
+}
+
+}  // namespace overtake::sim

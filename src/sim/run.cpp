@@ -1,0 +1,100 @@
+#include "overtake/sim/run.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+
+#include "overtake/core/random.hpp"
+
+namespace overtake::sim {
+namespace {
+
+constexpr std::uint64_t kLatencyStream = 20;
+constexpr double kProgressEveryS = 10.0;
+
+double percentile(const std::vector<double>& sorted, double q) {
+  if (sorted.empty()) return 0.0;
+  const auto i = static_cast<std::size_t>(std::ceil(q * static_cast<double>(sorted.size()))) - 1;
+  return sorted[std::min(i, sorted.size() - 1)];
+}
+
+}  // namespace
+
+LaneTracker::LaneTracker(const core::RoadParams& road, double settle_m)
+    : road_(road), settle_m_(settle_m), time_in_lane_s_(static_cast<std::size_t>(road.lane_count), 0.0) {}
+
+void LaneTracker::observe(double d_m, double dt_s) {
+  const int lane = core::lane_of(d_m, road_);
+  time_in_lane_s_[static_cast<std::size_t>(lane)] += dt_s;
+  if (std::abs(d_m - core::lane_center_d(lane, road_)) > settle_m_) return;
+  if (settled_ >= 0 && settled_ != lane) ++changes_;
+  settled_ = lane;
+}
+
+RunReport run_drive(World& world, const PlannerFn& planner, const RunOptions& opts) {
+  const WorldParams& p = world.params();
+  const long total_steps = std::lround(opts.duration_s / p.step_s);
+  core::Rng latency(core::derive_seed(opts.seed, kLatencyStream));
+  LaneTracker lanes(p.road);
+  std::vector<double> cycle_us;
+  cycle_us.reserve(static_cast<std::size_t>(total_steps / std::max(1, p.min_steps_per_call)) + 1);
+
+  std::string ended_early;
+  double next_progress_s = kProgressEveryS;
+  while (world.steps() < total_steps) {
+    if (opts.stop && opts.stop->load(std::memory_order_relaxed)) {
+      ended_early = "stopped";
+      break;
+    }
+    const core::Telemetry telemetry = world.telemetry();
+    std::vector<core::Vec2> path;
+    const auto t0 = std::chrono::steady_clock::now();
+    try {
+      path = planner(telemetry);
+    } catch (const std::exception& e) {
+      ended_early = std::string("planner failed at t = ") +
+                           std::to_string(world.time_s()) + " s: " + e.what();
+      break;
+    }
+    const auto t1 = std::chrono::steady_clock::now();
+    cycle_us.push_back(std::chrono::duration<double, std::micro>(t1 - t0).count());
+    world.apply_path(std::move(path));
+
+    const int k = opts.steps_per_call
+                      ? *opts.steps_per_call
+                      : latency.uniform_int(p.min_steps_per_call, p.max_steps_per_call);
+    for (int i = 0; i < k && world.steps() < total_steps; ++i) {
+      world.step();
+      lanes.observe(world.ego().frenet.d_m, p.step_s);
+    }
+    if (opts.progress && world.time_s() >= next_progress_s) {  // every 10 simulated seconds
+      opts.progress(world.time_s(), world.referee().distance_m());
+      next_progress_s += kProgressEveryS;
+    }
+  }
+
+  return summarize(world, lanes, std::move(cycle_us), std::move(ended_early));
+}
+
+RunReport summarize(const World& world, const LaneTracker& lanes, std::vector<double> cycle_us,
+                    std::string ended_early) {
+  RunReport report;
+  report.ended_early = std::move(ended_early);
+  const Referee& ref = world.referee();
+  report.duration_s = world.time_s();
+  report.distance_m = ref.distance_m();
+  report.mean_speed_mps = report.duration_s > 0.0 ? report.distance_m / report.duration_s : 0.0;
+  report.best_incident_free_m = ref.best_incident_free_m();
+  report.incidents = ref.incidents();
+  report.incident_counts = ref.counts();
+  report.peak = ref.peaks();
+  report.lane_changes = lanes.lane_changes();
+  report.time_in_lane_s = lanes.time_in_lane_s();
+  report.planner_cycles = static_cast<long>(cycle_us.size());
+  std::sort(cycle_us.begin(), cycle_us.end());
+  report.timing = {percentile(cycle_us, 0.5), percentile(cycle_us, 0.99),
+                   cycle_us.empty() ? 0.0 : cycle_us.back(), static_cast<long>(cycle_us.size())};
+  return report;
+}
+
+}  // namespace overtake::sim

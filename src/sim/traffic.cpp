@@ -1,0 +1,741 @@
+#include "overtake/sim/traffic.hpp"
+
+#include <algorithm>
+#include <cassert>
+#include <cmath>
+#include <limits>
+
+#include "overtake/core/road.hpp"
+#include "overtake/core/units.hpp"
+
+namespace overtake::sim {
+namespace {
+
+constexpr std::uint64_t kSpawnStream = 0;
+constexpr std::uint64_t kFirstCarStream = 100;
+/// (faithful) A car counts as held up when it reacted to a vehicle ahead this step or
+/// within this time before: bang-bang following brakes in short bursts between surges.
+/// Its lane-change candidate is dropped once it has not been held up for more than
+/// kCandidateKeepS more, i.e. kHeldUpMemoryS + kCandidateKeepS after its last reaction;
+/// so a candidate picked while held up always has more than 50 steps to see its gap.
+constexpr double kHeldUpMemoryS = 1.0;
+constexpr double kCandidateKeepS = 1.0;
+constexpr double kTimeEpsilonS = 1e-9;
+/// (ours) spawn room in a lane: car length + this + the braking distance.
+constexpr double kSpawnMarginM = 1.0;
+/// Last resort of the initial placement: ego + this + kFallbackStepM * k, lane k mod count.
+constexpr double kFallbackAheadM = 150.0;
+constexpr double kFallbackStepM = 10.0;
+constexpr int kFallbackTries = 1000;
+/// Below this speed a footprint takes the road's heading instead of the velocity's.
+constexpr double kStationaryMps = 0.1;
+/// (calm) IDM's gap is never taken below this (avoids dividing by zero).
+constexpr double kMinIdmGapM = 0.01;
+constexpr double kMinDesiredSpeedMps = 0.1;
+/// (calm) The ACC model's coolness factor (Kesting, Treiber, Helbing 2010).
+constexpr double kCoolness = 0.99;
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+[[nodiscard]] constexpr unsigned lane_bit(int lane) { return 1U << static_cast<unsigned>(lane); }
+
+/// Minimum-jerk lateral profile: position fraction and its derivative in tau.
+[[nodiscard]] constexpr double min_jerk(double tau) {
+  return tau * tau * tau * (10.0 + tau * (-15.0 + 6.0 * tau));
+}
+[[nodiscard]] constexpr double min_jerk_rate(double tau) {
+  return tau * tau * (30.0 + tau * (-60.0 + 30.0 * tau));
+}
+
+}  // namespace
+
+std::optional<TrafficProfile> parse_traffic_profile(std::string_view name) {
+  if (name == "faithful") return TrafficProfile::faithful;
+  if (name == "calm") return TrafficProfile::calm;
+  return std::nullopt;
+}
+
+std::string_view to_string(TrafficProfile p) {
+  switch (p) {
+    case TrafficProfile::faithful:
+      return "faithful";
+    case TrafficProfile::calm:
+      return "calm";
+  }
+  return "faithful";
+}
+
+/// The implementation, as static helpers with access to Traffic's state.
+struct TrafficImpl {
+  using Vehicle = Traffic::Vehicle;
+  using Decision = Traffic::Decision;
+
+  struct Nearest {
+    int vehicle = -1;  // index into vehicles_
+    double gap_m = kInf;
+  };
+
+  struct Region {
+    double lo_m = 0.0;  // along-road offset from the ego
+    double hi_m = 0.0;
+    double min_speed_mps = 0.0;
+    double max_speed_mps = 0.0;
+  };
+
+  // ----- along-road geometry ---------------------------------------------------------------
+
+  /// line.s_ahead for s values already wrapped (as every stored s is): the same result
+  /// without the two fmods, since this runs for every pair of vehicles every step.
+  [[nodiscard]] static double ahead(const Traffic& t, double from_s, double to_s) {
+    const double length = t.line_.length_m();
+    double diff = to_s - from_s;
+    if (diff > 0.5 * length) {
+      diff -= length;
+    } else if (diff <= -0.5 * length) {
+      diff += length;
+    }
+    return diff;
+  }
+
+  /// Distance from `from_s` forward to `to_s`, in [0, length).
+  [[nodiscard]] static double forward(const Traffic& t, double from_s, double to_s) {
+    const double length = t.line_.length_m();
+    double r = std::fmod(to_s - from_s, length);
+    if (r < 0.0) r += length;
+    return r;
+  }
+
+  /// Index of the first waypoint ahead of s (strictly), wrapping to 0 past the last.
+  [[nodiscard]] static std::size_t next_waypoint(const Traffic& t, double s_wrapped) {
+    const auto& w = t.map_.waypoints;
+    const auto it = std::upper_bound(w.begin(), w.end(), s_wrapped,
+                                     [](double s, const core::Waypoint& p) { return s < p.s_m; });
+    return it == w.end() ? 0 : static_cast<std::size_t>(it - w.begin());
+  }
+
+  [[nodiscard]] static double waypoint_s(const Traffic& t, long index) {
+    const auto n = static_cast<long>(t.map_.waypoints.size());
+    return t.map_.waypoints[static_cast<std::size_t>(((index % n) + n) % n)].s_m;
+  }
+
+  // ----- lanes -----------------------------------------------------------------------------
+
+  [[nodiscard]] static unsigned ego_lanes(const Traffic& t, double ego_d) {
+    unsigned mask = 0;
+    for (int k = 0; k < t.road_.lane_count; ++k) {
+      if (std::abs(ego_d - core::lane_center_d(k, t.road_)) < t.params_.faithful.ego_lane_radius_m) {
+        mask |= lane_bit(k);
+      }
+    }
+    return mask;
+  }
+
+  [[nodiscard]] static unsigned now_lanes(const Traffic& t, const TrafficCar& c) {
+    return lane_bit(core::lane_of(c.d_m, t.road_));
+  }
+
+  [[nodiscard]] static unsigned follow_lanes(const Traffic& t, const TrafficCar& c) {
+    unsigned mask = now_lanes(t, c);
+    if (c.manoeuvre) mask |= lane_bit(c.manoeuvre->to_lane);
+    return mask;
+  }
+
+  /// Fills vehicles_: the cars in order, then the ego.
+  static void build_vehicles(Traffic& t, const EgoView& ego, double ego_s, double dt) {
+    const std::size_t n = t.cars_.size();
+    t.vehicles_.resize(n + 1);
+    for (std::size_t i = 0; i < n; ++i) {
+      const TrafficCar& c = t.cars_[i];
+      Vehicle& v = t.vehicles_[i];
+      v.s_m = c.s_m;
+      v.speed_mps = c.speed_mps;
+      v.accel_mps2 = c.accel_mps2;
+      v.now_lanes = now_lanes(t, c);
+      v.follow_lanes = c.manoeuvre ? v.now_lanes | lane_bit(c.manoeuvre->to_lane) : v.now_lanes;
+      v.car = static_cast<int>(i);
+    }
+    Vehicle& e = t.vehicles_[n];
+    e.s_m = ego_s;
+    e.speed_mps = ego.speed_mps;
+    // The ego's acceleration, from its speed at the previous step (0 at the first).
+    e.accel_mps2 = t.ego_prev_speed_mps_ >= 0.0 ? (ego.speed_mps - t.ego_prev_speed_mps_) / dt : 0.0;
+    e.now_lanes = e.follow_lanes = ego_lanes(t, ego.d_m);
+    e.car = -1;
+  }
+
+  /// Nearest vehicle ahead (smallest positive gap) among those occupying any of `lanes`,
+  /// other than `self` and `skip`.
+  [[nodiscard]] static Nearest leader(const Traffic& t, int self, unsigned lanes, int skip = -1) {
+    Nearest best;
+    const double s = t.vehicles_[static_cast<std::size_t>(self)].s_m;
+    const int count = static_cast<int>(t.vehicles_.size());
+    for (int j = 0; j < count; ++j) {
+      const Vehicle& v = t.vehicles_[static_cast<std::size_t>(j)];
+      if (j == self || j == skip || (v.follow_lanes & lanes) == 0) continue;
+      const double gap = ahead(t, s, v.s_m);
+      if (gap > 0.0 && gap < best.gap_m) best = {j, gap};
+    }
+    return best;
+  }
+
+  /// Nearest vehicle behind (gap reported as a positive distance) occupying any of `lanes`.
+  [[nodiscard]] static Nearest follower(const Traffic& t, int self, unsigned lanes) {
+    Nearest best;
+    const double s = t.vehicles_[static_cast<std::size_t>(self)].s_m;
+    const int count = static_cast<int>(t.vehicles_.size());
+    for (int j = 0; j < count; ++j) {
+      const Vehicle& v = t.vehicles_[static_cast<std::size_t>(j)];
+      if (j == self || (v.follow_lanes & lanes) == 0) continue;
+      const double gap = -ahead(t, s, v.s_m);
+      if (gap > 0.0 && gap < best.gap_m) best = {j, gap};
+    }
+    return best;
+  }
+
+  // ----- faithful profile ------------------------------------------------------------------
+
+  /// A lane is clear for car i when no vehicle counting in it (traffic by current d, the ego
+  /// by the radius rule) is within clear_gap_m ahead or behind.
+  [[nodiscard]] static bool lane_clear(const Traffic& t, int self, int lane) {
+    const double s = t.vehicles_[static_cast<std::size_t>(self)].s_m;
+    const double gap = t.params_.faithful.clear_gap_m;
+    const int count = static_cast<int>(t.vehicles_.size());
+    for (int j = 0; j < count; ++j) {
+      const Vehicle& v = t.vehicles_[static_cast<std::size_t>(j)];
+      if (j == self || (v.now_lanes & lane_bit(lane)) == 0) continue;
+      if (std::abs(ahead(t, s, v.s_m)) <= gap) return false;
+    }
+    return true;
+  }
+
+  [[nodiscard]] static bool near_next_waypoint(const Traffic& t, double s) {
+    const std::size_t next = next_waypoint(t, s);
+    const double dist = forward(t, s, t.map_.waypoints[next].s_m);
+    return dist <= t.params_.faithful.waypoint_trigger_m;
+  }
+
+  /// The original's choice: from an edge lane towards the middle; from the middle, the lane
+  /// nearer the divider first. The first clear one, else the first that exists.
+  [[nodiscard]] static std::optional<int> pick_candidate(const Traffic& t, int self, int lane) {
+    std::optional<int> first;
+    for (const int cand : {lane - 1, lane + 1}) {
+      if (cand < 0 || cand >= t.road_.lane_count) continue;
+      if (!first) first = cand;
+      if (lane_clear(t, self, cand)) return cand;
+    }
+    return first;
+  }
+
+  static void decide_faithful(Traffic& t, double dt) {
+    const FaithfulTrafficParams& f = t.params_.faithful;
+    const int n = static_cast<int>(t.cars_.size());
+    for (int i = 0; i < n; ++i) {
+      TrafficCar& c = t.cars_[static_cast<std::size_t>(i)];
+      Decision& dec = t.decisions_[static_cast<std::size_t>(i)];
+      dec = Decision{};
+      const Nearest lead = leader(t, i, t.vehicles_[static_cast<std::size_t>(i)].follow_lanes);
+      bool react = false;
+      if (lead.vehicle >= 0) {
+        const Vehicle& lv = t.vehicles_[static_cast<std::size_t>(lead.vehicle)];
+        // The original's mixed units: own cruise speed in mph minus the leader's in m/s.
+        const double reaction =
+            lv.car < 0 ? f.ego_reaction_m
+                       : std::clamp(f.reaction_gain_m * (core::mps_to_mph(c.cruise_mps) - lv.speed_mps),
+                                    f.min_reaction_m, f.max_reaction_m);
+        react = lead.gap_m < reaction;
+        dec.leader = lead.vehicle;
+        dec.leader_gap_m = lead.gap_m;
+      }
+      const double v = c.speed_mps;
+      if (react) {
+        dec.new_speed_mps = std::max(0.0, v - f.brake_mps2 * dt);
+      } else if (v < c.cruise_mps) {
+        dec.new_speed_mps = std::min(c.cruise_mps, v + f.accel_mps2 * dt);
+      } else {
+        dec.new_speed_mps = std::max(c.cruise_mps, v - f.accel_mps2 * dt);
+      }
+      dec.accel_mps2 = (dec.new_speed_mps - v) / dt;
+
+      // Own bookkeeping only: no other car's decision reads these fields.
+      c.held_up = react;
+      c.since_held_up_s = react ? 0.0 : c.since_held_up_s + dt;
+      const bool held = c.since_held_up_s <= kHeldUpMemoryS + kTimeEpsilonS;
+      if (c.candidate_lane &&
+          c.since_held_up_s > kHeldUpMemoryS + kCandidateKeepS + kTimeEpsilonS) {
+        c.candidate_lane.reset();
+        c.clear_steps = 0;
+      }
+      if (!c.candidate_lane && held && !c.manoeuvre && v > f.lane_change_min_speed_mps &&
+          c.since_lane_change_s >= f.lane_change_interval_s - kTimeEpsilonS &&
+          near_next_waypoint(t, c.s_m)) {
+        c.candidate_lane = pick_candidate(t, i, c.lane);
+        c.clear_steps = 0;
+      }
+      if (c.candidate_lane) {
+        if (lane_clear(t, i, *c.candidate_lane)) {
+          ++c.clear_steps;
+        } else {
+          c.clear_steps = 0;
+        }
+        if (c.clear_steps > f.clear_steps) {
+          dec.change_to_lane = *c.candidate_lane;
+          c.candidate_lane.reset();
+          c.clear_steps = 0;
+        }
+      }
+    }
+  }
+
+  // ----- calm profile ----------------------------------------------------------------------
+
+  /// IDM acceleration (Treiber, Hennecke, Helbing 2000) of a vehicle at speed v wanting v0,
+  /// `gap_m` centre to centre behind a leader at `leader_speed` (gap infinite: free road).
+  /// Not clamped: MOBIL compares these, and a clamp would make every emergency look alike.
+  [[nodiscard]] static double idm(const Traffic& t, double v, double v0, double gap_m,
+                                  double leader_speed) {
+    const CalmTrafficParams& p = t.params_.calm;
+    const double ratio = v / std::max(v0, kMinDesiredSpeedMps);
+    const double free_term = p.accel_exponent == 4.0 ? (ratio * ratio) * (ratio * ratio)
+                                                     : std::pow(ratio, p.accel_exponent);
+    double interaction = 0.0;
+    if (gap_m < kInf) {
+      const double s = std::max(gap_m - t.params_.car_length_m, kMinIdmGapM);
+      const double dynamic = v * p.time_headway_s +
+                             v * (v - leader_speed) /
+                                 (2.0 * std::sqrt(p.max_accel_mps2 * p.comfort_decel_mps2));
+      const double s_star = p.min_gap_m + std::max(0.0, dynamic);
+      interaction = (s_star / s) * (s_star / s);
+    }
+    return p.max_accel_mps2 * (1.0 - free_term - interaction);
+  }
+
+  /// The constant-acceleration heuristic of the ACC model (Kesting, Treiber, Helbing 2010):
+  /// the deceleration that just avoids a collision if the leader keeps its acceleration.
+  [[nodiscard]] static double cah(const Traffic& t, double v, double leader_speed,
+                                  double leader_accel, double bumper_gap_m) {
+    const double a_l = std::min(leader_accel, t.params_.calm.max_accel_mps2);
+    const double denom = leader_speed * leader_speed - 2.0 * bumper_gap_m * a_l;
+    if (leader_speed * (v - leader_speed) <= -2.0 * bumper_gap_m * a_l && denom > 1e-9) {
+      return v * v * a_l / denom;
+    }
+    const double closing = std::max(0.0, v - leader_speed);
+    return a_l - closing * closing / (2.0 * bumper_gap_m);
+  }
+
+  /// The acceleration a calm car applies: IDM, except where IDM brakes harder than the
+  /// situation needs (a gap far below the desired one, but not closing), where the ACC
+  /// model's blend with the CAH takes over; then the physical braking limit. Without this,
+  /// cars spawned ~6 m apart all brake at the limit at once and the faster ones run into
+  /// the slower ones ahead.
+  [[nodiscard]] static double applied_accel(const Traffic& t, int self, int lead, double gap_m,
+                                            double a_idm) {
+    const CalmTrafficParams& p = t.params_.calm;
+    double a = a_idm;
+    if (lead >= 0) {
+      const Vehicle& sv = t.vehicles_[static_cast<std::size_t>(self)];
+      const Vehicle& lv = t.vehicles_[static_cast<std::size_t>(lead)];
+      const double s = std::max(gap_m - t.params_.car_length_m, kMinIdmGapM);
+      const double a_cah = cah(t, sv.speed_mps, lv.speed_mps, lv.accel_mps2, s);
+      if (a_idm < a_cah) {
+        const double b = p.comfort_decel_mps2;
+        a = (1.0 - kCoolness) * a_idm + kCoolness * (a_cah + b * std::tanh((a_idm - a_cah) / b));
+      }
+    }
+    return std::max(a, -p.max_brake_mps2);
+  }
+
+  /// Desired speed of a vehicle for IDM: a car's cruise speed; for the ego (whose wishes are
+  /// unknown) its own speed, so that only the interaction term counts.
+  [[nodiscard]] static double desired_speed(const Traffic& t, const Vehicle& v) {
+    return v.car >= 0 ? t.cars_[static_cast<std::size_t>(v.car)].cruise_mps : v.speed_mps;
+  }
+
+  /// IDM acceleration of vehicle `k` behind `lead` (-1: free road) at `gap_m`.
+  [[nodiscard]] static double idm_of(const Traffic& t, int k, int lead, double gap_m) {
+    const Vehicle& v = t.vehicles_[static_cast<std::size_t>(k)];
+    if (lead < 0) return idm(t, v.speed_mps, desired_speed(t, v), kInf, 0.0);
+    return idm(t, v.speed_mps, desired_speed(t, v), gap_m,
+               t.vehicles_[static_cast<std::size_t>(lead)].speed_mps);
+  }
+
+  /// MOBIL (Kesting, Treiber, Helbing 2007) for car i into `lane`, on IDM accelerations:
+  /// the incentive when the change is safe, nullopt when it is not. Safe: no vehicle in the
+  /// target lane within car length + s0; the new follower (the ego included) need not brake
+  /// harder than safe_decel; (ours) nor need the car itself.
+  [[nodiscard]] static std::optional<double> mobil(const Traffic& t, int i, int lane) {
+    const CalmTrafficParams& p = t.params_.calm;
+    const unsigned target = lane_bit(lane);
+    const Vehicle& self = t.vehicles_[static_cast<std::size_t>(i)];
+    const int count = static_cast<int>(t.vehicles_.size());
+    const double too_close = t.params_.car_length_m + p.min_gap_m;
+    for (int j = 0; j < count; ++j) {
+      const Vehicle& v = t.vehicles_[static_cast<std::size_t>(j)];
+      if (j == i || (v.follow_lanes & target) == 0) continue;
+      if (std::abs(ahead(t, self.s_m, v.s_m)) < too_close) return std::nullopt;
+    }
+    // Own advantage in the target lane.
+    const Nearest nl = leader(t, i, target);
+    const double a_self_after = idm_of(t, i, nl.vehicle, nl.gap_m);
+    if (a_self_after < -p.safe_decel_mps2) return std::nullopt;
+    const double a_self = t.decisions_[static_cast<std::size_t>(i)].idm_mps2;
+    // The new follower.
+    const Nearest nf = follower(t, i, target);
+    double nf_gain = 0.0;
+    if (nf.vehicle >= 0) {
+      const Vehicle& fv = t.vehicles_[static_cast<std::size_t>(nf.vehicle)];
+      double a_after = 0.0;
+      if (fv.car >= 0) {
+        const Decision& fd = t.decisions_[static_cast<std::size_t>(fv.car)];
+        a_after = fd.leader >= 0 && fd.leader_gap_m < nf.gap_m ? fd.idm_mps2
+                                                                : idm_of(t, nf.vehicle, i, nf.gap_m);
+        nf_gain = a_after - fd.idm_mps2;
+      } else {
+        a_after = idm_of(t, nf.vehicle, i, nf.gap_m);
+      }
+      if (a_after < -p.safe_decel_mps2) return std::nullopt;
+    }
+    // Old followers: the cars that follow i now, once i has gone.
+    double of_gain = 0.0;
+    const int n = static_cast<int>(t.cars_.size());
+    for (int k = 0; k < n; ++k) {
+      const Decision& kd = t.decisions_[static_cast<std::size_t>(k)];
+      if (k == i || kd.leader != i) continue;
+      const Nearest next = leader(t, k, t.vehicles_[static_cast<std::size_t>(k)].follow_lanes, i);
+      of_gain += idm_of(t, k, next.vehicle, next.gap_m) - kd.idm_mps2;
+    }
+    return a_self_after - a_self + p.politeness * (nf_gain + of_gain);
+  }
+
+  /// Whether car j's change into a lane conflicts with car i's change into the same lane.
+  [[nodiscard]] static bool changes_conflict(const Traffic& t, int i, int j) {
+    const CalmTrafficParams& p = t.params_.calm;
+    const double gap = ahead(t, t.vehicles_[static_cast<std::size_t>(i)].s_m,
+                             t.vehicles_[static_cast<std::size_t>(j)].s_m);
+    if (std::abs(gap) < t.params_.car_length_m + p.min_gap_m) return true;
+    const int back = gap > 0.0 ? i : j;
+    const int front = gap > 0.0 ? j : i;
+    return idm_of(t, back, front, std::abs(gap)) < -p.safe_decel_mps2;
+  }
+
+  static void decide_calm(Traffic& t, double dt) {
+    const CalmTrafficParams& p = t.params_.calm;
+    const int n = static_cast<int>(t.cars_.size());
+    for (int i = 0; i < n; ++i) {
+      TrafficCar& c = t.cars_[static_cast<std::size_t>(i)];
+      Decision& dec = t.decisions_[static_cast<std::size_t>(i)];
+      dec = Decision{};
+      const Nearest lead = leader(t, i, t.vehicles_[static_cast<std::size_t>(i)].follow_lanes);
+      dec.leader = lead.vehicle;
+      dec.leader_gap_m = lead.gap_m;
+      dec.idm_mps2 = idm_of(t, i, lead.vehicle, lead.gap_m);
+      dec.accel_mps2 = applied_accel(t, i, lead.vehicle, lead.gap_m, dec.idm_mps2);
+      dec.new_speed_mps = std::max(0.0, c.speed_mps + dec.accel_mps2 * dt);
+      // Held up: the leader makes it accelerate less than the free road would.
+      const bool react =
+          lead.vehicle >= 0 && dec.idm_mps2 < idm(t, c.speed_mps, c.cruise_mps, kInf, 0.0) - 1e-9;
+      c.held_up = react;
+      c.since_held_up_s = react ? 0.0 : c.since_held_up_s + dt;
+    }
+    for (int i = 0; i < n; ++i) {
+      const TrafficCar& c = t.cars_[static_cast<std::size_t>(i)];
+      if (c.manoeuvre || c.since_lane_change_s < p.lane_change_interval_s - kTimeEpsilonS) continue;
+      double best = p.change_threshold_mps2;
+      for (const int cand : {c.lane - 1, c.lane + 1}) {
+        if (cand < 0 || cand >= t.road_.lane_count) continue;
+        const std::optional<double> gain = mobil(t, i, cand);
+        if (gain && *gain > best) {
+          best = *gain;
+          t.decisions_[static_cast<std::size_t>(i)].change_to_lane = cand;
+        }
+      }
+    }
+    // Two cars deciding in the same frame do not see each other's change: the later one
+    // waits when both move into the same lane too close together.
+    for (int j = 0; j < n; ++j) {
+      Decision& dj = t.decisions_[static_cast<std::size_t>(j)];
+      if (dj.change_to_lane < 0) continue;
+      for (int i = 0; i < j; ++i) {
+        const Decision& di = t.decisions_[static_cast<std::size_t>(i)];
+        if (di.change_to_lane == dj.change_to_lane && changes_conflict(t, i, j)) {
+          dj.change_to_lane = -1;
+          break;
+        }
+      }
+    }
+  }
+
+  // ----- motion ----------------------------------------------------------------------------
+
+  static void move(Traffic& t, TrafficCar& c, const Decision& dec, double dt) {
+    const TrafficParams& p = t.params_;
+    const double d_before = c.d_m;
+    c.accel_mps2 = (dec.new_speed_mps - c.speed_mps) / dt;
+    c.speed_mps = dec.new_speed_mps;
+    if (dec.change_to_lane >= 0) {
+      c.manoeuvre = LaneManoeuvre{c.lane, dec.change_to_lane, c.d_m, 0.0, p.lane_change_duration_s};
+      c.lane = dec.change_to_lane;
+      c.since_lane_change_s = 0.0;
+      c.lane_offset_m = 0.0;
+    } else {
+      c.since_lane_change_s += dt;
+    }
+    if (c.manoeuvre) {
+      LaneManoeuvre& m = *c.manoeuvre;
+      m.elapsed_s += dt;
+      const double to_d = core::lane_center_d(m.to_lane, t.road_);
+      const double tau = m.duration_s > 0.0 ? std::min(1.0, m.elapsed_s / m.duration_s) : 1.0;
+      if (tau >= 1.0) {
+        // Arrived: wander resumes from phase 0 (offset 0), so d is continuous.
+        c.d_m = to_d;
+        c.d_rate_mps = 0.0;
+        c.manoeuvre.reset();
+        c.wander_phase_rad = 0.0;
+        c.lane_offset_m = 0.0;
+      } else {
+        c.d_m = m.from_d_m + (to_d - m.from_d_m) * min_jerk(tau);
+        c.d_rate_mps = (to_d - m.from_d_m) * min_jerk_rate(tau) / m.duration_s;
+      }
+    } else {
+      c.wander_phase_rad = std::fmod(c.wander_phase_rad + c.wander_omega_rps * dt, 2.0 * core::kPi);
+      c.lane_offset_m = p.wander_amplitude_m * std::sin(c.wander_phase_rad);
+      c.d_m = core::lane_center_d(c.lane, t.road_) + c.lane_offset_m;
+      c.d_rate_mps = p.wander_amplitude_m * c.wander_omega_rps * std::cos(c.wander_phase_rad);
+    }
+    const double ds = t.line_.s_rate({c.s_m, d_before}, c.speed_mps) * dt;
+    c.s_m = t.line_.wrap_s(c.s_m + ds);
+  }
+
+  // ----- placement -------------------------------------------------------------------------
+
+  /// The behind and ahead regions around the ego's previous waypoint, as offsets from the ego.
+  static void regions(const Traffic& t, double ego_s, Region& behind, Region& ahead_region) {
+    const TrafficParams& p = t.params_;
+    const auto n = static_cast<long>(t.map_.waypoints.size());
+    const long prev = (static_cast<long>(next_waypoint(t, ego_s)) + n - 1) % n;
+    const double limit = 0.9 * p.despawn_distance_m;
+    auto clamp_pair = [limit](double a, double b, Region& r) {
+      a = std::clamp(a, -limit, limit);
+      b = std::clamp(b, -limit, limit);
+      r.lo_m = std::min(a, b);
+      r.hi_m = std::max(a, b);
+    };
+    clamp_pair(-forward(t, waypoint_s(t, prev - p.behind_max_waypoints), ego_s),
+               -forward(t, waypoint_s(t, prev - p.behind_min_waypoints), ego_s), behind);
+    behind.min_speed_mps = p.behind_min_speed_mps;
+    behind.max_speed_mps = p.behind_max_speed_mps;
+    clamp_pair(forward(t, ego_s, waypoint_s(t, prev + p.ahead_min_waypoints)),
+               forward(t, ego_s, waypoint_s(t, prev + p.ahead_max_waypoints)), ahead_region);
+    ahead_region.min_speed_mps = p.ahead_min_speed_mps;
+    ahead_region.max_speed_mps = p.ahead_max_speed_mps;
+  }
+
+  /// (ours) In one lane, the vehicle behind must be able to brake to the one ahead's speed.
+  [[nodiscard]] static bool room_to_brake(const Traffic& t, double s, double v, double other_s,
+                                          double other_v) {
+    const double gap = ahead(t, s, other_s);
+    const double dv = gap >= 0.0 ? std::max(0.0, v - other_v) : std::max(0.0, other_v - v);
+    return std::abs(gap) >=
+           t.params_.car_length_m + kSpawnMarginM + dv * dv / (2.0 * t.params_.spawn_brake_mps2);
+  }
+
+  /// Whether car i may be put at (s, d) in `lane` at `speed`, given the cars [0, limit)
+  /// other than i (positions in positions_) and the ego.
+  [[nodiscard]] static bool spot_ok(const Traffic& t, int i, int limit, double s, double d, int lane,
+                                    double speed, const EgoView& ego, double ego_s,
+                                    core::Vec2 ego_pos, unsigned ego_mask) {
+    const TrafficParams& p = t.params_;
+    const core::Vec2 pos = t.line_.to_cartesian({s, d});
+    const double min_sq = p.min_spawn_distance_m * p.min_spawn_distance_m;
+    if (core::distance_sq(pos, ego_pos) < min_sq) return false;
+    if ((ego_mask & lane_bit(lane)) != 0 && !room_to_brake(t, s, speed, ego_s, ego.speed_mps)) {
+      return false;
+    }
+    for (int j = 0; j < limit; ++j) {
+      if (j == i) continue;
+      const TrafficCar& o = t.cars_[static_cast<std::size_t>(j)];
+      if (core::distance_sq(pos, t.positions_[static_cast<std::size_t>(j)]) < min_sq) return false;
+      if ((follow_lanes(t, o) & lane_bit(lane)) != 0 &&
+          !room_to_brake(t, s, speed, o.s_m, o.speed_mps)) {
+        return false;
+      }
+    }
+    return true;
+  }
+
+  /// Puts car i at a spot and resets its state.
+  static void commit(Traffic& t, TrafficCar& c, double s, int lane, double cruise, double phase,
+                     double omega) {
+    const double amp = t.params_.wander_amplitude_m;
+    c.s_m = s;
+    c.lane = lane;
+    c.wander_phase_rad = phase;
+    c.wander_omega_rps = omega;
+    c.lane_offset_m = amp * std::sin(phase);
+    c.d_m = core::lane_center_d(lane, t.road_) + c.lane_offset_m;
+    c.d_rate_mps = amp * omega * std::cos(phase);
+    c.cruise_mps = cruise;
+    c.speed_mps = cruise;
+    c.accel_mps2 = 0.0;
+    c.manoeuvre.reset();
+    c.since_lane_change_s = 1e9;
+    c.candidate_lane.reset();
+    c.clear_steps = 0;
+    c.held_up = false;
+    c.since_held_up_s = 1e9;
+    c.far = false;
+  }
+
+  enum class Where { either, behind, ahead };
+
+  /// Tries to place car i by the spawn rule (up to max_spawn_attempts draws) against the
+  /// cars [0, limit). `initial`: not behind the ego in the ego's lane.
+  static bool try_place(Traffic& t, int i, int limit, const EgoView& ego, bool initial,
+                        Where where) {
+    const TrafficParams& p = t.params_;
+    TrafficCar& c = t.cars_[static_cast<std::size_t>(i)];
+    const double ego_s = t.line_.wrap_s(ego.s_m);
+    const core::Vec2 ego_pos = t.line_.to_cartesian({ego_s, ego.d_m});
+    const unsigned ego_mask = ego_lanes(t, ego.d_m);
+    for (int j = 0; j < limit; ++j) {
+      const TrafficCar& o = t.cars_[static_cast<std::size_t>(j)];
+      t.positions_[static_cast<std::size_t>(j)] = t.line_.to_cartesian({o.s_m, o.d_m});
+    }
+    Region behind;
+    Region ahead_region;
+    regions(t, ego_s, behind, ahead_region);
+    // The car's own stream gives its wander.
+    const double period = c.rng.uniform(p.wander_min_period_s, p.wander_max_period_s);
+    const double omega = period > 0.0 ? 2.0 * core::kPi / period : 0.0;
+    const double phase = c.rng.uniform(0.0, 2.0 * core::kPi);
+    const double offset = p.wander_amplitude_m * std::sin(phase);
+    for (int attempt = 0; attempt < p.max_spawn_attempts; ++attempt) {
+      const bool is_behind = where == Where::either ? t.spawn_rng_.chance(p.behind_probability)
+                                                    : where == Where::behind;
+      const Region& r = is_behind ? behind : ahead_region;
+      const double off = t.spawn_rng_.uniform(r.lo_m, r.hi_m);
+      const int lane = t.spawn_rng_.uniform_int(0, t.road_.lane_count - 1);
+      const double cruise = t.spawn_rng_.uniform(r.min_speed_mps, r.max_speed_mps);
+      if (initial && is_behind && (ego_mask & lane_bit(lane)) != 0) continue;
+      const double s = t.line_.wrap_s(ego_s + off);
+      const double d = core::lane_center_d(lane, t.road_) + offset;
+      if (!spot_ok(t, i, limit, s, d, lane, cruise, ego, ego_s, ego_pos, ego_mask)) continue;
+      commit(t, c, s, lane, cruise, phase, omega);
+      return true;
+    }
+    return false;
+  }
+
+  /// Last resort of the initial placement: farther ahead, ego + 150 m + 10 m * k.
+  static void place_fallback(Traffic& t, int i, const EgoView& ego) {
+    const TrafficParams& p = t.params_;
+    TrafficCar& c = t.cars_[static_cast<std::size_t>(i)];
+    const double ego_s = t.line_.wrap_s(ego.s_m);
+    const core::Vec2 ego_pos = t.line_.to_cartesian({ego_s, ego.d_m});
+    const unsigned ego_mask = ego_lanes(t, ego.d_m);
+    const double cruise = t.spawn_rng_.uniform(p.ahead_min_speed_mps, p.ahead_max_speed_mps);
+    double s = ego_s;
+    int lane = 0;
+    for (int k = 0; k < kFallbackTries; ++k) {
+      s = t.line_.wrap_s(ego_s + kFallbackAheadM + kFallbackStepM * k);
+      lane = k % t.road_.lane_count;
+      if (spot_ok(t, i, i, s, core::lane_center_d(lane, t.road_), lane, cruise, ego, ego_s,
+                  ego_pos, ego_mask)) {
+        break;
+      }
+    }
+    commit(t, c, s, lane, cruise, 0.0, 0.0);
+  }
+};
+
+Traffic::Traffic(const core::Map& map, const core::ReferenceLine& line, const TrafficParams& params,
+                 const core::RoadParams& road, TrafficProfile profile, std::uint64_t seed)
+    : map_(map),
+      line_(line),
+      params_(params),
+      road_(road),
+      profile_(profile),
+      spawn_rng_(core::derive_seed(seed, kSpawnStream)) {
+  assert(!map.waypoints.empty());
+  assert(road.lane_count >= 1 && road.lane_count <= 32);
+  const auto n = static_cast<std::size_t>(std::max(0, params.car_count));
+  cars_.resize(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    cars_[i].id = static_cast<int>(i);
+    cars_[i].rng = core::Rng(core::derive_seed(seed, kFirstCarStream + i));
+  }
+  vehicles_.reserve(n + 1);
+  decisions_.reserve(n);
+  positions_.resize(n);
+}
+
+void Traffic::place_initial(const EgoView& ego) {
+  using Where = TrafficImpl::Where;
+  positions_.resize(cars_.size());
+  const int n = static_cast<int>(cars_.size());
+  for (int i = 0; i < n; ++i) {
+    if (TrafficImpl::try_place(*this, i, i, ego, true, Where::either)) continue;
+    if (TrafficImpl::try_place(*this, i, i, ego, true, Where::ahead)) continue;
+    if (TrafficImpl::try_place(*this, i, i, ego, true, Where::behind)) continue;
+    TrafficImpl::place_fallback(*this, i, ego);
+  }
+  frames_to_batch_ = spawn_rng_.uniform_int(params_.batch_min_frames, params_.batch_max_frames);
+}
+
+void Traffic::step(const EgoView& ego, double dt_s) {
+  assert(dt_s > 0.0);
+  const std::size_t n = cars_.size();
+  const double ego_s = line_.wrap_s(ego.s_m);
+  TrafficImpl::build_vehicles(*this, ego, ego_s, dt_s);
+  decisions_.resize(n);
+  if (profile_ == TrafficProfile::faithful) {
+    TrafficImpl::decide_faithful(*this, dt_s);
+  } else {
+    TrafficImpl::decide_calm(*this, dt_s);
+  }
+  for (std::size_t i = 0; i < n; ++i) TrafficImpl::move(*this, cars_[i], decisions_[i], dt_s);
+  ego_prev_speed_mps_ = ego.speed_mps;
+
+  for (TrafficCar& c : cars_) {
+    c.far = std::abs(TrafficImpl::ahead(*this, ego_s, c.s_m)) > params_.despawn_distance_m;
+  }
+  if (--frames_to_batch_ <= 0) {
+    const int batch = spawn_rng_.uniform_int(params_.batch_min_cars, params_.batch_max_cars);
+    int tried = 0;
+    for (std::size_t i = 0; i < n && tried < batch; ++i) {
+      if (!cars_[i].far) continue;
+      ++tried;
+      (void)TrafficImpl::try_place(*this, static_cast<int>(i), static_cast<int>(n), ego, false,
+                                   TrafficImpl::Where::either);
+    }
+    frames_to_batch_ = spawn_rng_.uniform_int(params_.batch_min_frames, params_.batch_max_frames);
+  }
+}
+
+core::CarObservation Traffic::observe(const TrafficCar& car) const {
+  const core::FrenetPoint p{line_.wrap_s(car.s_m), car.d_m};
+  core::CarObservation o;
+  o.id = car.id;
+  o.position = line_.to_cartesian(p);
+  o.velocity_mps = line_.velocity(p, line_.s_rate(p, car.speed_mps), car.d_rate_mps);
+  o.s_m = p.s_m;
+  o.d_m = p.d_m;
+  return o;
+}
+
+core::OrientedBox Traffic::footprint(const TrafficCar& car) const {
+  const core::FrenetPoint p{line_.wrap_s(car.s_m), car.d_m};
+  const core::Vec2 v = line_.velocity(p, line_.s_rate(p, car.speed_mps), car.d_rate_mps);
+  const double heading = core::norm(v) < kStationaryMps ? line_.frame(p.s_m).heading_rad
+                                                        : std::atan2(v.y, v.x);
+  return {line_.to_cartesian(p), heading, params_.car_length_m, params_.car_width_m};
+}
+
+void Traffic::set_cars(std::vector<TrafficCar> cars) {
+  cars_ = std::move(cars);
+  for (std::size_t i = 0; i < cars_.size(); ++i) {
+    cars_[i].id = static_cast<int>(i);
+    cars_[i].s_m = line_.wrap_s(cars_[i].s_m);
+  }
+  positions_.resize(cars_.size());
+}
+
+}  // namespace overtake::sim

@@ -1,0 +1,228 @@
+// `overtake bench`: deterministic, job-count independent, shardable, resumable, and strict
+// about bad input before any run starts.
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "overtake/app/bench.hpp"
+#include "overtake/app/commands.hpp"
+#include "overtake/app/io.hpp"
+
+namespace overtake::app {
+namespace {
+
+using ::testing::HasSubstr;
+using nlohmann::json;
+namespace fs = std::filesystem;
+
+class BenchTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    root_ = fs::temp_directory_path() /
+            ("overtake_bench_test_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
+    fs::remove_all(root_);
+    fs::create_directories(root_);
+  }
+  void TearDown() override { fs::remove_all(root_); }
+
+  BenchSpec spec(const std::string& out) const {
+    BenchSpec s;
+    s.policies = {"walkthrough", "seed001"};
+    s.traffic = {"faithful"};
+    s.seeds = {1, 2};
+    s.minutes = 1.0;
+    s.jobs = 2;
+    s.out = root_ / out;
+    return s;
+  }
+  // runs.jsonl without the fields that measure time or place.
+  static std::string stable_runs(const fs::path& dir) {
+    std::ifstream in(dir / "runs.jsonl");
+    std::string line, out;
+    while (std::getline(in, line)) {
+      json j = json::parse(line);
+      j.erase("timing");
+      j.erase("provenance");
+      out += j.dump() + "\n";
+    }
+    return out;
+  }
+  static json stable_summary(const fs::path& dir) {
+    std::vector<json> runs;
+    std::ifstream in(dir / "runs.jsonl");
+    std::string line;
+    while (std::getline(in, line)) runs.push_back(json::parse(line));
+    json rows = summarize_bench(runs, {"walkthrough", "seed001"}, {"faithful"});
+    for (auto& r : rows) r.erase("timing");
+    return rows;
+  }
+
+  fs::path root_;
+};
+
+TEST_F(BenchTest, SameRunsTwiceAndWithOneOrTwoJobs) {
+  BenchSpec a = spec("a");
+  BenchSpec b = spec("b");
+  b.jobs = 1;
+  BenchSpec c = spec("c");
+  const auto oa = run_bench(a, nullptr, {});
+  (void)run_bench(b, nullptr, {});
+  (void)run_bench(c, nullptr, {});
+  EXPECT_EQ(oa.runs_done, 4u);
+  const std::string ra = stable_runs(a.out);
+  EXPECT_EQ(std::count(ra.begin(), ra.end(), '\n'), 4);
+  EXPECT_EQ(ra, stable_runs(b.out));
+  EXPECT_EQ(ra, stable_runs(c.out));
+  EXPECT_TRUE(fs::exists(a.out / "summary.csv"));
+  EXPECT_TRUE(fs::exists(a.out / "summary.md"));
+  EXPECT_THAT(read_file(a.out / "summary.md"), HasSubstr("| seed001 | faithful | 2 |"));
+}
+
+TEST_F(BenchTest, EachLineCarriesProvenance) {
+  const BenchSpec s = spec("p");
+  (void)run_bench(s, nullptr, {});
+  std::ifstream in(s.out / "runs.jsonl");
+  std::string line;
+  std::getline(in, line);
+  const json j = json::parse(line);
+  EXPECT_EQ(j["index"], 0);
+  EXPECT_EQ(j["config"]["policy"], "walkthrough");
+  EXPECT_EQ(j["config"]["seed"], 1);
+  EXPECT_EQ(j["config"]["traffic"], "faithful");
+  EXPECT_EQ(j["config"]["map"]["hash"].get<std::string>().size(), 16u);
+  EXPECT_EQ(j["config"]["params_hash"].get<std::string>().size(), 16u);
+  EXPECT_TRUE(j["provenance"].contains("git_revision"));
+  EXPECT_TRUE(j["provenance"].contains("host"));
+  EXPECT_TRUE(j["timing"].contains("finished_at"));
+}
+
+TEST_F(BenchTest, ShardsMergeIntoTheUnshardedResult) {
+  const BenchSpec whole = spec("whole");
+  (void)run_bench(whole, nullptr, {});
+  BenchSpec s1 = spec("s1");
+  s1.shard_index = 1;
+  s1.shard_count = 2;
+  BenchSpec s2 = spec("s2");
+  s2.shard_index = 2;
+  s2.shard_count = 2;
+  EXPECT_EQ(run_bench(s1, nullptr, {}).runs_done, 2u);
+  EXPECT_EQ(run_bench(s2, nullptr, {}).runs_done, 2u);
+  const auto merged = merge_bench({s2.out, s1.out}, root_ / "merged");
+  EXPECT_EQ(merged.runs_done, 4u);
+  EXPECT_EQ(stable_runs(root_ / "merged"), stable_runs(whole.out));
+  EXPECT_EQ(stable_summary(root_ / "merged"), stable_summary(whole.out));
+}
+
+TEST_F(BenchTest, MergeRefusesDifferentConfigurationsAndMissingShards) {
+  BenchSpec s1 = spec("s1");
+  s1.shard_index = 1;
+  s1.shard_count = 2;
+  BenchSpec other = spec("other");
+  other.shard_index = 2;
+  other.shard_count = 2;
+  other.minutes = 0.5;
+  (void)run_bench(s1, nullptr, {});
+  (void)run_bench(other, nullptr, {});
+  try {
+    (void)merge_bench({s1.out, other.out}, root_ / "m");
+    FAIL();
+  } catch (const UsageError& e) {
+    EXPECT_THAT(std::string(e.what()), HasSubstr("different bench configuration"));
+  }
+  try {
+    (void)merge_bench({s1.out}, root_ / "m");
+    FAIL();
+  } catch (const UsageError& e) {
+    EXPECT_THAT(std::string(e.what()), HasSubstr("a shard is missing"));
+  }
+  try {
+    (void)merge_bench({s1.out, s1.out}, root_ / "m");
+    FAIL();
+  } catch (const UsageError& e) {
+    EXPECT_THAT(std::string(e.what()), HasSubstr("appears twice"));
+  }
+}
+
+TEST_F(BenchTest, ResumeSkipsFinishedRunsAndDropsACutOffLine) {
+  BenchSpec s = spec("r");
+  s.policies = {"walkthrough"};
+  (void)run_bench(s, nullptr, {});
+  const std::string full = stable_runs(s.out);
+  // Keep the first run, and a line cut off mid-way as a kill would leave it.
+  std::ifstream in(s.out / "runs.jsonl");
+  std::string first;
+  std::getline(in, first);
+  in.close();
+  write_file_atomic(s.out / "runs.jsonl", first + "\n" + first.substr(0, first.size() / 2));
+  EXPECT_THROW((void)run_bench(s, nullptr, {}), UsageError);  // without --resume: refused
+  s.resume = true;
+  const auto o = run_bench(s, nullptr, {});
+  EXPECT_EQ(o.runs_new, 1u);
+  EXPECT_EQ(o.runs_done, 2u);
+  EXPECT_EQ(stable_runs(s.out), full);
+}
+
+TEST_F(BenchTest, AStopKeepsFinishedRunsOnly) {
+  BenchSpec s = spec("stop");
+  std::atomic<bool> stop{true};
+  const auto o = run_bench(s, &stop, {});
+  EXPECT_TRUE(o.interrupted);
+  EXPECT_EQ(o.runs_done, 0u);
+  EXPECT_TRUE(fs::exists(s.out / "bench.json"));
+  s.resume = true;
+  EXPECT_EQ(run_bench(s, nullptr, {}).runs_done, 4u);
+}
+
+TEST_F(BenchTest, BadInputIsRefusedBeforeAnyRun) {
+  auto error_of = [&](BenchSpec s) {
+    try {
+      (void)run_bench(s, nullptr, {});
+    } catch (const UsageError& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  BenchSpec s = spec("bad");
+  s.policies = {"walkthrough", "nope"};
+  EXPECT_THAT(error_of(s), HasSubstr("unknown policy 'nope'"));
+  s = spec("bad");
+  s.traffic = {"rush"};
+  EXPECT_THAT(error_of(s), HasSubstr("unknown profile 'rush'"));
+  s = spec("bad");
+  s.shard_index = 3;
+  s.shard_count = 2;
+  EXPECT_THAT(error_of(s), HasSubstr("--shard"));
+  s = spec("bad");
+  s.jobs = 0;
+  EXPECT_THAT(error_of(s), HasSubstr("--jobs"));
+  EXPECT_FALSE(fs::exists(root_ / "bad" / "runs.jsonl"));
+}
+
+TEST(BenchParse, SeedLists) {
+  EXPECT_EQ(parse_seed_list("1-3"), (std::vector<std::uint64_t>{1, 2, 3}));
+  EXPECT_EQ(parse_seed_list("7"), (std::vector<std::uint64_t>{7}));
+  EXPECT_EQ(parse_seed_list("1,4-5,9"), (std::vector<std::uint64_t>{1, 4, 5, 9}));
+  EXPECT_THROW((void)parse_seed_list("5-1"), UsageError);
+  EXPECT_THROW((void)parse_seed_list(""), UsageError);
+  EXPECT_THROW((void)parse_seed_list("a-b"), UsageError);
+  EXPECT_THROW((void)parse_seed_list("1,1"), UsageError);
+  try {
+    (void)parse_seed_list("5-1");
+  } catch (const UsageError& e) {
+    EXPECT_THAT(std::string(e.what()), HasSubstr("empty"));
+  }
+}
+
+TEST(BenchParse, Shards) {
+  EXPECT_EQ(parse_shard("2/8"), (std::pair<int, int>{2, 8}));
+  EXPECT_THROW((void)parse_shard("0/8"), UsageError);
+  EXPECT_THROW((void)parse_shard("9/8"), UsageError);
+  EXPECT_THROW((void)parse_shard("2-8"), UsageError);
+  EXPECT_THROW((void)parse_shard("2/8x"), UsageError);
+}
+
+}  // namespace
+}  // namespace overtake::app

@@ -1,0 +1,115 @@
+// The shipped config file equals the structs' defaults, and bad config gets errors that
+// name the key.
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <sstream>
+
+#include "overtake/app/config.hpp"
+
+namespace overtake::app {
+namespace {
+
+using ::testing::HasSubstr;
+using nlohmann::json;
+
+json shipped() {
+  std::ifstream in(std::string(OVERTAKE_SOURCE_DIR) + "/config/overtake.json");
+  std::stringstream buf;
+  buf << in.rdbuf();
+  return json::parse(buf.str());
+}
+
+std::string error_of(const json& j) {
+  try {
+    (void)apply_config_json(Config{}, j, "user.json");
+  } catch (const ConfigError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(ConfigDefaults, ShippedFileHoldsExactlyTheStructDefaults) {
+  EXPECT_EQ(config_to_json(Config{}), shipped())
+      << "config/overtake.json is out of step with the params structs; regenerate it with "
+         "`overtake config > config/overtake.json`";
+  EXPECT_EQ(apply_config_json(Config{}, shipped(), "shipped"), Config{});
+  EXPECT_EQ(default_config(), Config{});
+}
+
+TEST(ConfigOverrides, ASubsetOfKeysOverridesOnlyThose) {
+  const Config c = apply_config_json(
+      Config{}, json::parse(R"({"world": {"traffic": {"car_count": 5, "calm": {"politeness": 0.1}}}})"),
+      "user.json");
+  EXPECT_EQ(c.world.traffic.car_count, 5);
+  EXPECT_DOUBLE_EQ(c.world.traffic.calm.politeness, 0.1);
+  EXPECT_EQ(c.world.referee, Config{}.world.referee);
+}
+
+TEST(ConfigOverrides, RoadIsSharedByWorldAndPlanner) {
+  const Config c = apply_config_json(Config{}, json::parse(R"({"road": {"lane_width_m": 3.7}})"), "u");
+  EXPECT_DOUBLE_EQ(c.world.road.lane_width_m, 3.7);
+  EXPECT_DOUBLE_EQ(c.planner.road.lane_width_m, 3.7);
+}
+
+TEST(ConfigErrors, UnknownKeyIsNamedWithItsPath) {
+  const std::string e = error_of(json::parse(R"({"world": {"traffic": {"car_cuont": 5}}})"));
+  EXPECT_THAT(e, HasSubstr("user.json"));
+  EXPECT_THAT(e, HasSubstr("unknown key 'world.traffic.car_cuont'"));
+}
+
+TEST(ConfigErrors, WrongTypeIsNamed) {
+  EXPECT_THAT(error_of(json::parse(R"({"world": {"step_s": "fast"}})")),
+              HasSubstr("world.step_s: expected a number, got a string"));
+  EXPECT_THAT(error_of(json::parse(R"({"world": {"traffic": {"car_count": 2.5}}})")),
+              HasSubstr("world.traffic.car_count: expected an integer"));
+  EXPECT_THAT(error_of(json::parse(R"({"world": {"wire_rounding": 1}})")),
+              HasSubstr("world.wire_rounding: expected true or false"));
+  EXPECT_THAT(error_of(json::parse(R"({"world": []})")), HasSubstr("world: expected an object"));
+  EXPECT_THAT(error_of(json::parse(R"([1, 2])")), HasSubstr("top level must be a JSON object"));
+}
+
+TEST(ConfigErrors, InvalidValuesAreNamedWithTheValue) {
+  const std::string e = error_of(json::parse(
+      R"({"world": {"traffic": {"car_count": -1}, "referee": {"max_jerk_mps3": 0}}})"));
+  EXPECT_THAT(e, HasSubstr("world.traffic.car_count must be between 0 and 64 (got -1)"));
+  EXPECT_THAT(e, HasSubstr("world.referee.max_jerk_mps3 must be a positive number (got 0)"));
+  EXPECT_THAT(error_of(json::parse(R"({"world": {"min_steps_per_call": 3, "max_steps_per_call": 2}})")),
+              HasSubstr("world.min_steps_per_call (3) must not exceed world.max_steps_per_call (2)"));
+  EXPECT_THAT(error_of(json::parse(R"({"planner": {"walkthrough": {"anchor_distances_m": [30, 20]}}})")),
+              HasSubstr("planner.walkthrough.anchor_distances_m must be positive and increasing"));
+}
+
+TEST(ConfigErrors, MissingAndMalformedFilesAreNamed) {
+  try {
+    (void)load_config(std::filesystem::path("/nonexistent/cfg.json"));
+    FAIL();
+  } catch (const ConfigError& e) {
+    EXPECT_THAT(std::string(e.what()), HasSubstr("/nonexistent/cfg.json"));
+  }
+  const auto path = std::filesystem::temp_directory_path() / "overtake_bad_config.json";
+  {
+    std::ofstream out(path);
+    out << "{\"world\": ";
+  }
+  try {
+    (void)load_config(path);
+    FAIL();
+  } catch (const ConfigError& e) {
+    EXPECT_THAT(std::string(e.what()), HasSubstr("not valid JSON"));
+  }
+  std::filesystem::remove(path);
+}
+
+TEST(ConfigHash, ChangesWithAnyValue) {
+  Config c;
+  const std::string h = config_hash(c);
+  c.world.traffic.calm.politeness += 0.01;
+  EXPECT_NE(config_hash(c), h);
+  EXPECT_EQ(config_hash(Config{}), h);
+}
+
+}  // namespace
+}  // namespace overtake::app

@@ -1,0 +1,146 @@
+// Map files: every bad-file case gets an error naming the file, the line and the fault; a
+// good file parses completely.
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include "overtake/core/map.hpp"
+
+namespace overtake::core {
+namespace {
+
+using ::testing::HasSubstr;
+
+// Four waypoints of a 400 m square-ish loop, normals pointing outward.
+const std::string kGood =
+    "0 -100 0 0 -1\n"
+    "100 0 141.4214 1 0\n"
+    "0 100 282.8427 0 1\n"
+    "-100 0 424.2641 -1 0\n";
+
+std::string error_of(const std::string& text) {
+  try {
+    (void)parse_map(text, "bad.csv");
+  } catch (const MapError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(MapParse, GoodFileParsesEveryWaypoint) {
+  const Map m = parse_map(kGood, "good.csv");
+  ASSERT_EQ(m.waypoints.size(), 4u);
+  EXPECT_DOUBLE_EQ(m.waypoints[1].x_m, 100.0);
+  EXPECT_DOUBLE_EQ(m.waypoints[3].s_m, 424.2641);
+  EXPECT_NEAR(m.loop_length_m, 424.2641 + std::hypot(100.0, 100.0), 1e-9);
+  EXPECT_EQ(m.source, "good.csv");
+}
+
+TEST(MapParse, BlankLinesCommentsAndCrlfAreAccepted) {
+  std::string text = "# a comment\n\n";
+  for (char c : kGood) {
+    if (c == '\n') text += "\r";
+    text += c;
+  }
+  EXPECT_EQ(parse_map(text, "crlf.csv").waypoints.size(), 4u);
+}
+
+TEST(MapErrors, WrongColumnCountNamesTheLine) {
+  const std::string e = error_of("0 -100 0 0 -1\n100 0 141.4 1\n0 100 282.8 0 1\n-100 0 424.3 -1 0\n");
+  EXPECT_THAT(e, HasSubstr("bad.csv:2:"));
+  EXPECT_THAT(e, HasSubstr("expected 5 numbers"));
+  EXPECT_THAT(e, HasSubstr("found 4"));
+}
+
+TEST(MapErrors, NotANumberNamesLineAndColumn) {
+  const std::string e = error_of("0 -100 0 0 -1\n100 0 141.4 1 0\n0 abc 282.8 0 1\n-100 0 424.3 -1 0\n");
+  EXPECT_THAT(e, HasSubstr("bad.csv:3:"));
+  EXPECT_THAT(e, HasSubstr("column 2 (y) is not a number: 'abc'"));
+}
+
+TEST(MapErrors, TrailingGarbageInANumberIsNotANumber) {
+  EXPECT_THAT(error_of("0 -100 0 0 -1\n100 0 141.4x 1 0\n0 100 282.8 0 1\n-100 0 424.3 -1 0\n"),
+              HasSubstr("bad.csv:2: column 3 (s) is not a number"));
+}
+
+TEST(MapErrors, NanIsRejected) {
+  const std::string e = error_of("0 -100 0 0 -1\n100 nan 141.4 1 0\n0 100 282.8 0 1\n-100 0 424.3 -1 0\n");
+  EXPECT_THAT(e, HasSubstr("bad.csv:2:"));
+  EXPECT_THAT(e, HasSubstr("not finite"));
+}
+
+TEST(MapErrors, InfinityIsRejected) {
+  const std::string e = error_of("0 -100 0 0 -1\n100 0 141.4 1 0\n0 100 inf 0 1\n-100 0 424.3 -1 0\n");
+  EXPECT_THAT(e, HasSubstr("bad.csv:3:"));
+  EXPECT_THAT(e, HasSubstr("column 3 (s) is not finite"));
+}
+
+TEST(MapErrors, SNotIncreasingNamesBothLines) {
+  const std::string e = error_of("0 -100 0 0 -1\n100 0 141.4 1 0\n0 100 141.4 0 1\n-100 0 424.3 -1 0\n");
+  EXPECT_THAT(e, HasSubstr("bad.csv:3:"));
+  EXPECT_THAT(e, HasSubstr("does not increase"));
+  EXPECT_THAT(e, HasSubstr("line 2"));
+}
+
+TEST(MapErrors, NormalNotUnitLength) {
+  const std::string e = error_of("0 -100 0 0 -1\n100 0 141.4 1.02 0\n0 100 282.8 0 1\n-100 0 424.3 -1 0\n");
+  EXPECT_THAT(e, HasSubstr("bad.csv:2:"));
+  EXPECT_THAT(e, HasSubstr("unit vector"));
+}
+
+TEST(MapErrors, NormalWithinOnePercentIsAccepted) {
+  EXPECT_EQ(error_of("0 -100 0 0 -1\n100 0 141.4 1.009 0\n0 100 282.8 0 1\n-100 0 424.3 -1 0\n"), "");
+}
+
+TEST(MapErrors, DuplicatePointNamesBothLines) {
+  const std::string e = error_of("0 -100 0 0 -1\n100 0 141.4 1 0\n0 100 282.8 0 1\n100 0 424.3 1 0\n-100 0 500 -1 0\n");
+  EXPECT_THAT(e, HasSubstr("bad.csv:4:"));
+  EXPECT_THAT(e, HasSubstr("duplicates the point on line 2"));
+}
+
+TEST(MapErrors, FewerThanFourWaypoints) {
+  const std::string e = error_of("0 -100 0 0 -1\n100 0 141.4 1 0\n0 100 282.8 0 1\n");
+  EXPECT_THAT(e, HasSubstr("bad.csv"));
+  EXPECT_THAT(e, HasSubstr("only 3 waypoints"));
+  EXPECT_THAT(e, HasSubstr("at least 4"));
+}
+
+TEST(MapErrors, EmptyFile) {
+  EXPECT_THAT(error_of(""), HasSubstr("bad.csv: empty map file"));
+  EXPECT_THAT(error_of("\n  \n# only a comment\n"), HasSubstr("empty map file"));
+}
+
+TEST(MapErrors, MissingFileNamesThePath) {
+  try {
+    (void)load_map_file("/nonexistent/dir/map.csv");
+    FAIL() << "expected MapError";
+  } catch (const MapError& e) {
+    EXPECT_THAT(std::string(e.what()), HasSubstr("/nonexistent/dir/map.csv: cannot open"));
+  }
+}
+
+TEST(MapFile, LoadsFromDiskWithTheSameResultAsText) {
+  const auto path = std::filesystem::temp_directory_path() / "overtake_map_test.csv";
+  {
+    std::ofstream out(path);
+    out << kGood;
+  }
+  const Map a = load_map_file(path);
+  const Map b = parse_map(kGood, path.string());
+  EXPECT_EQ(a.waypoints, b.waypoints);
+  EXPECT_EQ(a.content_hash, b.content_hash);
+  std::filesystem::remove(path);
+}
+
+TEST(MapFile, FormatThenParseKeepsTheWaypoints) {
+  const Map m = parse_map(kGood, "good.csv");
+  const Map again = parse_map(format_map(m.waypoints), "again");
+  EXPECT_EQ(again.waypoints, m.waypoints);
+}
+
+}  // namespace
+}  // namespace overtake::core
