@@ -29,8 +29,10 @@ class ProgressLine {
     if (now - last_ < std::chrono::milliseconds(100)) return;
     last_ = now;
     const double wall_s = std::chrono::duration<double>(now - start_).count();
-    std::fprintf(stderr, "\r  %6.1f / %.1f min simulated   %7.2f mi   %6.0fx real time ", t_s / 60.0,
-                 total_s / 60.0, core::metres_to_miles(distance_m), wall_s > 0 ? t_s / wall_s : 0.0);
+    char total[32] = "";
+    if (total_s > 0.0) std::snprintf(total, sizeof total, " / %.1f", total_s / 60.0);
+    std::fprintf(stderr, "\r  %6.1f%s min simulated   %7.2f mi   %6.0fx real time ", t_s / 60.0, total,
+                 core::metres_to_miles(distance_m), wall_s > 0 ? t_s / wall_s : 0.0);
     std::fflush(stderr);
     shown_ = true;
   }
@@ -57,7 +59,7 @@ std::string policy_help() {
 int cmd_drive(const DriveOptions& opts, const std::optional<std::filesystem::path>& json_out,
               bool quiet) {
   ProgressLine progress(!quiet);
-  const double total_s = opts.minutes * 60.0;
+  const double total_s = opts.minutes_from_scenario ? 0.0 : opts.minutes * 60.0;  // 0: not known yet
   const auto wall0 = std::chrono::steady_clock::now();
   const DriveResult result =
       drive(opts, [&](double t, double dist) { progress.update(t, total_s, dist); });
@@ -111,7 +113,7 @@ bool stderr_is_terminal() { return ::isatty(STDERR_FILENO) != 0; }
 Subcommand register_drive(CLI::App& app) {
   struct State {
     DriveOptions opts;
-    std::string map, config, json;
+    std::string map, config, json, scenario;
     bool quiet = false;
   };
   auto st = std::make_shared<State>();
@@ -119,7 +121,8 @@ Subcommand register_drive(CLI::App& app) {
       "drive", "Drive a car around the highway among traffic and print its scorecard.");
   cmd->add_option("--map", st->map, "Map file (x y s dx dy per line); default: the built-in track")
       ->check(CLI::ExistingFile);
-  cmd->add_option("--minutes", st->opts.minutes, "Simulated minutes to drive")->capture_default_str();
+  auto* minutes = cmd->add_option("--minutes", st->opts.minutes,
+                                  "Simulated minutes to drive (default 30, or the scenario's duration)");
   cmd->add_option("--seed", st->opts.seed, "Seed of the traffic and latency draws")->capture_default_str();
   cmd->add_option("--traffic", st->opts.traffic,
                   "Traffic profile: faithful (the original's rules) or calm (IDM + MOBIL)")
@@ -131,9 +134,16 @@ Subcommand register_drive(CLI::App& app) {
   cmd->add_option("--config", st->config,
                   "JSON file overriding any of the default parameters (see `overtake config`)")
       ->check(CLI::ExistingFile);
+  cmd->add_option("--scenario", st->scenario,
+                  "Scripted scenario (JSON: ego start, cars, timed events) instead of random traffic")
+      ->check(CLI::ExistingFile);
   cmd->add_flag("--quiet,-q", st->quiet, "No progress line or extra messages");
-  return {cmd, [st] {
+  return {cmd, [st, minutes] {
             if (!st->map.empty()) st->opts.map = st->map;
+            if (!st->scenario.empty()) {
+              st->opts.scenario = st->scenario;
+              st->opts.minutes_from_scenario = minutes->count() == 0;
+            }
             if (!st->config.empty()) st->opts.config = st->config;
             std::optional<std::filesystem::path> json_out;
             if (!st->json.empty()) json_out = st->json;

@@ -4,6 +4,7 @@
 
 #include "overtake/app/commands.hpp"
 #include "overtake/app/resources.hpp"
+#include "overtake/app/scenario_file.hpp"
 #include "overtake/core/hash.hpp"
 #include "overtake/planner/policy.hpp"
 #include "overtake/sim/world.hpp"
@@ -58,12 +59,15 @@ std::shared_ptr<const Track> load_track(const std::optional<std::filesystem::pat
 
 DriveResult drive_on(const Track& track, const Config& config, const DriveOptions& opts,
                      const std::function<void(double, double)>& progress,
-                     const std::atomic<bool>* stop) {
+                     const std::atomic<bool>* stop, const sim::Scenario* scenario) {
   validate_drive_options(opts);
   const auto profile = sim::parse_traffic_profile(opts.traffic);
   auto policy = planner::make_policy(opts.policy, track.line, config.planner);
 
-  sim::World world(track.map, track.line, config.world, *profile, opts.seed);
+  auto world_ptr = scenario ? std::make_unique<sim::World>(track.map, track.line, config.world, *scenario)
+                            : std::make_unique<sim::World>(track.map, track.line, config.world, *profile,
+                                                           opts.seed);
+  sim::World& world = *world_ptr;
   sim::RunOptions run;
   run.duration_s = opts.minutes * 60.0;
   if (opts.steps_per_call > 0) run.steps_per_call = opts.steps_per_call;
@@ -77,7 +81,8 @@ DriveResult drive_on(const Track& track, const Config& config, const DriveOption
   RunProvenance& p = result.provenance;
   p.seed = opts.seed;
   p.policy = opts.policy;
-  p.traffic = std::string(sim::to_string(*profile));
+  p.traffic = scenario ? "scripted" : std::string(sim::to_string(*profile));
+  if (scenario) p.scenario = scenario->name.empty() ? "unnamed scenario" : scenario->name;
   p.map_path = track.map.source;
   p.map_hash = core::hex64(track.map.content_hash);
   p.params_hash = config_hash(config);
@@ -91,7 +96,12 @@ DriveResult drive_on(const Track& track, const Config& config, const DriveOption
 DriveResult drive(const DriveOptions& opts, const std::function<void(double, double)>& progress) {
   const Config config = load_config(opts.config);
   const auto track = load_track(opts.map);
-  return drive_on(*track, config, opts, progress);
+  if (!opts.scenario) return drive_on(*track, config, opts, progress);
+  sim::Scenario scenario = load_scenario(*opts.scenario, config.road);
+  if (scenario.name.empty()) scenario.name = opts.scenario->filename().string();
+  DriveOptions o = opts;
+  if (o.minutes_from_scenario && scenario.duration_s) o.minutes = *scenario.duration_s / 60.0;
+  return drive_on(*track, config, o, progress, nullptr, &scenario);
 }
 
 }  // namespace overtake::app

@@ -76,6 +76,7 @@ json report_to_json(const sim::RunReport& r, const RunProvenance& p) {
                  {"steps_per_call", steps_text(p)},
                  {"minutes", p.minutes},
                  {"params_hash", p.params_hash}};
+  if (!p.scenario.empty()) j["config"]["scenario"] = p.scenario;
   return j;
 }
 

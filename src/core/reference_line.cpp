@@ -161,8 +161,15 @@ Vec2 ReferenceLine::velocity(FrenetPoint p, double s_dot, double d_dot) const {
 }
 
 double ReferenceLine::s_rate(FrenetPoint p, double speed_mps) const {
-  const RoadFrame f = frame(p.s_m);
-  return speed_mps / (f.ds_scale * (1.0 + side_ * f.curvature_1pm * p.d_m));
+  // The hot path of traffic motion: the same as from frame(), without heading or tangent.
+  const double s = wrap_s(p.s_m);
+  const std::size_t i = x_.piece(s);
+  const SplineSample ex = x_.eval_piece(i, s);
+  const SplineSample ey = y_.eval_piece(i, s);
+  const double speed_sq = ex.d1 * ex.d1 + ey.d1 * ey.d1;
+  const double speed = std::sqrt(speed_sq);
+  const double curvature = (ex.d1 * ey.d2 - ey.d1 * ex.d2) / (speed_sq * speed);
+  return speed_mps / (speed * (1.0 + side_ * curvature * p.d_m));
 }
 
 }  // namespace overtake::core

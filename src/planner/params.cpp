@@ -12,6 +12,108 @@ std::string fmt(double v) {
   return os.str();
 }
 
+void validate_reference(const PlannerParams& all, std::vector<std::string>& out) {
+  const ReferenceParams& p = all.reference;
+  const std::string base = "planner.reference.";
+  auto positive = [&](const std::string& key, double v) {
+    if (!(v > 0.0) || !std::isfinite(v)) out.push_back(base + key + " must be a positive number (got " + fmt(v) + ")");
+  };
+  auto non_negative = [&](const std::string& key, double v) {
+    if (!(v >= 0.0) || !std::isfinite(v)) out.push_back(base + key + " must be zero or more (got " + fmt(v) + ")");
+  };
+  auto at_most = [&](const std::string& key, double v, double limit, const std::string& what) {
+    if (v > limit) out.push_back(base + key + " must be at most " + what + " (got " + fmt(v) + ")");
+  };
+  auto times = [&](const std::string& key, const std::vector<double>& v) {
+    if (v.empty()) out.push_back(base + key + " must list at least one value");
+    for (const double x : v) {
+      if (!(x > 0.0) || !std::isfinite(x)) {
+        out.push_back(base + key + " must hold positive numbers (got " + fmt(x) + ")");
+        break;
+      }
+    }
+  };
+  positive("car_length_m", p.car_length_m);
+  positive("car_width_m", p.car_width_m);
+  const auto& pr = p.prediction;
+  positive("prediction.lane_change_speed_mps", pr.lane_change_speed_mps);
+  positive("prediction.lane_change_offset_m", pr.lane_change_offset_m);
+  positive("prediction.lane_change_duration_s", pr.lane_change_duration_s);
+  non_negative("prediction.braking_threshold_mps2", pr.braking_threshold_mps2);
+  non_negative("prediction.braking_horizon_s", pr.braking_horizon_s);
+  positive("prediction.max_track_jump_m", pr.max_track_jump_m);
+  const auto& b = p.behaviour;
+  positive("behaviour.cruise_speed_mps", b.cruise_speed_mps);
+  positive("behaviour.lookahead_m", b.lookahead_m);
+  positive("behaviour.evaluation_horizon_s", b.evaluation_horizon_s);
+  non_negative("behaviour.response_time_s", b.response_time_s);
+  positive("behaviour.ego_brake_mps2", b.ego_brake_mps2);
+  positive("behaviour.ego_brake_jerk_mps3", b.ego_brake_jerk_mps3);
+  positive("behaviour.lead_brake_mps2", b.lead_brake_mps2);
+  positive("behaviour.min_gap_m", b.min_gap_m);
+  positive("behaviour.follower_reaction_gap_m", b.follower_reaction_gap_m);
+  positive("behaviour.follower_brake_mps2", b.follower_brake_mps2);
+  non_negative("behaviour.follower_response_s", b.follower_response_s);
+  non_negative("behaviour.follower_margin_m", b.follower_margin_m);
+  non_negative("behaviour.change_front_factor", b.change_front_factor);
+  non_negative("behaviour.min_change_speed_mps", b.min_change_speed_mps);
+  non_negative("behaviour.change_dwell_s", b.change_dwell_s);
+  non_negative("behaviour.speed_weight", b.speed_weight);
+  non_negative("behaviour.change_cost", b.change_cost);
+  non_negative("behaviour.hysteresis", b.hysteresis);
+  non_negative("behaviour.rear_threat_weight", b.rear_threat_weight);
+  non_negative("behaviour.rear_threat_speed_mps", b.rear_threat_speed_mps);
+  positive("behaviour.rear_threat_span_mps", b.rear_threat_span_mps);
+  positive("behaviour.rear_threat_range_m", b.rear_threat_range_m);
+  positive("behaviour.passing_speed_mps", b.passing_speed_mps);
+  const auto& t = p.trajectory;
+  positive("trajectory.step_s", t.step_s);
+  if (t.keep_points < 0 || t.keep_points > 50) {
+    out.push_back(base + "trajectory.keep_points must be between 0 and 50 (got " + std::to_string(t.keep_points) + ")");
+  }
+  if (t.path_points < t.keep_points + 10 || t.path_points > 1000) {
+    out.push_back(base + "trajectory.path_points must be between keep_points + 10 and 1000 (got " +
+                  std::to_string(t.path_points) + ")");
+  }
+  positive("trajectory.check_step_s", t.check_step_s);
+  positive("trajectory.horizon_s", t.horizon_s);
+  if (t.check_step_s > 0.0 && t.horizon_s / t.check_step_s > 1000.0) {
+    out.push_back(base + "trajectory.horizon_s must be at most 1000 check steps (got " + fmt(t.horizon_s) + ")");
+  }
+  positive("trajectory.max_speed_mps", t.max_speed_mps);
+  at_most("behaviour.cruise_speed_mps", b.cruise_speed_mps, t.max_speed_mps, "trajectory.max_speed_mps");
+  positive("trajectory.max_accel_mps2", t.max_accel_mps2);
+  positive("trajectory.max_jerk_mps3", t.max_jerk_mps3);
+  positive("trajectory.lateral_jerk_mps3", t.lateral_jerk_mps3);
+  positive("trajectory.min_lateral_time_s", t.min_lateral_time_s);
+  times("trajectory.lateral_time_factors", t.lateral_time_factors);
+  times("trajectory.cruise_times_s", t.cruise_times_s);
+  times("trajectory.follow_times_s", t.follow_times_s);
+  if (t.speed_offsets_mps.empty()) out.push_back(base + "trajectory.speed_offsets_mps must list at least one value");
+  for (const double x : t.speed_offsets_mps) {
+    if (!std::isfinite(x)) out.push_back(base + "trajectory.speed_offsets_mps must hold numbers");
+  }
+  non_negative("trajectory.line_band_m", t.line_band_m);
+  positive("trajectory.max_band_time_s", t.max_band_time_s);
+  non_negative("trajectory.lon_margin_m", t.lon_margin_m);
+  non_negative("trajectory.lat_margin_m", t.lat_margin_m);
+  positive("trajectory.fallback_brake_mps2", t.fallback_brake_mps2);
+  positive("trajectory.fallback_jerk_mps3", t.fallback_jerk_mps3);
+  for (const auto& [key, v] : {std::pair<const char*, double>{"trajectory.progress_weight", t.progress_weight},
+                               {"trajectory.lon_jerk_weight", t.lon_jerk_weight},
+                               {"trajectory.lat_jerk_weight", t.lat_jerk_weight},
+                               {"trajectory.lat_time_weight", t.lat_time_weight},
+                               {"trajectory.lane_weight", t.lane_weight},
+                               {"trajectory.proximity_weight", t.proximity_weight},
+                               {"trajectory.rear_weight", t.rear_weight}}) {
+    non_negative(key, v);
+  }
+  if (t.max_kinematic_checks < 1) {
+    out.push_back(base + "trajectory.max_kinematic_checks must be at least 1 (got " +
+                  std::to_string(t.max_kinematic_checks) + ")");
+  }
+}
+
 }  // namespace
 
 std::vector<std::string> validate(const PlannerParams& p) {
@@ -67,6 +169,7 @@ std::vector<std::string> validate(const PlannerParams& p) {
   positive("planner.seed004.faster_behind_m", p.seed004.faster_behind_m);
   positive("planner.seed004.speed_match_divisor", p.seed004.speed_match_divisor);
   positive("planner.seed004.change_first_anchor_m", p.seed004.change_first_anchor_m);
+  validate_reference(p, out);
   if (w.start_lane < 0 || w.start_lane >= p.road.lane_count) {
     out.push_back("planner.walkthrough.start_lane must be a lane of the road, 0 to " +
                   std::to_string(p.road.lane_count - 1) + " (got " + std::to_string(w.start_lane) + ")");

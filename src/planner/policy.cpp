@@ -1,5 +1,6 @@
 #include "overtake/planner/policy.hpp"
 
+#include "overtake/planner/reference/reference_policy.hpp"
 #include "overtake/planner/seed_policies.hpp"
 #include "overtake/planner/walkthrough.hpp"
 
@@ -7,6 +8,9 @@ namespace overtake::planner {
 
 std::vector<PolicyInfo> list_policies() {
   return {
+      {"reference",
+       "the reference planner: predictions with cut-ins, lane choice by cost with RSS gaps and "
+       "hysteresis, jerk-minimising Frenet trajectories checked for limits and collisions"},
       {"walkthrough",
        "keep lane, ramp to 49.5 mph, slow behind a car closer than 30 m, spline path (the "
        "project walkthrough the seed planners start from)"},
@@ -20,6 +24,7 @@ std::vector<PolicyInfo> list_policies() {
 
 std::unique_ptr<Policy> make_policy(std::string_view name, const core::ReferenceLine& line,
                                     const PlannerParams& params) {
+  if (name == "reference") return std::make_unique<reference::ReferencePolicy>(line, params);
   if (name == "walkthrough") return std::make_unique<WalkthroughPolicy>(line, params);
   if (name == "seed000") return std::make_unique<Seed000Policy>(line, params);
   if (name == "seed001") return std::make_unique<Seed001Policy>(line, params);

@@ -78,14 +78,36 @@ auto element(const char* key, std::size_t i) {
   return [key, i] { return quoted(key) + "[" + std::to_string(i) + "]"; };
 }
 
+// nlohmann's parse error without its prefix and its "last read" echo (which can be huge),
+// with the column counted in the whole frame: "column 40: syntax error while parsing value -
+// invalid literal".
+std::string parse_error_text(std::string_view what, std::size_t offset) {
+  std::string_view s = what;
+  if (s.starts_with("[json.exception.")) s = s.substr(std::min(s.size(), s.find("] ") + 2));
+  if (const auto at = s.find("column "); at != std::string_view::npos) {
+    s = s.substr(at + 7);
+    std::size_t column = 0;
+    const auto r = std::from_chars(s.data(), s.data() + s.size(), column);
+    s = std::string_view(r.ptr, static_cast<std::size_t>(s.data() + s.size() - r.ptr));
+    if (const auto cut = s.find("; last read"); cut != std::string_view::npos) s = s.substr(0, cut);
+    return "column " + std::to_string(column + offset) + std::string(s);
+  }
+  return std::string(s.substr(0, 120));
+}
+
 // The JSON array `[name, payload]` of an event frame.
 json parse_event(std::string_view frame) {
   if (frame.substr(0, kEventPrefix.size()) != kEventPrefix) {
     reject("not a Socket.IO event (does not start with 42): " + excerpt(frame));
   }
   const std::string_view body = frame.substr(kEventPrefix.size());
-  json j = json::parse(body.begin(), body.end(), nullptr, /*allow_exceptions=*/false);
-  if (j.is_discarded()) reject("the event is not valid JSON: " + excerpt(frame));
+  json j;
+  try {
+    j = json::parse(body.begin(), body.end());
+  } catch (const json::exception& e) {  // parse_error, or out_of_range for 1e999
+    reject("the event is not valid JSON (" + parse_error_text(e.what(), kEventPrefix.size()) + "): " +
+           excerpt(frame));
+  }
   if (!j.is_array() || j.size() != 2) reject("the event is not a [name, payload] array: " + excerpt(frame));
   if (!j[0].is_string()) reject("the event name is " + describe(j[0]) + ", not a string");
   return j;

@@ -33,7 +33,7 @@ FrameOutcome PlannerSession::handle(const Frame& frame) {
   }
   if (frame.oversized) {
     out.warning = "frame of " + bytes(frame.size) + " is larger than the limit of " +
-                  bytes(max_frame_bytes_) + ", dropped: " + excerpt(frame.text, 40);
+                  bytes(max_frame_bytes_) + ", dropped: " + excerpt(frame.text.substr(0, 40)) + "...";
     // The simulator waits for an answer to a telemetry, however broken.
     const auto name = event_name(frame.text);
     if (is_event(frame.text) && (!name || *name == "telemetry")) {

@@ -27,16 +27,26 @@ constexpr double kSpawnMarginM = 1.0;
 constexpr double kFallbackAheadM = 150.0;
 constexpr double kFallbackStepM = 10.0;
 constexpr int kFallbackTries = 1000;
+/// (ours) Lateral motion (lane changes, wander) runs at its full pace at this speed and
+/// above, and slower below it in proportion, stopping when the car stands: a car does not
+/// move sideways at a crawl. A 4 m change over 3 s peaks at 2.5 m/s sideways, so a car
+/// is never more than ~20 degrees off its lane.
+constexpr double kFullLateralPaceMps = 7.0;
 /// Below this speed a footprint takes the road's heading instead of the velocity's.
 constexpr double kStationaryMps = 0.1;
 /// (calm) IDM's gap is never taken below this (avoids dividing by zero).
 constexpr double kMinIdmGapM = 0.01;
 constexpr double kMinDesiredSpeedMps = 0.1;
+/// (calm) A car's body counts in a lane when it comes within this of it (sideways), beyond
+/// half its width: room for its heading during a lane change.
+constexpr double kBodyMarginM = 0.5;
 /// (calm) The ACC model's coolness factor (Kesting, Treiber, Helbing 2010).
 constexpr double kCoolness = 0.99;
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
-[[nodiscard]] constexpr unsigned lane_bit(int lane) { return 1U << static_cast<unsigned>(lane); }
+[[nodiscard]] constexpr unsigned lane_bit(int lane) {
+  return 1U << static_cast<unsigned>(lane);
+}
 
 /// Minimum-jerk lateral profile: position fraction and its derivative in tau.
 [[nodiscard]] constexpr double min_jerk(double tau) {
@@ -122,7 +132,8 @@ struct TrafficImpl {
   [[nodiscard]] static unsigned ego_lanes(const Traffic& t, double ego_d) {
     unsigned mask = 0;
     for (int k = 0; k < t.road_.lane_count; ++k) {
-      if (std::abs(ego_d - core::lane_center_d(k, t.road_)) < t.params_.faithful.ego_lane_radius_m) {
+      if (std::abs(ego_d - core::lane_center_d(k, t.road_)) <
+          t.params_.faithful.ego_lane_radius_m) {
         mask |= lane_bit(k);
       }
     }
@@ -133,8 +144,18 @@ struct TrafficImpl {
     return lane_bit(core::lane_of(c.d_m, t.road_));
   }
 
+  /// Lanes a car occupies for following: faithful, the lane of its d; calm (ours), every
+  /// lane its body reaches into (half its width plus a margin either side of d), so that a
+  /// car that has crossed a lane line keeps counting in the lane it is leaving. Either way
+  /// also the target lane of a lane change.
   [[nodiscard]] static unsigned follow_lanes(const Traffic& t, const TrafficCar& c) {
     unsigned mask = now_lanes(t, c);
+    if (t.profile_ == TrafficProfile::calm) {
+      const double half = 0.5 * t.params_.car_width_m + kBodyMarginM;
+      const int lo = core::lane_of(c.d_m - half, t.road_);
+      const int hi = core::lane_of(c.d_m + half, t.road_);
+      for (int k = lo; k <= hi; ++k) mask |= lane_bit(k);
+    }
     if (c.manoeuvre) mask |= lane_bit(c.manoeuvre->to_lane);
     return mask;
   }
@@ -150,14 +171,15 @@ struct TrafficImpl {
       v.speed_mps = c.speed_mps;
       v.accel_mps2 = c.accel_mps2;
       v.now_lanes = now_lanes(t, c);
-      v.follow_lanes = c.manoeuvre ? v.now_lanes | lane_bit(c.manoeuvre->to_lane) : v.now_lanes;
+      v.follow_lanes = follow_lanes(t, c);
       v.car = static_cast<int>(i);
     }
     Vehicle& e = t.vehicles_[n];
     e.s_m = ego_s;
     e.speed_mps = ego.speed_mps;
     // The ego's acceleration, from its speed at the previous step (0 at the first).
-    e.accel_mps2 = t.ego_prev_speed_mps_ >= 0.0 ? (ego.speed_mps - t.ego_prev_speed_mps_) / dt : 0.0;
+    e.accel_mps2 =
+        t.ego_prev_speed_mps_ >= 0.0 ? (ego.speed_mps - t.ego_prev_speed_mps_) / dt : 0.0;
     e.now_lanes = e.follow_lanes = ego_lanes(t, ego.d_m);
     e.car = -1;
   }
@@ -172,20 +194,6 @@ struct TrafficImpl {
       const Vehicle& v = t.vehicles_[static_cast<std::size_t>(j)];
       if (j == self || j == skip || (v.follow_lanes & lanes) == 0) continue;
       const double gap = ahead(t, s, v.s_m);
-      if (gap > 0.0 && gap < best.gap_m) best = {j, gap};
-    }
-    return best;
-  }
-
-  /// Nearest vehicle behind (gap reported as a positive distance) occupying any of `lanes`.
-  [[nodiscard]] static Nearest follower(const Traffic& t, int self, unsigned lanes) {
-    Nearest best;
-    const double s = t.vehicles_[static_cast<std::size_t>(self)].s_m;
-    const int count = static_cast<int>(t.vehicles_.size());
-    for (int j = 0; j < count; ++j) {
-      const Vehicle& v = t.vehicles_[static_cast<std::size_t>(j)];
-      if (j == self || (v.follow_lanes & lanes) == 0) continue;
-      const double gap = -ahead(t, s, v.s_m);
       if (gap > 0.0 && gap < best.gap_m) best = {j, gap};
     }
     return best;
@@ -238,16 +246,23 @@ struct TrafficImpl {
         const Vehicle& lv = t.vehicles_[static_cast<std::size_t>(lead.vehicle)];
         // The original's mixed units: own cruise speed in mph minus the leader's in m/s.
         const double reaction =
-            lv.car < 0 ? f.ego_reaction_m
-                       : std::clamp(f.reaction_gain_m * (core::mps_to_mph(c.cruise_mps) - lv.speed_mps),
-                                    f.min_reaction_m, f.max_reaction_m);
+            lv.car < 0
+                ? f.ego_reaction_m
+                : std::clamp(f.reaction_gain_m * (core::mps_to_mph(c.cruise_mps) - lv.speed_mps),
+                             f.min_reaction_m, f.max_reaction_m);
         react = lead.gap_m < reaction;
         dec.leader = lead.vehicle;
         dec.leader_gap_m = lead.gap_m;
       }
       const double v = c.speed_mps;
-      if (react) {
+      const double leader_speed =
+          react ? t.vehicles_[static_cast<std::size_t>(lead.vehicle)].speed_mps : 0.0;
+      if (react && v >= leader_speed) {
+        // Inside the reaction distance: brake hard down to below the leader's speed ...
         dec.new_speed_mps = std::max(0.0, v - f.brake_mps2 * dt);
+      } else if (react) {
+        // ... then hold that speed until the gap opens past the reaction distance.
+        dec.new_speed_mps = v;
       } else if (v < c.cruise_mps) {
         dec.new_speed_mps = std::min(c.cruise_mps, v + f.accel_mps2 * dt);
       } else {
@@ -299,9 +314,9 @@ struct TrafficImpl {
     double interaction = 0.0;
     if (gap_m < kInf) {
       const double s = std::max(gap_m - t.params_.car_length_m, kMinIdmGapM);
-      const double dynamic = v * p.time_headway_s +
-                             v * (v - leader_speed) /
-                                 (2.0 * std::sqrt(p.max_accel_mps2 * p.comfort_decel_mps2));
+      const double dynamic =
+          v * p.time_headway_s +
+          v * (v - leader_speed) / (2.0 * std::sqrt(p.max_accel_mps2 * p.comfort_decel_mps2));
       const double s_star = p.min_gap_m + std::max(0.0, dynamic);
       interaction = (s_star / s) * (s_star / s);
     }
@@ -358,41 +373,33 @@ struct TrafficImpl {
   }
 
   /// MOBIL (Kesting, Treiber, Helbing 2007) for car i into `lane`, on IDM accelerations:
-  /// the incentive when the change is safe, nullopt when it is not. Safe: no vehicle in the
-  /// target lane within car length + s0; the new follower (the ego included) need not brake
-  /// harder than safe_decel; (ours) nor need the car itself.
-  [[nodiscard]] static std::optional<double> mobil(const Traffic& t, int i, int lane) {
+  /// the incentive when the change is safe and its incentive beats `best`, else nullopt.
+  /// Safe: no vehicle in the target lane within car length + s0; the new follower (the
+  /// ego included) need not brake harder than safe_decel; (ours) nor need the car itself.
+  [[nodiscard]] static std::optional<double> mobil(const Traffic& t, int i, int lane, double best) {
     const CalmTrafficParams& p = t.params_.calm;
     const unsigned target = lane_bit(lane);
-    const Vehicle& self = t.vehicles_[static_cast<std::size_t>(i)];
-    const int count = static_cast<int>(t.vehicles_.size());
+    const double s = t.vehicles_[static_cast<std::size_t>(i)].s_m;
     const double too_close = t.params_.car_length_m + p.min_gap_m;
+    // One pass over the target lane: overlap, new leader, new follower.
+    Nearest nl;
+    Nearest nf;
+    const int count = static_cast<int>(t.vehicles_.size());
     for (int j = 0; j < count; ++j) {
       const Vehicle& v = t.vehicles_[static_cast<std::size_t>(j)];
       if (j == i || (v.follow_lanes & target) == 0) continue;
-      if (std::abs(ahead(t, self.s_m, v.s_m)) < too_close) return std::nullopt;
+      const double gap = ahead(t, s, v.s_m);
+      if (std::abs(gap) < too_close) return std::nullopt;
+      if (gap > 0.0) {
+        if (gap < nl.gap_m) nl = {j, gap};
+      } else if (-gap < nf.gap_m) {
+        nf = {j, -gap};
+      }
     }
     // Own advantage in the target lane.
-    const Nearest nl = leader(t, i, target);
     const double a_self_after = idm_of(t, i, nl.vehicle, nl.gap_m);
     if (a_self_after < -p.safe_decel_mps2) return std::nullopt;
     const double a_self = t.decisions_[static_cast<std::size_t>(i)].idm_mps2;
-    // The new follower.
-    const Nearest nf = follower(t, i, target);
-    double nf_gain = 0.0;
-    if (nf.vehicle >= 0) {
-      const Vehicle& fv = t.vehicles_[static_cast<std::size_t>(nf.vehicle)];
-      double a_after = 0.0;
-      if (fv.car >= 0) {
-        const Decision& fd = t.decisions_[static_cast<std::size_t>(fv.car)];
-        a_after = fd.leader >= 0 && fd.leader_gap_m < nf.gap_m ? fd.idm_mps2
-                                                                : idm_of(t, nf.vehicle, i, nf.gap_m);
-        nf_gain = a_after - fd.idm_mps2;
-      } else {
-        a_after = idm_of(t, nf.vehicle, i, nf.gap_m);
-      }
-      if (a_after < -p.safe_decel_mps2) return std::nullopt;
-    }
     // Old followers: the cars that follow i now, once i has gone.
     double of_gain = 0.0;
     const int n = static_cast<int>(t.cars_.size());
@@ -402,7 +409,24 @@ struct TrafficImpl {
       const Nearest next = leader(t, k, t.vehicles_[static_cast<std::size_t>(k)].follow_lanes, i);
       of_gain += idm_of(t, k, next.vehicle, next.gap_m) - kd.idm_mps2;
     }
-    return a_self_after - a_self + p.politeness * (nf_gain + of_gain);
+    // The new follower can only lose: without it, this bounds the incentive.
+    if (a_self_after - a_self + p.politeness * of_gain <= best) return std::nullopt;
+    double nf_gain = 0.0;
+    if (nf.vehicle >= 0) {
+      const Vehicle& fv = t.vehicles_[static_cast<std::size_t>(nf.vehicle)];
+      const double a_behind_i = idm_of(t, nf.vehicle, i, nf.gap_m);
+      double a_after = a_behind_i;
+      if (fv.car >= 0) {
+        // Whichever asks more of it: its present leader, or car i in front of it.
+        const Decision& fd = t.decisions_[static_cast<std::size_t>(fv.car)];
+        a_after = std::min(fd.idm_mps2, a_behind_i);
+        nf_gain = a_after - fd.idm_mps2;
+      }
+      if (a_after < -p.safe_decel_mps2) return std::nullopt;
+    }
+    const double incentive = a_self_after - a_self + p.politeness * (nf_gain + of_gain);
+    if (incentive <= best) return std::nullopt;
+    return incentive;
   }
 
   /// Whether car j's change into a lane conflicts with car i's change into the same lane.
@@ -423,15 +447,28 @@ struct TrafficImpl {
       TrafficCar& c = t.cars_[static_cast<std::size_t>(i)];
       Decision& dec = t.decisions_[static_cast<std::size_t>(i)];
       dec = Decision{};
-      const Nearest lead = leader(t, i, t.vehicles_[static_cast<std::size_t>(i)].follow_lanes);
-      dec.leader = lead.vehicle;
-      dec.leader_gap_m = lead.gap_m;
-      dec.idm_mps2 = idm_of(t, i, lead.vehicle, lead.gap_m);
-      dec.accel_mps2 = applied_accel(t, i, lead.vehicle, lead.gap_m, dec.idm_mps2);
+      // The nearest vehicle ahead in each lane it occupies (two during a lane change): the
+      // one that asks for the lowest acceleration leads. (With one lane, simply the nearest;
+      // with two, a slow car in one lane is not hidden by a nearer, faster one in the other.)
+      dec.idm_mps2 = kInf;
+      dec.accel_mps2 = kInf;
+      const unsigned lanes = t.vehicles_[static_cast<std::size_t>(i)].follow_lanes;
+      for (int lane = 0; lane < t.road_.lane_count; ++lane) {
+        if ((lanes & lane_bit(lane)) == 0) continue;
+        const Nearest lead = leader(t, i, lane_bit(lane));
+        const double a_idm = idm_of(t, i, lead.vehicle, lead.gap_m);
+        dec.accel_mps2 =
+            std::min(dec.accel_mps2, applied_accel(t, i, lead.vehicle, lead.gap_m, a_idm));
+        if (a_idm < dec.idm_mps2) {
+          dec.idm_mps2 = a_idm;
+          dec.leader = lead.vehicle;
+          dec.leader_gap_m = lead.gap_m;
+        }
+      }
       dec.new_speed_mps = std::max(0.0, c.speed_mps + dec.accel_mps2 * dt);
-      // Held up: the leader makes it accelerate less than the free road would.
+      // Held up: a leader makes it accelerate less than the free road would.
       const bool react =
-          lead.vehicle >= 0 && dec.idm_mps2 < idm(t, c.speed_mps, c.cruise_mps, kInf, 0.0) - 1e-9;
+          dec.leader >= 0 && dec.idm_mps2 < idm(t, c.speed_mps, c.cruise_mps, kInf, 0.0) - 1e-9;
       c.held_up = react;
       c.since_held_up_s = react ? 0.0 : c.since_held_up_s + dt;
     }
@@ -441,8 +478,8 @@ struct TrafficImpl {
       double best = p.change_threshold_mps2;
       for (const int cand : {c.lane - 1, c.lane + 1}) {
         if (cand < 0 || cand >= t.road_.lane_count) continue;
-        const std::optional<double> gain = mobil(t, i, cand);
-        if (gain && *gain > best) {
+        const std::optional<double> gain = mobil(t, i, cand, best);
+        if (gain) {
           best = *gain;
           t.decisions_[static_cast<std::size_t>(i)].change_to_lane = cand;
         }
@@ -478,9 +515,10 @@ struct TrafficImpl {
     } else {
       c.since_lane_change_s += dt;
     }
+    const double pace = std::min(1.0, c.speed_mps / kFullLateralPaceMps);
     if (c.manoeuvre) {
       LaneManoeuvre& m = *c.manoeuvre;
-      m.elapsed_s += dt;
+      m.elapsed_s += dt * pace;
       const double to_d = core::lane_center_d(m.to_lane, t.road_);
       const double tau = m.duration_s > 0.0 ? std::min(1.0, m.elapsed_s / m.duration_s) : 1.0;
       if (tau >= 1.0) {
@@ -492,13 +530,15 @@ struct TrafficImpl {
         c.lane_offset_m = 0.0;
       } else {
         c.d_m = m.from_d_m + (to_d - m.from_d_m) * min_jerk(tau);
-        c.d_rate_mps = (to_d - m.from_d_m) * min_jerk_rate(tau) / m.duration_s;
+        c.d_rate_mps = (to_d - m.from_d_m) * min_jerk_rate(tau) / m.duration_s * pace;
       }
     } else {
-      c.wander_phase_rad = std::fmod(c.wander_phase_rad + c.wander_omega_rps * dt, 2.0 * core::kPi);
+      c.wander_phase_rad =
+          std::fmod(c.wander_phase_rad + c.wander_omega_rps * pace * dt, 2.0 * core::kPi);
       c.lane_offset_m = p.wander_amplitude_m * std::sin(c.wander_phase_rad);
       c.d_m = core::lane_center_d(c.lane, t.road_) + c.lane_offset_m;
-      c.d_rate_mps = p.wander_amplitude_m * c.wander_omega_rps * std::cos(c.wander_phase_rad);
+      c.d_rate_mps =
+          p.wander_amplitude_m * c.wander_omega_rps * pace * std::cos(c.wander_phase_rad);
     }
     const double ds = t.line_.s_rate({c.s_m, d_before}, c.speed_mps) * dt;
     c.s_m = t.line_.wrap_s(c.s_m + ds);
@@ -528,25 +568,65 @@ struct TrafficImpl {
     ahead_region.max_speed_mps = p.ahead_max_speed_mps;
   }
 
-  /// (ours) In one lane, the vehicle behind must be able to brake to the one ahead's speed.
+  /// How much the gap between two vehicles in one lane can shrink at most when the one
+  /// behind (speed v_f) brakes at b while the one ahead (v_l) keeps braking at decel_l >= 0
+  /// until it stands: the spawn rule's dv^2 / (2 b) when the leader holds its speed.
+  [[nodiscard]] static double worst_closing_m(double v_f, double v_l, double decel_l, double b) {
+    double worst = 0.0;
+    if (v_f > v_l && b > decel_l) {
+      const double t_equal = (v_f - v_l) / (b - decel_l);
+      if (decel_l <= 0.0 || t_equal <= v_l / decel_l) {
+        worst = (v_f - v_l) * (v_f - v_l) / (2.0 * (b - decel_l));
+      }
+    }
+    if (decel_l > 0.0) {
+      worst = std::max(worst, v_f * v_f / (2.0 * b) - v_l * v_l / (2.0 * decel_l));
+    }
+    return worst;
+  }
+
+  /// (ours) In one lane, the vehicle behind must be able to brake in time for the one ahead
+  /// (which keeps its present deceleration, if it is braking) at spawn_brake_mps2.
   [[nodiscard]] static bool room_to_brake(const Traffic& t, double s, double v, double other_s,
-                                          double other_v) {
+                                          double other_v, double other_accel) {
     const double gap = ahead(t, s, other_s);
-    const double dv = gap >= 0.0 ? std::max(0.0, v - other_v) : std::max(0.0, other_v - v);
-    return std::abs(gap) >=
-           t.params_.car_length_m + kSpawnMarginM + dv * dv / (2.0 * t.params_.spawn_brake_mps2);
+    const double b = t.params_.spawn_brake_mps2;
+    const double closing = gap >= 0.0 ? worst_closing_m(v, other_v, std::max(0.0, -other_accel), b)
+                                      : worst_closing_m(other_v, v, 0.0, b);
+    return std::abs(gap) >= t.params_.car_length_m + kSpawnMarginM + closing;
+  }
+
+  /// The ego as placement sees it.
+  struct EgoSpot {
+    double s_m = 0.0;  // wrapped
+    core::Vec2 position;
+    unsigned lanes = 0;
+    double speed_mps = 0.0;
+    double accel_mps2 = 0.0;
+  };
+
+  [[nodiscard]] static EgoSpot ego_spot(const Traffic& t, const EgoView& ego) {
+    EgoSpot e;
+    e.s_m = t.line_.wrap_s(ego.s_m);
+    e.position = t.line_.to_cartesian({e.s_m, ego.d_m});
+    e.lanes = ego_lanes(t, ego.d_m);
+    e.speed_mps = ego.speed_mps;
+    // During a step the ego's last acceleration is known (the last vehicle); not before.
+    e.accel_mps2 =
+        !t.vehicles_.empty() && t.vehicles_.back().car < 0 ? t.vehicles_.back().accel_mps2 : 0.0;
+    return e;
   }
 
   /// Whether car i may be put at (s, d) in `lane` at `speed`, given the cars [0, limit)
   /// other than i (positions in positions_) and the ego.
-  [[nodiscard]] static bool spot_ok(const Traffic& t, int i, int limit, double s, double d, int lane,
-                                    double speed, const EgoView& ego, double ego_s,
-                                    core::Vec2 ego_pos, unsigned ego_mask) {
+  [[nodiscard]] static bool spot_ok(const Traffic& t, int i, int limit, double s, double d,
+                                    int lane, double speed, const EgoSpot& ego) {
     const TrafficParams& p = t.params_;
     const core::Vec2 pos = t.line_.to_cartesian({s, d});
     const double min_sq = p.min_spawn_distance_m * p.min_spawn_distance_m;
-    if (core::distance_sq(pos, ego_pos) < min_sq) return false;
-    if ((ego_mask & lane_bit(lane)) != 0 && !room_to_brake(t, s, speed, ego_s, ego.speed_mps)) {
+    if (core::distance_sq(pos, ego.position) < min_sq) return false;
+    if ((ego.lanes & lane_bit(lane)) != 0 &&
+        !room_to_brake(t, s, speed, ego.s_m, ego.speed_mps, ego.accel_mps2)) {
       return false;
     }
     for (int j = 0; j < limit; ++j) {
@@ -554,7 +634,7 @@ struct TrafficImpl {
       const TrafficCar& o = t.cars_[static_cast<std::size_t>(j)];
       if (core::distance_sq(pos, t.positions_[static_cast<std::size_t>(j)]) < min_sq) return false;
       if ((follow_lanes(t, o) & lane_bit(lane)) != 0 &&
-          !room_to_brake(t, s, speed, o.s_m, o.speed_mps)) {
+          !room_to_brake(t, s, speed, o.s_m, o.speed_mps, o.accel_mps2)) {
         return false;
       }
     }
@@ -571,7 +651,7 @@ struct TrafficImpl {
     c.wander_omega_rps = omega;
     c.lane_offset_m = amp * std::sin(phase);
     c.d_m = core::lane_center_d(lane, t.road_) + c.lane_offset_m;
-    c.d_rate_mps = amp * omega * std::cos(phase);
+    c.d_rate_mps = amp * omega * std::min(1.0, cruise / kFullLateralPaceMps) * std::cos(phase);
     c.cruise_mps = cruise;
     c.speed_mps = cruise;
     c.accel_mps2 = 0.0;
@@ -584,29 +664,44 @@ struct TrafficImpl {
     c.far = false;
   }
 
-  enum class Where { either, behind, ahead };
+  /// A car's wander, drawn from its own stream at each placement.
+  struct Wander {
+    double omega_rps = 0.0;
+    double phase_rad = 0.0;
+  };
 
-  /// Tries to place car i by the spawn rule (up to max_spawn_attempts draws) against the
-  /// cars [0, limit). `initial`: not behind the ego in the ego's lane.
-  static bool try_place(Traffic& t, int i, int limit, const EgoView& ego, bool initial,
-                        Where where) {
+  [[nodiscard]] static Wander draw_wander(const Traffic& t, TrafficCar& c) {
     const TrafficParams& p = t.params_;
-    TrafficCar& c = t.cars_[static_cast<std::size_t>(i)];
-    const double ego_s = t.line_.wrap_s(ego.s_m);
-    const core::Vec2 ego_pos = t.line_.to_cartesian({ego_s, ego.d_m});
-    const unsigned ego_mask = ego_lanes(t, ego.d_m);
+    const double period = c.rng.uniform(p.wander_min_period_s, p.wander_max_period_s);
+    Wander w;
+    w.omega_rps = period > 0.0 ? 2.0 * core::kPi / period : 0.0;
+    w.phase_rad = c.rng.uniform(0.0, 2.0 * core::kPi);
+    return w;
+  }
+
+  /// Positions of the cars [0, limit), for the spacing checks.
+  static void cache_positions(Traffic& t, int limit) {
     for (int j = 0; j < limit; ++j) {
       const TrafficCar& o = t.cars_[static_cast<std::size_t>(j)];
       t.positions_[static_cast<std::size_t>(j)] = t.line_.to_cartesian({o.s_m, o.d_m});
     }
+  }
+
+  enum class Where { either, behind, ahead };
+
+  /// Tries to place car i by the spawn rule (up to max_spawn_attempts draws) against the
+  /// cars [0, limit). `initial`: not behind the ego in the ego's lane.
+  static bool try_place(Traffic& t, int i, int limit, const EgoView& ego_view, bool initial,
+                        Where where) {
+    const TrafficParams& p = t.params_;
+    TrafficCar& c = t.cars_[static_cast<std::size_t>(i)];
+    const EgoSpot ego = ego_spot(t, ego_view);
+    cache_positions(t, limit);
     Region behind;
     Region ahead_region;
-    regions(t, ego_s, behind, ahead_region);
-    // The car's own stream gives its wander.
-    const double period = c.rng.uniform(p.wander_min_period_s, p.wander_max_period_s);
-    const double omega = period > 0.0 ? 2.0 * core::kPi / period : 0.0;
-    const double phase = c.rng.uniform(0.0, 2.0 * core::kPi);
-    const double offset = p.wander_amplitude_m * std::sin(phase);
+    regions(t, ego.s_m, behind, ahead_region);
+    const Wander w = draw_wander(t, c);
+    const double offset = p.wander_amplitude_m * std::sin(w.phase_rad);
     for (int attempt = 0; attempt < p.max_spawn_attempts; ++attempt) {
       const bool is_behind = where == Where::either ? t.spawn_rng_.chance(p.behind_probability)
                                                     : where == Where::behind;
@@ -614,35 +709,35 @@ struct TrafficImpl {
       const double off = t.spawn_rng_.uniform(r.lo_m, r.hi_m);
       const int lane = t.spawn_rng_.uniform_int(0, t.road_.lane_count - 1);
       const double cruise = t.spawn_rng_.uniform(r.min_speed_mps, r.max_speed_mps);
-      if (initial && is_behind && (ego_mask & lane_bit(lane)) != 0) continue;
-      const double s = t.line_.wrap_s(ego_s + off);
+      if (initial && is_behind && (ego.lanes & lane_bit(lane)) != 0) continue;
+      const double s = t.line_.wrap_s(ego.s_m + off);
       const double d = core::lane_center_d(lane, t.road_) + offset;
-      if (!spot_ok(t, i, limit, s, d, lane, cruise, ego, ego_s, ego_pos, ego_mask)) continue;
-      commit(t, c, s, lane, cruise, phase, omega);
+      if (!spot_ok(t, i, limit, s, d, lane, cruise, ego)) continue;
+      commit(t, c, s, lane, cruise, w.phase_rad, w.omega_rps);
       return true;
     }
     return false;
   }
 
   /// Last resort of the initial placement: farther ahead, ego + 150 m + 10 m * k.
-  static void place_fallback(Traffic& t, int i, const EgoView& ego) {
+  static void place_fallback(Traffic& t, int i, const EgoView& ego_view) {
     const TrafficParams& p = t.params_;
     TrafficCar& c = t.cars_[static_cast<std::size_t>(i)];
-    const double ego_s = t.line_.wrap_s(ego.s_m);
-    const core::Vec2 ego_pos = t.line_.to_cartesian({ego_s, ego.d_m});
-    const unsigned ego_mask = ego_lanes(t, ego.d_m);
+    const EgoSpot ego = ego_spot(t, ego_view);
+    cache_positions(t, i);
+    const Wander w = draw_wander(t, c);
+    const double offset = p.wander_amplitude_m * std::sin(w.phase_rad);
     const double cruise = t.spawn_rng_.uniform(p.ahead_min_speed_mps, p.ahead_max_speed_mps);
-    double s = ego_s;
+    double s = ego.s_m;
     int lane = 0;
     for (int k = 0; k < kFallbackTries; ++k) {
-      s = t.line_.wrap_s(ego_s + kFallbackAheadM + kFallbackStepM * k);
+      s = t.line_.wrap_s(ego.s_m + kFallbackAheadM + kFallbackStepM * k);
       lane = k % t.road_.lane_count;
-      if (spot_ok(t, i, i, s, core::lane_center_d(lane, t.road_), lane, cruise, ego, ego_s,
-                  ego_pos, ego_mask)) {
+      if (spot_ok(t, i, i, s, core::lane_center_d(lane, t.road_) + offset, lane, cruise, ego)) {
         break;
       }
     }
-    commit(t, c, s, lane, cruise, 0.0, 0.0);
+    commit(t, c, s, lane, cruise, w.phase_rad, w.omega_rps);
   }
 };
 
@@ -683,6 +778,30 @@ void Traffic::place_initial(const EgoView& ego) {
 void Traffic::step(const EgoView& ego, double dt_s) {
   assert(dt_s > 0.0);
   const std::size_t n = cars_.size();
+  if (scripted_) {
+    decisions_.resize(n);
+    for (std::size_t i = 0; i < n; ++i) {
+      TrafficCar& c = cars_[i];
+      TrafficCar::Script& m = *c.script;
+      Decision& dec = decisions_[i];
+      dec = {};
+      const double v = c.speed_mps;
+      if (m.brake_left_s > 0.0) {
+        dec.new_speed_mps = std::max(0.0, v - m.brake_mps2 * dt_s);
+        m.brake_left_s -= dt_s;
+        if (m.brake_left_s <= 0.0) m.target_speed_mps = dec.new_speed_mps;  // then hold it
+      } else if (v < m.target_speed_mps) {
+        dec.new_speed_mps = std::min(m.target_speed_mps, v + m.rate_mps2 * dt_s);
+      } else {
+        dec.new_speed_mps = std::max(m.target_speed_mps, v - m.rate_mps2 * dt_s);
+      }
+      dec.change_to_lane = m.change_to_lane;
+      m.change_to_lane = -1;
+    }
+    for (std::size_t i = 0; i < n; ++i) TrafficImpl::move(*this, cars_[i], decisions_[i], dt_s);
+    ego_prev_speed_mps_ = ego.speed_mps;
+    return;
+  }
   const double ego_s = line_.wrap_s(ego.s_m);
   TrafficImpl::build_vehicles(*this, ego, ego_s, dt_s);
   decisions_.resize(n);
@@ -724,8 +843,8 @@ core::CarObservation Traffic::observe(const TrafficCar& car) const {
 core::OrientedBox Traffic::footprint(const TrafficCar& car) const {
   const core::FrenetPoint p{line_.wrap_s(car.s_m), car.d_m};
   const core::Vec2 v = line_.velocity(p, line_.s_rate(p, car.speed_mps), car.d_rate_mps);
-  const double heading = core::norm(v) < kStationaryMps ? line_.frame(p.s_m).heading_rad
-                                                        : std::atan2(v.y, v.x);
+  const double heading =
+      core::norm(v) < kStationaryMps ? line_.frame(p.s_m).heading_rad : std::atan2(v.y, v.x);
   return {line_.to_cartesian(p), heading, params_.car_length_m, params_.car_width_m};
 }
 
@@ -736,6 +855,45 @@ void Traffic::set_cars(std::vector<TrafficCar> cars) {
     cars_[i].s_m = line_.wrap_s(cars_[i].s_m);
   }
   positions_.resize(cars_.size());
+}
+
+void Traffic::set_script(const std::vector<ScriptedCar>& cars) {
+  std::vector<TrafficCar> out;
+  out.reserve(cars.size());
+  for (const ScriptedCar& sc : cars) {
+    TrafficCar c;
+    c.s_m = line_.wrap_s(sc.s_m);
+    c.lane = sc.lane;
+    c.d_m = core::lane_center_d(sc.lane, road_);
+    c.speed_mps = sc.speed_mps;
+    c.cruise_mps = sc.speed_mps;
+    c.wander_omega_rps = 0.0;  // scripted cars keep to the lane centre
+    c.script = TrafficCar::Script{sc.speed_mps};
+    out.push_back(std::move(c));
+  }
+  set_cars(std::move(out));
+  scripted_ = true;
+}
+
+void Traffic::apply_event(const ScenarioEvent& e) {
+  if (e.car < 0 || static_cast<std::size_t>(e.car) >= cars_.size()) return;
+  TrafficCar& c = cars_[static_cast<std::size_t>(e.car)];
+  if (!c.script) return;
+  TrafficCar::Script& m = *c.script;
+  switch (e.action) {
+    case ScenarioAction::change_lane:
+      if (e.lane != c.lane && e.lane >= 0 && e.lane < road_.lane_count) m.change_to_lane = e.lane;
+      break;
+    case ScenarioAction::brake:
+      m.brake_mps2 = e.rate_mps2;
+      m.brake_left_s = e.duration_s;
+      break;
+    case ScenarioAction::set_speed:
+      m.brake_left_s = 0.0;
+      m.target_speed_mps = e.speed_mps;
+      m.rate_mps2 = e.rate_mps2;
+      break;
+  }
 }
 
 }  // namespace overtake::sim

@@ -36,6 +36,30 @@ World::World(const core::Map& map, const core::ReferenceLine& line, const WorldP
   traffic_.place_initial(ego_view());
 }
 
+World::World(const core::Map& map, const core::ReferenceLine& line, const WorldParams& params,
+             const Scenario& scenario)
+    : World(map, line,
+            [&] {
+              WorldParams p = params;
+              p.ego.start_s_m = scenario.ego_s_m;
+              p.ego.start_d_m = scenario.ego_d_m;
+              return p;
+            }(),
+            TrafficProfile::faithful, 0) {
+  traffic_.set_script(scenario.cars);
+  events_ = scenario.events;
+  if (scenario.ego_speed_mps > 0.0) {
+    ego_.speed_mps = scenario.ego_speed_mps;
+    const double ds = scenario.ego_speed_mps * params_.step_s;
+    const auto points = static_cast<int>(std::lround(1.0 / params_.step_s));
+    std::vector<core::Vec2> path;
+    for (int i = 1; i <= points; ++i) {
+      path.push_back(line_.to_cartesian({ego_.frenet.s_m + ds * i, scenario.ego_d_m}));
+    }
+    apply_path(std::move(path));
+  }
+}
+
 EgoView World::ego_view() const {
   return {ego_.frenet.s_m, ego_.frenet.d_m, ego_.speed_mps};
 }
@@ -74,6 +98,9 @@ std::optional<int> World::collision() const {
 }
 
 void World::step() {
+  while (next_event_ < events_.size() && events_[next_event_].t_s <= time_s() + 1e-9) {
+    traffic_.apply_event(events_[next_event_++]);
+  }
   // Traffic decides from the frame before this step, then moves.
   traffic_.step(ego_view(), params_.step_s);
 

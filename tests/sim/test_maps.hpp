@@ -24,9 +24,8 @@ namespace overtake::test {
   char line[200];
   for (int i = 0; i < count; ++i) {
     const double a = step_rad * i;
-    std::snprintf(line, sizeof line, "%.10f %.10f %.10f %.12f %.12f\n",
-                  cx + radius_m * std::cos(a), cy + radius_m * std::sin(a), chord_m * i,
-                  std::cos(a), std::sin(a));
+    std::snprintf(line, sizeof line, "%.10f %.10f %.10f %.12f %.12f\n", cx + radius_m * std::cos(a),
+                  cy + radius_m * std::sin(a), chord_m * i, std::cos(a), std::sin(a));
     text += line;
   }
   return core::parse_map(text, "test:circle");

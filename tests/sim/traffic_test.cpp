@@ -355,6 +355,34 @@ TEST_F(TrafficTest, FaithfulProfileOverlapsAreReported) {
   EXPECT_GT(total_lane_changes, 0);
 }
 
+// Calm: MOBIL counts the ego as the new follower. A car held up by a slow car does not
+// move in 8 m ahead of the ego; with the ego 60 m back it does.
+TEST_F(TrafficTest, CalmCarDoesNotCutInCloseAheadOfTheEgo) {
+  core::RoadParams two_lanes;
+  two_lanes.lane_count = 2;
+  const double s0 = 2000.0;
+  TrafficParams selfish = params_;
+  selfish.calm.politeness = 0.0;  // else the slow car politely moves over itself
+  Traffic t(map_, line_, selfish, two_lanes, TrafficProfile::calm, 9);
+  t.set_cars({car(s0, 1, 20.0, 25.0), car(s0 + 30.0, 1, 12.0, 12.0)});
+  auto ego_behind = [&](double back_m) {
+    const TrafficCar& a = t.cars()[0];
+    return EgoView{line_.wrap_s(a.s_m - back_m), core::lane_center_d(0), a.speed_mps};
+  };
+  for (int k = 0; k < 500; ++k) {  // 10 s
+    t.step(ego_behind(8.0), kDt);
+    ASSERT_FALSE(t.cars()[0].manoeuvre.has_value()) << "cut in on the ego at step " << k;
+  }
+  EXPECT_TRUE(t.cars()[0].held_up);
+  int started = -1;
+  for (int k = 0; k < 500 && started < 0; ++k) {
+    t.step(ego_behind(60.0), kDt);
+    if (t.cars()[0].manoeuvre) started = k;
+  }
+  ASSERT_GE(started, 0);
+  EXPECT_EQ(t.cars()[0].manoeuvre->to_lane, 0);
+}
+
 // 5. Same seed, same states bit for bit; another seed differs.
 TEST_F(TrafficTest, SameSeedSameTraffic) {
   for (const TrafficProfile profile : {TrafficProfile::faithful, TrafficProfile::calm}) {
@@ -428,7 +456,8 @@ TEST_F(TrafficTest, ObservationMatchesTheCarsMotion) {
   const core::RoadFrame f = line_.frame(1000.0);
   EXPECT_NEAR(core::norm(o.velocity_mps), 20.0, 1e-9);
   EXPECT_NEAR(core::dot(o.velocity_mps, f.tangent), 20.0, 1e-9);
-  EXPECT_NEAR(core::distance(o.position, f.position + core::lane_center_d(2) * f.normal), 0.0, 1e-9);
+  EXPECT_NEAR(core::distance(o.position, f.position + core::lane_center_d(2) * f.normal), 0.0,
+              1e-9);
   const core::OrientedBox box = t.footprint(t.cars()[0]);
   EXPECT_NEAR(core::wrap_angle_rad(box.heading_rad - f.heading_rad), 0.0, 1e-9);
   EXPECT_EQ(box.length_m, params_.car_length_m);

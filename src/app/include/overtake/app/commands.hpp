@@ -15,6 +15,7 @@
 #include "overtake/core/map.hpp"
 #include "overtake/core/reference_line.hpp"
 #include "overtake/sim/run.hpp"
+#include "overtake/sim/scenario.hpp"
 
 namespace overtake::app {
 
@@ -42,6 +43,11 @@ struct DriveOptions {
   std::string policy = "walkthrough";
   int steps_per_call = 0;  ///< 0: drawn per call by the seed
   std::optional<std::filesystem::path> config;
+  /// A scripted scenario (JSON, see docs/scenarios.md) instead of random traffic.
+  std::optional<std::filesystem::path> scenario;
+  /// Take the duration from the scenario file when it gives one (the CLI sets this when
+  /// --minutes is not given).
+  bool minutes_from_scenario = false;
 };
 
 /// Checks flag values and names (UsageError naming the flag).
@@ -59,10 +65,12 @@ struct DriveResult {
                                 const std::function<void(double t_s, double distance_m)>& progress = {});
 
 /// Like drive(), with the map and config already loaded.
-/// `stop` (may be null) ends the run early when set.
+/// `stop` (may be null) ends the run early when set; `scenario` (may be null) replaces the
+/// random traffic (opts.scenario is not read here).
 [[nodiscard]] DriveResult drive_on(const Track& track, const Config& config, const DriveOptions& opts,
                                    const std::function<void(double t_s, double distance_m)>& progress = {},
-                                   const std::atomic<bool>* stop = nullptr);
+                                   const std::atomic<bool>* stop = nullptr,
+                                   const sim::Scenario* scenario = nullptr);
 
 /// The `overtake` command line. Returns the process exit code: 0 success, 1 failure, 2 bad
 /// usage.

@@ -23,6 +23,7 @@ struct RunProvenance {
   int min_steps_per_call = 1;
   int max_steps_per_call = 3;
   double minutes = 0.0;
+  std::string scenario;  ///< the scenario's name (or file) when scripted; empty otherwise
 };
 
 /// The JSON report. Deterministic for a given run apart from the `timing` key.

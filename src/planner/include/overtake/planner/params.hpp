@@ -68,9 +68,105 @@ struct Seed004Params {
   friend bool operator==(const Seed004Params&, const Seed004Params&) = default;
 };
 
+
+/// reference, prediction layer: how other cars are expected to move.
+struct ReferencePredictionParams {
+  /// A car moving sideways faster than this, away from its lane centre, is changing lanes.
+  double lane_change_speed_mps = 0.3;
+  /// ... and so is one this far off its lane centre, moving away from it.
+  double lane_change_offset_m = 0.5;
+  /// Assumed duration of another car's lane change (minimum-jerk lateral profile).
+  double lane_change_duration_s = 3.0;
+  /// A car slowing harder than this is predicted to keep braking ...
+  double braking_threshold_mps2 = 1.0;
+  /// ... for at most this long.
+  double braking_horizon_s = 1.0;
+  /// A car that moved farther than this between two cycles was placed again: history dropped.
+  double max_track_jump_m = 15.0;
+  friend bool operator==(const ReferencePredictionParams&, const ReferencePredictionParams&) = default;
+};
+
+/// reference, behaviour layer: which lane to aim for, at what speed, and the safety gaps.
+struct ReferenceBehaviourParams {
+  double cruise_speed_mps = core::mph_to_mps(49.5);  ///< wanted speed on a free road (at the car)
+  double lookahead_m = 150.0;          ///< cars farther ahead do not shape a lane's cost
+  double evaluation_horizon_s = 12.0;  ///< a lane's speed is averaged over this much time
+  // RSS longitudinal distance (Shalev-Shwartz et al. 2017) with jerk-limited ego braking.
+  double response_time_s = 0.3;        ///< rho: the ego's response time
+  double ego_brake_mps2 = 5.0;         ///< braking the ego commits to
+  double ego_brake_jerk_mps3 = 7.0;    ///< ... reached at this jerk
+  double lead_brake_mps2 = 8.0;        ///< worst braking of the car ahead
+  double min_gap_m = 4.0;              ///< bumper to bumper, at any speed
+  /// Cars behind react to the ego only this close, centre to centre (the faithful world's
+  /// 10 m; later reactions are always safe)...
+  double follower_reaction_gap_m = 10.0;
+  double follower_brake_mps2 = 7.0;    ///< ... and then brake at least this hard
+  double follower_response_s = 0.1;    ///< ... after this delay
+  double follower_margin_m = 1.2;      ///< bumper to bumper left when a follower has stopped closing
+  /// A lane change needs this share of the RSS gap ahead in the target lane.
+  double change_front_factor = 0.6;
+  double min_change_speed_mps = 8.0;   ///< no lane changes slower than this
+  double change_dwell_s = 2.0;         ///< after a lane change, wait this long before the next
+  double speed_weight = 1.0;           ///< lane cost per unit of lost speed (fraction of cruise)
+  double change_cost = 0.04;           ///< lane cost per lane to cross
+  double hysteresis = 0.06;            ///< a lane must be this much cheaper to change to it
+  double rear_threat_weight = 0.5;     ///< lane cost of a car closing fast from behind
+  double rear_threat_speed_mps = 3.0;  ///< closing faster than this is a threat ...
+  double rear_threat_span_mps = 5.0;   ///< ... and a full one this much faster
+  double rear_threat_range_m = 80.0;   ///< ... within this distance
+  double passing_speed_mps = 9.0;      ///< closing speed on a slower car in the next lane
+  friend bool operator==(const ReferenceBehaviourParams&, const ReferenceBehaviourParams&) = default;
+};
+
+/// reference, trajectory layer: jerk-minimising Frenet candidates (Werling et al. 2010) and
+/// their checks.
+struct ReferenceTrajectoryParams {
+  double step_s = 0.02;              ///< the simulator's step: spacing of path points in time
+  int keep_points = 3;               ///< points of the previous path kept for latency
+  int path_points = 75;              ///< points sent each cycle (kept ones included)
+  double check_step_s = 0.1;         ///< candidates are checked at this spacing
+  double horizon_s = 5.0;            ///< checked and costed over this long
+  double max_speed_mps = core::mph_to_mps(49.8);  ///< checked limit (the rubric's is 50 mph)
+  double max_accel_mps2 = 7.0;       ///< total (tangential and normal), checked
+  double max_jerk_mps3 = 7.5;        ///< checked over 0.1 s windows as the strict figures are
+  double lateral_jerk_mps3 = 3.5;    ///< sets the shortest lateral manoeuvre for a distance
+  double min_lateral_time_s = 1.2;
+  std::vector<double> lateral_time_factors = {1.0, 1.3, 1.7};
+  std::vector<double> cruise_times_s = {1.5, 2.5, 4.0, 6.0};
+  std::vector<double> speed_offsets_mps = {0.0, -1.0, -2.5, -5.0, -9.0};
+  std::vector<double> follow_times_s = {1.5, 2.5, 3.5, 5.0, 7.0};
+  double line_band_m = 0.8;          ///< half width of the band about an inner lane line ...
+  double max_band_time_s = 2.4;      ///< ... in which the ego may stay at most this long
+  double lon_margin_m = 1.0;         ///< bumper to bumper, hard
+  double lat_margin_m = 0.35;        ///< side to side, hard
+  double fallback_brake_mps2 = 6.0;  ///< the braking fallback ...
+  double fallback_jerk_mps3 = 7.0;   ///< ... reached at this jerk
+  // cost weights
+  double progress_weight = 1.0;      ///< per metre short of cruising at the wanted speed
+  double lon_jerk_weight = 0.05;     ///< per (m/s^3)^2 s
+  double lat_jerk_weight = 0.2;
+  double lat_time_weight = 0.5;      ///< per second of lateral manoeuvre
+  double lane_weight = 20.0;         ///< for ending away from the behaviour's lane
+  double proximity_weight = 150.0;   ///< for being inside the RSS gap ahead
+  double rear_weight = 150.0;        ///< for leaving a closing car behind too little room
+  int max_kinematic_checks = 40;     ///< candidates checked in Cartesian per cycle
+  friend bool operator==(const ReferenceTrajectoryParams&, const ReferenceTrajectoryParams&) = default;
+};
+
+/// The reference planner: prediction, behaviour and trajectory layers.
+struct ReferenceParams {
+  double car_length_m = 4.7;  ///< footprint of every car, the ego's included
+  double car_width_m = 1.9;
+  ReferencePredictionParams prediction;
+  ReferenceBehaviourParams behaviour;
+  ReferenceTrajectoryParams trajectory;
+  friend bool operator==(const ReferenceParams&, const ReferenceParams&) = default;
+};
+
 /// Parameters of every policy.
 struct PlannerParams {
   core::RoadParams road;
+  ReferenceParams reference;
   WalkthroughParams walkthrough;  ///< also the shared base of the seed policies
   Seed000Params seed000;
   Seed001Params seed001;
@@ -140,7 +236,86 @@ void describe(V& v, Seed004Params& p) {
 }
 
 template <class V>
+void describe(V& v, ReferencePredictionParams& p) {
+  v("lane_change_speed_mps", p.lane_change_speed_mps);
+  v("lane_change_offset_m", p.lane_change_offset_m);
+  v("lane_change_duration_s", p.lane_change_duration_s);
+  v("braking_threshold_mps2", p.braking_threshold_mps2);
+  v("braking_horizon_s", p.braking_horizon_s);
+  v("max_track_jump_m", p.max_track_jump_m);
+}
+
+template <class V>
+void describe(V& v, ReferenceBehaviourParams& p) {
+  v("cruise_speed_mps", p.cruise_speed_mps);
+  v("lookahead_m", p.lookahead_m);
+  v("evaluation_horizon_s", p.evaluation_horizon_s);
+  v("response_time_s", p.response_time_s);
+  v("ego_brake_mps2", p.ego_brake_mps2);
+  v("ego_brake_jerk_mps3", p.ego_brake_jerk_mps3);
+  v("lead_brake_mps2", p.lead_brake_mps2);
+  v("min_gap_m", p.min_gap_m);
+  v("follower_reaction_gap_m", p.follower_reaction_gap_m);
+  v("follower_brake_mps2", p.follower_brake_mps2);
+  v("follower_response_s", p.follower_response_s);
+  v("follower_margin_m", p.follower_margin_m);
+  v("change_front_factor", p.change_front_factor);
+  v("min_change_speed_mps", p.min_change_speed_mps);
+  v("change_dwell_s", p.change_dwell_s);
+  v("speed_weight", p.speed_weight);
+  v("change_cost", p.change_cost);
+  v("hysteresis", p.hysteresis);
+  v("rear_threat_weight", p.rear_threat_weight);
+  v("rear_threat_speed_mps", p.rear_threat_speed_mps);
+  v("rear_threat_span_mps", p.rear_threat_span_mps);
+  v("rear_threat_range_m", p.rear_threat_range_m);
+  v("passing_speed_mps", p.passing_speed_mps);
+}
+
+template <class V>
+void describe(V& v, ReferenceTrajectoryParams& p) {
+  v("step_s", p.step_s);
+  v("keep_points", p.keep_points);
+  v("path_points", p.path_points);
+  v("check_step_s", p.check_step_s);
+  v("horizon_s", p.horizon_s);
+  v("max_speed_mps", p.max_speed_mps);
+  v("max_accel_mps2", p.max_accel_mps2);
+  v("max_jerk_mps3", p.max_jerk_mps3);
+  v("lateral_jerk_mps3", p.lateral_jerk_mps3);
+  v("min_lateral_time_s", p.min_lateral_time_s);
+  v("lateral_time_factors", p.lateral_time_factors);
+  v("cruise_times_s", p.cruise_times_s);
+  v("speed_offsets_mps", p.speed_offsets_mps);
+  v("follow_times_s", p.follow_times_s);
+  v("line_band_m", p.line_band_m);
+  v("max_band_time_s", p.max_band_time_s);
+  v("lon_margin_m", p.lon_margin_m);
+  v("lat_margin_m", p.lat_margin_m);
+  v("fallback_brake_mps2", p.fallback_brake_mps2);
+  v("fallback_jerk_mps3", p.fallback_jerk_mps3);
+  v("progress_weight", p.progress_weight);
+  v("lon_jerk_weight", p.lon_jerk_weight);
+  v("lat_jerk_weight", p.lat_jerk_weight);
+  v("lat_time_weight", p.lat_time_weight);
+  v("lane_weight", p.lane_weight);
+  v("proximity_weight", p.proximity_weight);
+  v("rear_weight", p.rear_weight);
+  v("max_kinematic_checks", p.max_kinematic_checks);
+}
+
+template <class V>
+void describe(V& v, ReferenceParams& p) {
+  v("car_length_m", p.car_length_m);
+  v("car_width_m", p.car_width_m);
+  v.section("prediction", p.prediction);
+  v.section("behaviour", p.behaviour);
+  v.section("trajectory", p.trajectory);
+}
+
+template <class V>
 void describe(V& v, PlannerParams& p) {
+  v.section("reference", p.reference);
   v.section("walkthrough", p.walkthrough);
   v.section("seed000", p.seed000);
   v.section("seed001", p.seed001);

@@ -13,6 +13,7 @@
 #include "overtake/core/reference_line.hpp"
 #include "overtake/core/telemetry.hpp"
 #include "overtake/sim/params.hpp"
+#include "overtake/sim/scenario.hpp"
 
 namespace overtake::sim {
 
@@ -37,7 +38,7 @@ struct LaneManoeuvre {
   int from_lane = 0;
   int to_lane = 0;
   double from_d_m = 0.0;  ///< lateral position when it started
-  double elapsed_s = 0.0;
+  double elapsed_s = 0.0;  ///< time into it (its clock runs slower when the car crawls)
   double duration_s = 0.0;
 };
 
@@ -62,6 +63,15 @@ struct TrafficCar {
   double wander_phase_rad = 0.0;
   double wander_omega_rps = 0.0;
   double lane_offset_m = 0.0;  ///< current wander offset from the lane centre
+  /// Set for a car of a scripted scenario: it keeps its lane and speed until an event.
+  struct Script {
+    double target_speed_mps = 0.0;
+    double rate_mps2 = 3.0;       ///< how fast it reaches the target speed
+    double brake_mps2 = 0.0;      ///< braking under way ...
+    double brake_left_s = 0.0;    ///< ... for this much longer
+    int change_to_lane = -1;      ///< a lane change to start at the next step
+  };
+  std::optional<Script> script;
   bool far = false;            ///< farther than the despawn distance; waiting to be placed again
   core::Rng rng;               ///< this car's own random stream
 };
@@ -88,6 +98,13 @@ class Traffic {
   /// Testing hook: replaces the cars (ids are reassigned in order).
   void set_cars(std::vector<TrafficCar> cars);
 
+  /// Replaces the random traffic by a scenario's scripted cars: they keep their lane and
+  /// speed (no following, no re-placement) until an event (apply_event) says otherwise.
+  void set_script(const std::vector<ScriptedCar>& cars);
+  /// Applies one scenario event to the scripted car it names.
+  void apply_event(const ScenarioEvent& event);
+  [[nodiscard]] bool scripted() const { return scripted_; }
+
  private:
   const core::Map& map_;
   const core::ReferenceLine& line_;
@@ -96,6 +113,7 @@ class Traffic {
   TrafficProfile profile_;
   core::Rng spawn_rng_;
   int frames_to_batch_ = 0;
+  bool scripted_ = false;
   std::vector<TrafficCar> cars_;
   // Per-step scratch, reused so that step() does not allocate.
   struct Vehicle {               // a car or the ego as the others see it this step

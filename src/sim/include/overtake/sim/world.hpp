@@ -11,6 +11,7 @@
 #include "overtake/core/telemetry.hpp"
 #include "overtake/sim/params.hpp"
 #include "overtake/sim/referee.hpp"
+#include "overtake/sim/scenario.hpp"
 #include "overtake/sim/traffic.hpp"
 
 namespace overtake::sim {
@@ -28,6 +29,11 @@ class World {
  public:
   World(const core::Map& map, const core::ReferenceLine& line, const WorldParams& params,
         TrafficProfile profile, std::uint64_t seed);
+  /// A scripted world: the scenario's start state, its cars instead of random traffic, and
+  /// its events at their times. An ego starting at speed has one second of path queued
+  /// along its lane at that speed.
+  World(const core::Map& map, const core::ReferenceLine& line, const WorldParams& params,
+        const Scenario& scenario);
 
   /// What the planner is told now (rounded as on the wire when the params say so).
   [[nodiscard]] core::Telemetry telemetry() const;
@@ -60,6 +66,8 @@ class World {
   Traffic traffic_;
   Referee referee_;
   long steps_ = 0;
+  std::vector<ScenarioEvent> events_;  // pending, in time order
+  std::size_t next_event_ = 0;
 };
 
 }  // namespace overtake::sim

@@ -1,0 +1,27 @@
+#pragma once
+// Scenario files (JSON) for `--scenario FILE`. Format (SI units; see docs/scenarios.md):
+//   {"name": "...", "duration_s": 40,
+//    "ego": {"s_m": 300, "lane": 1, "speed_mps": 21.9},         (or "d_m" instead of "lane")
+//    "cars": [{"gap_m": 20, "lane": 0, "speed_mps": 17.9}, ...], (or "s_m": absolute)
+//    "events": [{"t_s": 2, "car": 0, "change_lane": 1},
+//               {"t_s": 6, "car": 1, "brake_mps2": 6, "duration_s": 2},
+//               {"t_s": 9, "car": 1, "speed_mps": 20, "accel_mps2": 2}]}
+
+#include <filesystem>
+#include <string_view>
+
+#include <nlohmann/json.hpp>
+
+#include "overtake/core/road.hpp"
+#include "overtake/sim/scenario.hpp"
+
+namespace overtake::app {
+
+/// Reads a scenario from JSON; errors (ConfigError) name `source` and the key.
+[[nodiscard]] sim::Scenario parse_scenario(const nlohmann::json& j, std::string_view source,
+                                           const core::RoadParams& road);
+
+/// Reads a scenario file.
+[[nodiscard]] sim::Scenario load_scenario(const std::filesystem::path& path, const core::RoadParams& road);
+
+}  // namespace overtake::app

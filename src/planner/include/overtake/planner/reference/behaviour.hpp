@@ -1,0 +1,82 @@
+#pragma once
+// The behaviour layer of the reference planner: which lane to aim for and how fast, by a
+// cost over every lane (the speed it allows over the next seconds, a car closing fast from
+// behind, the lanes to cross; a far lane is reached through the middle one), safety gaps
+// ahead (RSS longitudinal distance, Shalev-Shwartz et al. 2017, with the ego's braking
+// limited in jerk) and behind (a follower that reacts late and brakes hard), and hysteresis
+// so that it never weaves between lanes.
+
+#include <vector>
+
+#include "overtake/core/road.hpp"
+#include "overtake/planner/params.hpp"
+#include "overtake/planner/reference/prediction.hpp"
+
+namespace overtake::planner::reference {
+
+/// Distance (m) to stop from `speed_mps` braking at up to `brake_mps2`, reached at `jerk_mps3`
+/// from zero acceleration.
+[[nodiscard]] double jerk_limited_stop_distance(double speed_mps, double brake_mps2, double jerk_mps3);
+
+/// RSS minimum bumper-to-bumper distance (m) from the ego, behind at `rear_mps`, to a car
+/// ahead at `front_mps`: the ego keeps its speed for the response time, then brakes with
+/// limited jerk; the car ahead brakes as hard as it can. Never less than min_gap_m.
+[[nodiscard]] double rss_front_gap(double rear_mps, double front_mps, const ReferenceBehaviourParams& p);
+
+/// Room (m) left, bumper to bumper beyond the margin, when a car behind at centre distance
+/// `centre_gap_m` closes at `closing_mps` on the ego and reacts as late as followers do
+/// (within follower_reaction_gap_m) and then brakes; negative: it would come too close.
+[[nodiscard]] double rear_room(double centre_gap_m, double closing_mps, double car_length_m,
+                               const ReferenceBehaviourParams& p);
+
+/// The ego as behaviour sees it.
+struct EgoSnapshot {
+  double s_m = 0.0;        ///< unwrapped, in the cars' frame
+  double speed_mps = 0.0;  ///< along the road
+  double d_m = 0.0;
+  double metres_per_s = 1.0;  ///< metres along the road per unit of s near the ego
+};
+
+/// One lane as seen from the ego.
+struct LaneView {
+  int lane = 0;
+  int leader = -1;                 ///< index into the predictions, -1: none within lookahead
+  double leader_gap_m = 1e9;       ///< bumper to bumper
+  double leader_speed_mps = 0.0;
+  int follower = -1;               ///< nearest car behind
+  double follower_gap_m = 1e9;     ///< bumper to bumper
+  double follower_speed_mps = 0.0;
+  bool alongside = false;          ///< a car overlaps the ego's length (with a margin)
+  double expected_speed_mps = 0.0; ///< average over the evaluation horizon
+  double rear_threat = 0.0;        ///< 0 .. 1: a car closing fast from behind
+  bool enterable = false;          ///< an adjacent lane with room to move into now
+  double cost = 0.0;
+};
+
+/// Views of every lane.
+[[nodiscard]] std::vector<LaneView> assess_lanes(const std::vector<CarPrediction>& cars,
+                                                 const EgoSnapshot& ego, double car_length_m,
+                                                 const ReferenceBehaviourParams& p,
+                                                 const core::RoadParams& road);
+
+/// What behaviour remembers between cycles.
+struct BehaviourState {
+  int target_lane = -1;          ///< lane being driven to or kept; -1 before the first cycle
+  int goal_lane = -1;            ///< the lane it is heading for (two lanes across: beyond target)
+  double since_settled_s = 1e9;  ///< time since the ego last settled in its target lane
+};
+
+/// What behaviour asks of the trajectory layer.
+struct BehaviourDecision {
+  int target_lane = 1;
+  int goal_lane = 1;
+  double speed_mps = 0.0;        ///< wanted speed (cruise, or less when passing a slow queue)
+  std::vector<LaneView> lanes;
+};
+
+/// Chooses the target lane and speed. `elapsed_s`: time since the last decision.
+[[nodiscard]] BehaviourDecision decide(const std::vector<CarPrediction>& cars, const EgoSnapshot& ego,
+                                       BehaviourState& state, double elapsed_s, double car_length_m,
+                                       const ReferenceBehaviourParams& p, const core::RoadParams& road);
+
+}  // namespace overtake::planner::reference

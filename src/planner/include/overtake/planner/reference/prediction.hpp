@@ -1,0 +1,77 @@
+#pragma once
+// The prediction layer of the reference planner: each other car's lane, speed along the
+// road and lateral speed; a car drifting toward or across a lane line is predicted into the
+// lane it is entering (a cut-in) before it gets there. Predictions over the horizon are
+// constant-velocity along the road (with braking continued for a short while) and either
+// lane keeping or a constant lane change (a minimum-jerk lateral profile to the next lane's
+// centre).
+
+#include <vector>
+
+#include "overtake/core/reference_line.hpp"
+#include "overtake/core/road.hpp"
+#include "overtake/core/telemetry.hpp"
+#include "overtake/planner/params.hpp"
+
+namespace overtake::planner::reference {
+
+/// What a car was last seen doing (kept between cycles to estimate its acceleration).
+struct CarTrack {
+  int id = -1;
+  double s_m = 0.0;    ///< wrapped, as observed
+  double s_dot = 0.0;  ///< along the road
+  double s_ddot = 0.0; ///< estimated acceleration along the road
+};
+
+/// One car's predicted motion, from the time it was observed.
+struct CarPrediction {
+  int id = 0;
+  double s_m = 0.0;        ///< unwrapped: within half a loop of the ego's s
+  double s_dot = 0.0;      ///< ds/dt along the road
+  double s_ddot = 0.0;     ///< braking continued for a short while (0 unless braking)
+  double brake_time_s = 0.0;  ///< how long the braking is continued
+  double speed_mps = 0.0;  ///< along the road, m/s
+  double d_m = 0.0;
+  double d_dot_mps = 0.0;
+  int lane = 0;            ///< the lane its d lies in now
+  int target_lane = 0;     ///< where it is heading (== lane unless changing)
+  bool changing = false;   ///< a lane change detected
+  double change_from_d_m = 0.0;  ///< lane change: start and end d of the lateral profile ...
+  double change_to_d_m = 0.0;
+  double change_progress = 0.0;  ///< ... and the share of its time already done, in [0, 1]
+  double change_duration_s = 3.0;
+
+  /// s at `t_s` after the observation.
+  [[nodiscard]] double s_at(double t_s) const;
+  /// ds/dt at `t_s`.
+  [[nodiscard]] double s_dot_at(double t_s) const;
+  /// d at `t_s`.
+  [[nodiscard]] double d_at(double t_s) const;
+  /// dd/dt at `t_s`.
+  [[nodiscard]] double d_dot_at(double t_s) const;
+  /// True when the car is in `lane` now or heading into it.
+  [[nodiscard]] bool occupies(int l) const { return l == lane || l == target_lane; }
+};
+
+/// Minimum-jerk profile x(tau) = 10 tau^3 - 15 tau^4 + 6 tau^5 on [0, 1], clamped outside.
+[[nodiscard]] double min_jerk_fraction(double tau);
+/// Inverse of min_jerk_fraction on [0, 1].
+[[nodiscard]] double min_jerk_progress(double fraction);
+
+/// Predicts every observed car. `ego_s_m` (unwrapped) anchors the cars' unwrapped s;
+/// `tracks` holds last cycle's tracks and is replaced by this cycle's; `elapsed_s` is the
+/// time since the last cycle (0: unknown, no acceleration estimate).
+[[nodiscard]] std::vector<CarPrediction> predict_cars(const core::Telemetry& telemetry,
+                                                      const core::ReferenceLine& line,
+                                                      double ego_s_m, double elapsed_s,
+                                                      std::vector<CarTrack>& tracks,
+                                                      const ReferencePredictionParams& params,
+                                                      const core::RoadParams& road);
+
+/// Predicts one car from its Frenet state now (s unwrapped) and an acceleration estimate.
+[[nodiscard]] CarPrediction predict_car(int id, double s_m, double s_dot, double s_ddot,
+                                        double speed_mps, double d_m, double d_dot_mps,
+                                        const ReferencePredictionParams& params,
+                                        const core::RoadParams& road);
+
+}  // namespace overtake::planner::reference

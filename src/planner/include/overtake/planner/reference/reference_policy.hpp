@@ -1,0 +1,61 @@
+#pragma once
+// The reference planner: the layers (map: the smooth reference line; prediction; behaviour;
+// trajectory) driven once per cycle. It remembers its own last plan as Frenet states per
+// point, so that from the number of points the simulator consumed it knows the exact state
+// at the car and at every kept point; each new plan starts from the exact state (position,
+// velocity, acceleration) where the kept prefix ends, so the joint is C2-continuous whatever
+// the latency.
+
+#include <vector>
+
+#include "overtake/core/reference_line.hpp"
+#include "overtake/core/telemetry.hpp"
+#include "overtake/planner/params.hpp"
+#include "overtake/planner/policy.hpp"
+#include "overtake/planner/reference/behaviour.hpp"
+#include "overtake/planner/reference/frenet.hpp"
+#include "overtake/planner/reference/prediction.hpp"
+#include "overtake/planner/reference/trajectory.hpp"
+
+namespace overtake::planner::reference {
+
+/// The reference policy ("reference").
+class ReferencePolicy final : public Policy {
+ public:
+  ReferencePolicy(const core::ReferenceLine& line, const PlannerParams& params);
+  [[nodiscard]] std::vector<core::Vec2> plan(const core::Telemetry& telemetry) override;
+
+  /// The last cycle's behaviour decision (for tests and tools).
+  [[nodiscard]] const BehaviourDecision& last_decision() const { return decision_; }
+  /// How the last cycle's trajectory was found.
+  [[nodiscard]] PlanStatus last_status() const { return status_; }
+  /// The last cycle's trajectory plan.
+  [[nodiscard]] const TrajectoryPlan& last_plan() const { return plan_; }
+  /// The last cycle's predictions.
+  [[nodiscard]] const std::vector<CarPrediction>& last_predictions() const { return predictions_; }
+  /// False when the last cycle could not place the car on its own previous plan.
+  [[nodiscard]] bool last_synced() const { return synced_; }
+  /// Frenet states of the points sent last (s unwrapped).
+  [[nodiscard]] const std::vector<FrenetState>& planned_states() const { return states_; }
+
+ private:
+  [[nodiscard]] FrenetState observed_state(const core::Telemetry& t) const;
+
+  const core::ReferenceLine& line_;
+  core::RoadParams road_;
+  ReferenceParams p_;
+  std::vector<FrenetState> states_;  // state at each point sent last cycle
+  std::vector<core::Vec2> sent_;     // those points as the simulator read them
+  FrenetState origin_;               // the car's state when they were sent
+  bool have_plan_ = false;
+  double band_time_s_ = 0.0;         // time in a lane-line band without a break, at the car
+  bool synced_ = false;
+  std::vector<CarTrack> tracks_;
+  std::vector<CarPrediction> predictions_;
+  BehaviourState behaviour_;
+  BehaviourDecision decision_;
+  PlanStatus status_ = PlanStatus::feasible;
+  TrajectoryPlan plan_;
+};
+
+}  // namespace overtake::planner::reference

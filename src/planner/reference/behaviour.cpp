@@ -1,0 +1,194 @@
+#include "overtake/planner/reference/behaviour.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace overtake::planner::reference {
+namespace {
+
+/// A lane counts as settled in once d is this close to its centre.
+constexpr double kSettledM = 0.4;
+/// A car held up behind another this close (bumper to bumper) may cut in.
+constexpr double kHeldUpGapM = 25.0;
+/// Slower cars in the next lane this close ahead (bumper to bumper) limit the passing speed.
+constexpr double kPassingRangeM = 60.0;
+/// Bumper-to-bumper distance under which a car counts as alongside.
+constexpr double kAlongsideM = 1.5;
+
+}  // namespace
+
+double jerk_limited_stop_distance(double v, double brake, double jerk) {
+  if (!(v > 0.0)) return 0.0;
+  const double ramp_t = brake / jerk;
+  const double ramp_dv = 0.5 * brake * ramp_t;
+  if (v <= ramp_dv) {
+    // Stops before the full braking is reached: v = jerk t^2 / 2.
+    const double t = std::sqrt(2.0 * v / jerk);
+    return v * t - jerk * t * t * t / 6.0;
+  }
+  const double ramp_d = v * ramp_t - jerk * ramp_t * ramp_t * ramp_t / 6.0;
+  const double rest = v - ramp_dv;
+  return ramp_d + rest * rest / (2.0 * brake);
+}
+
+double rss_front_gap(double rear_mps, double front_mps, const ReferenceBehaviourParams& p) {
+  const double rear = std::max(0.0, rear_mps);
+  const double front = std::max(0.0, front_mps);
+  const double d = rear * p.response_time_s +
+                   jerk_limited_stop_distance(rear, p.ego_brake_mps2, p.ego_brake_jerk_mps3) -
+                   front * front / (2.0 * p.lead_brake_mps2);
+  return std::max(d, p.min_gap_m);
+}
+
+double rear_room(double centre_gap_m, double closing_mps, double car_length_m,
+                 const ReferenceBehaviourParams& p) {
+  const double floor_m = car_length_m + p.follower_margin_m;
+  if (closing_mps <= 0.0) return centre_gap_m - floor_m;
+  const double react_at = std::min(centre_gap_m, p.follower_reaction_gap_m);
+  return react_at - closing_mps * p.follower_response_s -
+         closing_mps * closing_mps / (2.0 * p.follower_brake_mps2) - floor_m;
+}
+
+std::vector<LaneView> assess_lanes(const std::vector<CarPrediction>& cars, const EgoSnapshot& ego,
+                                   double car_length_m, const ReferenceBehaviourParams& p,
+                                   const core::RoadParams& road) {
+  std::vector<LaneView> lanes(static_cast<std::size_t>(road.lane_count));
+  const int cur = core::lane_of(ego.d_m, road);
+  for (int l = 0; l < road.lane_count; ++l) {
+    LaneView& v = lanes[static_cast<std::size_t>(l)];
+    v.lane = l;
+    double best_ahead = std::numeric_limits<double>::infinity();
+    double best_behind = std::numeric_limits<double>::infinity();
+    for (std::size_t i = 0; i < cars.size(); ++i) {
+      const CarPrediction& c = cars[i];
+      if (!c.occupies(l)) continue;
+      const double centre_gap = (c.s_m - ego.s_m) * ego.metres_per_s;
+      if (std::abs(centre_gap) < car_length_m + kAlongsideM && l != cur) v.alongside = true;
+      if (centre_gap >= 0.0) {
+        if (centre_gap < best_ahead && centre_gap < p.lookahead_m) {
+          best_ahead = centre_gap;
+          v.leader = static_cast<int>(i);
+          v.leader_gap_m = centre_gap - car_length_m;
+          v.leader_speed_mps = c.speed_mps;
+        }
+      } else if (-centre_gap < best_behind) {
+        best_behind = -centre_gap;
+        v.follower = static_cast<int>(i);
+        v.follower_gap_m = -centre_gap - car_length_m;
+        v.follower_speed_mps = c.speed_mps;
+      }
+    }
+    // The speed the lane allows: cruise until the gap to a slower leader has closed to its
+    // RSS distance, then the leader's speed.
+    const double cruise = p.cruise_speed_mps;
+    v.expected_speed_mps = cruise;
+    if (v.leader >= 0 && v.leader_speed_mps < cruise) {
+      const double wanted = rss_front_gap(v.leader_speed_mps, v.leader_speed_mps, p);
+      const double reach_s = std::max(0.0, v.leader_gap_m - wanted) / (cruise - v.leader_speed_mps);
+      const double h = p.evaluation_horizon_s;
+      const double free_s = std::min(reach_s, h);
+      v.expected_speed_mps = (free_s * cruise + (h - free_s) * v.leader_speed_mps) / h;
+    }
+    // A car closing fast from behind.
+    if (v.follower >= 0) {
+      const double own = std::min(ego.speed_mps, v.expected_speed_mps);
+      const double closing = v.follower_speed_mps - own;
+      const double fast = std::clamp((closing - p.rear_threat_speed_mps) / p.rear_threat_span_mps, 0.0, 1.0);
+      const double near = std::clamp(1.0 - v.follower_gap_m / p.rear_threat_range_m, 0.0, 1.0);
+      v.rear_threat = fast * near;
+    }
+    if (std::abs(l - cur) == 1) {
+      const bool front_ok =
+          v.leader < 0 ||
+          v.leader_gap_m >= std::max(p.min_gap_m, p.change_front_factor *
+                                                       rss_front_gap(ego.speed_mps, v.leader_speed_mps, p));
+      const bool rear_ok =
+          v.follower < 0 || rear_room(v.follower_gap_m + car_length_m,
+                                      v.follower_speed_mps - ego.speed_mps, car_length_m, p) >= 0.0;
+      v.enterable = !v.alongside && front_ok && rear_ok && ego.speed_mps >= p.min_change_speed_mps;
+    }
+    v.cost = p.speed_weight * (cruise - v.expected_speed_mps) / cruise +
+             p.change_cost * std::abs(l - cur) + p.rear_threat_weight * v.rear_threat;
+  }
+  return lanes;
+}
+
+namespace {
+
+/// The wanted speed: cruise, but not much faster than a held-up car in the next lane ahead,
+/// which may cut in.
+double wanted_speed(const std::vector<CarPrediction>& cars, const EgoSnapshot& ego, int cur,
+                    double car_length_m, const ReferenceBehaviourParams& p) {
+  double speed = p.cruise_speed_mps;
+  for (const CarPrediction& c : cars) {
+    if (std::abs(c.lane - cur) != 1 || c.target_lane != c.lane) continue;
+    const double gap = (c.s_m - ego.s_m) * ego.metres_per_s - car_length_m;
+    if (gap <= 0.0 || gap > kPassingRangeM) continue;
+    bool held_up = false;
+    for (const CarPrediction& o : cars) {
+      if (&o == &c || !o.occupies(c.lane)) continue;
+      const double ahead = (o.s_m - c.s_m) * ego.metres_per_s - car_length_m;
+      if (ahead > -car_length_m && ahead < kHeldUpGapM) held_up = true;
+    }
+    if (held_up) speed = std::min(speed, c.speed_mps + p.passing_speed_mps);
+  }
+  return speed;
+}
+
+}  // namespace
+
+BehaviourDecision decide(const std::vector<CarPrediction>& cars, const EgoSnapshot& ego,
+                         BehaviourState& state, double elapsed_s, double car_length_m,
+                         const ReferenceBehaviourParams& p, const core::RoadParams& road) {
+  BehaviourDecision out;
+  out.lanes = assess_lanes(cars, ego, car_length_m, p, road);
+  const int cur = core::lane_of(ego.d_m, road);
+  if (state.target_lane < 0 || state.target_lane >= road.lane_count) {
+    state.target_lane = cur;
+    state.goal_lane = cur;
+  }
+  const bool settled = state.target_lane == cur &&
+                       std::abs(ego.d_m - core::lane_center_d(cur, road)) < kSettledM;
+  state.since_settled_s = settled ? state.since_settled_s + elapsed_s : 0.0;
+
+  const auto lane = [&](int l) -> const LaneView& { return out.lanes[static_cast<std::size_t>(l)]; };
+  if (!settled) {
+    // Changing lanes (or centring): carry on unless a car came alongside in the target lane
+    // before we crossed. (The trajectory layer returns when the change is no longer safe.)
+    const int target = state.target_lane;
+    if (cur != target && lane(target).alongside) {
+      state.target_lane = cur;
+      state.goal_lane = cur;
+    }
+  } else {
+    // Settled: the cheapest lane we can head for, if clearly cheaper than staying.
+    int best = cur;
+    double best_cost = lane(cur).cost;
+    for (int l = 0; l < road.lane_count; ++l) {
+      if (l == cur) continue;
+      const int step = cur + (l > cur ? 1 : -1);
+      if (!lane(step).enterable) continue;
+      if (lane(l).cost < best_cost) {
+        best = l;
+        best_cost = lane(l).cost;
+      }
+    }
+    const bool continuing = state.goal_lane != cur && best == state.goal_lane;
+    if (best != cur && best_cost + p.hysteresis < lane(cur).cost &&
+        (continuing || state.since_settled_s >= p.change_dwell_s)) {
+      state.target_lane = cur + (best > cur ? 1 : -1);
+      state.goal_lane = best;
+      state.since_settled_s = 0.0;
+    } else {
+      state.target_lane = cur;
+      state.goal_lane = cur;
+    }
+  }
+  out.target_lane = state.target_lane;
+  out.goal_lane = state.goal_lane;
+  out.speed_mps = wanted_speed(cars, ego, core::lane_of(ego.d_m, road), car_length_m, p);
+  return out;
+}
+
+}  // namespace overtake::planner::reference

@@ -1,0 +1,148 @@
+#include "overtake/planner/reference/prediction.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "overtake/planner/reference/frenet.hpp"
+
+namespace overtake::planner::reference {
+namespace {
+
+constexpr int kInverseIterations = 40;
+
+double min_jerk_rate(double tau) {
+  if (tau <= 0.0 || tau >= 1.0) return 0.0;
+  return tau * tau * (30.0 + tau * (-60.0 + 30.0 * tau));
+}
+
+}  // namespace
+
+double min_jerk_fraction(double tau) {
+  tau = std::clamp(tau, 0.0, 1.0);
+  return tau * tau * tau * (10.0 + tau * (-15.0 + 6.0 * tau));
+}
+
+double min_jerk_progress(double fraction) {
+  fraction = std::clamp(fraction, 0.0, 1.0);
+  double lo = 0.0;
+  double hi = 1.0;
+  for (int i = 0; i < kInverseIterations; ++i) {
+    const double mid = 0.5 * (lo + hi);
+    (min_jerk_fraction(mid) < fraction ? lo : hi) = mid;
+  }
+  return 0.5 * (lo + hi);
+}
+
+double CarPrediction::s_at(double t) const {
+  if (!(s_ddot < 0.0) || t <= 0.0) return s_m + s_dot * t;
+  // Braking for brake_time_s, then steady; the speed never goes below zero.
+  const double tb = std::min(t, brake_time_s);
+  const double t_stop = s_dot / -s_ddot;
+  if (t_stop <= tb) return s_m + 0.5 * s_dot * t_stop;
+  const double v = s_dot + s_ddot * tb;
+  return s_m + s_dot * tb + 0.5 * s_ddot * tb * tb + v * (t - tb);
+}
+
+double CarPrediction::s_dot_at(double t) const {
+  if (s_ddot >= 0.0) return s_dot;
+  return std::max(0.0, s_dot + s_ddot * std::clamp(t, 0.0, brake_time_s));
+}
+
+double CarPrediction::d_at(double t) const {
+  if (!changing) return d_m;
+  const double tau = change_progress + t / change_duration_s;
+  return change_from_d_m + (change_to_d_m - change_from_d_m) * min_jerk_fraction(tau);
+}
+
+double CarPrediction::d_dot_at(double t) const {
+  if (!changing) return 0.0;
+  const double tau = change_progress + t / change_duration_s;
+  return (change_to_d_m - change_from_d_m) * min_jerk_rate(tau) / change_duration_s;
+}
+
+CarPrediction predict_car(int id, double s_m, double s_dot, double s_ddot, double speed_mps,
+                          double d_m, double d_dot_mps, const ReferencePredictionParams& params,
+                          const core::RoadParams& road) {
+  CarPrediction c;
+  c.id = id;
+  c.s_m = s_m;
+  c.s_dot = std::max(0.0, s_dot);
+  c.speed_mps = std::max(0.0, speed_mps);
+  c.d_m = d_m;
+  c.d_dot_mps = d_dot_mps;
+  c.lane = core::lane_of(d_m, road);
+  c.target_lane = c.lane;
+  c.change_duration_s = params.lane_change_duration_s;
+  if (s_ddot < -params.braking_threshold_mps2) {
+    c.s_ddot = s_ddot;
+    c.brake_time_s = params.braking_horizon_s;
+  }
+
+  // Lane change: moving sideways faster than lane keeping does. Away from its lane's
+  // centre: heading for the next lane that way; towards it from far off: finishing a change
+  // into it.
+  const double w = road.lane_width_m;
+  const int nearest = core::lane_of(d_m, road);
+  const double offset = d_m - core::lane_center_d(nearest, road);
+  const double dir = d_dot_mps > 0.0 ? 1.0 : -1.0;
+  const bool fast = std::abs(d_dot_mps) > params.lane_change_speed_mps;
+  bool changing = false;
+  double to_d = 0.0;
+  if (fast) {
+    if (offset * dir >= 0.0) {
+      const int next = nearest + (dir > 0.0 ? 1 : -1);
+      if (next >= 0 && next < road.lane_count) {
+        changing = true;
+        to_d = core::lane_center_d(next, road);
+      }
+    } else if (std::abs(offset) > params.lane_change_offset_m) {
+      changing = true;
+      to_d = core::lane_center_d(nearest, road);
+    }
+  }
+  if (changing) {
+    const double from_d = to_d - dir * w;
+    const double fraction = (d_m - from_d) / (to_d - from_d);
+    c.changing = true;
+    c.change_from_d_m = from_d;
+    c.change_to_d_m = to_d;
+    c.change_progress = min_jerk_progress(fraction);
+    c.target_lane = core::lane_of(to_d, road);
+    if (c.change_progress >= 1.0 - 1e-6) {
+      c.changing = false;
+      c.target_lane = c.lane;
+    }
+  }
+  return c;
+}
+
+std::vector<CarPrediction> predict_cars(const core::Telemetry& telemetry,
+                                        const core::ReferenceLine& line, double ego_s_m,
+                                        double elapsed_s, std::vector<CarTrack>& tracks,
+                                        const ReferencePredictionParams& params,
+                                        const core::RoadParams& road) {
+  std::vector<CarPrediction> out;
+  out.reserve(telemetry.cars.size());
+  std::vector<CarTrack> next;
+  next.reserve(telemetry.cars.size());
+  for (const core::CarObservation& car : telemetry.cars) {
+    const FrenetState x = frenet_from_cartesian(line, car.position, car.velocity_mps, car.s_m);
+    const RoadPoint at = road_point(line, x.s_m, x.d_m);
+    const double speed = x.s_dot * at.along_scale;
+    double accel = 0.0;
+    const auto prev = std::find_if(tracks.begin(), tracks.end(),
+                                   [&](const CarTrack& t) { return t.id == car.id; });
+    if (prev != tracks.end() && elapsed_s > 0.0 &&
+        std::abs(line.s_ahead(prev->s_m, x.s_m) - prev->s_dot * elapsed_s) < params.max_track_jump_m) {
+      accel = (x.s_dot - prev->s_dot) / elapsed_s;
+    }
+    next.push_back({car.id, x.s_m, x.s_dot, accel});
+    const double s_unwrapped = ego_s_m + line.s_ahead(ego_s_m, x.s_m);
+    out.push_back(predict_car(car.id, s_unwrapped, x.s_dot, accel, speed, x.d_m, x.d_dot_mps,
+                              params, road));
+  }
+  tracks = std::move(next);
+  return out;
+}
+
+}  // namespace overtake::planner::reference

@@ -1,0 +1,110 @@
+#include "overtake/planner/reference/reference_policy.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace overtake::planner::reference {
+namespace {
+
+/// The first queued point must be where the last plan put it, within this (wire rounding
+/// is 0.1 mm on a track within +-1000 m).
+constexpr double kSyncToleranceM = 0.01;
+
+}  // namespace
+
+ReferencePolicy::ReferencePolicy(const core::ReferenceLine& line, const PlannerParams& params)
+    : line_(line), road_(params.road), p_(params.reference) {}
+
+FrenetState ReferencePolicy::observed_state(const core::Telemetry& t) const {
+  const core::Vec2 v = t.ego.speed_mps * core::Vec2{std::cos(t.ego.yaw_rad), std::sin(t.ego.yaw_rad)};
+  return frenet_from_cartesian(line_, t.ego.position, v, t.ego.s_m);
+}
+
+std::vector<core::Vec2> ReferencePolicy::plan(const core::Telemetry& t) {
+  const auto& tp = p_.trajectory;
+  const double dt = tp.step_s;
+
+  // Where the car is on the last plan: the simulator consumed the points not queued.
+  const std::size_t remaining = t.previous_path.size();
+  synced_ = false;
+  std::size_t consumed = 0;
+  FrenetState car;
+  if (have_plan_ && remaining >= 2 && remaining <= sent_.size()) {
+    consumed = sent_.size() - remaining;
+    const bool queue_matches = core::distance(t.previous_path.front(), sent_[consumed]) < kSyncToleranceM;
+    const bool car_matches =
+        consumed == 0 || core::distance(t.ego.position, sent_[consumed - 1]) < kSyncToleranceM;
+    if (queue_matches && car_matches) {
+      car = consumed == 0 ? origin_ : states_[consumed - 1];
+      synced_ = true;
+      for (std::size_t i = 0; i < consumed; ++i) {
+        band_time_s_ = in_line_band(states_[i].d_m, tp.line_band_m, road_) ? band_time_s_ + dt : 0.0;
+      }
+    }
+  }
+  std::vector<FrenetState> states;
+  std::vector<core::Vec2> points;
+  const auto n_points = static_cast<std::size_t>(std::max(tp.path_points, 2));
+  states.reserve(n_points);
+  points.reserve(n_points);
+  if (synced_) {
+    const std::size_t keep = std::min<std::size_t>(static_cast<std::size_t>(std::max(tp.keep_points, 0)), remaining);
+    for (std::size_t i = 0; i < keep; ++i) {
+      states.push_back(states_[consumed + i]);
+      points.push_back(t.previous_path[i]);
+    }
+  } else {
+    car = observed_state(t);
+    tracks_.clear();
+    band_time_s_ = 0.0;
+  }
+  double band_time = band_time_s_;
+  for (const FrenetState& x : states) band_time = in_line_band(x.d_m, tp.line_band_m, road_) ? band_time + dt : 0.0;
+  // Keep s within one loop at the car (the plan may run past the end).
+  const double shift = line_.wrap_s(car.s_m) - car.s_m;
+  car.s_m += shift;
+  for (FrenetState& x : states) x.s_m += shift;
+  const FrenetState start = states.empty() ? car : states.back();
+  const double start_delay = static_cast<double>(states.size()) * dt;
+  const double elapsed = synced_ ? static_cast<double>(consumed) * dt : 0.0;
+
+  // Prediction, behaviour, trajectory.
+  predictions_ = predict_cars(t, line_, car.s_m, elapsed, tracks_, p_.prediction, road_);
+  const RoadPoint at_car = road_point(line_, car.s_m, car.d_m);
+  EgoSnapshot ego;
+  ego.s_m = car.s_m;
+  ego.d_m = car.d_m;
+  ego.speed_mps = car.s_dot * at_car.along_scale;
+  ego.metres_per_s = at_car.along_scale;
+  decision_ = decide(predictions_, ego, behaviour_, elapsed, p_.car_length_m, p_.behaviour, road_);
+
+  TrajectoryRequest req;
+  req.start = start;
+  req.start_delay_s = start_delay;
+  req.target_lane = decision_.target_lane;
+  req.wanted_speed_mps = decision_.speed_mps;
+  req.band_time_s = band_time;
+  req.cars = &predictions_;
+  plan_ = plan_trajectory(line_, req, p_, road_);
+  const TrajectoryPlan& chosen = plan_;
+  status_ = chosen.status;
+  if (chosen.trajectory.end_lane != behaviour_.target_lane) {
+    // The trajectory layer could not go where behaviour wanted: behaviour follows it.
+    behaviour_.target_lane = chosen.trajectory.end_lane;
+    behaviour_.goal_lane = chosen.trajectory.end_lane;
+  }
+
+  const std::size_t fresh = n_points - states.size();
+  for (std::size_t i = 1; i <= fresh; ++i) {
+    const FrenetState x = chosen.trajectory.at(static_cast<double>(i) * dt);
+    states.push_back(x);
+    points.push_back(road_point(line_, x.s_m, x.d_m).position);
+  }
+  sent_ = core::round_like_wire(points);
+  states_ = std::move(states);
+  origin_ = car;
+  have_plan_ = true;
+  return points;
+}
+
+}  // namespace overtake::planner::reference

@@ -1,0 +1,560 @@
+#include "overtake/planner/reference/trajectory.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numeric>
+#include <cstdio>
+#include <cstdlib>
+
+#include "overtake/planner/reference/behaviour.hpp"
+
+namespace overtake::planner::reference {
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+const bool kDebug = std::getenv("REFDBG") != nullptr;  // TEMPORARY
+/// Samples before t = 0, so that the 0.1 s windows at the start see the start state's
+/// continuation.
+constexpr int kBack = 3;
+/// Slowest speed used when turning a lateral speed into a heading.
+constexpr double kMinHeadingSpeedMps = 3.0;
+/// Lateral distances below this need no manoeuvre.
+constexpr double kHoldLateralM = 0.02;
+/// Cars farther than this along the road are not considered.
+constexpr double kRelevantM = 200.0;
+/// A tiny negative speed counts as standing.
+constexpr double kReverseTolerance = -0.05;
+/// The early window of a lane change, in which the ego is still in its first lane.
+constexpr double kEarlyWindowS = 2.0;
+/// Spacing of the samples that find a lane's largest along-road scale ahead.
+constexpr double kScaleSampleM = 10.0;
+/// Lane changes costed as this many seconds of lateral time at least.
+constexpr double kRearRoomScaleM = 3.0;
+/// Longest a collision-failed candidate list is searched for a least-bad one.
+constexpr int kLeastBadChecks = 12;
+
+/// Samples of one motion over the grid k = -kBack .. n (index k + kBack).
+struct Track1d {
+  std::vector<double> x;
+  std::vector<double> v;
+};
+
+struct LonCandidate {
+  Longitudinal motion;
+  Track1d samples;
+  double cost = 0.0;
+};
+
+struct LatCandidate {
+  Polynomial1d poly;
+  Track1d samples;
+  int end_lane = 0;
+  double cost = 0.0;
+};
+
+struct CarSamples {
+  int id = 0;
+  std::vector<double> s, s_dot, d, d_dot;  // k = 0 .. n
+};
+
+struct Grid {
+  double h = 0.1;
+  int n = 50;
+  [[nodiscard]] std::size_t size() const { return static_cast<std::size_t>(n + 1 + kBack); }
+  [[nodiscard]] double t(int k) const { return h * k; }
+};
+
+Grid grid_of(const ReferenceTrajectoryParams& p) {
+  Grid g;
+  g.h = p.check_step_s;
+  g.n = std::max(1, static_cast<int>(std::lround(p.horizon_s / p.check_step_s)));
+  return g;
+}
+
+template <class F>
+Track1d sample(const Grid& g, F&& motion_at) {
+  Track1d out;
+  out.x.resize(g.size());
+  out.v.resize(g.size());
+  for (int k = -kBack; k <= g.n; ++k) {
+    const Motion1d m = motion_at(g.t(k));
+    out.x[static_cast<std::size_t>(k + kBack)] = m.x;
+    out.v[static_cast<std::size_t>(k + kBack)] = m.v;
+  }
+  return out;
+}
+
+/// Whether a motion stays within the limits along one axis (no reversing for s).
+template <class F>
+bool axis_ok(const Grid& g, F&& motion_at, double max_accel, double max_jerk, bool forward) {
+  for (int k = 0; k <= g.n; ++k) {
+    const Motion1d m = motion_at(g.t(k));
+    if (forward && m.v < kReverseTolerance) return false;
+    if (std::abs(m.a) > max_accel || std::abs(m.j) > max_jerk) return false;
+  }
+  return true;
+}
+
+std::vector<CarSamples> sample_cars(const std::vector<CarPrediction>& cars, double delay, double s0,
+                                    const Grid& g) {
+  std::vector<CarSamples> out;
+  out.reserve(cars.size());
+  for (const CarPrediction& c : cars) {
+    if (std::abs(c.s_m - s0) > kRelevantM) continue;
+    CarSamples cs;
+    cs.id = c.id;
+    const auto n = static_cast<std::size_t>(g.n + 1);
+    cs.s.resize(n);
+    cs.s_dot.resize(n);
+    cs.d.resize(n);
+    cs.d_dot.resize(n);
+    for (int k = 0; k <= g.n; ++k) {
+      const double t = delay + g.t(k);
+      const auto i = static_cast<std::size_t>(k);
+      cs.s[i] = c.s_at(t);
+      cs.s_dot[i] = c.s_dot_at(t);
+      cs.d[i] = c.d_at(t);
+      cs.d_dot[i] = c.d_dot_at(t);
+    }
+    out.push_back(std::move(cs));
+  }
+  return out;
+}
+
+/// The collision check over samples: `s`, `sv`, `d`, `dv` indexed k + kBack.
+CollisionReport collide(const Track1d& lon, const Track1d& lat, bool ego_changing, const Grid& g,
+                        const std::vector<CarSamples>& cars, double mps, const ReferenceParams& p) {
+  const double length = p.car_length_m;
+  const double lon_need = length + p.trajectory.lon_margin_m;
+  const double lat_base = p.car_width_m + p.trajectory.lat_margin_m;
+  CollisionReport r;
+  for (const CarSamples& c : cars) {
+    bool seen = false;
+    for (int k = 0; k <= g.n; ++k) {
+      const auto e = static_cast<std::size_t>(k + kBack);
+      const auto i = static_cast<std::size_t>(k);
+      const double ve = std::max(lon.v[e] * mps, kMinHeadingSpeedMps);
+      const double vc = std::max(c.s_dot[i] * mps, kMinHeadingSpeedMps);
+      const double lat_need =
+          lat_base + 0.5 * length * (std::abs(lat.v[e]) / ve + std::abs(c.d_dot[i]) / vc);
+      if (std::abs(lat.x[e] - c.d[i]) >= lat_need) continue;
+      const double ahead = (c.s[i] - lon.x[e]) * mps;
+      if (k == 0 && ahead < 0.0) break;  // it follows the ego already: its business
+      const double t = g.t(k);
+      if (std::abs(ahead) < lon_need) {
+        if (t < r.first_collision_s) r = {false, t, c.id};
+        break;
+      }
+      if (!seen && ahead < 0.0 && ego_changing) {
+        // The ego moves in front of it: it must have room to stop closing.
+        const double closing = (c.s_dot[i] - lon.v[e]) * mps;
+        if (rear_room(-ahead, closing, length, p.behaviour) < 0.0) {
+          if (t < r.first_collision_s) r = {false, t, c.id};
+          break;
+        }
+      }
+      seen = true;
+      if (ahead < 0.0) break;  // from here on it follows the ego
+    }
+  }
+  return r;
+}
+
+/// The Cartesian check over samples.
+KinematicReport kinematics(const Track1d& lon, const Track1d& lat, const Grid& g,
+                           const core::ReferenceLine& line, const ReferenceTrajectoryParams& p,
+                           bool stop_at_first) {
+  KinematicReport r;
+  const double h2 = g.h * g.h;
+  const double h3 = h2 * g.h;
+  core::Vec2 back[4];  // positions k, k-1, k-2, k-3
+  for (int k = -kBack; k <= g.n; ++k) {
+    const auto e = static_cast<std::size_t>(k + kBack);
+    const RoadPoint at = road_point(line, lon.x[e], lat.x[e]);
+    back[3] = back[2];
+    back[2] = back[1];
+    back[1] = back[0];
+    back[0] = at.position;
+    if (k < 0) continue;
+    const double t = g.t(k);
+    const double speed = std::hypot(lon.v[e] * at.along_scale, lat.v[e]);
+    const double accel = core::norm(back[0] - 2.0 * back[1] + back[2]) / h2;
+    const double jerk = core::norm(back[0] - 3.0 * back[1] + 3.0 * back[2] - back[3]) / h3;
+    r.peak_speed_mps = std::max(r.peak_speed_mps, speed);
+    r.peak_accel_mps2 = std::max(r.peak_accel_mps2, accel);
+    r.peak_jerk_mps3 = std::max(r.peak_jerk_mps3, jerk);
+    if (speed > p.max_speed_mps || accel > p.max_accel_mps2 || jerk > p.max_jerk_mps3) {
+      if (r.ok) r.first_violation_s = t;
+      r.ok = false;
+      if (stop_at_first) return r;
+    }
+  }
+  return r;
+}
+
+/// Largest and smallest along-road scale of a lane over s in [s0, s1].
+struct ScaleRange {
+  double max = 1.0;
+  double min = 1.0;
+};
+
+ScaleRange lane_scale(const core::ReferenceLine& line, double s0, double s1, double d) {
+  ScaleRange r{0.0, kInf};
+  const int n = std::max(1, static_cast<int>(std::ceil((s1 - s0) / kScaleSampleM)));
+  for (int i = 0; i <= n; ++i) {
+    const double s = s0 + (s1 - s0) * i / n;
+    const double k = road_point(line, s, d).along_scale;
+    r.max = std::max(r.max, k);
+    r.min = std::min(r.min, k);
+  }
+  return r;
+}
+
+/// Soft costs of one longitudinal candidate in one lane: inside the RSS gap of the cars ahead,
+/// and leaving too little room to cars closing from behind; over the whole horizon and over
+/// its first kEarlyWindowS.
+struct LaneCost {
+  double full = 0.0;
+  double early = 0.0;
+};
+
+LaneCost lane_cost(const Track1d& lon, const Grid& g, const std::vector<const CarSamples*>& ahead,
+                   const CarSamples* behind, double mps, const ReferenceParams& p) {
+  const auto& b = p.behaviour;
+  const auto& tp = p.trajectory;
+  LaneCost c;
+  const int early_n = static_cast<int>(std::lround(kEarlyWindowS / g.h));
+  for (int k = 0; k <= g.n; ++k) {
+    const auto e = static_cast<std::size_t>(k + kBack);
+    const auto i = static_cast<std::size_t>(k);
+    const double ve = lon.v[e] * mps;
+    double step = 0.0;
+    for (const CarSamples* car : ahead) {
+      const double gap = (car->s[i] - lon.x[e]) * mps - p.car_length_m;
+      const double want = rss_front_gap(ve, car->s_dot[i] * mps, b);
+      const double short_by = std::max(0.0, want - gap) / want;
+      step += tp.proximity_weight * short_by * short_by;
+    }
+    if (behind) {
+      const double centre_gap = (lon.x[e] - behind->s[i]) * mps;
+      if (centre_gap < b.follower_reaction_gap_m + kRearRoomScaleM * 5.0) {
+        const double closing = (behind->s_dot[i] - lon.v[e]) * mps;
+        const double room = rear_room(b.follower_reaction_gap_m, closing, p.car_length_m, b);
+        const double short_by = std::max(0.0, -room) / kRearRoomScaleM;
+        step += tp.rear_weight * short_by * short_by;
+      }
+    }
+    c.full += step * g.h;
+    if (k <= early_n) c.early += step * g.h;
+  }
+  return c;
+}
+
+/// The longest time without a break that a lateral motion spends in a lane-line band over
+/// the grid, the first stretch extended by `already_s`.
+double longest_band_time(const Track1d& lat, const Grid& g, double already_s, double half_width,
+                         const core::RoadParams& road) {
+  double longest = 0.0;
+  double run = already_s;
+  for (int k = 0; k <= g.n; ++k) {
+    if (in_line_band(lat.x[static_cast<std::size_t>(k + kBack)], half_width, road)) {
+      run += k == 0 ? 0.0 : g.h;
+      longest = std::max(longest, run);
+    } else {
+      run = 0.0;
+    }
+  }
+  return longest;
+}
+
+}  // namespace
+
+bool in_line_band(double d_m, double half_width_m, const core::RoadParams& road) {
+  if (road.lane_count < 2) return false;
+  const double k = std::clamp(std::round(d_m / road.lane_width_m), 1.0, static_cast<double>(road.lane_count - 1));
+  return std::abs(d_m - k * road.lane_width_m) <= half_width_m;
+}
+
+FrenetState Trajectory::at(double t) const {
+  const Motion1d s = longitudinal.at(t);
+  const Motion1d d = lateral.at(t);
+  return {s.x, s.v, s.a, d.x, d.v, d.a};
+}
+
+KinematicReport check_kinematics(const Trajectory& t, const core::ReferenceLine& line,
+                                 const ReferenceTrajectoryParams& p) {
+  const Grid g = grid_of(p);
+  const Track1d lon = sample(g, [&](double x) { return t.longitudinal.at(x); });
+  const Track1d lat = sample(g, [&](double x) { return t.lateral.at(x); });
+  return kinematics(lon, lat, g, line, p, false);
+}
+
+CollisionReport check_collisions(const Trajectory& t, const std::vector<CarPrediction>& cars,
+                                 double start_delay_s, double metres_per_s, const ReferenceParams& p,
+                                 const core::RoadParams& road) {
+  const Grid g = grid_of(p.trajectory);
+  const Track1d lon = sample(g, [&](double x) { return t.longitudinal.at(x); });
+  const Track1d lat = sample(g, [&](double x) { return t.lateral.at(x); });
+  const bool changing = core::lane_of(lat.x[kBack], road) != t.end_lane;
+  return collide(lon, lat, changing, g, sample_cars(cars, start_delay_s, lon.x[kBack], g), metres_per_s, p);
+}
+
+TrajectoryPlan plan_trajectory(const core::ReferenceLine& line, const TrajectoryRequest& req,
+                               const ReferenceParams& params, const core::RoadParams& road) {
+  const auto& tp = params.trajectory;
+  const auto& bp = params.behaviour;
+  const Grid g = grid_of(tp);
+  const FrenetState& x0 = req.start;
+  static const std::vector<CarPrediction> kNoCars;
+  const std::vector<CarPrediction>& cars = req.cars ? *req.cars : kNoCars;
+  TrajectoryPlan plan;
+
+  // Lanes in play: behaviour's, the one the ego is in (to stay or return), and on a lane
+  // line both lanes of that line (to finish or undo a change).
+  const int start_lane = core::lane_of(x0.d_m, road);
+  std::vector<int> lanes{req.target_lane};
+  const auto add_lane = [&](int l) {
+    if (l >= 0 && l < road.lane_count && std::find(lanes.begin(), lanes.end(), l) == lanes.end()) lanes.push_back(l);
+  };
+  add_lane(start_lane);
+  if (in_line_band(x0.d_m, tp.line_band_m, road)) {
+    add_lane(core::lane_of(x0.d_m - tp.line_band_m, road));
+    add_lane(core::lane_of(x0.d_m + tp.line_band_m, road));
+  }
+
+  // Along-road scale over the stretch ahead: the wanted speed as ds/dt, and s to metres.
+  const double reach = std::max(x0.s_dot, req.wanted_speed_mps) * tp.horizon_s + kScaleSampleM;
+  double max_scale = 0.0;
+  double mps = kInf;
+  for (const int l : lanes) {
+    const ScaleRange r = lane_scale(line, x0.s_m, x0.s_m + reach, core::lane_center_d(l, road));
+    max_scale = std::max(max_scale, r.max);
+    mps = std::min(mps, r.min);
+  }
+  {
+    const ScaleRange here = lane_scale(line, x0.s_m, x0.s_m, x0.d_m);
+    max_scale = std::max(max_scale, here.max);
+    mps = std::min(mps, here.min);
+  }
+  const double s_dot_cap = std::min(req.wanted_speed_mps, tp.max_speed_mps) / max_scale;
+
+  // Cars over the grid, and per lane the cars ahead (nearest two) and the nearest behind.
+  const std::vector<CarSamples> car_samples = sample_cars(cars, req.start_delay_s, x0.s_m, g);
+  struct LaneCars {
+    std::vector<const CarSamples*> ahead;
+    const CarSamples* behind = nullptr;
+    const CarPrediction* leader = nullptr;
+  };
+  std::vector<LaneCars> lane_cars(static_cast<std::size_t>(road.lane_count));
+  for (const int l : lanes) {
+    LaneCars& lc = lane_cars[static_cast<std::size_t>(l)];
+    std::vector<std::pair<double, std::size_t>> ahead;
+    double behind_gap = kInf;
+    for (std::size_t i = 0; i < car_samples.size(); ++i) {
+      const CarSamples& c = car_samples[i];
+      const auto pred = std::find_if(cars.begin(), cars.end(), [&](const CarPrediction& x) { return x.id == c.id; });
+      if (!pred->occupies(l)) continue;
+      const double gap = c.s[0] - x0.s_m;
+      if (gap >= 0.0) {
+        ahead.emplace_back(gap, i);
+      } else if (-gap < behind_gap) {
+        behind_gap = -gap;
+        lc.behind = &c;
+      }
+    }
+    std::sort(ahead.begin(), ahead.end());
+    for (std::size_t i = 0; i < ahead.size() && i < 2; ++i) lc.ahead.push_back(&car_samples[ahead[i].second]);
+    if (!ahead.empty()) {
+      const int id = car_samples[ahead.front().second].id;
+      lc.leader = &*std::find_if(cars.begin(), cars.end(), [&](const CarPrediction& x) { return x.id == id; });
+    }
+  }
+
+  // Lateral candidates: to the centre of each lane in play, none lingering on a lane line
+  // (when every one would, the ones that leave it soonest).
+  std::vector<LatCandidate> lats;
+  std::vector<std::pair<double, LatCandidate>> lingering;
+  for (const int l : lanes) {
+    const double target = core::lane_center_d(l, road);
+    const double dist = std::abs(target - x0.d_m);
+    const bool hold = dist < kHoldLateralM && std::abs(x0.d_dot_mps) < kHoldLateralM;
+    const double t_min = std::max(tp.min_lateral_time_s, std::cbrt(60.0 * dist / tp.lateral_jerk_mps3));
+    for (const double f : tp.lateral_time_factors) {
+      LatCandidate c;
+      c.poly = quintic(x0.d_m, x0.d_dot_mps, x0.d_ddot_mps2, target, 0.0, 0.0, t_min * f);
+      c.end_lane = l;
+      const auto at = [&](double t) { return c.poly.at(t); };
+      if (!axis_ok(g, at, tp.max_accel_mps2, tp.max_jerk_mps3, false)) continue;
+      c.samples = sample(g, at);
+      c.cost = tp.lat_jerk_weight * c.poly.jerk_cost() + (hold ? 0.0 : tp.lat_time_weight * c.poly.duration_s) +
+               tp.lane_weight * std::abs(l - req.target_lane);
+      const double band = longest_band_time(c.samples, g, req.band_time_s, tp.line_band_m, road);
+      if (band > tp.max_band_time_s) {
+        lingering.emplace_back(band, std::move(c));
+      } else {
+        lats.push_back(std::move(c));
+      }
+      if (hold) break;
+    }
+  }
+  if (lats.empty() && !lingering.empty()) {
+    std::sort(lingering.begin(), lingering.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+    for (auto& [band, c] : lingering) {
+      if (band <= lingering.front().first + g.h) lats.push_back(std::move(c));
+    }
+  }
+
+  if (kDebug) {
+    for (const int l : lanes) std::fprintf(stderr, "lane %d ", l);
+    std::fprintf(stderr, " start d=%.2f dd=%.2f ddd=%.2f band=%.2f lats:", x0.d_m, x0.d_dot_mps, x0.d_ddot_mps2, req.band_time_s);
+    for (const auto& c : lats) std::fprintf(stderr, " [%d T=%.2f c=%.2f]", c.end_lane, c.poly.duration_s, c.cost);
+    std::fprintf(stderr, "\n");
+  }
+  // Longitudinal candidates.
+  std::vector<LonCandidate> lons;
+  const auto add_lon = [&](Longitudinal m) {
+    LonCandidate c;
+    c.motion = m;
+    const auto at = [&](double t) { return c.motion.at(t); };
+    if (!axis_ok(g, at, tp.max_accel_mps2, tp.max_jerk_mps3, true)) return;
+    c.samples = sample(g, at);
+    const double travelled = (c.samples.x.back() - x0.s_m) * mps;
+    const double deficit = req.wanted_speed_mps * tp.horizon_s - travelled;
+    const double jerk = m.braking ? tp.fallback_jerk_mps3 * tp.fallback_jerk_mps3 : m.poly.jerk_cost();
+    c.cost = tp.progress_weight * deficit + tp.lon_jerk_weight * jerk;
+    lons.push_back(std::move(c));
+  };
+  for (const double t : tp.cruise_times_s) {
+    double last = -1.0;
+    for (const double off : tp.speed_offsets_mps) {
+      const double v1 = std::max(0.0, s_dot_cap + off / mps);
+      if (std::abs(v1 - last) < 1e-6) continue;
+      last = v1;
+      add_lon({quartic(x0.s_m, x0.s_dot, x0.s_ddot, v1, 0.0, t), {}, false});
+    }
+  }
+  std::vector<const CarPrediction*> leaders;
+  for (const int l : lanes) {
+    const CarPrediction* lead = lane_cars[static_cast<std::size_t>(l)].leader;
+    if (lead && std::find(leaders.begin(), leaders.end(), lead) == leaders.end()) leaders.push_back(lead);
+  }
+  for (const CarPrediction* lead : leaders) {
+    for (const double t : tp.follow_times_s) {
+      const double tc = req.start_delay_s + t;
+      const double v_lead = lead->s_dot_at(tc);
+      const double gap = rss_front_gap(v_lead * mps, v_lead * mps, bp);
+      const double s1 = lead->s_at(tc) - (params.car_length_m + gap) / mps;
+      const double v1 = std::min(v_lead, s_dot_cap);
+      add_lon({quintic(x0.s_m, x0.s_dot, x0.s_ddot, s1, v1, 0.0, t), {}, false});
+    }
+  }
+  Longitudinal braking;
+  braking.braking = true;
+  braking.brake = BrakingProfile(x0.s_m, x0.s_dot, x0.s_ddot, tp.fallback_brake_mps2 / mps,
+                                 tp.fallback_jerk_mps3 / mps);
+  add_lon(braking);
+
+  // Soft lane costs per longitudinal candidate.
+  const std::size_t lane_n = static_cast<std::size_t>(road.lane_count);
+  std::vector<LaneCost> soft(lons.size() * lane_n);
+  for (std::size_t j = 0; j < lons.size(); ++j) {
+    for (const int l : lanes) {
+      const LaneCars& lc = lane_cars[static_cast<std::size_t>(l)];
+      soft[j * lane_n + static_cast<std::size_t>(l)] = lane_cost(lons[j].samples, g, lc.ahead, lc.behind, mps, params);
+    }
+  }
+
+  // Every combination, cheapest first.
+  struct Combo {
+    double cost;
+    std::uint32_t lat;
+    std::uint32_t lon;
+  };
+  std::vector<Combo> combos;
+  combos.reserve(lats.size() * lons.size());
+  for (std::size_t i = 0; i < lats.size(); ++i) {
+    const auto end = static_cast<std::size_t>(lats[i].end_lane);
+    for (std::size_t j = 0; j < lons.size(); ++j) {
+      double c = lats[i].cost + lons[j].cost + soft[j * lane_n + end].full;
+      if (lats[i].end_lane != start_lane) c += soft[j * lane_n + static_cast<std::size_t>(start_lane)].early;
+      combos.push_back({c, static_cast<std::uint32_t>(i), static_cast<std::uint32_t>(j)});
+    }
+  }
+  plan.candidates = static_cast<int>(combos.size());
+  std::sort(combos.begin(), combos.end(), [](const Combo& a, const Combo& b) { return a.cost < b.cost; });
+
+  const auto make = [&](const Combo& c) {
+    Trajectory t;
+    t.lateral = lats[c.lat].poly;
+    t.longitudinal = lons[c.lon].motion;
+    t.end_lane = lats[c.lat].end_lane;
+    return t;
+  };
+  std::vector<std::pair<double, std::size_t>> failed;  // (collision time, combo index)
+  for (std::size_t n = 0; n < combos.size(); ++n) {
+    const Combo& c = combos[n];
+    const LatCandidate& lat = lats[c.lat];
+    const LonCandidate& lon = lons[c.lon];
+    ++plan.collision_checks;
+    const CollisionReport col = collide(lon.samples, lat.samples, lat.end_lane != start_lane, g, car_samples, mps, params);
+    if (!col.ok) {
+      if (plan.collision_failures++ == 0) {
+        plan.blocking_car = col.car_id;
+        plan.blocking_time_s = col.first_collision_s;
+      }
+      failed.emplace_back(col.first_collision_s, n);
+      continue;
+    }
+    if (plan.kinematic_checks >= tp.max_kinematic_checks) continue;
+    ++plan.kinematic_checks;
+    if (kDebug) {
+      const KinematicReport kr = kinematics(lon.samples, lat.samples, g, line, tp, true);
+      std::fprintf(stderr, "  kin lat=%d T=%.2f lon=%u v1=%.2f ok=%d t=%.2f v=%.2f a=%.2f j=%.2f cost=%.2f\n", lat.end_lane, lat.poly.duration_s, c.lon, lon.motion.at(10).v, kr.ok, kr.first_violation_s, kr.peak_speed_mps, kr.peak_accel_mps2, kr.peak_jerk_mps3, c.cost);
+    }
+    if (kinematics(lon.samples, lat.samples, g, line, tp, true).ok) {
+      plan.trajectory = make(c);
+      plan.status = PlanStatus::feasible;
+      plan.cost = c.cost;
+      return plan;
+    }
+  }
+
+  // Nothing passed: the braking fallback in the lane being kept, or the candidate that
+  // collides latest, whichever collides later.
+  Trajectory fallback;
+  fallback.longitudinal = braking;
+  if (!lats.empty()) {
+    // The cheapest lateral motion (it keeps off the lane lines).
+    const auto best = std::min_element(lats.begin(), lats.end(),
+                                       [](const LatCandidate& a, const LatCandidate& b) { return a.cost < b.cost; });
+    fallback.lateral = best->poly;
+    fallback.end_lane = best->end_lane;
+  } else {
+    fallback.end_lane = start_lane;
+    const double back_to = core::lane_center_d(start_lane, road);
+    fallback.lateral = quintic(x0.d_m, x0.d_dot_mps, x0.d_ddot_mps2, back_to, 0.0, 0.0,
+                               std::max(tp.min_lateral_time_s,
+                                        std::cbrt(60.0 * std::abs(back_to - x0.d_m) / tp.lateral_jerk_mps3)));
+  }
+  const CollisionReport fb = check_collisions(fallback, cars, req.start_delay_s, mps, params, road);
+  std::stable_sort(failed.begin(), failed.end(), [](const auto& a, const auto& b) { return a.first > b.first; });
+  int tried = 0;
+  for (const auto& [when, n] : failed) {
+    if (when <= fb.first_collision_s || tried >= kLeastBadChecks) break;
+    ++tried;
+    const Combo& c = combos[n];
+    ++plan.kinematic_checks;
+    if (kinematics(lons[c.lon].samples, lats[c.lat].samples, g, line, tp, true).ok) {
+      plan.trajectory = make(c);
+      plan.status = PlanStatus::least_bad;
+      plan.cost = c.cost;
+      return plan;
+    }
+  }
+  plan.trajectory = fallback;
+  plan.status = PlanStatus::fallback;
+  return plan;
+}
+
+}  // namespace overtake::planner::reference

@@ -1,0 +1,82 @@
+// Scenario files: what they say becomes the world; bad ones get errors naming the key.
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include "overtake/app/commands.hpp"
+#include "overtake/app/config.hpp"
+#include "overtake/app/scenario_file.hpp"
+
+namespace overtake::app {
+namespace {
+
+using ::testing::HasSubstr;
+using nlohmann::json;
+
+std::string error_of(const std::string& text) {
+  try {
+    (void)parse_scenario(json::parse(text), "s.json", core::RoadParams{});
+  } catch (const ConfigError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(ScenarioFile, ParsesEveryPart) {
+  const auto sc = parse_scenario(json::parse(R"({
+    "name": "x", "duration_s": 12,
+    "ego": {"s_m": 300, "lane": 2, "speed_mps": 20},
+    "cars": [{"gap_m": 25, "lane": 0, "speed_mps": 15}, {"s_m": 10, "lane": 1, "speed_mps": 0}],
+    "events": [{"t_s": 3, "car": 1, "speed_mps": 10, "accel_mps2": 2},
+               {"t_s": 1, "car": 0, "change_lane": 1},
+               {"t_s": 2, "car": 0, "brake_mps2": 6, "duration_s": 1.5}]})"),
+                                 "s.json", core::RoadParams{});
+  EXPECT_EQ(sc.name, "x");
+  EXPECT_EQ(*sc.duration_s, 12.0);
+  EXPECT_EQ(sc.ego_s_m, 300.0);
+  EXPECT_EQ(sc.ego_d_m, 10.0);
+  ASSERT_EQ(sc.cars.size(), 2u);
+  EXPECT_EQ(sc.cars[0].s_m, 325.0);  // gap from the ego
+  EXPECT_EQ(sc.cars[1].s_m, 10.0);
+  ASSERT_EQ(sc.events.size(), 3u);  // sorted by time
+  EXPECT_EQ(sc.events[0].action, sim::ScenarioAction::change_lane);
+  EXPECT_EQ(sc.events[1].action, sim::ScenarioAction::brake);
+  EXPECT_EQ(sc.events[1].duration_s, 1.5);
+  EXPECT_EQ(sc.events[2].action, sim::ScenarioAction::set_speed);
+}
+
+TEST(ScenarioFile, ErrorsNameTheKey) {
+  EXPECT_THAT(error_of(R"({"cars": [{"lane": 0, "speed_mps": 15}]})"),
+              HasSubstr("scenario.cars[0]: give exactly one of gap_m"));
+  EXPECT_THAT(error_of(R"({"cars": [{"gap_m": 5, "lane": 7, "speed_mps": 15}]})"),
+              HasSubstr("scenario.cars[0]: lane 7 is not a lane of the road"));
+  EXPECT_THAT(error_of(R"({"cars": [{"gap_m": 5, "lane": 0}]})"), HasSubstr("scenario.cars[0].speed_mps: missing"));
+  EXPECT_THAT(error_of(R"({"ego": {"speed_mps": "fast"}})"),
+              HasSubstr("scenario.ego.speed_mps: expected a finite number"));
+  EXPECT_THAT(error_of(R"({"events": [{"t_s": 1, "car": 0, "change_lane": 1}]})"),
+              HasSubstr("car 0 is not one of the scenario's 0 cars"));
+  EXPECT_THAT(error_of(R"({"cars": [{"gap_m": 5, "lane": 0, "speed_mps": 1}],
+                           "events": [{"t_s": 1, "car": 0, "brake_mps2": 6}]})"),
+              HasSubstr("scenario.events[0].duration_s: missing"));
+  EXPECT_THAT(error_of(R"({"cars": [{"gap_m": 5, "lane": 0, "speed_mps": 1}],
+                           "events": [{"t_s": 1, "car": 0}]})"),
+              HasSubstr("give exactly one of change_lane"));
+  EXPECT_THAT(error_of(R"({"speed": 3})"), HasSubstr("scenario.speed: unknown key"));
+  EXPECT_THAT(error_of(R"({"duration_s": -1})"), HasSubstr("scenario.duration_s: must be more than 0"));
+  EXPECT_THAT(error_of(R"([])"), HasSubstr("scenario: expected an object"));
+}
+
+TEST(ScenarioFile, TheShippedExampleDrives) {
+  DriveOptions o;
+  o.scenario = std::string(OVERTAKE_SOURCE_DIR) + "/data/scenarios/cut_in.json";
+  o.minutes_from_scenario = true;
+  o.policy = "walkthrough";
+  const DriveResult r = drive(o);
+  EXPECT_DOUBLE_EQ(r.report.duration_s, 30.0);
+  EXPECT_EQ(r.provenance.traffic, "scripted");
+  EXPECT_EQ(r.provenance.scenario, "cut-in 20 m ahead");
+  EXPECT_EQ(report_to_json(r.report, r.provenance)["config"]["scenario"], "cut-in 20 m ahead");
+}
+
+}  // namespace
+}  // namespace overtake::app

@@ -1,0 +1,90 @@
+// Both sides at once: `overtake serve` (walkthrough) driven by `overtake sim --planner` in
+// lock-step gives exactly the report of an in-process `overtake drive` with the same seed,
+// because every number crosses the wire as the in-process loop rounds it.
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <filesystem>
+
+#include <unistd.h>
+
+#include "overtake/app/cli.hpp"
+#include "overtake/app/io.hpp"
+#include "test_support.hpp"
+
+namespace overtake::protocol {
+namespace {
+
+using namespace testing;  // NOLINT: the test helpers
+using nlohmann::json;
+
+int run_cli(std::vector<std::string> args) {
+  args.insert(args.begin(), "overtake");
+  std::vector<const char*> argv;
+  for (const auto& a : args) argv.push_back(a.c_str());
+  return app::run_cli(static_cast<int>(argv.size()), argv.data());
+}
+
+json without_timing(json j) {
+  j.erase("timing");
+  return j;
+}
+
+json in_process(const app::DriveOptions& o) {
+  const app::DriveResult r = app::drive(o);
+  return without_timing(app::report_to_json(r.report, r.provenance));
+}
+
+json over_the_wire(const ServerFixture& server, const std::vector<std::string>& extra) {
+  const auto path = std::filesystem::temp_directory_path() /
+                    ("overtake-loopback-" + std::to_string(::getpid()) + ".json");
+  std::vector<std::string> args = {"sim", "--planner", server.url(), "--name", "walkthrough", "--json",
+                                   path.string(), "--quiet"};
+  args.insert(args.end(), extra.begin(), extra.end());
+  EXPECT_EQ(run_cli(args), app::kExitOk);
+  json j = json::parse(app::read_file(path));
+  std::filesystem::remove(path);
+  return without_timing(j);
+}
+
+TEST(ProtocolLoopback, LockStepOverTheWireEqualsInProcessDrive) {
+  ServerFixture server;
+  struct Variant {
+    std::string traffic;
+    std::uint64_t seed;
+    int steps_per_call;
+  };
+  for (const Variant& v : {Variant{"faithful", 7, 0}, Variant{"calm", 7, 0}, Variant{"faithful", 11, 2}}) {
+    SCOPED_TRACE(v.traffic + " seed " + std::to_string(v.seed) + " steps " + std::to_string(v.steps_per_call));
+    app::DriveOptions o;
+    o.minutes = 2.0;
+    o.seed = v.seed;
+    o.traffic = v.traffic;
+    o.steps_per_call = v.steps_per_call;
+    const json expected = in_process(o);
+    std::vector<std::string> extra = {"--minutes", "2", "--seed", std::to_string(v.seed), "--traffic", v.traffic};
+    if (v.steps_per_call > 0) {
+      extra.push_back("--steps-per-call");
+      extra.push_back(std::to_string(v.steps_per_call));
+    }
+    const json got = over_the_wire(server, extra);
+    EXPECT_EQ(got.dump(), expected.dump());
+    EXPECT_GT(got["planner_cycles"].get<long>(), 1000);
+    EXPECT_TRUE(got["ended_early"].is_null());
+  }
+  EXPECT_EQ(server.log().warnings(), 0u) << server.log().dump();
+}
+
+TEST(ProtocolLoopback, RealTimeAgainstOurServer) {
+  ServerFixture server;
+  const json got = over_the_wire(server, {"--minutes", "0.02", "--realtime"});
+  EXPECT_TRUE(got["ended_early"].is_null());
+  EXPECT_DOUBLE_EQ(got["duration_s"].get<double>(), 1.2);
+  EXPECT_GT(got["planner_cycles"].get<long>(), 20);
+  EXPECT_GT(got["distance_miles"].get<double>(), 0.0);
+  EXPECT_EQ(server.log().warnings(), 0u) << server.log().dump();
+}
+
+}  // namespace
+}  // namespace overtake::protocol
