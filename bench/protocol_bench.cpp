@@ -40,7 +40,8 @@ void BM_ProtocolParseTelemetry(benchmark::State& state) {
   const sim::World world = world_with_path();
   const core::Telemetry t = world.telemetry();
   const std::string text = protocol::format_telemetry(t);
-  if (t.previous_path.size() != 50 || t.cars.size() != 12) state.SkipWithError("unexpected snapshot");
+  if (t.previous_path.size() != 50 || t.cars.size() != 12)
+    state.SkipWithError("unexpected snapshot");
   for (auto _ : state) {
     auto r = protocol::parse_telemetry(text);
     benchmark::DoNotOptimize(r);
@@ -86,7 +87,9 @@ void BM_ProtocolRoundTrip(benchmark::State& state) {
   opts.status_lines = false;
   opts.log = [](protocol::LogLevel, std::string_view) {};
   std::promise<std::uint16_t> bound;
-  std::thread server([&] { protocol::run_server(ioc, setup, opts, [&](std::uint16_t p) { bound.set_value(p); }); });
+  std::thread server([&] {
+    protocol::run_server(ioc, setup, opts, [&](std::uint16_t p) { bound.set_value(p); });
+  });
   const std::uint16_t port = bound.get_future().get();
   {
     protocol::ClientOptions client;
@@ -95,7 +98,8 @@ void BM_ProtocolRoundTrip(benchmark::State& state) {
         protocol::parse_planner_url("ws://127.0.0.1:" + std::to_string(port)).value(), client);
     protocol::RemotePlanner remote(connection, client);
     const auto t = track();
-    sim::World world(t->map, t->line, app::default_config().world, sim::TrafficProfile::faithful, 1);
+    sim::World world(t->map, t->line, app::default_config().world, sim::TrafficProfile::faithful,
+                     1);
     int k = 0;
     for (auto _ : state) {
       world.apply_path(remote(world.telemetry()));

@@ -68,7 +68,7 @@ void draw_progress(const BenchProgress& p, double total_sim_s) {
 Subcommand register_bench(CLI::App& app) {
   struct State {
     BenchSpec spec;
-    std::string policies = "walkthrough";
+    std::string policies = "reference,walkthrough,seed000,seed001,seed002,seed003,seed004";
     std::string seeds = "1-20";
     std::string traffic = "faithful,calm";
     std::string map, config, out = "bench-out", shard;

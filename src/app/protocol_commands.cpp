@@ -43,8 +43,8 @@ std::string policy_help() {
 
 void check_limits(std::size_t max_frame_bytes, std::size_t max_path_points) {
   if (max_frame_bytes < kMinFrameBytes) {
-    throw UsageError("--max-frame-bytes must be at least " + std::to_string(kMinFrameBytes) + " (got " +
-                     std::to_string(max_frame_bytes) + ")");
+    throw UsageError("--max-frame-bytes must be at least " + std::to_string(kMinFrameBytes) +
+                     " (got " + std::to_string(max_frame_bytes) + ")");
   }
   if (max_path_points < 1) throw UsageError("--max-path-points must be at least 1");
 }
@@ -72,8 +72,10 @@ int cmd_serve(const ServeArgs& a) {
   }
   check_limits(a.max_frame_bytes, a.max_path_points);
   const auto policies = planner::list_policies();
-  if (std::none_of(policies.begin(), policies.end(), [&](const auto& p) { return p.name == a.policy; })) {
-    throw UsageError("--policy: unknown policy '" + a.policy + "' (available: " + policy_names() + ")");
+  if (std::none_of(policies.begin(), policies.end(),
+                   [&](const auto& p) { return p.name == a.policy; })) {
+    throw UsageError("--policy: unknown policy '" + a.policy + "' (available: " + policy_names() +
+                     ")");
   }
   const Config config = load_config(optional_path(a.config));
   const auto track = load_track(optional_path(a.map));
@@ -129,7 +131,8 @@ std::chrono::milliseconds checked_timeout(double seconds, const char* flag) {
 // A progress line on a terminal, at most ten times a second.
 class SimProgress {
  public:
-  SimProgress(bool enabled, double total_s) : enabled_(enabled && stderr_is_terminal()), total_s_(total_s) {}
+  SimProgress(bool enabled, double total_s)
+      : enabled_(enabled && stderr_is_terminal()), total_s_(total_s) {}
   ~SimProgress() { clear(); }
   SimProgress(const SimProgress&) = delete;
   SimProgress& operator=(const SimProgress&) = delete;
@@ -163,13 +166,15 @@ int cmd_sim(const SimArgs& a) {
     throw UsageError("--minutes must be more than 0 and at most " + std::to_string(kMaxMinutes));
   }
   if (a.steps_per_call < 0 || a.steps_per_call > 1000) {
-    throw UsageError("--steps-per-call must be between 1 and 1000 (got " + std::to_string(a.steps_per_call) + ")");
+    throw UsageError("--steps-per-call must be between 1 and 1000 (got " +
+                     std::to_string(a.steps_per_call) + ")");
   }
   if (a.realtime && a.steps_per_call > 0) {
     throw UsageError("--steps-per-call applies to lock-step runs only, not with --realtime");
   }
   const auto profile = sim::parse_traffic_profile(a.traffic);
-  if (!profile) throw UsageError("--traffic: unknown profile '" + a.traffic + "' (available: faithful, calm)");
+  if (!profile)
+    throw UsageError("--traffic: unknown profile '" + a.traffic + "' (available: faithful, calm)");
   protocol::ClientOptions client;
   client.connect_timeout = checked_timeout(a.connect_timeout_s, "--connect-timeout");
   client.reply_timeout = checked_timeout(a.reply_timeout_s, "--reply-timeout");
@@ -199,10 +204,12 @@ int cmd_sim(const SimArgs& a) {
     report = protocol::run_realtime(world, connection, client, run);
   } else {
     protocol::RemotePlanner remote(connection, client);
-    report = sim::run_drive(world, [&remote](const core::Telemetry& t) { return remote(t); }, run);
+    report = sim::run_drive(
+        world, [&remote](const core::Telemetry& t) { return remote(t); }, run);
   }
   connection.close();
-  const double wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
+  const double wall_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
   progress.clear();
 
   RunProvenance p;
@@ -220,7 +227,8 @@ int cmd_sim(const SimArgs& a) {
   std::cout << format_scorecard(report, p);
   if (!a.quiet) {
     std::printf("  wall time          %.2f s (%.1fx real time, %s)\n", wall_s,
-                wall_s > 0 ? report.duration_s / wall_s : 0.0, a.realtime ? "real time" : "lock-step");
+                wall_s > 0 ? report.duration_s / wall_s : 0.0,
+                a.realtime ? "real time" : "lock-step");
   }
   std::cout.flush();
   if (!a.json.empty()) {
@@ -235,10 +243,13 @@ int cmd_sim(const SimArgs& a) {
 Subcommand register_serve(CLI::App& app) {
   auto a = std::make_shared<ServeArgs>();
   auto* cmd = app.add_subcommand(
-      "serve", "Serve a planner over the original simulator's websocket protocol (the original "
-               "simulator, or `overtake sim --planner`, drives it).");
-  cmd->add_option("--port", a->port, "TCP port to listen on (0: any free port)")->capture_default_str();
-  cmd->add_option("--host", a->host, "Address to listen on (the old planners listen on all; we do not)")
+      "serve",
+      "Serve a planner over the original simulator's websocket protocol (the original "
+      "simulator, or `overtake sim --planner`, drives it).");
+  cmd->add_option("--port", a->port, "TCP port to listen on (0: any free port)")
+      ->capture_default_str();
+  cmd->add_option("--host", a->host,
+                  "Address to listen on (the old planners listen on all; we do not)")
       ->capture_default_str();
   cmd->add_option("--map", a->map, "Map file (x y s dx dy per line); default: the built-in track")
       ->check(CLI::ExistingFile);
@@ -251,37 +262,44 @@ Subcommand register_serve(CLI::App& app) {
   cmd->add_option("--max-path-points", a->max_path_points,
                   "A telemetry with a longer previous path is refused (manual)")
       ->capture_default_str();
-  cmd->add_flag("--quiet,-q", a->quiet, "No connection events or status lines (warnings still show)");
+  cmd->add_flag("--quiet,-q", a->quiet,
+                "No connection events or status lines (warnings still show)");
   return {cmd, [a] { return cmd_serve(*a); }};
 }
 
 Subcommand register_sim(CLI::App& app) {
   auto a = std::make_shared<SimArgs>();
   auto* cmd = app.add_subcommand(
-      "sim", "Drive a planner written for the original simulator over its websocket protocol and "
-             "print the scorecard.");
+      "sim",
+      "Drive a planner written for the original simulator over its websocket protocol and "
+      "print the scorecard.");
   cmd->add_option("--planner", a->planner,
                   "The planner's address, ws://HOST:PORT[/PATH] (default path: "
                   "/socket.io/?EIO=4&transport=websocket)")
       ->required();
   cmd->add_option("--name", a->name, "Name of the planner in the report (default: its address)");
   cmd->add_option("--minutes", a->minutes, "Simulated minutes to drive")->capture_default_str();
-  cmd->add_option("--seed", a->seed, "Seed of the traffic and latency draws")->capture_default_str();
-  cmd->add_option("--traffic", a->traffic, "Traffic profile: faithful (the original's rules) or calm")
+  cmd->add_option("--seed", a->seed, "Seed of the traffic and latency draws")
+      ->capture_default_str();
+  cmd->add_option("--traffic", a->traffic,
+                  "Traffic profile: faithful (the original's rules) or calm")
       ->capture_default_str();
   cmd->add_option("--map", a->map, "Map file (x y s dx dy per line); default: the built-in track")
       ->check(CLI::ExistingFile);
   cmd->add_option("--config", a->config, "JSON file overriding any of the default parameters")
       ->check(CLI::ExistingFile);
-  cmd->add_option("--steps-per-call", a->steps_per_call,
-                  "Lock-step: world steps per reply (1-1000); default: drawn from 1-3 per reply by the seed");
-  cmd->add_flag("--realtime", a->realtime,
-                "Step at 50 Hz of wall time and keep driving while the planner thinks, as the original");
+  cmd->add_option(
+      "--steps-per-call", a->steps_per_call,
+      "Lock-step: world steps per reply (1-1000); default: drawn from 1-3 per reply by the seed");
+  cmd->add_flag(
+      "--realtime", a->realtime,
+      "Step at 50 Hz of wall time and keep driving while the planner thinks, as the original");
   cmd->add_option("--connect-timeout", a->connect_timeout_s, "Seconds to keep trying to connect")
       ->capture_default_str();
   cmd->add_option("--reply-timeout", a->reply_timeout_s, "Seconds to wait for each reply")
       ->capture_default_str();
-  cmd->add_option("--max-frame-bytes", a->max_frame_bytes, "A larger reply ends the run")->capture_default_str();
+  cmd->add_option("--max-frame-bytes", a->max_frame_bytes, "A larger reply ends the run")
+      ->capture_default_str();
   cmd->add_option("--max-path-points", a->max_path_points, "A longer path in a reply ends the run")
       ->capture_default_str();
   cmd->add_option("--json", a->json, "Also write the report as JSON to this file");

@@ -56,6 +56,7 @@ void validate_reference(const PlannerParams& all, std::vector<std::string>& out)
   non_negative("behaviour.follower_response_s", b.follower_response_s);
   non_negative("behaviour.follower_margin_m", b.follower_margin_m);
   non_negative("behaviour.change_front_factor", b.change_front_factor);
+  non_negative("behaviour.transit_front_factor", b.transit_front_factor);
   non_negative("behaviour.min_change_speed_mps", b.min_change_speed_mps);
   non_negative("behaviour.change_dwell_s", b.change_dwell_s);
   non_negative("behaviour.speed_weight", b.speed_weight);

@@ -6,16 +6,21 @@
 #include <algorithm>
 #include <cctype>
 #include <charconv>
-#include <cstdio>
 #include <cmath>
+#include <cstdio>
 #include <deque>
 #include <thread>
 
+// GCC 12 may report a false maybe-uninitialized inside Beast's HTTP parser (boost::optional)
+// depending on inlining (seen with the sanitizers).
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
 #include <boost/asio/connect.hpp>
 #include <boost/asio/io_context.hpp>
 #include <boost/asio/ip/tcp.hpp>
 #include <boost/beast/core.hpp>
 #include <boost/beast/websocket.hpp>
+#pragma GCC diagnostic pop
 
 namespace overtake::protocol {
 namespace {
@@ -55,7 +60,8 @@ Result<PlannerUrl> parse_planner_url(std::string_view url) {
   PlannerUrl out;
   if (!rest.empty() && rest[0] == '[') {
     const auto close = rest.find(']');
-    if (close == std::string_view::npos) return Error{"unclosed '[' in the host of " + excerpt(url)};
+    if (close == std::string_view::npos)
+      return Error{"unclosed '[' in the host of " + excerpt(url)};
     out.host = std::string(rest.substr(1, close - 1));
     rest = rest.substr(close + 1);
   } else {
@@ -138,9 +144,11 @@ struct PlannerConnection::Impl {
     const error_code& ec = read_error;
     if (ec == websocket::error::closed) return "the planner closed the connection";
     if (ec == websocket::error::message_too_big) {
-      return "the planner sent a frame larger than " + std::to_string(opts.max_frame_bytes) + " bytes";
+      return "the planner sent a frame larger than " + std::to_string(opts.max_frame_bytes) +
+             " bytes";
     }
-    if (ec == net::error::eof || ec == net::error::connection_reset || ec == net::error::broken_pipe) {
+    if (ec == net::error::eof || ec == net::error::connection_reset ||
+        ec == net::error::broken_pipe) {
       return "the planner dropped the connection (" + ec.message() + ")";
     }
     if (!ec) return "the connection is closed";
@@ -175,8 +183,9 @@ struct PlannerConnection::Impl {
     ws->read_message_max(opts.max_frame_bytes);
     ws->auto_fragment(false);
     done = false;
-    const std::string host = (url.host.find(':') != std::string::npos ? "[" + url.host + "]" : url.host) +
-                             ":" + url.port;
+    const std::string host =
+        (url.host.find(':') != std::string::npos ? "[" + url.host + "]" : url.host) + ":" +
+        url.port;
     ws->async_handshake(host, url.target, [&](const error_code& e) {
       ec = e;
       done = true;
@@ -212,7 +221,9 @@ PlannerConnection::PlannerConnection(const PlannerUrl& url, const ClientOptions&
   }
 }
 
-PlannerConnection::~PlannerConnection() { impl_->drop(); }
+PlannerConnection::~PlannerConnection() {
+  impl_->drop();
+}
 
 void PlannerConnection::send(std::string_view payload, Clock::time_point deadline, bool binary) {
   Impl& m = *impl_;
@@ -272,7 +283,9 @@ void PlannerConnection::close() noexcept {
   m.drop();
 }
 
-bool PlannerConnection::is_open() const { return impl_->open; }
+bool PlannerConnection::is_open() const {
+  return impl_->open;
+}
 
 // ---- what the planner sent --------------------------------------------------------------
 
@@ -286,7 +299,8 @@ struct Sorted {
 
 Sorted sort_planner_frame(const ReceivedFrame& f) {
   if (f.binary) {
-    return {Sorted::fatal, "malformed reply: a binary frame of " + std::to_string(f.text.size()) + " bytes"};
+    return {Sorted::fatal,
+            "malformed reply: a binary frame of " + std::to_string(f.text.size()) + " bytes"};
   }
   const Packet p = split_packet(f.text);
   switch (p.type) {
@@ -305,7 +319,8 @@ Sorted sort_planner_frame(const ReceivedFrame& f) {
       break;
   }
   if (!p.data.empty() && p.data[0] == '2') return {Sorted::reply, f.text};
-  if (!p.data.empty() && p.data[0] == '0') return {Sorted::ignore, "ignored the planner's Socket.IO connect (40)"};
+  if (!p.data.empty() && p.data[0] == '0')
+    return {Sorted::ignore, "ignored the planner's Socket.IO connect (40)"};
   if (!p.data.empty() && p.data[0] == '1') return {Sorted::fatal, "the planner left (41)"};
   return {Sorted::fatal, "malformed reply: not a Socket.IO event: " + excerpt(f.text)};
 }
@@ -331,7 +346,8 @@ std::vector<core::Vec2> RemotePlanner::operator()(const core::Telemetry& telemet
       if (s.kind == Sorted::reply) {
         ++extra_replies_;
         log(LogLevel::warning,
-            "the planner replied twice to one telemetry; the extra reply is ignored: " + excerpt(f.text, 40));
+            "the planner replied twice to one telemetry; the extra reply is ignored: " +
+                excerpt(f.text, 40));
       } else if (s.kind == Sorted::ping) {
         connection_.send(s.text, Clock::now() + options_.reply_timeout);
       } else if (s.kind == Sorted::ignore) {
@@ -365,7 +381,8 @@ std::vector<core::Vec2> RemotePlanner::operator()(const core::Telemetry& telemet
       if (!reply) throw sim::PlannerFailure("malformed reply: " + reply.error());
       if (reply.value().manual) {
         if (!manual_noted_) {
-          log(LogLevel::info, "the planner answered a full telemetry with manual: the queued path is kept");
+          log(LogLevel::info,
+              "the planner answered a full telemetry with manual: the queued path is kept");
           manual_noted_ = true;
         }
         return telemetry.previous_path;
@@ -384,7 +401,8 @@ sim::RunReport run_realtime(sim::World& world, PlannerConnection& connection,
   const LogFn& log = log_of(options);
   const sim::WorldParams& p = world.params();
   const long total_steps = std::lround(run.duration_s / p.step_s);
-  const auto period = std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(p.step_s));
+  const auto period =
+      std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(p.step_s));
   sim::LaneTracker lanes(p.road);
   std::vector<double> cycle_us;
   std::string ended_early;
@@ -403,7 +421,8 @@ sim::RunReport run_realtime(sim::World& world, PlannerConnection& connection,
       append_telemetry(buffer, world.telemetry());
       last_full_step = world.steps();
     }
-    connection.send(full ? std::string_view(buffer) : kNullTelemetry, sent_at + options.reply_timeout);
+    connection.send(full ? std::string_view(buffer) : kNullTelemetry,
+                    sent_at + options.reply_timeout);
     awaiting = true;
     awaiting_full = full;
   };
@@ -433,10 +452,12 @@ sim::RunReport run_realtime(sim::World& world, PlannerConnection& connection,
         if (!awaiting && stepped) send_telemetry(true);
         const auto reply_deadline = sent_at + options.reply_timeout;
         if (awaiting && Clock::now() >= reply_deadline) {
-          throw sim::PlannerFailure("the planner stalled: no reply within " + seconds_text(options.reply_timeout));
+          throw sim::PlannerFailure("the planner stalled: no reply within " +
+                                    seconds_text(options.reply_timeout));
         }
 
-        const auto frame = connection.receive(awaiting ? std::min(next_tick, reply_deadline) : next_tick);
+        const auto frame =
+            connection.receive(awaiting ? std::min(next_tick, reply_deadline) : next_tick);
         if (!frame) continue;
         const Sorted s = sort_planner_frame(*frame);
         if (s.kind == Sorted::fatal) throw sim::PlannerFailure(s.text);
@@ -449,15 +470,17 @@ sim::RunReport run_realtime(sim::World& world, PlannerConnection& connection,
           continue;
         }
         if (!awaiting) {
-          log(LogLevel::warning, "the planner replied twice to one telemetry; the extra reply is ignored: " +
-                                     excerpt(frame->text, 40));
+          log(LogLevel::warning,
+              "the planner replied twice to one telemetry; the extra reply is ignored: " +
+                  excerpt(frame->text, 40));
           continue;
         }
         auto reply = parse_reply(frame->text, options.limits);
         if (!reply) throw sim::PlannerFailure("malformed reply: " + reply.error());
         awaiting = false;
         if (awaiting_full) {
-          cycle_us.push_back(std::chrono::duration<double, std::micro>(Clock::now() - sent_at).count());
+          cycle_us.push_back(
+              std::chrono::duration<double, std::micro>(Clock::now() - sent_at).count());
         }
         if (!reply.value().manual) world.apply_path(std::move(reply).value().path);
         // Next telemetry: full when anything stepped; null once when nothing did; after the
@@ -472,7 +495,8 @@ sim::RunReport run_realtime(sim::World& world, PlannerConnection& connection,
       throw sim::PlannerFailure(e.what());
     }
   } catch (const sim::PlannerFailure& e) {
-    ended_early = std::string("planner failed at t = ") + std::to_string(world.time_s()) + " s: " + e.what();
+    ended_early =
+        std::string("planner failed at t = ") + std::to_string(world.time_s()) + " s: " + e.what();
   }
   return sim::summarize(world, lanes, std::move(cycle_us), std::move(ended_early));
 }

@@ -24,21 +24,33 @@ struct Reject {
   std::string reason;
 };
 
-[[noreturn]] void reject(std::string reason) { throw Reject{std::move(reason)}; }
+[[noreturn]] void reject(std::string reason) {
+  throw Reject{std::move(reason)};
+}
 
-std::string quoted(std::string_view key) { return "'" + std::string(key) + "'"; }
+std::string quoted(std::string_view key) {
+  return "'" + std::string(key) + "'";
+}
 
 // What a JSON value is, for a message that says why it is not a number.
 std::string describe(const json& j) {
   switch (j.type()) {
-    case json::value_t::null: return "null";
-    case json::value_t::boolean: return "a boolean";
-    case json::value_t::string: return "a string (" + excerpt(j.get_ref<const std::string&>(), 20) + ")";
-    case json::value_t::array: return "an array";
-    case json::value_t::object: return "an object";
-    case json::value_t::binary: return "binary";
-    case json::value_t::discarded: return "invalid";
-    default: return "a number";
+    case json::value_t::null:
+      return "null";
+    case json::value_t::boolean:
+      return "a boolean";
+    case json::value_t::string:
+      return "a string (" + excerpt(j.get_ref<const std::string&>(), 20) + ")";
+    case json::value_t::array:
+      return "an array";
+    case json::value_t::object:
+      return "an object";
+    case json::value_t::binary:
+      return "binary";
+    case json::value_t::discarded:
+      return "invalid";
+    default:
+      return "a number";
   }
 }
 
@@ -67,8 +79,8 @@ const json& array_member(const json& obj, const char* key, std::size_t max_size,
   const json& a = member(obj, key);
   if (!a.is_array()) reject(quoted(key) + " is " + describe(a) + ", not an array");
   if (a.size() > max_size) {
-    reject(quoted(key) + " has " + std::to_string(a.size()) + " " + unit + ", more than the limit of " +
-           std::to_string(max_size));
+    reject(quoted(key) + " has " + std::to_string(a.size()) + " " + unit +
+           ", more than the limit of " + std::to_string(max_size));
   }
   return a;
 }
@@ -105,10 +117,11 @@ json parse_event(std::string_view frame) {
   try {
     j = json::parse(body.begin(), body.end());
   } catch (const json::exception& e) {  // parse_error, or out_of_range for 1e999
-    reject("the event is not valid JSON (" + parse_error_text(e.what(), kEventPrefix.size()) + "): " +
-           excerpt(frame));
+    reject("the event is not valid JSON (" + parse_error_text(e.what(), kEventPrefix.size()) +
+           "): " + excerpt(frame));
   }
-  if (!j.is_array() || j.size() != 2) reject("the event is not a [name, payload] array: " + excerpt(frame));
+  if (!j.is_array() || j.size() != 2)
+    reject("the event is not a [name, payload] array: " + excerpt(frame));
   if (!j[0].is_string()) reject("the event name is " + describe(j[0]) + ", not a string");
   return j;
 }
@@ -125,8 +138,8 @@ core::Telemetry telemetry_from_json(const json& o, const Limits& limits) {
   const json& px = array_member(o, "previous_path_x", limits.max_path_points, "points");
   const json& py = array_member(o, "previous_path_y", limits.max_path_points, "points");
   if (px.size() != py.size()) {
-    reject("'previous_path_x' has " + std::to_string(px.size()) + " points but 'previous_path_y' has " +
-           std::to_string(py.size()));
+    reject("'previous_path_x' has " + std::to_string(px.size()) +
+           " points but 'previous_path_y' has " + std::to_string(py.size()));
   }
   t.previous_path.resize(px.size());
   for (std::size_t i = 0; i < px.size(); ++i) {
@@ -142,7 +155,8 @@ core::Telemetry telemetry_from_json(const json& o, const Limits& limits) {
     const auto where = element("sensor_fusion", i);
     if (!row.is_array()) reject(where() + " is " + describe(row) + ", not an array");
     if (row.size() != 7) {
-      reject(where() + " has " + std::to_string(row.size()) + " values, expected 7 [id,x,y,vx,vy,s,d]");
+      reject(where() + " has " + std::to_string(row.size()) +
+             " values, expected 7 [id,x,y,vx,vy,s,d]");
     }
     double v[7];
     for (std::size_t k = 0; k < 7; ++k) {
@@ -271,7 +285,8 @@ void append_telemetry(std::string& out, const core::Telemetry& t) {
     out += i ? ",[" : "[";
     char id[16];
     out.append(id, std::to_chars(id, id + sizeof id, c.id).ptr);
-    for (const double v : {c.position.x, c.position.y, c.velocity_mps.x, c.velocity_mps.y, c.s_m, c.d_m}) {
+    for (const double v :
+         {c.position.x, c.position.y, c.velocity_mps.x, c.velocity_mps.y, c.s_m, c.d_m}) {
       out += ',';
       num(v);
     }
@@ -293,7 +308,8 @@ Result<TelemetryEvent> parse_telemetry(std::string_view frame, const Limits& lim
     if (name != "telemetry") reject("unexpected event " + excerpt(name) + " (expected telemetry)");
     const json& payload = event[1];
     if (payload.is_null()) return std::nullopt;
-    if (!payload.is_object()) reject("the telemetry payload is " + describe(payload) + ", not an object");
+    if (!payload.is_object())
+      reject("the telemetry payload is " + describe(payload) + ", not an object");
     return telemetry_from_json(payload, limits);
   });
 }
@@ -326,9 +342,11 @@ Result<Reply> parse_reply(std::string_view frame, const Limits& limits) {
     const json event = parse_event(frame);
     const auto& name = event[0].get_ref<const std::string&>();
     if (name == "manual") return Reply{true, {}};
-    if (name != "control") reject("unexpected event " + excerpt(name) + " (expected control or manual)");
+    if (name != "control")
+      reject("unexpected event " + excerpt(name) + " (expected control or manual)");
     const json& payload = event[1];
-    if (!payload.is_object()) reject("the control payload is " + describe(payload) + ", not an object");
+    if (!payload.is_object())
+      reject("the control payload is " + describe(payload) + ", not an object");
     return Reply{false, path_from_json(payload, limits)};
   });
 }
@@ -340,7 +358,9 @@ Packet split_packet(std::string_view frame) {
   return {static_cast<PacketType>(frame[0] - '0'), frame.substr(1)};
 }
 
-bool is_event(std::string_view frame) { return frame.substr(0, kEventPrefix.size()) == kEventPrefix; }
+bool is_event(std::string_view frame) {
+  return frame.substr(0, kEventPrefix.size()) == kEventPrefix;
+}
 
 std::optional<std::string_view> event_name(std::string_view frame) {
   constexpr std::string_view kStart = R"(42[")";

@@ -9,6 +9,10 @@
 #include <utility>
 #include <vector>
 
+// GCC 12 may report a false maybe-uninitialized inside Beast's HTTP parser (boost::optional)
+// depending on inlining (seen with the sanitizers).
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
 #include <boost/asio/co_spawn.hpp>
 #include <boost/asio/detached.hpp>
 #include <boost/asio/io_context.hpp>
@@ -19,6 +23,7 @@
 #include <boost/asio/use_awaitable.hpp>
 #include <boost/beast/core.hpp>
 #include <boost/beast/websocket.hpp>
+#pragma GCC diagnostic pop
 
 #include "overtake/core/road.hpp"
 #include "overtake/core/units.hpp"
@@ -70,25 +75,30 @@ class OpenCount {
   ServerState& st_;
 };
 
-std::string cycles_text(long n) { return std::to_string(n) + (n == 1 ? " cycle" : " cycles"); }
+std::string cycles_text(long n) {
+  return std::to_string(n) + (n == 1 ? " cycle" : " cycles");
+}
 
 // The log line for a connection that ended with `ec` (empty when the server is stopping).
 std::optional<std::pair<LogLevel, std::string>> end_line(const error_code& ec) {
   if (ec == net::error::operation_aborted) return std::nullopt;
-  if (ec == websocket::error::closed) return std::pair{LogLevel::info, std::string("closed by the peer")};
-  if (ec == net::error::eof || ec == net::error::connection_reset || ec == net::error::broken_pipe ||
-      ec == beast::error::timeout) {
+  if (ec == websocket::error::closed)
+    return std::pair{LogLevel::info, std::string("closed by the peer")};
+  if (ec == net::error::eof || ec == net::error::connection_reset ||
+      ec == net::error::broken_pipe || ec == beast::error::timeout) {
     return std::pair{LogLevel::info, "dropped (" + ec.message() + ")"};
   }
   // Websocket protocol violations: Beast has failed the connection with a close frame.
-  return std::pair{LogLevel::warning, "closed after a websocket protocol error (" + ec.message() + ")"};
+  return std::pair{LogLevel::warning,
+                   "closed after a websocket protocol error (" + ec.message() + ")"};
 }
 
 net::awaitable<void> serve_connection(tcp::socket socket, std::shared_ptr<ServerState> st) {
   const int id = st->next_id++;
   error_code ec;
   const auto remote = socket.remote_endpoint(ec);
-  const std::string who = "connection #" + std::to_string(id) + " (" + (ec ? "?" : endpoint_text(remote)) + ")";
+  const std::string who =
+      "connection #" + std::to_string(id) + " (" + (ec ? "?" : endpoint_text(remote)) + ")";
   socket.set_option(tcp::no_delay(true), ec);  // small frames, one at a time: no Nagle delay
 
   try {
@@ -112,8 +122,9 @@ net::awaitable<void> serve_connection(tcp::socket socket, std::shared_ptr<Server
     }
     st->log(LogLevel::info, who + " open");
     const OpenCount counted(*st);
-    PlannerSession session(planner::make_policy(st->setup.policy, *st->setup.line, st->setup.params),
-                           st->opts.limits, st->opts.max_frame_bytes);
+    PlannerSession session(
+        planner::make_policy(st->setup.policy, *st->setup.line, st->setup.params), st->opts.limits,
+        st->opts.max_frame_bytes);
     long cycles = 0;
     beast::flat_buffer buffer;
     std::string head;
@@ -122,8 +133,8 @@ net::awaitable<void> serve_connection(tcp::socket socket, std::shared_ptr<Server
       std::size_t size = 0;
       bool oversized = false;
       do {
-        const std::size_t n =
-            co_await ws.async_read_some(buffer, kReadChunk, net::redirect_error(net::use_awaitable, ec));
+        const std::size_t n = co_await ws.async_read_some(
+            buffer, kReadChunk, net::redirect_error(net::use_awaitable, ec));
         if (ec) {
           if (const auto line = end_line(ec)) {
             st->log(line->first, who + " " + line->second + " after " + cycles_text(cycles));
@@ -134,7 +145,8 @@ net::awaitable<void> serve_connection(tcp::socket socket, std::shared_ptr<Server
         if (!oversized && buffer.size() > st->opts.max_frame_bytes) {
           oversized = true;
           const auto data = buffer.data();
-          head.assign(static_cast<const char*>(data.data()), std::min(data.size(), kOversizedHeadBytes));
+          head.assign(static_cast<const char*>(data.data()),
+                      std::min(data.size(), kOversizedHeadBytes));
         }
         if (oversized) buffer.clear();  // keep reading the message, keep none of it
       } while (!ws.is_message_done());
@@ -175,7 +187,8 @@ net::awaitable<void> accept_loop(tcp::acceptor acceptor, std::shared_ptr<ServerS
   net::steady_timer pause(acceptor.get_executor());
   for (;;) {
     error_code ec;
-    tcp::socket socket = co_await acceptor.async_accept(net::redirect_error(net::use_awaitable, ec));
+    tcp::socket socket =
+        co_await acceptor.async_accept(net::redirect_error(net::use_awaitable, ec));
     if (ec == net::error::operation_aborted) co_return;
     if (ec) {  // e.g. out of file descriptors: say so, wait a little, go on
       st->log(LogLevel::warning, "cannot accept a connection (" + ec.message() + ")");
@@ -204,15 +217,18 @@ net::awaitable<void> status_loop(std::shared_ptr<ServerState> st) {
     if (st->open > 0) {
       char line[256];
       const double max_us =
-          st->plan_us_window.empty() ? 0.0 : *std::max_element(st->plan_us_window.begin(), st->plan_us_window.end());
+          st->plan_us_window.empty()
+              ? 0.0
+              : *std::max_element(st->plan_us_window.begin(), st->plan_us_window.end());
       const auto& ego = st->last_ego;
-      std::snprintf(line, sizeof line,
-                    "status: %d connection%s, %ld cycles/s (%ld in all), %.1f mph, lane %d, planner "
-                    "median %.0f us, max %.0f us",
-                    st->open, st->open == 1 ? "" : "s", st->cycles_window, st->cycles_total,
-                    ego ? core::mps_to_mph(ego->speed_mps) : 0.0,
-                    ego ? core::lane_of(ego->d_m, st->setup.params.road) : -1,
-                    median(st->plan_us_window), max_us);
+      std::snprintf(
+          line, sizeof line,
+          "status: %d connection%s, %ld cycles/s (%ld in all), %.1f mph, lane %d, planner "
+          "median %.0f us, max %.0f us",
+          st->open, st->open == 1 ? "" : "s", st->cycles_window, st->cycles_total,
+          ego ? core::mps_to_mph(ego->speed_mps) : 0.0,
+          ego ? core::lane_of(ego->d_m, st->setup.params.road) : -1, median(st->plan_us_window),
+          max_us);
       st->log(LogLevel::info, line);
     }
     st->cycles_window = 0;
@@ -249,9 +265,11 @@ void run_server(net::io_context& ioc, const PlannerSetup& setup, const ServeOpti
   if (!planner::make_policy(setup.policy, *setup.line, setup.params)) {
     std::string names;
     for (const auto& p : planner::list_policies()) names += (names.empty() ? "" : ", ") + p.name;
-    throw std::invalid_argument("--policy: unknown policy '" + setup.policy + "' (available: " + names + ")");
+    throw std::invalid_argument("--policy: unknown policy '" + setup.policy +
+                                "' (available: " + names + ")");
   }
-  if (opts.max_frame_bytes == 0) throw std::invalid_argument("--max-frame-bytes must be at least 1");
+  if (opts.max_frame_bytes == 0)
+    throw std::invalid_argument("--max-frame-bytes must be at least 1");
 
   auto st = std::make_shared<ServerState>();
   st->setup = setup;
@@ -265,10 +283,12 @@ void run_server(net::io_context& ioc, const PlannerSetup& setup, const ServeOpti
   if (!ec) acceptor.set_option(net::socket_base::reuse_address(true), ec);
   if (!ec) acceptor.bind(ep, ec);
   if (!ec) acceptor.listen(net::socket_base::max_listen_connections, ec);
-  if (ec) throw std::runtime_error("cannot listen on " + endpoint_text(ep) + " (" + ec.message() + ")");
+  if (ec)
+    throw std::runtime_error("cannot listen on " + endpoint_text(ep) + " (" + ec.message() + ")");
   const tcp::endpoint bound = acceptor.local_endpoint();
 
-  st->log(LogLevel::info, "listening on ws://" + endpoint_text(bound) + " with policy " + setup.policy);
+  st->log(LogLevel::info,
+          "listening on ws://" + endpoint_text(bound) + " with policy " + setup.policy);
   net::co_spawn(ioc, accept_loop(std::move(acceptor), st), net::detached);
   if (opts.status_lines) net::co_spawn(ioc, status_loop(st), net::detached);
   if (on_listening) on_listening(bound.port());

@@ -17,7 +17,9 @@ bool all_finite(const std::vector<core::Vec2>& path) {
   return true;
 }
 
-std::string bytes(std::size_t n) { return std::to_string(n) + (n == 1 ? " byte" : " bytes"); }
+std::string bytes(std::size_t n) {
+  return std::to_string(n) + (n == 1 ? " byte" : " bytes");
+}
 
 }  // namespace
 
@@ -33,7 +35,8 @@ FrameOutcome PlannerSession::handle(const Frame& frame) {
   }
   if (frame.oversized) {
     out.warning = "frame of " + bytes(frame.size) + " is larger than the limit of " +
-                  bytes(max_frame_bytes_) + ", dropped: " + excerpt(frame.text.substr(0, 40)) + "...";
+                  bytes(max_frame_bytes_) + ", dropped: " + excerpt(frame.text.substr(0, 40)) +
+                  "...";
     // The simulator waits for an answer to a telemetry, however broken.
     const auto name = event_name(frame.text);
     if (is_event(frame.text) && (!name || *name == "telemetry")) {
@@ -45,9 +48,9 @@ FrameOutcome PlannerSession::handle(const Frame& frame) {
   const Packet packet = split_packet(frame.text);
   switch (packet.type) {
     case PacketType::invalid:
-      out.warning = frame.text.empty() ? std::string("empty frame ignored")
-                                       : "frame that is not an Engine.IO packet ignored: " +
-                                             excerpt(frame.text);
+      out.warning = frame.text.empty()
+                        ? std::string("empty frame ignored")
+                        : "frame that is not an Engine.IO packet ignored: " + excerpt(frame.text);
       return out;
     case PacketType::ping:  // the simulator's probe; answering it is allowed
       out.reply = "3" + std::string(packet.data);
@@ -112,7 +115,8 @@ FrameOutcome PlannerSession::handle_event(std::string_view text) {
   try {
     path = policy_->plan(telemetry);
   } catch (const std::exception& e) {
-    out.warning = std::string("the planner failed on this telemetry (") + e.what() + "); replied manual";
+    out.warning =
+        std::string("the planner failed on this telemetry (") + e.what() + "); replied manual";
     out.reply = std::string(kManual);
     return out;
   }

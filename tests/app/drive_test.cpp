@@ -56,7 +56,7 @@ TEST(DriveReport, HasTheDocumentedKeys) {
     EXPECT_TRUE(j["peak"].contains(key)) << key;
   }
   EXPECT_EQ(j["config"]["seed"], 3);
-  EXPECT_EQ(j["config"]["policy"], "walkthrough");
+  EXPECT_EQ(j["config"]["policy"], "reference");
   EXPECT_EQ(j["config"]["traffic"], "faithful");
   EXPECT_EQ(j["config"]["map"]["path"], "builtin:default");
   EXPECT_EQ(j["config"]["steps_per_call"], "random 1-3");

@@ -26,7 +26,8 @@ using namespace testing;  // NOLINT: the test helpers
 
 // A fake planner that drives well: the walkthrough policy behind the codec. `misbehave` may
 // replace the answer to any message.
-FakeBehaviour walkthrough_planner(std::function<std::optional<FakeAction>(int index, const std::string& good)> misbehave = {}) {
+FakeBehaviour walkthrough_planner(
+    std::function<std::optional<FakeAction>(int index, const std::string& good)> misbehave = {}) {
   const auto track = default_track();
   auto policy = std::shared_ptr<planner::Policy>(
       planner::make_policy("walkthrough", track->line, app::default_config().planner));
@@ -50,7 +51,8 @@ struct LockStepRun {
 LockStepRun lock_step(const std::string& url, double seconds, LogCapture& log,
                       std::chrono::milliseconds reply_timeout = 3s) {
   const auto track = default_track();
-  sim::World world(track->map, track->line, app::default_config().world, sim::TrafficProfile::faithful, 3);
+  sim::World world(track->map, track->line, app::default_config().world,
+                   sim::TrafficProfile::faithful, 3);
   ClientOptions o = quick_client(&log);
   o.reply_timeout = reply_timeout;
   PlannerConnection c(parse_planner_url(url).value(), o);
@@ -59,7 +61,8 @@ LockStepRun lock_step(const std::string& url, double seconds, LogCapture& log,
   run.duration_s = seconds;
   run.seed = 3;
   LockStepRun out;
-  out.report = sim::run_drive(world, [&remote](const core::Telemetry& t) { return remote(t); }, run);
+  out.report = sim::run_drive(
+      world, [&remote](const core::Telemetry& t) { return remote(t); }, run);
   out.extra_replies = remote.extra_replies();
   c.close();
   return out;
@@ -78,14 +81,15 @@ int run_cli(std::vector<std::string> args) {
 }
 
 TEST(ProtocolClient, StallEndsTheRunWithAMessageAndTheReportIsKept) {
-  FakePlanner planner(walkthrough_planner([](int index, const std::string&) -> std::optional<FakeAction> {
-    if (index >= 100) return FakeAction{};  // no reply, ever
-    return std::nullopt;
-  }));
+  FakePlanner planner(
+      walkthrough_planner([](int index, const std::string&) -> std::optional<FakeAction> {
+        if (index >= 100) return FakeAction{};  // no reply, ever
+        return std::nullopt;
+      }));
   const auto json_path = temp_file("stall");
   const auto t0 = std::chrono::steady_clock::now();
-  const int rc = run_cli({"sim", "--planner", planner.url(), "--minutes", "1", "--reply-timeout", "0.3",
-                          "--json", json_path.string(), "--quiet"});
+  const int rc = run_cli({"sim", "--planner", planner.url(), "--minutes", "1", "--reply-timeout",
+                          "0.3", "--json", json_path.string(), "--quiet"});
   EXPECT_LT(std::chrono::steady_clock::now() - t0, 5s);
   EXPECT_EQ(rc, app::kExitFailure);
   const auto j = nlohmann::json::parse(app::read_file(json_path));
@@ -102,17 +106,18 @@ TEST(ProtocolClient, StallEndsTheRunWithAMessageAndTheReportIsKept) {
 TEST(ProtocolClient, CloseAndDropEndTheRunWithAMessage) {
   for (const bool graceful : {true, false}) {
     SCOPED_TRACE(graceful ? "close frame" : "TCP dropped");
-    FakePlanner planner(walkthrough_planner([graceful](int index, const std::string& good) -> std::optional<FakeAction> {
-      if (index != 60) return std::nullopt;
-      FakeAction a{{good}};
-      (graceful ? a.close : a.drop) = true;
-      return a;
-    }));
+    FakePlanner planner(walkthrough_planner(
+        [graceful](int index, const std::string& good) -> std::optional<FakeAction> {
+          if (index != 60) return std::nullopt;
+          FakeAction a{{good}};
+          (graceful ? a.close : a.drop) = true;
+          return a;
+        }));
     LogCapture log;
     const auto run = lock_step(planner.url(), 60.0, log);
     EXPECT_THAT(run.report.ended_early, StartsWith("planner failed at t = "));
-    EXPECT_THAT(run.report.ended_early,
-                HasSubstr(graceful ? "the planner closed the connection" : "the planner dropped the connection"));
+    EXPECT_THAT(run.report.ended_early, HasSubstr(graceful ? "the planner closed the connection"
+                                                           : "the planner dropped the connection"));
     EXPECT_EQ(run.report.planner_cycles, 61);  // the reply that came with the close counts
     EXPECT_GT(run.report.duration_s, 0.0);
   }
@@ -120,9 +125,12 @@ TEST(ProtocolClient, CloseAndDropEndTheRunWithAMessage) {
 
 TEST(ProtocolClient, MalformedRepliesEndTheRunSayingWhat) {
   const std::vector<std::pair<std::string, std::string>> cases = {
-      {R"(42["control",{"next_x":[1,2],"next_y":[1,null]}])", "malformed reply: 'next_y'[1] is null, not a number"},
-      {R"(42["control",{"next_x":[1,2],"next_y":[1]}])", "malformed reply: 'next_y' has 1 points, fewer than the 2 of 'next_x'"},
-      {R"(42["control",{"next_x":[NaN],"next_y":[1]}])", "malformed reply: the event is not valid JSON"},
+      {R"(42["control",{"next_x":[1,2],"next_y":[1,null]}])",
+       "malformed reply: 'next_y'[1] is null, not a number"},
+      {R"(42["control",{"next_x":[1,2],"next_y":[1]}])",
+       "malformed reply: 'next_y' has 1 points, fewer than the 2 of 'next_x'"},
+      {R"(42["control",{"next_x":[NaN],"next_y":[1]}])",
+       "malformed reply: the event is not valid JSON"},
       {R"(42["control",{"next_y":[1]}])", "malformed reply: 'next_x' is missing"},
       {R"(42["steer",{}])", "malformed reply: unexpected event \"steer\""},
       {"hello", "malformed reply: not an Engine.IO packet"},
@@ -132,10 +140,11 @@ TEST(ProtocolClient, MalformedRepliesEndTheRunSayingWhat) {
   };
   for (const auto& [bad, message] : cases) {
     SCOPED_TRACE(bad);
-    FakePlanner planner(walkthrough_planner([&bad](int index, const std::string&) -> std::optional<FakeAction> {
-      if (index == 25) return FakeAction{{bad}};
-      return std::nullopt;
-    }));
+    FakePlanner planner(
+        walkthrough_planner([&bad](int index, const std::string&) -> std::optional<FakeAction> {
+          if (index == 25) return FakeAction{{bad}};
+          return std::nullopt;
+        }));
     LogCapture log;
     const auto run = lock_step(planner.url(), 60.0, log);
     EXPECT_THAT(run.report.ended_early, StartsWith("planner failed at t = "));
@@ -158,12 +167,13 @@ TEST(ProtocolClient, BinaryReplyIsMalformed) {
 // A planner that answers one telemetry twice: the extra reply is ignored with one warning and
 // the run goes on in step.
 TEST(ProtocolClient, ReplyingTwiceIsIgnoredWithALogLine) {
-  FakePlanner planner(walkthrough_planner([](int index, const std::string& good) -> std::optional<FakeAction> {
-    if (index != 40) return std::nullopt;
-    FakeAction a{{good, good}};
-    a.one_write = true;  // both frames together, as a planner writing twice in a row does
-    return a;
-  }));
+  FakePlanner planner(
+      walkthrough_planner([](int index, const std::string& good) -> std::optional<FakeAction> {
+        if (index != 40) return std::nullopt;
+        FakeAction a{{good, good}};
+        a.one_write = true;  // both frames together, as a planner writing twice in a row does
+        return a;
+      }));
   LogCapture log;
   const auto run = lock_step(planner.url(), 20.0, log);
   EXPECT_EQ(run.report.ended_early, "");
@@ -177,11 +187,12 @@ TEST(ProtocolClient, ReplyingTwiceIsIgnoredWithALogLine) {
 // Engine.IO chatter from a planner (a ping, a Socket.IO connect) is answered or ignored; a
 // manual reply to a full telemetry keeps the queued path.
 TEST(ProtocolClient, PlannerChatterAndManualRepliesDoNotEndTheRun) {
-  FakePlanner planner(walkthrough_planner([](int index, const std::string& good) -> std::optional<FakeAction> {
-    if (index == 0) return FakeAction{{"40", "2probe", good}};
-    if (index == 30) return FakeAction{{std::string(kManual)}};
-    return std::nullopt;
-  }));
+  FakePlanner planner(
+      walkthrough_planner([](int index, const std::string& good) -> std::optional<FakeAction> {
+        if (index == 0) return FakeAction{{"40", "2probe", good}};
+        if (index == 30) return FakeAction{{std::string(kManual)}};
+        return std::nullopt;
+      }));
   LogCapture log;
   const auto run = lock_step(planner.url(), 20.0, log);
   EXPECT_EQ(run.report.ended_early, "");
@@ -202,7 +213,8 @@ TEST(ProtocolClient, SendsTheOriginalsUpgradeRequestAndSpeaksFirst) {
   EXPECT_THAT(lower, HasSubstr("upgrade: websocket"));
   EXPECT_THAT(lower, HasSubstr("sec-websocket-version: 13"));
   EXPECT_THAT(lower, HasSubstr("host: 127.0.0.1:"));
-  for (const char* absent : {"user-agent", "origin", "cookie", "sec-websocket-protocol", "sec-websocket-extensions"}) {
+  for (const char* absent :
+       {"user-agent", "origin", "cookie", "sec-websocket-protocol", "sec-websocket-extensions"}) {
     EXPECT_THAT(lower, Not(HasSubstr(absent))) << req;
   }
   const auto got = planner.received();
@@ -249,13 +261,14 @@ TEST(ProtocolClient, RetriesUntilThePlannerIsUpAndGivesUpAfterTheTimeout) {
 }
 
 TEST(ProtocolClient, RejectsBadPlannerUrls) {
-  EXPECT_EQ(parse_planner_url("ws://127.0.0.1:4567").value().target, "/socket.io/?EIO=4&transport=websocket");
+  EXPECT_EQ(parse_planner_url("ws://127.0.0.1:4567").value().target,
+            "/socket.io/?EIO=4&transport=websocket");
   EXPECT_EQ(parse_planner_url("ws://localhost").value().port, "4567");
   EXPECT_EQ(parse_planner_url("ws://[::1]:80/x?y").value().host, "::1");
   EXPECT_EQ(parse_planner_url("ws://h:1?EIO=4").value().target, "/?EIO=4");
   EXPECT_EQ(to_string(parse_planner_url("ws://[::1]:80/x").value()), "ws://[::1]:80/x");
-  for (const char* bad : {"http://127.0.0.1:4567", "wss://127.0.0.1", "ws://", "ws://:80", "ws://h:0", "ws://h:70000",
-                          "ws://h:x/", "ws://[::1", "127.0.0.1:4567"}) {
+  for (const char* bad : {"http://127.0.0.1:4567", "wss://127.0.0.1", "ws://", "ws://:80",
+                          "ws://h:0", "ws://h:70000", "ws://h:x/", "ws://[::1", "127.0.0.1:4567"}) {
     EXPECT_FALSE(parse_planner_url(bad).ok()) << bad;
   }
   EXPECT_EQ(run_cli({"sim", "--planner", "http://127.0.0.1:1", "--quiet"}), app::kExitUsage);
@@ -286,7 +299,8 @@ TEST(ProtocolOriginalConvention, OldStylePlannerRecognisesNullTelemetryInRealTim
       return FakeAction{{original_planner_answer(m, stats)}};
     });
     const auto track = default_track();
-    sim::World world(track->map, track->line, app::default_config().world, sim::TrafficProfile::faithful, 3);
+    sim::World world(track->map, track->line, app::default_config().world,
+                     sim::TrafficProfile::faithful, 3);
     LogCapture log;
     const ClientOptions o = quick_client(&log);
     PlannerConnection c(parse_planner_url(planner.url()).value(), o);
@@ -310,12 +324,14 @@ TEST(ProtocolOriginalConvention, OldStylePlannerRecognisesNullTelemetryInRealTim
 }
 
 TEST(ProtocolClient, RealTimeStallEndsTheRunWhileTheWorldKeepsStepping) {
-  FakePlanner planner(walkthrough_planner([](int index, const std::string&) -> std::optional<FakeAction> {
-    if (index >= 10) return FakeAction{};
-    return std::nullopt;
-  }));
+  FakePlanner planner(
+      walkthrough_planner([](int index, const std::string&) -> std::optional<FakeAction> {
+        if (index >= 10) return FakeAction{};
+        return std::nullopt;
+      }));
   const auto track = default_track();
-  sim::World world(track->map, track->line, app::default_config().world, sim::TrafficProfile::faithful, 3);
+  sim::World world(track->map, track->line, app::default_config().world,
+                   sim::TrafficProfile::faithful, 3);
   LogCapture log;
   ClientOptions o = quick_client(&log);
   o.reply_timeout = 300ms;

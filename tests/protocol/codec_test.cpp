@@ -148,11 +148,12 @@ TEST(ProtocolTelemetry, KnownStateExactBytesWithExponents) {
   t.end_path = {0.1, 1e7};
   t.cars.push_back({11, {775.99, 1132.11}, {1e-5, -3.5e-6}, 85.3, 2.012});
   t.cars.push_back({3, {-0.0, 0.0}, {0.0, 0.0}, 0.0, 10.0});
-  EXPECT_EQ(format_telemetry(t),
-            R"(42["telemetry",{"x":1000.5,"y":-20.25,"yaw":90,"speed":49.5,"s":6945.554,"d":1E-05,)"
-            R"("previous_path_x":[909.4825,1.234568E+07],"previous_path_y":[1128.67,0.0001234568],)"
-            R"("end_path_s":0.1,"end_path_d":1E+07,)"
-            R"("sensor_fusion":[[11,775.99,1132.11,1E-05,-3.5E-06,85.3,2.012],[3,0,0,0,0,0,10]]}])");
+  EXPECT_EQ(
+      format_telemetry(t),
+      R"(42["telemetry",{"x":1000.5,"y":-20.25,"yaw":90,"speed":49.5,"s":6945.554,"d":1E-05,)"
+      R"("previous_path_x":[909.4825,1.234568E+07],"previous_path_y":[1128.67,0.0001234568],)"
+      R"("end_path_s":0.1,"end_path_d":1E+07,)"
+      R"("sensor_fusion":[[11,775.99,1132.11,1E-05,-3.5E-06,85.3,2.012],[3,0,0,0,0,0,10]]}])");
 }
 
 TEST(ProtocolTelemetry, NullForm) {
@@ -187,11 +188,16 @@ TEST(ProtocolTelemetry, FormatThenParseIsWireRounding) {
   std::uniform_real_distribution<double> speed(0.0, 30.0);
   for (int i = 0; i < 2000; ++i) {
     core::Telemetry t;
-    t.ego = {{coord(rng), coord(rng)}, yaw(rng), speed(rng), coord(rng) + 5000.0, coord(rng) / 500.0};
+    t.ego = {
+        {coord(rng), coord(rng)}, yaw(rng), speed(rng), coord(rng) + 5000.0, coord(rng) / 500.0};
     for (int k = 0; k < i % 60; ++k) t.previous_path.push_back({coord(rng), coord(rng)});
     t.end_path = {coord(rng), coord(rng) / 500.0};
     for (int c = 0; c < 12; ++c) {
-      t.cars.push_back({c, {coord(rng), coord(rng)}, {speed(rng), speed(rng) - 15.0}, coord(rng), coord(rng) / 500.0});
+      t.cars.push_back({c,
+                        {coord(rng), coord(rng)},
+                        {speed(rng), speed(rng) - 15.0},
+                        coord(rng),
+                        coord(rng) / 500.0});
     }
     const auto r = parse_telemetry(format_telemetry(t));
     ASSERT_TRUE(r.ok()) << r.error();
@@ -202,8 +208,10 @@ TEST(ProtocolTelemetry, FormatThenParseIsWireRounding) {
 std::string recorded_with(std::string_view from, std::string_view to) {
   std::string s(kRecordedTelemetry);
   const auto at = s.find(from);
-  if (at == std::string::npos) ADD_FAILURE() << "not in the recorded message: " << from;
-  else s.replace(at, from.size(), to);
+  if (at == std::string::npos)
+    ADD_FAILURE() << "not in the recorded message: " << from;
+  else
+    s.replace(at, from.size(), to);
   return s;
 }
 
@@ -217,21 +225,28 @@ TEST(ProtocolTelemetry, RejectsBadMessagesWithAReason) {
       {R"(42["telemetry",{}])", "'x' is missing"},
       {recorded_with(R"("x":909.48)", R"("x":"NaN")"), "'x' is a string (\"NaN\"), not a number"},
       {recorded_with(R"("x":909.48)", R"("x":null)"), "'x' is null, not a number"},
-      {recorded_with(R"("x":909.48)", R"("x":NaN)"), "not valid JSON (column 21: syntax error while parsing value - invalid literal)"},
+      {recorded_with(R"("x":909.48)", R"("x":NaN)"),
+       "not valid JSON (column 21: syntax error while parsing value - invalid literal)"},
       {recorded_with(R"("speed":0)", R"("speed":Infinity)"), "not valid JSON"},
-      {recorded_with(R"("speed":0)", R"("speed":1e999)"), "not valid JSON (number overflow parsing '1e999')"},
+      {recorded_with(R"("speed":0)", R"("speed":1e999)"),
+       "not valid JSON (number overflow parsing '1e999')"},
       {recorded_with(R"("s":124.8336)", R"("s":1e30)"), "'s' is out of range"},
       {recorded_with(R"("yaw":0)", R"("yaw":true)"), "'yaw' is a boolean"},
       {recorded_with(R"("d":6.164833,)", ""), "'d' is missing"},
       {recorded_with(R"("previous_path_x":[])", R"("previous_path_x":[1])"),
        "'previous_path_x' has 1 points but 'previous_path_y' has 0"},
-      {recorded_with(R"("previous_path_x":[])", R"("previous_path_x":5)"), "'previous_path_x' is a number, not an array"},
-      {recorded_with(R"("previous_path_x":[],"previous_path_y":[])", R"("previous_path_x":[1,null],"previous_path_y":[1,2])"),
+      {recorded_with(R"("previous_path_x":[])", R"("previous_path_x":5)"),
+       "'previous_path_x' is a number, not an array"},
+      {recorded_with(R"("previous_path_x":[],"previous_path_y":[])",
+                     R"("previous_path_x":[1,null],"previous_path_y":[1,2])"),
        "'previous_path_x'[1] is null"},
-      {recorded_with(R"("previous_path_x":[],"previous_path_y":[])", many_points), "more than the limit of 10000"},
-      {recorded_with(R"([0,775.99,1132.11,22.1,-0.3651,85.3,2.012])", R"([0,775.99,1132.11,22.1,-0.3651,85.3])"),
+      {recorded_with(R"("previous_path_x":[],"previous_path_y":[])", many_points),
+       "more than the limit of 10000"},
+      {recorded_with(R"([0,775.99,1132.11,22.1,-0.3651,85.3,2.012])",
+                     R"([0,775.99,1132.11,22.1,-0.3651,85.3])"),
        "'sensor_fusion'[0] has 6 values, expected 7"},
-      {recorded_with(R"([0,775.99,1132.11,22.1,-0.3651,85.3,2.012])", R"({"id":0})"), "'sensor_fusion'[0] is an object"},
+      {recorded_with(R"([0,775.99,1132.11,22.1,-0.3651,85.3,2.012])", R"({"id":0})"),
+       "'sensor_fusion'[0] is an object"},
       {recorded_with(R"([0,775.99,)", R"([0.5,775.99,)"), "the id is not an integer"},
       {recorded_with(R"(22.1,)", R"("22.1",)"), "'sensor_fusion'[0][3] is a string"},
       {R"(42["telemetry",[1,2]])", "payload is an array, not an object"},
@@ -254,8 +269,10 @@ TEST(ProtocolTelemetry, RejectsBadMessagesWithAReason) {
 
 TEST(ProtocolTelemetry, ToleratesKeyOrderExtraKeysAndWhitespace) {
   const auto r = parse_telemetry(
-      "42[ \"telemetry\" , { \"sensor_fusion\" : [ ] , \"d\" : 6, \"s\" : 1, \"speed\" : 0, \"yaw\" : 0, "
-      "\"y\" : 2, \"x\" : 1, \"previous_path_y\" : [], \"previous_path_x\" : [], \"end_path_d\" : 0, "
+      "42[ \"telemetry\" , { \"sensor_fusion\" : [ ] , \"d\" : 6, \"s\" : 1, \"speed\" : 0, "
+      "\"yaw\" : 0, "
+      "\"y\" : 2, \"x\" : 1, \"previous_path_y\" : [], \"previous_path_x\" : [], \"end_path_d\" : "
+      "0, "
       "\"end_path_s\" : 0, \"extra\" : {\"nested\": [1, 2]} } ]");
   ASSERT_TRUE(r.ok()) << r.error();
   EXPECT_EQ(r.value()->ego.position, (core::Vec2{1.0, 2.0}));
@@ -266,17 +283,23 @@ TEST(ProtocolTelemetry, ToleratesKeyOrderExtraKeysAndWhitespace) {
 TEST(ProtocolControl, RoundTripsDoublesExactly) {
   std::mt19937_64 rng(3);
   std::uniform_real_distribution<double> coord(-1e6, 1e6);
-  std::vector<core::Vec2> path = {{909.48250105225, 1128.6700001}, {-0.0, 0.0}, {1e-300, -2.5e-310}};
+  std::vector<core::Vec2> path = {
+      {909.48250105225, 1128.6700001}, {-0.0, 0.0}, {1e-300, -2.5e-310}};
   for (int i = 0; i < 500; ++i) path.push_back({coord(rng), coord(rng)});
   const std::string text = format_control(path);
-  EXPECT_EQ(text.rfind(R"(42["control",{"next_x":[909.48250105225,-0.0,1e-300,)", 0), 0u) << text.substr(0, 80);
+  EXPECT_EQ(text.rfind(R"(42["control",{"next_x":[909.48250105225,-0.0,1e-300,)", 0), 0u)
+      << text.substr(0, 80);
   const auto r = parse_reply(text);
   ASSERT_TRUE(r.ok()) << r.error();
   ASSERT_FALSE(r.value().manual);
   ASSERT_EQ(r.value().path.size(), path.size());
   for (std::size_t i = 0; i < path.size(); ++i) {
-    EXPECT_EQ(std::bit_cast<std::uint64_t>(r.value().path[i].x), std::bit_cast<std::uint64_t>(path[i].x)) << i;
-    EXPECT_EQ(std::bit_cast<std::uint64_t>(r.value().path[i].y), std::bit_cast<std::uint64_t>(path[i].y)) << i;
+    EXPECT_EQ(std::bit_cast<std::uint64_t>(r.value().path[i].x),
+              std::bit_cast<std::uint64_t>(path[i].x))
+        << i;
+    EXPECT_EQ(std::bit_cast<std::uint64_t>(r.value().path[i].y),
+              std::bit_cast<std::uint64_t>(path[i].y))
+        << i;
   }
   EXPECT_EQ(format_control({}), R"(42["control",{"next_x":[],"next_y":[]}])");
 }
@@ -304,7 +327,8 @@ TEST(ProtocolControl, RejectsBadRepliesWithAReason) {
     return R"(42["control",{"next_x":[)" + xs + R"(],"next_y":[)" + xs + "]}]";
   }();
   const std::vector<std::pair<std::string, std::string>> cases = {
-      {R"(42["control",{"next_x":[1,2,3],"next_y":[1,2]}])", "'next_y' has 2 points, fewer than the 3 of 'next_x'"},
+      {R"(42["control",{"next_x":[1,2,3],"next_y":[1,2]}])",
+       "'next_y' has 2 points, fewer than the 3 of 'next_x'"},
       {R"(42["control",{"next_y":[1]}])", "'next_x' is missing"},
       {R"(42["control",{"next_x":[1]}])", "'next_y' is missing"},
       {R"(42["control",{"next_x":[1,null],"next_y":[1,2]}])", "'next_x'[1] is null, not a number"},
@@ -357,7 +381,8 @@ TEST(ProtocolFraming, PacketsAndEventNames) {
 // numbers as our parser; the null form is recognised as empty.
 TEST(ProtocolOriginalConvention, OurTelemetrySurvivesTheOldHelper) {
   const auto track = testing::default_track();
-  sim::World world(track->map, track->line, app::default_config().world, sim::TrafficProfile::faithful, 5);
+  sim::World world(track->map, track->line, app::default_config().world,
+                   sim::TrafficProfile::faithful, 5);
   testing::OriginalPlannerStats stats;
   for (int cycle = 0; cycle < 1500; ++cycle) {
     const std::string text = format_telemetry(world.telemetry());

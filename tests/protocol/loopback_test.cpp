@@ -36,11 +36,12 @@ json in_process(const app::DriveOptions& o) {
   return without_timing(app::report_to_json(r.report, r.provenance));
 }
 
-json over_the_wire(const ServerFixture& server, const std::vector<std::string>& extra) {
+json over_the_wire(const ServerFixture& server, const std::string& policy,
+                   const std::vector<std::string>& extra) {
   const auto path = std::filesystem::temp_directory_path() /
                     ("overtake-loopback-" + std::to_string(::getpid()) + ".json");
-  std::vector<std::string> args = {"sim", "--planner", server.url(), "--name", "walkthrough", "--json",
-                                   path.string(), "--quiet"};
+  std::vector<std::string> args = {"sim",  "--planner", server.url(),  "--name",
+                                   policy, "--json",    path.string(), "--quiet"};
   args.insert(args.end(), extra.begin(), extra.end());
   EXPECT_EQ(run_cli(args), app::kExitOk);
   json j = json::parse(app::read_file(path));
@@ -49,36 +50,42 @@ json over_the_wire(const ServerFixture& server, const std::vector<std::string>& 
 }
 
 TEST(ProtocolLoopback, LockStepOverTheWireEqualsInProcessDrive) {
-  ServerFixture server;
   struct Variant {
+    std::string policy;
     std::string traffic;
     std::uint64_t seed;
     int steps_per_call;
   };
-  for (const Variant& v : {Variant{"faithful", 7, 0}, Variant{"calm", 7, 0}, Variant{"faithful", 11, 2}}) {
-    SCOPED_TRACE(v.traffic + " seed " + std::to_string(v.seed) + " steps " + std::to_string(v.steps_per_call));
+  for (const Variant& v :
+       {Variant{"walkthrough", "faithful", 7, 0}, Variant{"walkthrough", "calm", 7, 0},
+        Variant{"walkthrough", "faithful", 11, 2}, Variant{"seed001", "faithful", 5, 0}}) {
+    SCOPED_TRACE(v.policy + ", " + v.traffic + " seed " + std::to_string(v.seed) + " steps " +
+                 std::to_string(v.steps_per_call));
+    ServerFixture server(v.policy);
     app::DriveOptions o;
+    o.policy = v.policy;
     o.minutes = 2.0;
     o.seed = v.seed;
     o.traffic = v.traffic;
     o.steps_per_call = v.steps_per_call;
     const json expected = in_process(o);
-    std::vector<std::string> extra = {"--minutes", "2", "--seed", std::to_string(v.seed), "--traffic", v.traffic};
+    std::vector<std::string> extra = {"--minutes", "2",      "--seed", std::to_string(v.seed),
+                                      "--traffic", v.traffic};
     if (v.steps_per_call > 0) {
       extra.push_back("--steps-per-call");
       extra.push_back(std::to_string(v.steps_per_call));
     }
-    const json got = over_the_wire(server, extra);
+    const json got = over_the_wire(server, v.policy, extra);
     EXPECT_EQ(got.dump(), expected.dump());
     EXPECT_GT(got["planner_cycles"].get<long>(), 1000);
     EXPECT_TRUE(got["ended_early"].is_null());
+    EXPECT_EQ(server.log().warnings(), 0u) << server.log().dump();
   }
-  EXPECT_EQ(server.log().warnings(), 0u) << server.log().dump();
 }
 
 TEST(ProtocolLoopback, RealTimeAgainstOurServer) {
   ServerFixture server;
-  const json got = over_the_wire(server, {"--minutes", "0.02", "--realtime"});
+  const json got = over_the_wire(server, "walkthrough", {"--minutes", "0.02", "--realtime"});
   EXPECT_TRUE(got["ended_early"].is_null());
   EXPECT_DOUBLE_EQ(got["duration_s"].get<double>(), 1.2);
   EXPECT_GT(got["planner_cycles"].get<long>(), 20);

@@ -25,9 +25,9 @@ inline std::string cut_json(std::string_view message) {
 
 /// What the tiny planner made of the messages it got.
 struct OriginalPlannerStats {
-  int full = 0;         ///< telemetry parsed and used
-  int empty = 0;        ///< recognised as empty ("null"), answered manual
-  int unreadable = 0;   ///< anything that made it stumble (must stay 0)
+  int full = 0;        ///< telemetry parsed and used
+  int empty = 0;       ///< recognised as empty ("null"), answered manual
+  int unreadable = 0;  ///< anything that made it stumble (must stay 0)
 };
 
 /// Answers one message the way such a planner does: for a full telemetry, its previous path
@@ -64,7 +64,8 @@ inline std::string original_planner_answer(std::string_view message, OriginalPla
     double x = px.empty() ? car_x : px.back();
     double y = py.empty() ? car_y : py.back();
     double yaw = car_yaw;
-    if (px.size() >= 2) yaw = std::atan2(py.back() - py[py.size() - 2], px.back() - px[px.size() - 2]);
+    if (px.size() >= 2)
+      yaw = std::atan2(py.back() - py[py.size() - 2], px.back() - px[px.size() - 2]);
     while (px.size() < 50) {
       x += 0.4 * std::cos(yaw);
       y += 0.4 * std::sin(yaw);

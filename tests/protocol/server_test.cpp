@@ -48,9 +48,11 @@ std::vector<Case> bad_inputs() {
   const std::string points_100k = repeated("1", 100'000);
   const std::string points_10k = repeated("909.5", 10'000);
   const std::string rows_1001 = repeated("[0,1,2,3,4,5,6]", 1001);
-  std::string big_telemetry = R"(42["telemetry",{"x":1,"pad":")" + std::string(kTwoMiB, 'a') + R"("}])";
+  std::string big_telemetry =
+      R"(42["telemetry",{"x":1,"pad":")" + std::string(kTwoMiB, 'a') + R"("}])";
   std::string deep_open = R"(42["telemetry",)" + std::string(100'000, '[');
-  std::string deep_closed = R"(42["telemetry",)" + std::string(50'000, '[') + std::string(50'000, ']') + "]";
+  std::string deep_closed =
+      R"(42["telemetry",)" + std::string(50'000, '[') + std::string(50'000, ']') + "]";
   return {
       // Telemetry that cannot be used: one warning, manual (the simulator waits for it).
       {"missing every key", R"(42["telemetry",{}])", false, {manual}},
@@ -62,19 +64,35 @@ std::vector<Case> bad_inputs() {
       {"absurd magnitude", with(t, R"("s":124.8336)", R"("s":1e30)"), false, {manual}},
       {"boolean for a number", with(t, R"("yaw":0)", R"("yaw":true)"), false, {manual}},
       {"missing d", with(t, R"("d":6.164833,)", ""), false, {manual}},
-      {"previous_path_x longer than _y", with(t, R"("previous_path_x":[])", R"("previous_path_x":[1,2])"), false, {manual}},
-      {"previous_path_x not an array", with(t, R"("previous_path_x":[])", R"("previous_path_x":"[]")"), false, {manual}},
+      {"previous_path_x longer than _y",
+       with(t, R"("previous_path_x":[])", R"("previous_path_x":[1,2])"),
+       false,
+       {manual}},
+      {"previous_path_x not an array",
+       with(t, R"("previous_path_x":[])", R"("previous_path_x":"[]")"),
+       false,
+       {manual}},
       {"null inside the previous path",
-       with(t, R"("previous_path_x":[],"previous_path_y":[])", R"("previous_path_x":[1,null],"previous_path_y":[1,2])"),
-       false, {manual}},
-      {"100,000-point previous path",
        with(t, R"("previous_path_x":[],"previous_path_y":[])",
-            R"("previous_path_x":[)" + points_100k + R"(],"previous_path_y":[)" + points_100k + "]"),
-       false, {manual}},
+            R"("previous_path_x":[1,null],"previous_path_y":[1,2])"),
+       false,
+       {manual}},
+      {"100,000-point previous path",
+       with(
+           t, R"("previous_path_x":[],"previous_path_y":[])",
+           R"("previous_path_x":[)" + points_100k + R"(],"previous_path_y":[)" + points_100k + "]"),
+       false,
+       {manual}},
       {"sensor row of 6 values", with(t, R"(85.3,2.012])", R"(85.3])"), false, {manual}},
-      {"sensor row as an object", with(t, R"([0,775.99,1132.11,22.1,-0.3651,85.3,2.012])", R"({"id":0})"), false, {manual}},
+      {"sensor row as an object",
+       with(t, R"([0,775.99,1132.11,22.1,-0.3651,85.3,2.012])", R"({"id":0})"),
+       false,
+       {manual}},
       {"fractional car id", with(t, R"([0,775.99)", R"([1.5,775.99)"), false, {manual}},
-      {"1001 sensor rows", with(t, R"([[0,775.99,1132.11,22.1,-0.3651,85.3,2.012]])", "[" + rows_1001 + "]"), false, {manual}},
+      {"1001 sensor rows",
+       with(t, R"([[0,775.99,1132.11,22.1,-0.3651,85.3,2.012]])", "[" + rows_1001 + "]"),
+       false,
+       {manual}},
       {"payload is an array", R"(42["telemetry",[1,2]])", false, {manual}},
       {"payload is a string", R"(42["telemetry","hello"])", false, {manual}},
       {"truncated telemetry", t.substr(0, 60), false, {manual}},
@@ -110,19 +128,27 @@ std::vector<Case> bad_inputs() {
       {"empty telemetry (null form)", std::string(kNullTelemetry), false, {manual}, 0},
       // Unusual but valid telemetry: the planner answers.
       {"keys reordered, extra keys, whitespace",
-       "42[ \"telemetry\" , { \"sensor_fusion\" : [ ] , \"d\" : 6, \"s\" : 125, \"speed\" : 0, \"yaw\" : 0, "
-       "\"y\" : 1128.67, \"x\" : 909.48, \"previous_path_y\" : [], \"previous_path_x\" : [], \"end_path_d\" : 0, "
+       "42[ \"telemetry\" , { \"sensor_fusion\" : [ ] , \"d\" : 6, \"s\" : 125, \"speed\" : 0, "
+       "\"yaw\" : 0, "
+       "\"y\" : 1128.67, \"x\" : 909.48, \"previous_path_y\" : [], \"previous_path_x\" : [], "
+       "\"end_path_d\" : 0, "
        "\"end_path_s\" : 0, \"extra\" : {\"nested\": [1, 2]} } ]",
-       false, {"control"}, 0},
+       false,
+       {"control"},
+       0},
       {"previous path at the 10,000-point limit",
        with(t, R"("previous_path_x":[],"previous_path_y":[])",
             R"("previous_path_x":[)" + points_10k + R"(],"previous_path_y":[)" + points_10k + "]"),
-       false, {"control"}, 0},
+       false,
+       {"control"},
+       0},
       {"absurd but finite values",
        R"(42["telemetry",{"x":-9900000,"y":9900000,"yaw":9999999,"speed":9999999,"s":-9999999,"d":9999999,)"
        R"("previous_path_x":[9999999],"previous_path_y":[-9999999],"end_path_s":9999999,"end_path_d":-9999999,)"
        R"("sensor_fusion":[[0,9999999,-9999999,9999999,9999999,-9999999,9999999]]}])",
-       false, {"control|manual"}, -1},
+       false,
+       {"control|manual"},
+       -1},
   };
 }
 
@@ -163,7 +189,8 @@ TEST(ProtocolServer, AnswersEachBadInputAsDocumentedAndStaysUp) {
     const auto got = replies_until_control(c, k.replies.size());
     ASSERT_EQ(got.size(), k.replies.size() + 1) << server.log().dump();
     for (std::size_t i = 0; i < k.replies.size(); ++i) {
-      EXPECT_TRUE(matches(got[i], k.replies[i])) << "got " << excerpt(got[i]) << ", want " << k.replies[i];
+      EXPECT_TRUE(matches(got[i], k.replies[i]))
+          << "got " << excerpt(got[i]) << ", want " << k.replies[i];
     }
     EXPECT_THAT(got.back(), StartsWith(kControlStart));
     if (k.warnings >= 0) {
@@ -219,10 +246,11 @@ TEST(ProtocolServer, WebsocketViolationsCloseThatConnectionOnly) {
   ServerFixture server("walkthrough", [](ServeOptions& o) { o.handshake_timeout = 300ms; });
   const std::string valid = start_telemetry();
   const std::vector<RawCase> cases = {
-      {"TLS hello instead of HTTP", [](RawClient& r) { r.write(std::string("\x16\x03\x01\x02\x00\x01\x00", 7)); },
+      {"TLS hello instead of HTTP",
+       [](RawClient& r) { r.write(std::string("\x16\x03\x01\x02\x00\x01\x00", 7)); },
        "no websocket upgrade"},
-      {"HTTP request without upgrade", [](RawClient& r) { r.write("GET / HTTP/1.1\r\nHost: x\r\n\r\n"); },
-       "no websocket upgrade"},
+      {"HTTP request without upgrade",
+       [](RawClient& r) { r.write("GET / HTTP/1.1\r\nHost: x\r\n\r\n"); }, "no websocket upgrade"},
       {"silence instead of a handshake", [](RawClient&) {}, "no websocket upgrade"},
       {"unmasked client frame",
        [&](RawClient& r) {
@@ -304,7 +332,8 @@ TEST(ProtocolServer, WebsocketViolationsCloseThatConnectionOnly) {
     }
     EXPECT_EQ(about, 1u) << server.log().dump();
     std::size_t warnings = 0;
-    for (const auto& line : server.log().lines(LogLevel::warning)) warnings += line.find(who) != std::string::npos;
+    for (const auto& line : server.log().lines(LogLevel::warning))
+      warnings += line.find(who) != std::string::npos;
     EXPECT_EQ(warnings, k.warning ? 1u : 0u) << server.log().dump();
     expect_server_answers(server);
   }
@@ -315,7 +344,8 @@ TEST(ProtocolServer, UpgradeResponseCarriesNoSubprotocolOrExtension) {
   RawClient raw(server.port());
   // Offer both; the original simulator rejects a 101 that accepts either.
   const std::string head = raw.upgrade(
-      "Sec-WebSocket-Protocol: chat\r\nSec-WebSocket-Extensions: permessage-deflate; client_max_window_bits\r\n");
+      "Sec-WebSocket-Protocol: chat\r\nSec-WebSocket-Extensions: permessage-deflate; "
+      "client_max_window_bits\r\n");
   EXPECT_THAT(head, StartsWith("HTTP/1.1 101"));
   std::string lower = head;
   for (char& ch : lower) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
@@ -359,7 +389,8 @@ TEST(ProtocolServer, EachConnectionHasItsOwnPlanner) {
   PlannerConnection a(server.planner_url(), quick_client());
   std::vector<std::string> a_replies;
   for (int i = 0; i < 10; ++i) a_replies.push_back(round_trip(a));
-  EXPECT_NE(a_replies.front(), a_replies.back()) << "the walkthrough ramps its speed cycle by cycle";
+  EXPECT_NE(a_replies.front(), a_replies.back())
+      << "the walkthrough ramps its speed cycle by cycle";
   PlannerConnection b(server.planner_url(), quick_client());
   for (int i = 0; i < 10; ++i) {
     EXPECT_EQ(round_trip(b), a_replies[static_cast<std::size_t>(i)]) << i;
@@ -385,7 +416,8 @@ TEST(ProtocolServer, StatusLineOnceASecondAndListensOnLoopbackByDefault) {
   }
   EXPECT_TRUE(log_has(server, "status: 1 connection, ")) << server.log().dump();
   const auto lines = server.log().lines();
-  const auto status = std::find_if(lines.begin(), lines.end(), [](const std::string& l) { return l.starts_with("status:"); });
+  const auto status = std::find_if(lines.begin(), lines.end(),
+                                   [](const std::string& l) { return l.starts_with("status:"); });
   ASSERT_NE(status, lines.end());
   EXPECT_THAT(*status, HasSubstr("cycles/s"));
   EXPECT_THAT(*status, HasSubstr("mph, lane 1, planner median"));

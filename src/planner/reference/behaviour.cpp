@@ -99,14 +99,16 @@ std::vector<LaneView> assess_lanes(const std::vector<CarPrediction>& cars, const
       v.rear_threat = fast * near;
     }
     if (std::abs(l - cur) == 1) {
-      const bool front_ok =
-          v.leader < 0 ||
-          v.leader_gap_m >= std::max(p.min_gap_m, p.change_front_factor *
-                                                       rss_front_gap(ego.speed_mps, v.leader_speed_mps, p));
+      const double rss = v.leader < 0 ? 0.0 : rss_front_gap(ego.speed_mps, v.leader_speed_mps, p);
+      const auto front_ok = [&](double factor) {
+        return v.leader < 0 || v.leader_gap_m >= std::max(p.min_gap_m, factor * rss);
+      };
       const bool rear_ok =
           v.follower < 0 || rear_room(v.follower_gap_m + car_length_m,
                                       v.follower_speed_mps - ego.speed_mps, car_length_m, p) >= 0.0;
-      v.enterable = !v.alongside && front_ok && rear_ok && ego.speed_mps >= p.min_change_speed_mps;
+      const bool can = !v.alongside && rear_ok && ego.speed_mps >= p.min_change_speed_mps;
+      v.enterable = can && front_ok(p.change_front_factor);
+      v.passable = can && front_ok(p.transit_front_factor);
     }
     v.cost = p.speed_weight * (cruise - v.expected_speed_mps) / cruise +
              p.change_cost * std::abs(l - cur) + p.rear_threat_weight * v.rear_threat;
@@ -168,7 +170,7 @@ BehaviourDecision decide(const std::vector<CarPrediction>& cars, const EgoSnapsh
     for (int l = 0; l < road.lane_count; ++l) {
       if (l == cur) continue;
       const int step = cur + (l > cur ? 1 : -1);
-      if (!lane(step).enterable) continue;
+      if (step == l ? !lane(step).enterable : !lane(step).passable) continue;
       if (lane(l).cost < best_cost) {
         best = l;
         best_cost = lane(l).cost;

@@ -120,6 +120,12 @@ BrakingProfile::BrakingProfile(double x0, double v0, double a0, double brake, do
   start_[3] = t;
 }
 
+double BrakingProfile::jerk_cost() const {
+  double cost = 0.0;
+  for (std::size_t i = 0; i < 3; ++i) cost += states_[i].j * states_[i].j * (start_[i + 1] - start_[i]);
+  return cost;
+}
+
 Motion1d BrakingProfile::at(double t) const {
   if (t < 0.0) return advance(states_[0], t);
   int i = 3;

@@ -34,17 +34,16 @@ double min_jerk_progress(double fraction) {
 }
 
 double CarPrediction::s_at(double t) const {
-  if (!(s_ddot < 0.0) || t <= 0.0) return s_m + s_dot * t;
+  if (s_ddot == 0.0 || t <= 0.0) return s_m + s_dot * t;
   // Braking for brake_time_s, then steady; the speed never goes below zero.
   const double tb = std::min(t, brake_time_s);
-  const double t_stop = s_dot / -s_ddot;
+  const double t_stop = s_ddot < 0.0 ? s_dot / -s_ddot : tb + 1.0;
   if (t_stop <= tb) return s_m + 0.5 * s_dot * t_stop;
   const double v = s_dot + s_ddot * tb;
   return s_m + s_dot * tb + 0.5 * s_ddot * tb * tb + v * (t - tb);
 }
 
 double CarPrediction::s_dot_at(double t) const {
-  if (s_ddot >= 0.0) return s_dot;
   return std::max(0.0, s_dot + s_ddot * std::clamp(t, 0.0, brake_time_s));
 }
 
@@ -62,7 +61,7 @@ double CarPrediction::d_dot_at(double t) const {
 
 CarPrediction predict_car(int id, double s_m, double s_dot, double s_ddot, double speed_mps,
                           double d_m, double d_dot_mps, const ReferencePredictionParams& params,
-                          const core::RoadParams& road) {
+                          const core::RoadParams& road, bool speeding_up) {
   CarPrediction c;
   c.id = id;
   c.s_m = s_m;
@@ -74,6 +73,10 @@ CarPrediction predict_car(int id, double s_m, double s_dot, double s_ddot, doubl
   c.target_lane = c.lane;
   c.change_duration_s = params.lane_change_duration_s;
   if (s_ddot < -params.braking_threshold_mps2) {
+    c.s_ddot = s_ddot;
+    c.brake_time_s = params.braking_horizon_s;
+  }
+  if (speeding_up && s_ddot > params.braking_threshold_mps2) {
     c.s_ddot = s_ddot;
     c.brake_time_s = params.braking_horizon_s;
   }
@@ -138,8 +141,10 @@ std::vector<CarPrediction> predict_cars(const core::Telemetry& telemetry,
     }
     next.push_back({car.id, x.s_m, x.s_dot, accel});
     const double s_unwrapped = ego_s_m + line.s_ahead(ego_s_m, x.s_m);
+    // Cars behind: a car speeding up is predicted to keep doing so for a while (it may be
+    // closing on the ego); ahead, only braking is extrapolated.
     out.push_back(predict_car(car.id, s_unwrapped, x.s_dot, accel, speed, x.d_m, x.d_dot_mps,
-                              params, road));
+                              params, road, s_unwrapped < ego_s_m));
   }
   tracks = std::move(next);
   return out;

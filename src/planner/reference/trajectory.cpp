@@ -4,8 +4,6 @@
 #include <cmath>
 #include <limits>
 #include <numeric>
-#include <cstdio>
-#include <cstdlib>
 
 #include "overtake/planner/reference/behaviour.hpp"
 
@@ -13,7 +11,6 @@ namespace overtake::planner::reference {
 namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
-const bool kDebug = std::getenv("REFDBG") != nullptr;  // TEMPORARY
 /// Samples before t = 0, so that the 0.1 s windows at the start see the start state's
 /// continuation.
 constexpr int kBack = 3;
@@ -23,14 +20,22 @@ constexpr double kMinHeadingSpeedMps = 3.0;
 constexpr double kHoldLateralM = 0.02;
 /// Cars farther than this along the road are not considered.
 constexpr double kRelevantM = 200.0;
-/// A tiny negative speed counts as standing.
-constexpr double kReverseTolerance = -0.05;
+/// The ego never reverses: a planned ds/dt below this is refused.
+constexpr double kReverseTolerance = -1e-4;
+/// A gentle stop (to standstill behind a stopped car, or at a crawl): its braking and jerk.
+constexpr double kGentleStopMps2 = 2.0;
+constexpr double kGentleStopJerkMps3 = 2.5;
 /// The early window of a lane change, in which the ego is still in its first lane.
 constexpr double kEarlyWindowS = 2.0;
 /// Spacing of the samples that find a lane's largest along-road scale ahead.
 constexpr double kScaleSampleM = 10.0;
 /// Lane changes costed as this many seconds of lateral time at least.
 constexpr double kRearRoomScaleM = 3.0;
+/// Off its lane's centre by more than this, the ego counts as moving across lanes.
+constexpr double kSidewaysM = 0.5;
+/// Cost of a lateral motion that stays on a lane line too long (an incident, but better than
+/// a collision).
+constexpr double kLingerCost = 1e4;
 /// Longest a collision-failed candidate list is searched for a least-bad one.
 constexpr int kLeastBadChecks = 12;
 
@@ -122,15 +127,19 @@ std::vector<CarSamples> sample_cars(const std::vector<CarPrediction>& cars, doub
   return out;
 }
 
-/// The collision check over samples: `s`, `sv`, `d`, `dv` indexed k + kBack.
-CollisionReport collide(const Track1d& lon, const Track1d& lat, bool ego_changing, const Grid& g,
-                        const std::vector<CarSamples>& cars, double mps, const ReferenceParams& p) {
+/// The collision check over samples (indexed k + kBack). `ego_changing`: the ego moves into
+/// another lane; `sideways`: it is off its lane's centre or moving into another lane.
+CollisionReport collide(const Track1d& lon, const Track1d& lat, bool ego_changing, bool sideways,
+                        const Grid& g, const std::vector<CarSamples>& cars, double mps,
+                        const ReferenceParams& p) {
   const double length = p.car_length_m;
   const double lon_need = length + p.trajectory.lon_margin_m;
   const double lat_base = p.car_width_m + p.trajectory.lat_margin_m;
+  const double react_gap = p.behaviour.follower_reaction_gap_m;
   CollisionReport r;
   for (const CarSamples& c : cars) {
     bool seen = false;
+    bool follower = false;
     for (int k = 0; k <= g.n; ++k) {
       const auto e = static_cast<std::size_t>(k + kBack);
       const auto i = static_cast<std::size_t>(k);
@@ -138,10 +147,27 @@ CollisionReport collide(const Track1d& lon, const Track1d& lat, bool ego_changin
       const double vc = std::max(c.s_dot[i] * mps, kMinHeadingSpeedMps);
       const double lat_need =
           lat_base + 0.5 * length * (std::abs(lat.v[e]) / ve + std::abs(c.d_dot[i]) / vc);
-      if (std::abs(lat.x[e] - c.d[i]) >= lat_need) continue;
+      if (std::abs(lat.x[e] - c.d[i]) >= lat_need) {
+        if (follower) break;  // the ego has left its lane
+        continue;
+      }
       const double ahead = (c.s[i] - lon.x[e]) * mps;
-      if (k == 0 && ahead < 0.0) break;  // it follows the ego already: its business
       const double t = g.t(k);
+      if (k == 0 && ahead < 0.0) {
+        // It follows the ego already: its business, unless the ego is on its way across
+        // lanes and it closes too fast to stop once it reacts.
+        if (!sideways || -ahead <= react_gap) break;
+        follower = true;
+        continue;
+      }
+      if (follower) {
+        if (-ahead > react_gap) continue;
+        const double closing = (c.s_dot[i] - lon.v[e]) * mps;
+        if (rear_room(-ahead, closing, length, p.behaviour) < 0.0 && t < r.first_collision_s) {
+          r = {false, t, c.id};
+        }
+        break;
+      }
       if (std::abs(ahead) < lon_need) {
         if (t < r.first_collision_s) r = {false, t, c.id};
         break;
@@ -296,8 +322,10 @@ CollisionReport check_collisions(const Trajectory& t, const std::vector<CarPredi
   const Grid g = grid_of(p.trajectory);
   const Track1d lon = sample(g, [&](double x) { return t.longitudinal.at(x); });
   const Track1d lat = sample(g, [&](double x) { return t.lateral.at(x); });
-  const bool changing = core::lane_of(lat.x[kBack], road) != t.end_lane;
-  return collide(lon, lat, changing, g, sample_cars(cars, start_delay_s, lon.x[kBack], g), metres_per_s, p);
+  const double d0 = lat.x[kBack];
+  const bool changing = core::lane_of(d0, road) != t.end_lane;
+  const bool sideways = changing || std::abs(d0 - core::lane_center_d(core::lane_of(d0, road), road)) > kSidewaysM;
+  return collide(lon, lat, changing, sideways, g, sample_cars(cars, start_delay_s, lon.x[kBack], g), metres_per_s, p);
 }
 
 TrajectoryPlan plan_trajectory(const core::ReferenceLine& line, const TrajectoryRequest& req,
@@ -371,10 +399,10 @@ TrajectoryPlan plan_trajectory(const core::ReferenceLine& line, const Trajectory
     }
   }
 
-  // Lateral candidates: to the centre of each lane in play, none lingering on a lane line
-  // (when every one would, the ones that leave it soonest).
+  // Lateral candidates: to the centre of each lane in play; one that would linger on a lane
+  // line costs so much that it is driven only when nothing else is safe.
   std::vector<LatCandidate> lats;
-  std::vector<std::pair<double, LatCandidate>> lingering;
+  const bool off_centre = std::abs(x0.d_m - core::lane_center_d(start_lane, road)) > kSidewaysM;
   for (const int l : lanes) {
     const double target = core::lane_center_d(l, road);
     const double dist = std::abs(target - x0.d_m);
@@ -390,27 +418,12 @@ TrajectoryPlan plan_trajectory(const core::ReferenceLine& line, const Trajectory
       c.cost = tp.lat_jerk_weight * c.poly.jerk_cost() + (hold ? 0.0 : tp.lat_time_weight * c.poly.duration_s) +
                tp.lane_weight * std::abs(l - req.target_lane);
       const double band = longest_band_time(c.samples, g, req.band_time_s, tp.line_band_m, road);
-      if (band > tp.max_band_time_s) {
-        lingering.emplace_back(band, std::move(c));
-      } else {
-        lats.push_back(std::move(c));
-      }
+      if (band > tp.max_band_time_s) c.cost += kLingerCost * (1.0 + band);
+      lats.push_back(std::move(c));
       if (hold) break;
     }
   }
-  if (lats.empty() && !lingering.empty()) {
-    std::sort(lingering.begin(), lingering.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
-    for (auto& [band, c] : lingering) {
-      if (band <= lingering.front().first + g.h) lats.push_back(std::move(c));
-    }
-  }
 
-  if (kDebug) {
-    for (const int l : lanes) std::fprintf(stderr, "lane %d ", l);
-    std::fprintf(stderr, " start d=%.2f dd=%.2f ddd=%.2f band=%.2f lats:", x0.d_m, x0.d_dot_mps, x0.d_ddot_mps2, req.band_time_s);
-    for (const auto& c : lats) std::fprintf(stderr, " [%d T=%.2f c=%.2f]", c.end_lane, c.poly.duration_s, c.cost);
-    std::fprintf(stderr, "\n");
-  }
   // Longitudinal candidates.
   std::vector<LonCandidate> lons;
   const auto add_lon = [&](Longitudinal m) {
@@ -421,7 +434,7 @@ TrajectoryPlan plan_trajectory(const core::ReferenceLine& line, const Trajectory
     c.samples = sample(g, at);
     const double travelled = (c.samples.x.back() - x0.s_m) * mps;
     const double deficit = req.wanted_speed_mps * tp.horizon_s - travelled;
-    const double jerk = m.braking ? tp.fallback_jerk_mps3 * tp.fallback_jerk_mps3 : m.poly.jerk_cost();
+    const double jerk = m.braking ? m.brake.jerk_cost() : m.poly.jerk_cost();
     c.cost = tp.progress_weight * deficit + tp.lon_jerk_weight * jerk;
     lons.push_back(std::move(c));
   };
@@ -454,6 +467,10 @@ TrajectoryPlan plan_trajectory(const core::ReferenceLine& line, const Trajectory
   braking.brake = BrakingProfile(x0.s_m, x0.s_dot, x0.s_ddot, tp.fallback_brake_mps2 / mps,
                                  tp.fallback_jerk_mps3 / mps);
   add_lon(braking);
+  Longitudinal gentle;
+  gentle.braking = true;
+  gentle.brake = BrakingProfile(x0.s_m, x0.s_dot, x0.s_ddot, kGentleStopMps2 / mps, kGentleStopJerkMps3 / mps);
+  add_lon(gentle);
 
   // Soft lane costs per longitudinal candidate.
   const std::size_t lane_n = static_cast<std::size_t>(road.lane_count);
@@ -497,7 +514,8 @@ TrajectoryPlan plan_trajectory(const core::ReferenceLine& line, const Trajectory
     const LatCandidate& lat = lats[c.lat];
     const LonCandidate& lon = lons[c.lon];
     ++plan.collision_checks;
-    const CollisionReport col = collide(lon.samples, lat.samples, lat.end_lane != start_lane, g, car_samples, mps, params);
+    const bool changing = lat.end_lane != start_lane;
+    const CollisionReport col = collide(lon.samples, lat.samples, changing, changing || off_centre, g, car_samples, mps, params);
     if (!col.ok) {
       if (plan.collision_failures++ == 0) {
         plan.blocking_car = col.car_id;
@@ -508,10 +526,6 @@ TrajectoryPlan plan_trajectory(const core::ReferenceLine& line, const Trajectory
     }
     if (plan.kinematic_checks >= tp.max_kinematic_checks) continue;
     ++plan.kinematic_checks;
-    if (kDebug) {
-      const KinematicReport kr = kinematics(lon.samples, lat.samples, g, line, tp, true);
-      std::fprintf(stderr, "  kin lat=%d T=%.2f lon=%u v1=%.2f ok=%d t=%.2f v=%.2f a=%.2f j=%.2f cost=%.2f\n", lat.end_lane, lat.poly.duration_s, c.lon, lon.motion.at(10).v, kr.ok, kr.first_violation_s, kr.peak_speed_mps, kr.peak_accel_mps2, kr.peak_jerk_mps3, c.cost);
-    }
     if (kinematics(lon.samples, lat.samples, g, line, tp, true).ok) {
       plan.trajectory = make(c);
       plan.status = PlanStatus::feasible;

@@ -40,7 +40,7 @@ struct DriveOptions {
   double minutes = 30.0;
   std::uint64_t seed = 1;
   std::string traffic = "faithful";
-  std::string policy = "walkthrough";
+  std::string policy = "reference";
   int steps_per_call = 0;  ///< 0: drawn per call by the seed
   std::optional<std::filesystem::path> config;
   /// A scripted scenario (JSON, see docs/scenarios.md) instead of random traffic.

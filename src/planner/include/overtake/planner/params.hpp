@@ -89,8 +89,8 @@ struct ReferencePredictionParams {
 /// reference, behaviour layer: which lane to aim for, at what speed, and the safety gaps.
 struct ReferenceBehaviourParams {
   double cruise_speed_mps = core::mph_to_mps(49.5);  ///< wanted speed on a free road (at the car)
-  double lookahead_m = 150.0;          ///< cars farther ahead do not shape a lane's cost
-  double evaluation_horizon_s = 12.0;  ///< a lane's speed is averaged over this much time
+  double lookahead_m = 200.0;          ///< cars farther ahead do not shape a lane's cost
+  double evaluation_horizon_s = 20.0;  ///< a lane's speed is averaged over this much time
   // RSS longitudinal distance (Shalev-Shwartz et al. 2017) with jerk-limited ego braking.
   double response_time_s = 0.3;        ///< rho: the ego's response time
   double ego_brake_mps2 = 5.0;         ///< braking the ego commits to
@@ -105,11 +105,13 @@ struct ReferenceBehaviourParams {
   double follower_margin_m = 1.2;      ///< bumper to bumper left when a follower has stopped closing
   /// A lane change needs this share of the RSS gap ahead in the target lane.
   double change_front_factor = 0.6;
+  /// ... and this share when it only passes through that lane to the one beyond.
+  double transit_front_factor = 0.6;
   double min_change_speed_mps = 8.0;   ///< no lane changes slower than this
-  double change_dwell_s = 2.0;         ///< after a lane change, wait this long before the next
+  double change_dwell_s = 1.5;         ///< after a lane change, wait this long before the next
   double speed_weight = 1.0;           ///< lane cost per unit of lost speed (fraction of cruise)
-  double change_cost = 0.04;           ///< lane cost per lane to cross
-  double hysteresis = 0.06;            ///< a lane must be this much cheaper to change to it
+  double change_cost = 0.01;           ///< lane cost per lane to cross
+  double hysteresis = 0.015;            ///< a lane must be this much cheaper to change to it
   double rear_threat_weight = 0.5;     ///< lane cost of a car closing fast from behind
   double rear_threat_speed_mps = 3.0;  ///< closing faster than this is a threat ...
   double rear_threat_span_mps = 5.0;   ///< ... and a full one this much faster
@@ -260,6 +262,7 @@ void describe(V& v, ReferenceBehaviourParams& p) {
   v("follower_response_s", p.follower_response_s);
   v("follower_margin_m", p.follower_margin_m);
   v("change_front_factor", p.change_front_factor);
+  v("transit_front_factor", p.transit_front_factor);
   v("min_change_speed_mps", p.min_change_speed_mps);
   v("change_dwell_s", p.change_dwell_s);
   v("speed_weight", p.speed_weight);

@@ -51,11 +51,11 @@ struct Frame {
 
 /// What answering one frame produced.
 struct FrameOutcome {
-  std::optional<std::string> reply;    ///< the frame to send back, if any
-  std::optional<std::string> warning;  ///< one line: what was wrong with the frame
-  std::optional<std::string> note;     ///< one line of information (e.g. the simulator quit)
-  bool planned = false;                ///< the planner ran and `reply` is its control
-  double plan_us = 0.0;                ///< planner time when it ran
+  std::optional<std::string> reply;         ///< the frame to send back, if any
+  std::optional<std::string> warning;       ///< one line: what was wrong with the frame
+  std::optional<std::string> note;          ///< one line of information (e.g. the simulator quit)
+  bool planned = false;                     ///< the planner ran and `reply` is its control
+  double plan_us = 0.0;                     ///< planner time when it ran
   std::optional<core::EgoObservation> ego;  ///< from a full telemetry, for status lines
 };
 

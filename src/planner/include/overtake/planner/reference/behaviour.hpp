@@ -50,6 +50,7 @@ struct LaneView {
   double expected_speed_mps = 0.0; ///< average over the evaluation horizon
   double rear_threat = 0.0;        ///< 0 .. 1: a car closing fast from behind
   bool enterable = false;          ///< an adjacent lane with room to move into now
+  bool passable = false;           ///< ... or at least to pass through to the lane beyond
   double cost = 0.0;
 };
 

@@ -51,6 +51,8 @@ class BrakingProfile {
   [[nodiscard]] Motion1d at(double t) const;
   /// When it stands still.
   [[nodiscard]] double stop_time_s() const { return start_[3]; }
+  /// Integral of the squared jerk until it stands.
+  [[nodiscard]] double jerk_cost() const;
 
  private:
   // Pieces of constant jerk: piece i starts at start_[i] in state states_[i]; piece 3 stands.

@@ -28,8 +28,9 @@ struct CarPrediction {
   int id = 0;
   double s_m = 0.0;        ///< unwrapped: within half a loop of the ego's s
   double s_dot = 0.0;      ///< ds/dt along the road
-  double s_ddot = 0.0;     ///< braking continued for a short while (0 unless braking)
-  double brake_time_s = 0.0;  ///< how long the braking is continued
+  double s_ddot = 0.0;     ///< acceleration continued for a short while (braking; or
+                           ///< speeding up, for cars behind the ego); 0 otherwise
+  double brake_time_s = 0.0;  ///< how long s_ddot is continued
   double speed_mps = 0.0;  ///< along the road, m/s
   double d_m = 0.0;
   double d_dot_mps = 0.0;
@@ -68,10 +69,12 @@ struct CarPrediction {
                                                       const ReferencePredictionParams& params,
                                                       const core::RoadParams& road);
 
-/// Predicts one car from its Frenet state now (s unwrapped) and an acceleration estimate.
+/// Predicts one car from its Frenet state now (s unwrapped) and an acceleration estimate;
+/// braking is continued for braking_horizon_s, and so is speeding up when `speeding_up`
+/// (used for cars behind the ego).
 [[nodiscard]] CarPrediction predict_car(int id, double s_m, double s_dot, double s_ddot,
                                         double speed_mps, double d_m, double d_dot_mps,
                                         const ReferencePredictionParams& params,
-                                        const core::RoadParams& road);
+                                        const core::RoadParams& road, bool speeding_up = false);
 
 }  // namespace overtake::planner::reference

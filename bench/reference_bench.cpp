@@ -1,0 +1,151 @@
+// Planner time per cycle of the reference policy, on recorded snapshots.
+//   ./build/release/overtake_bench --benchmark_filter=Reference
+//
+// A drive (3 minutes, seed 1, each traffic profile) is recorded once as the telemetry the
+// policy saw each cycle. The policy is stateful (it continues its own last plan), so the
+// snapshots are replayed in order through a fresh policy: every call then sees exactly the
+// state it had when the drive was recorded. Figures: the mean per cycle (Google Benchmark),
+// and per-cycle percentiles over a whole replay, both wall-clock and thread CPU time (the
+// CPU figures leave out time lost to other processes on a shared machine).
+
+#include <benchmark/benchmark.h>
+
+#include <algorithm>
+#include <chrono>
+#include <ctime>
+#include <map>
+#include <memory>
+#include <vector>
+
+#include "overtake/app/commands.hpp"
+#include "overtake/app/config.hpp"
+#include "overtake/core/random.hpp"
+#include "overtake/planner/policy.hpp"
+#include "overtake/planner/reference/reference_policy.hpp"
+#include "overtake/sim/world.hpp"
+
+namespace {
+
+using namespace overtake;
+
+constexpr double kRecordedS = 180.0;
+constexpr std::uint64_t kSeed = 1;
+constexpr std::uint64_t kLatencyStream = 20;  // as run_drive draws K
+
+const app::Track& track() {
+  static const auto t = app::load_track(std::nullopt);
+  return *t;
+}
+
+const app::Config& config() {
+  static const app::Config c = app::default_config();
+  return c;
+}
+
+/// The telemetry of every cycle of a recorded drive.
+const std::vector<core::Telemetry>& recording(sim::TrafficProfile profile) {
+  static std::map<sim::TrafficProfile, std::vector<core::Telemetry>> cache;
+  auto& rec = cache[profile];
+  if (!rec.empty()) return rec;
+  sim::World world(track().map, track().line, config().world, profile, kSeed);
+  auto policy = planner::make_policy("reference", track().line, config().planner);
+  core::Rng latency(core::derive_seed(kSeed, kLatencyStream));
+  const long steps = std::lround(kRecordedS / config().world.step_s);
+  while (world.steps() < steps) {
+    rec.push_back(world.telemetry());
+    world.apply_path(policy->plan(rec.back()));
+    const int k = latency.uniform_int(config().world.min_steps_per_call, config().world.max_steps_per_call);
+    for (int i = 0; i < k; ++i) world.step();
+  }
+  return rec;
+}
+
+sim::TrafficProfile profile_of(const benchmark::State& state) {
+  return state.range(0) == 0 ? sim::TrafficProfile::faithful : sim::TrafficProfile::calm;
+}
+
+double thread_cpu_us() {
+  timespec ts{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  return static_cast<double>(ts.tv_sec) * 1e6 + static_cast<double>(ts.tv_nsec) * 1e-3;
+}
+
+double percentile(std::vector<double> v, double q) {
+  if (v.empty()) return 0.0;
+  std::sort(v.begin(), v.end());
+  const auto i = static_cast<std::size_t>(std::ceil(q * static_cast<double>(v.size()))) - 1;
+  return v[std::min(i, v.size() - 1)];
+}
+
+// One planning cycle (the recorded cycles in turn).
+void BM_ReferencePlanCycle(benchmark::State& state) {
+  const auto& rec = recording(profile_of(state));
+  auto policy = std::make_unique<planner::reference::ReferencePolicy>(track().line, config().planner);
+  std::size_t i = 0;
+  for (auto _ : state) {
+    if (i == rec.size()) {
+      state.PauseTiming();
+      policy = std::make_unique<planner::reference::ReferencePolicy>(track().line, config().planner);
+      i = 0;
+      state.ResumeTiming();
+    }
+    benchmark::DoNotOptimize(policy->plan(rec[i++]));
+  }
+  state.SetItemsProcessed(state.iterations());
+  state.SetLabel(std::string(sim::to_string(profile_of(state))));
+}
+BENCHMARK(BM_ReferencePlanCycle)->Arg(0)->Arg(1)->Unit(benchmark::kMicrosecond);
+
+// A whole recorded drive, replayed: per-cycle percentiles, wall-clock and thread CPU time.
+void BM_ReferenceReplay(benchmark::State& state) {
+  const auto& rec = recording(profile_of(state));
+  std::vector<double> wall, cpu;
+  wall.reserve(rec.size());
+  cpu.reserve(rec.size());
+  for (auto _ : state) {
+    planner::reference::ReferencePolicy policy(track().line, config().planner);
+    for (const core::Telemetry& t : rec) {
+      const double c0 = thread_cpu_us();
+      const auto w0 = std::chrono::steady_clock::now();
+      benchmark::DoNotOptimize(policy.plan(t));
+      wall.push_back(std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - w0).count());
+      cpu.push_back(thread_cpu_us() - c0);
+    }
+  }
+  state.counters["cycles"] = static_cast<double>(rec.size());
+  state.counters["wall_p50_us"] = percentile(wall, 0.5);
+  state.counters["wall_p99_us"] = percentile(wall, 0.99);
+  state.counters["wall_max_us"] = percentile(wall, 1.0);
+  state.counters["cpu_p50_us"] = percentile(cpu, 0.5);
+  state.counters["cpu_p99_us"] = percentile(cpu, 0.99);
+  state.counters["cpu_max_us"] = percentile(cpu, 1.0);
+  state.SetLabel(std::string(sim::to_string(profile_of(state))));
+}
+BENCHMARK(BM_ReferenceReplay)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->Iterations(3);
+
+// The trajectory layer alone, on the busiest recorded cycle's request (the most cars near).
+void BM_ReferenceTrajectoryLayer(benchmark::State& state) {
+  const auto& rec = recording(sim::TrafficProfile::faithful);
+  planner::reference::ReferencePolicy policy(track().line, config().planner);
+  std::size_t busiest = 0;
+  int most = -1;
+  for (std::size_t i = 0; i < rec.size(); ++i) {
+    (void)policy.plan(rec[i]);
+    int near = 0;
+    for (const auto& c : policy.last_predictions()) near += std::abs(c.s_m - rec[i].ego.s_m) < 60.0 ? 1 : 0;
+    if (near > most) {
+      most = near;
+      busiest = i;
+    }
+  }
+  planner::reference::ReferencePolicy replay(track().line, config().planner);
+  for (std::size_t i = 0; i < busiest; ++i) (void)replay.plan(rec[i]);
+  for (auto _ : state) {
+    planner::reference::ReferencePolicy copy = replay;
+    benchmark::DoNotOptimize(copy.plan(rec[busiest]));
+  }
+  state.counters["cars_within_60m"] = most;
+}
+BENCHMARK(BM_ReferenceTrajectoryLayer)->Unit(benchmark::kMicrosecond);
+
+}  // namespace

@@ -1,0 +1,160 @@
+// The reference policy as a whole: its bookkeeping of its own path under latency, the C2
+// joint, robustness to odd input, the lap wrap, and seeded drives in both traffic profiles.
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "overtake/core/units.hpp"
+#include "overtake/planner/policy.hpp"
+#include "overtake/planner/reference/reference_policy.hpp"
+#include "overtake/sim/run.hpp"
+#include "overtake/sim/world.hpp"
+#include "planner/reference_support.hpp"
+
+namespace overtake::planner::reference {
+namespace {
+
+class PolicyTest : public ::testing::Test {
+ protected:
+  PolicyTest() : map_(overtake::test::circle_map()), line_(map_) {}
+
+  /// What the simulator reports after the car drove `k` points of `path` (trimmed as the
+  /// simulator does: rounded, the first point kept).
+  core::Telemetry after(const core::Telemetry& before, const std::vector<core::Vec2>& path, std::size_t k) const {
+    const auto sent = core::round_like_wire(path);
+    core::Telemetry t = before;
+    const core::Vec2 car = sent[k - 1];
+    const core::Vec2 next = sent[k];
+    const core::FrenetPoint f = line_.to_frenet(car, before.ego.s_m);
+    t.ego = {car, std::atan2(next.y - car.y, next.x - car.x), core::distance(car, sent[k - 2]) / 0.02, f.s_m, f.d_m};
+    t.previous_path.assign(sent.begin() + static_cast<std::ptrdiff_t>(k), sent.end());
+    t.end_path = line_.to_frenet(t.previous_path.back(), f.s_m);
+    return core::round_like_wire(t);
+  }
+
+  core::Map map_;
+  core::ReferenceLine line_;
+  PlannerParams params_;
+};
+
+TEST_F(PolicyTest, KeepsAShortPrefixAndKnowsWhereTheCarIs) {
+  ReferencePolicy p(line_, params_);
+  core::Telemetry t = test::ego_at(line_, 500.0, 6.0, 0.0);
+  std::vector<core::Vec2> path = p.plan(t);
+  ASSERT_EQ(path.size(), static_cast<std::size_t>(params_.reference.trajectory.path_points));
+  for (int cycle = 0; cycle < 200; ++cycle) {
+    const std::size_t k = 1 + static_cast<std::size_t>(cycle % 3);
+    t = after(t, path, k);
+    const std::vector<core::Vec2> next = p.plan(t);
+    ASSERT_TRUE(p.last_synced()) << cycle;
+    const auto keep = static_cast<std::size_t>(params_.reference.trajectory.keep_points);
+    for (std::size_t i = 0; i < keep; ++i) EXPECT_EQ(next[i], t.previous_path[i]);
+    path = next;
+  }
+  EXPECT_GT(t.ego.speed_mps, 5.0);  // it got going
+}
+
+TEST_F(PolicyTest, TheJointWithTheKeptPathIsSmooth) {
+  // Drive a while, then look at second and third differences of the points across joints:
+  // no spike beyond the limits (the strict figures' 0.1 s windows).
+  ReferencePolicy p(line_, params_);
+  core::Telemetry t = test::ego_at(line_, 500.0, 6.0, 0.0);
+  std::vector<core::Vec2> path = p.plan(t);
+  std::vector<core::Vec2> driven;
+  for (int cycle = 0; cycle < 600; ++cycle) {
+    const std::size_t k = 1 + static_cast<std::size_t>((cycle * 7) % 3);
+    const auto sent = core::round_like_wire(path);
+    for (std::size_t i = 0; i < k; ++i) driven.push_back(sent[i]);
+    t = after(t, path, k);
+    path = p.plan(t);
+  }
+  const int w = 5;
+  const double h = 0.1;
+  double peak_acc = 0.0, peak_jerk = 0.0;
+  for (std::size_t i = 3 * w; i < driven.size(); ++i) {
+    const core::Vec2 p0 = driven[i], p1 = driven[i - w], p2 = driven[i - 2 * w], p3 = driven[i - 3 * w];
+    peak_acc = std::max(peak_acc, core::norm(p0 - 2.0 * p1 + p2) / (h * h));
+    peak_jerk = std::max(peak_jerk, core::norm(p0 - 3.0 * p1 + 3.0 * p2 - p3) / (h * h * h));
+  }
+  EXPECT_LT(peak_acc, params_.reference.trajectory.max_accel_mps2 + 0.5);
+  EXPECT_LT(peak_jerk, params_.reference.trajectory.max_jerk_mps3 + 1.0);
+}
+
+TEST_F(PolicyTest, OddInputNeverThrowsAndAlwaysGivesAPath) {
+  ReferencePolicy p(line_, params_);
+  core::Telemetry empty;  // all zero: the ego at the map's origin, far off the road
+  EXPECT_NO_THROW({ EXPECT_FALSE(p.plan(empty).empty()); });
+  core::Telemetry off_road = test::ego_at(line_, 300.0, 30.0, 10.0);
+  EXPECT_NO_THROW({ EXPECT_FALSE(p.plan(off_road).empty()); });
+  core::Telemetry junk = test::ego_at(line_, 300.0, 6.0, 10.0);
+  junk.previous_path = {{1.0, 2.0}, {3.0, 4.0}, {5.0, 6.0}};  // not ours: it starts afresh
+  EXPECT_NO_THROW({ EXPECT_FALSE(p.plan(junk).empty()); });
+  EXPECT_FALSE(p.last_synced());
+  core::Telemetry one = test::ego_at(line_, 300.0, 6.0, 10.0);
+  one.previous_path = {one.ego.position};
+  EXPECT_NO_THROW({ EXPECT_FALSE(p.plan(one).empty()); });
+  core::Telemetry crowded = test::ego_at(line_, 300.0, 6.0, 0.0);
+  for (int i = 0; i < 12; ++i) crowded.cars.push_back(test::observed_car(line_, i, 300.0 + 5.0 * (i - 6), 2.0 + 4.0 * (i % 3), 0.0));
+  EXPECT_NO_THROW({ EXPECT_FALSE(p.plan(crowded).empty()); });
+}
+
+TEST_F(PolicyTest, DrivesAcrossTheLapWrapWithoutAJump) {
+  sim::WorldParams wp;
+  wp.traffic.car_count = 0;
+  wp.ego.start_s_m = line_.start_s_m() + line_.length_m() - 150.0;
+  sim::World world(map_, line_, wp, sim::TrafficProfile::faithful, 1);
+  auto policy = make_policy("reference", line_, params_);
+  sim::RunOptions opts;
+  opts.duration_s = 25.0;
+  const auto r = sim::run_drive(world, [&](const core::Telemetry& t) { return policy->plan(t); }, opts);
+  EXPECT_TRUE(r.incidents.empty());
+  EXPECT_GT(r.distance_m, 300.0);  // crossed the wrap
+  EXPECT_LT(r.peak.strict_jerk_mps3, 10.0);
+  EXPECT_LT(r.peak.strict_acceleration_mps2, 10.0);
+}
+
+TEST_F(PolicyTest, IsTheFirstPolicyListed) {
+  const auto policies = list_policies();
+  ASSERT_FALSE(policies.empty());
+  EXPECT_EQ(policies.front().name, "reference");
+  EXPECT_NE(make_policy("reference", line_, params_), nullptr);
+}
+
+/// Seeded drives on the default-like test loop: several seeds x minutes, both profiles;
+/// zero incidents, strict figures under the limits, and a mean speed floor.
+class SeededDrives : public ::testing::TestWithParam<sim::TrafficProfile> {};
+
+TEST_P(SeededDrives, NoIncidentsAndAMeanSpeedFloor) {
+  const core::Map map = overtake::test::circle_map(1100.0, 38.0);
+  const core::ReferenceLine line(map);
+  const PlannerParams params;
+  const bool small = test::sanitized();
+  const int seeds = small ? 1 : 4;
+  const double minutes = small ? 1.0 : 3.0;
+  double metres = 0.0, seconds = 0.0;
+  for (int seed = 1; seed <= seeds; ++seed) {
+    sim::World world(map, line, sim::WorldParams{}, GetParam(), static_cast<std::uint64_t>(seed));
+    auto policy = make_policy("reference", line, params);
+    sim::RunOptions opts;
+    opts.duration_s = minutes * 60.0;
+    opts.seed = static_cast<std::uint64_t>(seed);
+    const auto r = sim::run_drive(world, [&](const core::Telemetry& t) { return policy->plan(t); }, opts);
+    EXPECT_TRUE(r.incidents.empty()) << "seed " << seed << ": " << r.incidents.size() << " incidents, first at t = "
+                                     << (r.incidents.empty() ? 0.0 : r.incidents.front().t_s);
+    EXPECT_LT(r.peak.strict_acceleration_mps2, 10.0) << "seed " << seed;
+    EXPECT_LT(r.peak.strict_jerk_mps3, 10.0) << "seed " << seed;
+    EXPECT_LT(core::mps_to_mph(r.peak.speed_mps), 50.0) << "seed " << seed;
+    metres += r.distance_m;
+    seconds += r.duration_s;
+  }
+  // The start from rest costs ~0.5 mph over a minute; traffic a few more.
+  EXPECT_GT(core::mps_to_mph(metres / seconds), small ? 40.0 : 45.0);
+}
+
+INSTANTIATE_TEST_SUITE_P(BothProfiles, SeededDrives,
+                         ::testing::Values(sim::TrafficProfile::faithful, sim::TrafficProfile::calm),
+                         [](const auto& param_info) { return std::string(sim::to_string(param_info.param)); });
+
+}  // namespace
+}  // namespace overtake::planner::reference

@@ -1,0 +1,87 @@
+// Scripted scenarios (tests/scenarios/*.json) driven by the reference planner on the default
+// track: a cut-in 20 m ahead, all lanes blocked, hard braking ahead, a car speeding up in the
+// target lane during a lane change, stop-and-go traffic, and a lane change across the lap
+// wrap. Each with several latency draws: no incident, strict figures under the limits.
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <string>
+
+#include "overtake/app/commands.hpp"
+#include "overtake/app/config.hpp"
+#include "overtake/app/scenario_file.hpp"
+#include "overtake/core/units.hpp"
+#include "overtake/planner/policy.hpp"
+#include "overtake/sim/run.hpp"
+#include "overtake/sim/world.hpp"
+
+namespace overtake::planner::reference {
+namespace {
+
+constexpr double kLimit = 10.0;  // the strict figures' acceleration and jerk limits
+
+struct ScenarioRun {
+  sim::RunReport report;
+  sim::Scenario scenario;
+};
+
+ScenarioRun run_scenario(const std::string& file, std::uint64_t seed) {
+  static const auto track = app::load_track(std::nullopt);
+  const app::Config config = app::default_config();
+  ScenarioRun out;
+  out.scenario = app::load_scenario(std::filesystem::path(OVERTAKE_SOURCE_DIR) / "tests/scenarios" / file, config.road);
+  sim::World world(track->map, track->line, config.world, out.scenario);
+  auto policy = make_policy("reference", track->line, config.planner);
+  sim::RunOptions opts;
+  opts.duration_s = out.scenario.duration_s.value_or(30.0);
+  opts.seed = seed;
+  out.report = sim::run_drive(world, [&](const core::Telemetry& t) { return policy->plan(t); }, opts);
+  return out;
+}
+
+class Scenarios : public ::testing::TestWithParam<std::string> {};
+
+TEST_P(Scenarios, NoIncidentsAndWithinTheStrictLimits) {
+  for (std::uint64_t seed = 1; seed <= 3; ++seed) {
+    const ScenarioRun r = run_scenario(GetParam(), seed);
+    const auto& rep = r.report;
+    EXPECT_TRUE(rep.ended_early.empty()) << rep.ended_early;
+    EXPECT_TRUE(rep.incidents.empty()) << r.scenario.name << ", seed " << seed << ": " << rep.incidents.size()
+                                       << " incidents, the first at t = "
+                                       << (rep.incidents.empty() ? 0.0 : rep.incidents.front().t_s) << " s";
+    EXPECT_LT(rep.peak.strict_acceleration_mps2, kLimit) << r.scenario.name << ", seed " << seed;
+    EXPECT_LT(rep.peak.strict_jerk_mps3, kLimit) << r.scenario.name << ", seed " << seed;
+    EXPECT_LT(core::mps_to_mph(rep.peak.speed_mps), 50.0) << r.scenario.name << ", seed " << seed;
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(Reference, Scenarios,
+                         ::testing::Values("cut_in_20m.json", "all_lanes_blocked.json", "hard_brake_ahead.json",
+                                           "fast_car_in_target_lane.json", "stop_and_go.json",
+                                           "lap_wrap_lane_change.json"),
+                         [](const auto& param_info) {
+                           std::string name = param_info.param.substr(0, param_info.param.find('.'));
+                           return name;
+                         });
+
+TEST(ScenarioSpecifics, AllLanesBlockedIsFollowedWithoutWeaving) {
+  const ScenarioRun r = run_scenario("all_lanes_blocked.json", 1);
+  EXPECT_EQ(r.report.lane_changes, 0);
+  EXPECT_LT(r.report.peak.strict_acceleration_mps2, 3.0);  // smooth: a gentle slow-down
+}
+
+TEST(ScenarioSpecifics, TheLapWrapIsCrossedDuringALaneChange) {
+  const ScenarioRun r = run_scenario("lap_wrap_lane_change.json", 1);
+  EXPECT_GE(r.report.lane_changes, 1);
+  EXPECT_GT(r.report.distance_m, 7000.0 - r.scenario.ego_s_m + 100.0);
+}
+
+TEST(ScenarioSpecifics, StopAndGoComesToAStandstillAndGoesOn) {
+  const ScenarioRun r = run_scenario("stop_and_go.json", 1);
+  EXPECT_GT(r.report.distance_m, 300.0);
+  EXPECT_EQ(r.report.lane_changes, 0);
+}
+
+}  // namespace
+}  // namespace overtake::planner::reference
