@@ -27,7 +27,8 @@ class PolicyTest : public ::testing::Test {
     const core::Vec2 car = sent[k - 1];
     const core::Vec2 next = sent[k];
     const core::FrenetPoint f = line_.to_frenet(car, before.ego.s_m);
-    t.ego = {car, std::atan2(next.y - car.y, next.x - car.x), core::distance(car, sent[k - 2]) / 0.02, f.s_m, f.d_m};
+    const core::Vec2 before_car = k >= 2 ? sent[k - 2] : before.ego.position;
+    t.ego = {car, std::atan2(next.y - car.y, next.x - car.x), core::distance(car, before_car) / 0.02, f.s_m, f.d_m};
     t.previous_path.assign(sent.begin() + static_cast<std::ptrdiff_t>(k), sent.end());
     t.end_path = line_.to_frenet(t.previous_path.back(), f.s_m);
     return core::round_like_wire(t);
