@@ -12,13 +12,13 @@
 
 #include <algorithm>
 #include <chrono>
-#include <ctime>
 #include <map>
 #include <memory>
 #include <vector>
 
 #include "overtake/app/commands.hpp"
 #include "overtake/app/config.hpp"
+#include "overtake/core/cpu_clock.hpp"
 #include "overtake/core/random.hpp"
 #include "overtake/planner/policy.hpp"
 #include "overtake/planner/reference/reference_policy.hpp"
@@ -64,12 +64,6 @@ sim::TrafficProfile profile_of(const benchmark::State& state) {
   return state.range(0) == 0 ? sim::TrafficProfile::faithful : sim::TrafficProfile::calm;
 }
 
-double thread_cpu_us() {
-  timespec ts{};
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
-  return static_cast<double>(ts.tv_sec) * 1e6 + static_cast<double>(ts.tv_nsec) * 1e-3;
-}
-
 double percentile(std::vector<double> v, double q) {
   if (v.empty()) return 0.0;
   std::sort(v.begin(), v.end());
@@ -105,11 +99,11 @@ void BM_ReferenceReplay(benchmark::State& state) {
   for (auto _ : state) {
     planner::reference::ReferencePolicy policy(track().line, config().planner);
     for (const core::Telemetry& t : rec) {
-      const double c0 = thread_cpu_us();
+      const double c0 = core::thread_cpu_us();
       const auto w0 = std::chrono::steady_clock::now();
       benchmark::DoNotOptimize(policy.plan(t));
       wall.push_back(std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - w0).count());
-      cpu.push_back(thread_cpu_us() - c0);
+      cpu.push_back(core::thread_cpu_us() - c0);
     }
   }
   state.counters["cycles"] = static_cast<double>(rec.size());

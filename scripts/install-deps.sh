@@ -1,12 +1,16 @@
 #!/usr/bin/env bash
-# Installs what overtake needs to build and test, from Debian's packages, by name.
+# Installs what overtake needs to build and test, from Debian's packages, by name, and the
+# web pages' Node packages (web/package-lock.json) with npm ci.
 # Installs only what is missing; says what it installs; uses sudo when not root.
 set -euo pipefail
 
+root="$(cd "$(dirname "$0")/.." && pwd)"
+
 packages=(
   cmake ninja-build g++ make pkg-config
-  libeigen3-dev nlohmann-json3-dev libcli11-dev libboost-dev
+  libeigen3-dev nlohmann-json3-dev libcli11-dev libboost-dev zlib1g-dev
   libgtest-dev libgmock-dev libbenchmark-dev
+  chromium
 )
 
 missing=()
@@ -15,24 +19,40 @@ for p in "${packages[@]}"; do
     missing+=("$p")
   fi
 done
+# Node.js and npm: any installed node and npm will do (some nodejs packages bundle npm and
+# conflict with Debian's npm package), so these are looked for as commands.
+command -v node >/dev/null 2>&1 || missing+=(nodejs)
+command -v npm >/dev/null 2>&1 || missing+=(npm)
 
 if [ ${#missing[@]} -eq 0 ]; then
-  echo "install-deps: all ${#packages[@]} packages present"
-  exit 0
-fi
-
-sudo_cmd=()
-if [ "$(id -u)" -ne 0 ]; then
-  if command -v sudo >/dev/null 2>&1; then
-    sudo_cmd=(sudo)
-  else
-    echo "install-deps: missing packages (${missing[*]}) and not root, and no sudo to install them" >&2
-    exit 1
+  echo "install-deps: all $((${#packages[@]} + 2)) packages present"
+else
+  sudo_cmd=()
+  if [ "$(id -u)" -ne 0 ]; then
+    if command -v sudo >/dev/null 2>&1; then
+      sudo_cmd=(sudo)
+    else
+      echo "install-deps: missing packages (${missing[*]}) and not root, and no sudo to install them" >&2
+      exit 1
+    fi
   fi
+  echo "install-deps: installing ${missing[*]}"
+  export DEBIAN_FRONTEND=noninteractive
+  "${sudo_cmd[@]}" apt-get update -qq
+  "${sudo_cmd[@]}" apt-get install -y -qq --no-install-recommends "${missing[@]}"
+  echo "install-deps: done"
 fi
 
-echo "install-deps: installing ${missing[*]}"
-export DEBIAN_FRONTEND=noninteractive
-"${sudo_cmd[@]}" apt-get update -qq
-"${sudo_cmd[@]}" apt-get install -y -qq --no-install-recommends "${missing[@]}"
-echo "install-deps: done"
+# The web pages' packages: npm ci when web/node_modules is missing or was installed from
+# another package-lock.json (the stamp holds the lockfile's hash; the web build checks it).
+web="$root/web"
+stamp="$web/node_modules/.overtake-lock-sha256"
+want="$(sha256sum "$web/package-lock.json" | cut -d' ' -f1)"
+if [ -f "$stamp" ] && [ "$(cat "$stamp")" = "$want" ]; then
+  echo "install-deps: web/node_modules up to date"
+else
+  echo "install-deps: npm ci in web/ ($( [ -d "$web/node_modules" ] && echo stale || echo missing ))"
+  (cd "$web" && npm ci --no-audit --no-fund --loglevel=error)
+  echo "$want" > "$stamp"
+  echo "install-deps: web/node_modules installed"
+fi

@@ -15,6 +15,7 @@
 
 #include "overtake/app/commands.hpp"
 #include "overtake/app/io.hpp"
+#include "overtake/app/viewer.hpp"
 #include "overtake/core/hash.hpp"
 #include "overtake/core/units.hpp"
 #include "overtake/sim/referee.hpp"
@@ -29,6 +30,7 @@ namespace {
 using nlohmann::json;
 
 constexpr int kMaxJobs = 256;
+constexpr int kMaxRecordWorst = 1000;
 constexpr const char* kRunsFile = "runs.jsonl";
 constexpr const char* kManifestFile = "bench.json";
 
@@ -136,7 +138,89 @@ void write_outputs(const std::filesystem::path& out, const std::vector<json>& ru
   outcome.runs_done = runs.size();
 }
 
+double incident_total(const json& run) {
+  double n = 0.0;
+  for (const auto& [type, count] : run["incident_counts"].items()) n += count.get<double>();
+  return n;
+}
+
+// A run's report without what measures time or place (for comparing a re-run with it).
+json stable_report(json run) {
+  for (const char* key : {"timing", "provenance", "index"}) run.erase(key);
+  return run;
+}
+
+// Runs the `count` runs with most incidents again with a replay recorded, on `jobs` threads.
+std::vector<std::filesystem::path> record_worst(const BenchSpec& spec, std::vector<json> runs,
+                                                const Track& track, const Config& config,
+                                                const std::atomic<bool>* stop) {
+  std::stable_sort(runs.begin(), runs.end(), [](const json& a, const json& b) {
+    const double ia = incident_total(a), ib = incident_total(b);
+    if (ia != ib) return ia > ib;
+    const auto sa = a["config"]["seed"].get<std::uint64_t>(), sb = b["config"]["seed"].get<std::uint64_t>();
+    if (sa != sb) return sa < sb;
+    return a["index"].get<std::size_t>() < b["index"].get<std::size_t>();
+  });
+  runs.resize(std::min(runs.size(), static_cast<std::size_t>(spec.record_worst)));
+  const std::filesystem::path dir = spec.out / kReplaysFolder;
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  if (ec) throw std::runtime_error(dir.string() + ": cannot create the replays folder (" + ec.message() + ")");
+
+  std::vector<std::filesystem::path> written(runs.size());
+  std::vector<std::string> errors(runs.size());
+  std::atomic<std::size_t> next{0};
+  auto worker = [&] {
+    for (std::size_t i = next.fetch_add(1); i < runs.size(); i = next.fetch_add(1)) {
+      if (stop && stop->load()) return;
+      const json& run = runs[i];
+      DriveOptions o;
+      o.minutes = spec.minutes;
+      o.seed = run["config"]["seed"].get<std::uint64_t>();
+      o.traffic = run["config"]["traffic"].get<std::string>();
+      o.policy = run["config"]["policy"].get<std::string>();
+      o.steps_per_call = spec.steps_per_call;
+      const std::filesystem::path file = dir / bench_replay_name(o.policy, o.traffic, o.seed);
+      o.record = file;
+      try {
+        const DriveResult r = drive_on(track, config, o, {}, stop);
+        if (r.report.ended_early == "stopped") {  // interrupted: not the bench's run
+          std::filesystem::remove(file, ec);
+          continue;
+        }
+        if (stable_report(report_to_json(r.report, r.provenance)) != stable_report(run)) {
+          std::fprintf(stderr, "bench: warning: the recorded re-run of %s differs from its bench run\n",
+                       file.c_str());
+        }
+        written[i] = file;
+      } catch (const std::exception& e) {
+        errors[i] = file.string() + ": " + e.what();
+      }
+    }
+  };
+  const int threads = std::max(1, std::min<int>(spec.jobs, static_cast<int>(runs.size())));
+  std::vector<std::thread> pool;
+  for (int t = 0; t < threads; ++t) pool.emplace_back(worker);
+  for (auto& th : pool) th.join();
+  for (const std::string& e : errors) {
+    if (!e.empty()) throw std::runtime_error("--record-worst: " + e);
+  }
+  std::vector<std::filesystem::path> out;
+  for (auto& f : written) {
+    if (!f.empty()) out.push_back(std::move(f));
+  }
+  return out;
+}
+
 }  // namespace
+
+std::vector<json> load_bench_runs(const std::filesystem::path& dir) {
+  std::vector<json> runs = read_runs(dir / kRunsFile);
+  std::sort(runs.begin(), runs.end(), [](const json& a, const json& b) {
+    return a["index"].get<std::size_t>() < b["index"].get<std::size_t>();
+  });
+  return runs;
+}
 
 std::vector<std::uint64_t> parse_seed_list(const std::string& text) {
   std::vector<std::uint64_t> seeds;
@@ -198,6 +282,10 @@ BenchOutcome run_bench(const BenchSpec& spec, const std::atomic<bool>* stop,
   }
   if (spec.shard_count < 1 || spec.shard_index < 1 || spec.shard_index > spec.shard_count) {
     throw UsageError("--shard: " + std::to_string(spec.shard_index) + "/" + std::to_string(spec.shard_count) + " is out of range");
+  }
+  if (spec.record_worst < 0 || spec.record_worst > kMaxRecordWorst) {
+    throw UsageError("--record-worst must be between 0 and " + std::to_string(kMaxRecordWorst) +
+                     " (got " + std::to_string(spec.record_worst) + ")");
   }
   for (const auto& p : spec.policies) {
     DriveOptions o;
@@ -340,6 +428,10 @@ BenchOutcome run_bench(const BenchSpec& spec, const std::atomic<bool>* stop,
   }
   outcome.interrupted = stop && stop->load() && runs.size() < shard_total;
   write_outputs(spec.out, runs, manifest, outcome);
+  if (spec.record_worst > 0 && !outcome.interrupted) {
+    outcome.replays = record_worst(spec, runs, *track, config, stop);
+    outcome.interrupted = stop && stop->load();
+  }
   return outcome;
 }
 
@@ -397,7 +489,7 @@ json summarize_bench(const std::vector<json>& runs, const std::vector<std::strin
       }
       if (mine.empty()) continue;
       double miles = 0.0, seconds = 0.0, peak_acc = 0.0, peak_jerk = 0.0, strict_acc = 0.0,
-             strict_jerk = 0.0, worst_p99 = 0.0;
+             strict_jerk = 0.0, worst_p99 = 0.0, worst_wall_p99 = 0.0;
       std::vector<double> free_miles, p50s;
       std::map<std::string, double> counts;
       for (const json* r : mine) {
@@ -411,7 +503,9 @@ json summarize_bench(const std::vector<json>& runs, const std::vector<std::strin
         strict_acc = std::max(strict_acc, pk["strict_acceleration_mps2"].get<double>());
         strict_jerk = std::max(strict_jerk, pk["strict_jerk_mps3"].get<double>());
         p50s.push_back((*r)["timing"]["p50_us"].get<double>());
-        worst_p99 = std::max(worst_p99, (*r)["timing"]["p99_us"].get<double>());
+        const json& timing = (*r)["timing"];
+        worst_p99 = std::max(worst_p99, timing["p99_us"].get<double>());
+        worst_wall_p99 = std::max(worst_wall_p99, timing.value("wall_p99_us", timing["p99_us"].get<double>()));
       }
       json per100 = json::object();
       double total_incidents = 0.0;
@@ -433,7 +527,10 @@ json summarize_bench(const std::vector<json>& runs, const std::vector<std::strin
                       {"peak_jerk_mps3", peak_jerk},
                       {"peak_strict_acceleration_mps2", strict_acc},
                       {"peak_strict_jerk_mps3", strict_jerk},
-                      {"timing", {{"planner_p50_us_median", median(p50s)}, {"planner_p99_us_worst", worst_p99}}}});
+                      {"timing",
+                       {{"planner_p50_us_median", median(p50s)},
+                        {"planner_p99_us_worst", worst_p99},
+                        {"planner_wall_p99_us_worst", worst_wall_p99}}}});
     }
   }
   return rows;
@@ -454,7 +551,7 @@ std::string summary_csv(const json& rows) {
   for (const auto& type : incident_types()) header.push_back(type + std::string("_per_100mi"));
   for (const char* h : {"incident_free_miles_median", "incident_free_miles_worst", "peak_acceleration_mps2",
                         "peak_jerk_mps3", "peak_strict_acceleration_mps2", "peak_strict_jerk_mps3",
-                        "planner_p50_us_median", "planner_p99_us_worst"}) {
+                        "planner_p50_us_median", "planner_p99_us_worst", "planner_wall_p99_us_worst"}) {
     header.emplace_back(h);
   }
   std::string out = join(header);
@@ -470,6 +567,7 @@ std::string summary_csv(const json& rows) {
     }
     f.push_back(fmt(r["timing"]["planner_p50_us_median"], 1));
     f.push_back(fmt(r["timing"]["planner_p99_us_worst"], 1));
+    f.push_back(fmt(r["timing"]["planner_wall_p99_us_worst"], 1));
     out += join(f);
   }
   return out;
@@ -479,7 +577,7 @@ std::string summary_markdown(const json& rows) {
   std::string out =
       "| policy | traffic | runs | miles | mean mph | incidents /100 mi | collision | speeding | max acc | "
       "max jerk | outside lane | incident-free mi (median / worst) | peak acc / jerk (rubric) | "
-      "peak acc / jerk (strict) | planner us (p50 / p99) |\n"
+      "peak acc / jerk (strict) | planner CPU us (p50 / p99) |\n"
       "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|---|---|---|\n";
   for (const json& r : rows) {
     const json& by = r["incidents_per_100mi_by_type"];

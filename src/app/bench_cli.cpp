@@ -1,6 +1,5 @@
 // The `overtake bench` and `overtake bench merge` command lines.
 
-#include <csignal>
 #include <cstdio>
 #include <iostream>
 #include <thread>
@@ -8,20 +7,12 @@
 #include "overtake/app/bench.hpp"
 #include "overtake/app/cli.hpp"
 #include "overtake/app/commands.hpp"
+#include "overtake/app/interrupt.hpp"
+#include "overtake/app/viewer.hpp"
 #include "overtake/core/units.hpp"
 
 namespace overtake::app {
 namespace {
-
-constexpr int kExitInterrupted = 130;
-
-// Set by SIGINT/SIGTERM during a bench; a signal handler can only reach static storage.
-std::atomic<bool>& interrupt_flag() {
-  static std::atomic<bool> flag{false};
-  return flag;
-}
-
-extern "C" void on_interrupt(int) { interrupt_flag().store(true); }
 
 std::vector<std::string> split_list(const std::string& text) {
   std::vector<std::string> out;
@@ -71,7 +62,7 @@ Subcommand register_bench(CLI::App& app) {
     std::string policies = "reference,walkthrough,seed000,seed001,seed002,seed003,seed004";
     std::string seeds = "1-20";
     std::string traffic = "faithful,calm";
-    std::string map, config, out = "bench-out", shard;
+    std::string map, config, out = "bench-out", shard, html;
     bool quiet = false;
     std::vector<std::string> merge_dirs;
     std::string merge_out;
@@ -93,6 +84,14 @@ Subcommand register_bench(CLI::App& app) {
   cmd->add_option("--out,-o", st->out, "Output folder")->capture_default_str();
   cmd->add_option("--shard", st->shard, "Run only slice I of N (e.g. 3/8) of the combinations");
   cmd->add_flag("--resume", st->spec.resume, "Continue an interrupted bench in --out, skipping finished runs");
+  cmd->add_option("--record-worst", st->spec.record_worst,
+                  "After the bench, run the N runs with most incidents again (ties: lower seed first;\n"
+                  "deterministic, so the same runs) recording replays into --out/replays/\n"
+                  "<policy>-<traffic>-seed<N>.otr, for `overtake view`");
+  cmd->add_option("--html", st->html,
+                  "Also write the bench report page (summary table and charts per policy, each run\n"
+                  "linked to its replay when recorded) to this file, and each recorded replay's\n"
+                  "self-contained page beside it (replays/*.html)");
   cmd->add_flag("--quiet,-q", st->quiet, "No progress bar or summary");
   auto* merge = cmd->add_subcommand("merge", "Join the output folders of the shards of one bench into --out.");
   merge->add_option("dirs", st->merge_dirs, "Shard output folders")->required()->check(CLI::ExistingDirectory);
@@ -116,23 +115,24 @@ Subcommand register_bench(CLI::App& app) {
             const double total_sim_s = spec.minutes * 60.0 *
                                         static_cast<double>(bench_combinations(spec).size()) / spec.shard_count;
             const bool draw = !st->quiet && stderr_is_terminal();
-            interrupt_flag() = false;
-            auto old_int = std::signal(SIGINT, on_interrupt);
-            auto old_term = std::signal(SIGTERM, on_interrupt);
-            BenchOutcome o;
-            try {
-              o = run_bench(spec, &interrupt_flag(), [&](const BenchProgress& p) {
-                if (draw) draw_progress(p, total_sim_s);
-              });
-            } catch (...) {
-              std::signal(SIGINT, old_int);
-              std::signal(SIGTERM, old_term);
-              if (draw) std::fprintf(stderr, "\n");
-              throw;
+            // The pages come from the binary: check that they are there before any run.
+            if (!st->html.empty()) {
+              (void)embedded_page(kReportPageName);
+              (void)embedded_page(kViewerPageName);
             }
-            std::signal(SIGINT, old_int);
-            std::signal(SIGTERM, old_term);
-            if (draw) std::fprintf(stderr, "\n");
+            BenchOutcome o;
+            {
+              const InterruptScope interrupt;
+              try {
+                o = run_bench(spec, &InterruptScope::flag(), [&](const BenchProgress& p) {
+                  if (draw) draw_progress(p, total_sim_s);
+                });
+              } catch (...) {
+                if (draw) std::fprintf(stderr, "\n");
+                throw;
+              }
+              if (draw) std::fprintf(stderr, "\n");
+            }
             if (o.interrupted) {
               std::cerr << "bench: interrupted; " << o.runs_done << " finished runs kept in "
                         << (spec.out / "runs.jsonl").string() << "; rerun with --resume to finish\n";
@@ -144,6 +144,15 @@ Subcommand register_bench(CLI::App& app) {
               std::printf("%zu runs (%zu new) in %.1f s on %d jobs: %.1f simulated hours per wall-clock minute\n",
                           o.runs_done, o.runs_new, o.wall_s, spec.jobs, hours_per_minute);
               std::cout << "written: " << spec.out.string() << "/{runs.jsonl,summary.csv,summary.md,bench.json}\n";
+              for (const auto& r : o.replays) std::cout << "replay: " << r.string() << "\n";
+            }
+            if (!st->html.empty()) {
+              const auto pages = write_bench_report(spec.out, st->html, embedded_page(kReportPageName),
+                                                    embedded_page(kViewerPageName));
+              if (!st->quiet) {
+                std::cout << "report: " << st->html << " (" << pages.size() << " replay page"
+                          << (pages.size() == 1 ? "" : "s") << " linked)\n";
+              }
             }
             return kExitOk;
           }};

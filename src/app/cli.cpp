@@ -2,11 +2,15 @@
 #include <chrono>
 #include <cstdio>
 #include <iostream>
+#include <thread>
 #include <unistd.h>
 
 #include "overtake/app/cli.hpp"
 #include "overtake/app/commands.hpp"
+#include "overtake/app/interrupt.hpp"
 #include "overtake/app/io.hpp"
+#include "overtake/app/progress.hpp"
+#include "overtake/app/viewer.hpp"
 #include "overtake/core/hash.hpp"
 #include "overtake/core/track.hpp"
 #include "overtake/core/units.hpp"
@@ -15,54 +19,29 @@
 namespace overtake::app {
 namespace {
 
-// One status line on a terminal, redrawn at most ten times a second; silent otherwise.
-class ProgressLine {
- public:
-  explicit ProgressLine(bool enabled) : enabled_(enabled && stderr_is_terminal()) {}
-  ~ProgressLine() { clear(); }
-  ProgressLine(const ProgressLine&) = delete;
-  ProgressLine& operator=(const ProgressLine&) = delete;
-
-  void update(double t_s, double total_s, double distance_m) {
-    if (!enabled_) return;
-    const auto now = std::chrono::steady_clock::now();
-    if (now - last_ < std::chrono::milliseconds(100)) return;
-    last_ = now;
-    const double wall_s = std::chrono::duration<double>(now - start_).count();
-    char total[32] = "";
-    if (total_s > 0.0) std::snprintf(total, sizeof total, " / %.1f", total_s / 60.0);
-    std::fprintf(stderr, "\r  %6.1f%s min simulated   %7.2f mi   %6.0fx real time ", t_s / 60.0, total,
-                 core::metres_to_miles(distance_m), wall_s > 0 ? t_s / wall_s : 0.0);
-    std::fflush(stderr);
-    shown_ = true;
-  }
-  void clear() {
-    if (!shown_) return;
-    std::fprintf(stderr, "\r%80s\r", "");
-    std::fflush(stderr);
-    shown_ = false;
-  }
-
- private:
-  bool enabled_;
-  bool shown_ = false;
-  std::chrono::steady_clock::time_point start_ = std::chrono::steady_clock::now();
-  std::chrono::steady_clock::time_point last_{};
-};
-
 std::string policy_help() {
   std::string out = "Policy to drive with. Available:";
   for (const auto& p : planner::list_policies()) out += "\n  " + p.name + ": " + p.summary;
   return out;
 }
 
-int cmd_drive(const DriveOptions& opts, const std::optional<std::filesystem::path>& json_out,
+int cmd_drive(DriveOptions opts, const std::optional<std::filesystem::path>& json_out,
               bool quiet) {
-  ProgressLine progress(!quiet);
   const double total_s = opts.minutes_from_scenario ? 0.0 : opts.minutes * 60.0;  // 0: not known yet
+  ProgressLine progress(!quiet, total_s);
+  // A live run goes at real time: Ctrl-C stops it (keeping its report), and afterwards
+  // stops serving the page.
+  std::optional<InterruptScope> interrupt;
+  if (opts.live) {
+    interrupt.emplace();
+    opts.live->on_listening = [](const std::string& url) {
+      std::fprintf(stderr, "live view at %s (the run goes at real time; Ctrl-C stops it)\n", url.c_str());
+    };
+  }
   const auto wall0 = std::chrono::steady_clock::now();
   const DriveResult result =
-      drive(opts, [&](double t, double dist) { progress.update(t, total_s, dist); });
+      drive(opts, [&](double t, double dist) { progress.update(t, dist); },
+            interrupt ? &InterruptScope::flag() : nullptr);
   const double wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
   progress.clear();
   std::cout << format_scorecard(result.report, result.provenance);
@@ -74,6 +53,14 @@ int cmd_drive(const DriveOptions& opts, const std::optional<std::filesystem::pat
   if (json_out) {
     write_file_atomic(*json_out, report_to_json(result.report, result.provenance).dump(2) + "\n");
     if (!quiet) std::cout << "  report written to " << json_out->string() << "\n";
+  }
+  if (opts.record && !quiet) std::cout << "  replay written to " << opts.record->string() << "\n";
+  std::cout.flush();
+  if (result.report.ended_early == "stopped" && interrupt) return kExitInterrupted;
+  if (result.live) {
+    std::fprintf(stderr, "the run is over; the live view stays at %s until Ctrl-C\n",
+                 result.live->url().c_str());
+    while (!InterruptScope::flag().load()) std::this_thread::sleep_for(std::chrono::milliseconds(100));
   }
   return result.report.ended_early.empty() ? 0 : kExitFailure;
 }
@@ -113,7 +100,9 @@ bool stderr_is_terminal() { return ::isatty(STDERR_FILENO) != 0; }
 Subcommand register_drive(CLI::App& app) {
   struct State {
     DriveOptions opts;
-    std::string map, config, json, scenario;
+    std::string map, config, json, scenario, record;
+    LiveOptions live;
+    bool live_on = false;
     bool quiet = false;
   };
   auto st = std::make_shared<State>();
@@ -137,6 +126,19 @@ Subcommand register_drive(CLI::App& app) {
   cmd->add_option("--scenario", st->scenario,
                   "Scripted scenario (JSON: ego start, cars, timed events) instead of random traffic")
       ->check(CLI::ExistingFile);
+  cmd->add_option("--record", st->record,
+                  "Record a replay of the run to this file (every step's cars, the planned paths,\n"
+                  "the referee's figures and incidents); watch it with `overtake view FILE`");
+  auto* live = cmd->add_flag("--live", st->live_on,
+                             "Serve the run's live view (open the printed address in a browser); the run\n"
+                             "then goes at real time, and the page stays served after it until Ctrl-C");
+  cmd->add_option("--port", st->live.port, "With --live: TCP port of the page (0: any free port)")
+      ->capture_default_str()
+      ->needs(live);
+  cmd->add_option("--host", st->live.host,
+                  "With --live: address to serve on (loopback by default; the page is for this machine)")
+      ->capture_default_str()
+      ->needs(live);
   cmd->add_flag("--quiet,-q", st->quiet, "No progress line or extra messages");
   return {cmd, [st, minutes] {
             if (!st->map.empty()) st->opts.map = st->map;
@@ -145,6 +147,8 @@ Subcommand register_drive(CLI::App& app) {
               st->opts.minutes_from_scenario = minutes->count() == 0;
             }
             if (!st->config.empty()) st->opts.config = st->config;
+            if (!st->record.empty()) st->opts.record = st->record;
+            if (st->live_on) st->opts.live = st->live;
             std::optional<std::filesystem::path> json_out;
             if (!st->json.empty()) json_out = st->json;
             return cmd_drive(st->opts, json_out, st->quiet);
@@ -192,7 +196,8 @@ int run_cli(int argc, const char* const* argv) {
   app.set_version_flag("--version", "overtake 0.1.0");
   const std::vector<Subcommand> commands{register_drive(app), register_track(app),
                                          register_config(app), register_bench(app),
-                                         register_serve(app), register_sim(app)};
+                                         register_serve(app), register_sim(app),
+                                         register_view(app)};
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

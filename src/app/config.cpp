@@ -147,22 +147,24 @@ Config default_config() {
   return apply_config_json(Config{}, json::parse(*text), "built-in config/overtake.json");
 }
 
-Config load_config(const std::optional<std::filesystem::path>& user_file) {
-  Config c = default_config();
-  if (!user_file) return c;
+json read_json_file(const std::filesystem::path& path) {
   std::string text;
   try {
-    text = read_file(*user_file);
+    text = read_file(path);
   } catch (const std::exception& e) {
     throw ConfigError(e.what());
   }
-  json j;
   try {
-    j = json::parse(text);
+    return json::parse(text);
   } catch (const json::parse_error& e) {
-    throw ConfigError(user_file->string() + ": not valid JSON: " + e.what());
+    throw ConfigError(path.string() + ": not valid JSON: " + e.what());
   }
-  return apply_config_json(c, j, user_file->string());
+}
+
+Config load_config(const std::optional<std::filesystem::path>& user_file) {
+  Config c = default_config();
+  if (!user_file) return c;
+  return apply_config_json(c, read_json_file(*user_file), user_file->string());
 }
 
 json config_to_json(const Config& c) {

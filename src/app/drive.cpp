@@ -5,6 +5,7 @@
 #include "overtake/app/commands.hpp"
 #include "overtake/app/resources.hpp"
 #include "overtake/app/scenario_file.hpp"
+#include "overtake/app/viewer.hpp"
 #include "overtake/core/hash.hpp"
 #include "overtake/planner/policy.hpp"
 #include "overtake/sim/world.hpp"
@@ -42,6 +43,9 @@ void validate_drive_options(const DriveOptions& opts) {
   if (!known) {
     throw UsageError("--policy: unknown policy '" + opts.policy + "' (available: " + policy_list() + ")");
   }
+  if (opts.live && (opts.live->port < 0 || opts.live->port > 65535)) {
+    throw UsageError("--port must be between 0 and 65535 (got " + std::to_string(opts.live->port) + ")");
+  }
 }
 
 std::shared_ptr<const Track> load_track(const std::optional<std::filesystem::path>& path) {
@@ -76,7 +80,6 @@ DriveResult drive_on(const Track& track, const Config& config, const DriveOption
   run.stop = stop;
   planner::Policy& pol = *policy;
   DriveResult result;
-  result.report = sim::run_drive(world, [&pol](const core::Telemetry& t) { return pol.plan(t); }, run);
 
   RunProvenance& p = result.provenance;
   p.seed = opts.seed;
@@ -90,18 +93,38 @@ DriveResult drive_on(const Track& track, const Config& config, const DriveOption
   p.min_steps_per_call = config.world.min_steps_per_call;
   p.max_steps_per_call = config.world.max_steps_per_call;
   p.minutes = opts.minutes;
+
+  // Recording and the live view watch the run; without them it has no observer.
+  std::unique_ptr<sim::ReplayWriter> writer;
+  if (opts.record || opts.live) {
+    const sim::ReplayHeader header = replay_header_for(track, config, p, run.duration_s);
+    if (opts.live) result.live = start_live_view(header, *opts.live, true);
+    // Last: a failure above (a port in use) leaves no replay file behind.
+    if (opts.record) writer = std::make_unique<sim::ReplayWriter>(*opts.record, header);
+  }
+  sim::ObserverList observers({writer.get(), result.live ? &result.live->observer() : nullptr});
+  run.observer = observers.get();
+
+  result.report = sim::run_drive(world, [&pol](const core::Telemetry& t) { return pol.plan(t); }, run);
+
+  if (writer || result.live) {
+    const std::string end = replay_report_json(result.report, p);
+    if (result.live) result.live->finish(end);
+    if (writer) writer->finish(end);
+  }
   return result;
 }
 
-DriveResult drive(const DriveOptions& opts, const std::function<void(double, double)>& progress) {
+DriveResult drive(const DriveOptions& opts, const std::function<void(double, double)>& progress,
+                  const std::atomic<bool>* stop) {
   const Config config = load_config(opts.config);
   const auto track = load_track(opts.map);
-  if (!opts.scenario) return drive_on(*track, config, opts, progress);
+  if (!opts.scenario) return drive_on(*track, config, opts, progress, stop);
   sim::Scenario scenario = load_scenario(*opts.scenario, config.road);
   if (scenario.name.empty()) scenario.name = opts.scenario->filename().string();
   DriveOptions o = opts;
   if (o.minutes_from_scenario && scenario.duration_s) o.minutes = *scenario.duration_s / 60.0;
-  return drive_on(*track, config, o, progress, nullptr, &scenario);
+  return drive_on(*track, config, o, progress, stop, &scenario);
 }
 
 }  // namespace overtake::app

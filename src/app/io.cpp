@@ -22,6 +22,17 @@ std::string read_file(const std::filesystem::path& path) {
 }
 
 void write_file_atomic(const std::filesystem::path& path, std::string_view content) {
+  // A device, a pipe or a terminal (/dev/null, /dev/stdout, ...) is written in place: a
+  // rename would replace it with a regular file.
+  std::error_code status_ec;
+  const auto status = std::filesystem::status(path, status_ec);
+  if (!status_ec && std::filesystem::exists(status) && !std::filesystem::is_regular_file(status)) {
+    std::ofstream out(path, std::ios::binary);
+    out.write(content.data(), static_cast<std::streamsize>(content.size()));
+    out.flush();
+    if (!out) throw std::runtime_error(path.string() + ": write failed");
+    return;
+  }
   const std::filesystem::path tmp =
       path.string() + ".tmp." + std::to_string(static_cast<long>(::getpid()));
   {

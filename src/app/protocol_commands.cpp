@@ -9,13 +9,17 @@
 #include <iostream>
 #include <limits>
 #include <memory>
+#include <thread>
 
 #include <boost/asio/io_context.hpp>
 #include <boost/asio/signal_set.hpp>
 
 #include "overtake/app/cli.hpp"
 #include "overtake/app/commands.hpp"
+#include "overtake/app/interrupt.hpp"
 #include "overtake/app/io.hpp"
+#include "overtake/app/progress.hpp"
+#include "overtake/app/viewer.hpp"
 #include "overtake/core/hash.hpp"
 #include "overtake/core/units.hpp"
 #include "overtake/planner/policy.hpp"
@@ -112,7 +116,9 @@ struct SimArgs {
   std::uint64_t seed = 1;
   std::string traffic = "faithful";
   int steps_per_call = 0;
-  std::string map, config, json;
+  std::string map, config, json, record;
+  bool live = false;
+  LiveOptions live_view;
   bool realtime = false;
   double connect_timeout_s = 10.0;
   double reply_timeout_s = 2.0;
@@ -128,37 +134,6 @@ std::chrono::milliseconds checked_timeout(double seconds, const char* flag) {
   return std::chrono::milliseconds(std::max<long long>(1, std::llround(seconds * 1000.0)));
 }
 
-// A progress line on a terminal, at most ten times a second.
-class SimProgress {
- public:
-  SimProgress(bool enabled, double total_s)
-      : enabled_(enabled && stderr_is_terminal()), total_s_(total_s) {}
-  ~SimProgress() { clear(); }
-  SimProgress(const SimProgress&) = delete;
-  SimProgress& operator=(const SimProgress&) = delete;
-  void update(double t_s, double distance_m) {
-    const auto now = std::chrono::steady_clock::now();
-    if (!enabled_ || now - last_ < std::chrono::milliseconds(100)) return;
-    last_ = now;
-    std::fprintf(stderr, "\r  %6.1f / %.1f min simulated   %7.2f mi ", t_s / 60.0, total_s_ / 60.0,
-                 core::metres_to_miles(distance_m));
-    std::fflush(stderr);
-    shown_ = true;
-  }
-  void clear() {
-    if (!shown_) return;
-    std::fprintf(stderr, "\r%80s\r", "");
-    std::fflush(stderr);
-    shown_ = false;
-  }
-
- private:
-  bool enabled_;
-  double total_s_;
-  bool shown_ = false;
-  std::chrono::steady_clock::time_point last_{};
-};
-
 int cmd_sim(const SimArgs& a) {
   const auto url = protocol::parse_planner_url(a.planner);
   if (!url) throw UsageError("--planner: " + url.error());
@@ -171,6 +146,9 @@ int cmd_sim(const SimArgs& a) {
   }
   if (a.realtime && a.steps_per_call > 0) {
     throw UsageError("--steps-per-call applies to lock-step runs only, not with --realtime");
+  }
+  if (a.live && (a.live_view.port < 0 || a.live_view.port > 65535)) {
+    throw UsageError("--port must be between 0 and 65535 (got " + std::to_string(a.live_view.port) + ")");
   }
   const auto profile = sim::parse_traffic_profile(a.traffic);
   if (!profile)
@@ -193,24 +171,8 @@ int cmd_sim(const SimArgs& a) {
   run.duration_s = a.minutes * 60.0;
   if (a.steps_per_call > 0) run.steps_per_call = a.steps_per_call;
   run.seed = a.seed;
-  SimProgress progress(!a.quiet, run.duration_s);
+  ProgressLine progress(!a.quiet, run.duration_s);
   run.progress = [&progress](double t, double d) { progress.update(t, d); };
-
-  protocol::PlannerConnection connection(url.value(), client);
-  if (!a.quiet) std::fprintf(stderr, "connected to %s\n", protocol::to_string(url.value()).c_str());
-  const auto wall0 = std::chrono::steady_clock::now();
-  sim::RunReport report;
-  if (a.realtime) {
-    report = protocol::run_realtime(world, connection, client, run);
-  } else {
-    protocol::RemotePlanner remote(connection, client);
-    report = sim::run_drive(
-        world, [&remote](const core::Telemetry& t) { return remote(t); }, run);
-  }
-  connection.close();
-  const double wall_s =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
-  progress.clear();
 
   RunProvenance p;
   p.seed = a.seed;
@@ -224,6 +186,50 @@ int cmd_sim(const SimArgs& a) {
   p.max_steps_per_call = config.world.max_steps_per_call;
   p.minutes = a.minutes;
 
+  protocol::PlannerConnection connection(url.value(), client);
+  if (!a.quiet) std::fprintf(stderr, "connected to %s\n", protocol::to_string(url.value()).c_str());
+  // Recording and the live view (which holds a lock-step run to real time), once the
+  // planner is there.
+  std::unique_ptr<sim::ReplayWriter> writer;
+  std::shared_ptr<view::LiveView> live;
+  std::optional<InterruptScope> interrupt;
+  if (!a.record.empty() || a.live) {
+    const sim::ReplayHeader header = replay_header_for(*track, config, p, run.duration_s);
+    if (a.live) {
+      LiveOptions lo = a.live_view;
+      lo.on_listening = [](const std::string& url_text) {
+        std::fprintf(stderr, "live view at %s (the run goes at real time; Ctrl-C stops it)\n",
+                     url_text.c_str());
+      };
+      live = start_live_view(header, lo, !a.realtime);
+      interrupt.emplace();
+      run.stop = &InterruptScope::flag();
+    }
+    // Last: a failure above (a port in use) leaves no replay file behind.
+    if (!a.record.empty()) writer = std::make_unique<sim::ReplayWriter>(a.record, header);
+  }
+  sim::ObserverList observers({writer.get(), live ? &live->observer() : nullptr});
+  run.observer = observers.get();
+
+  const auto wall0 = std::chrono::steady_clock::now();
+  sim::RunReport report;
+  if (a.realtime) {
+    report = protocol::run_realtime(world, connection, client, run);
+  } else {
+    protocol::RemotePlanner remote(connection, client);
+    report = sim::run_drive(
+        world, [&remote](const core::Telemetry& t) { return remote(t); }, run);
+  }
+  connection.close();
+  const double wall_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
+  progress.clear();
+  if (writer || live) {
+    const std::string end = replay_report_json(report, p);
+    if (live) live->finish(end);
+    if (writer) writer->finish(end);
+  }
+
   std::cout << format_scorecard(report, p);
   if (!a.quiet) {
     std::printf("  wall time          %.2f s (%.1fx real time, %s)\n", wall_s,
@@ -234,6 +240,14 @@ int cmd_sim(const SimArgs& a) {
   if (!a.json.empty()) {
     write_file_atomic(a.json, report_to_json(report, p).dump(2) + "\n");
     if (!a.quiet) std::cout << "  report written to " << a.json << "\n";
+  }
+  if (writer && !a.quiet) std::cout << "  replay written to " << a.record << "\n";
+  std::cout.flush();
+  if (report.ended_early == "stopped" && interrupt) return kExitInterrupted;
+  if (live) {
+    std::fprintf(stderr, "the run is over; the live view stays at %s until Ctrl-C\n",
+                 live->url().c_str());
+    while (!InterruptScope::flag().load()) std::this_thread::sleep_for(std::chrono::milliseconds(100));
   }
   return report.ended_early.empty() ? kExitOk : kExitFailure;
 }
@@ -303,6 +317,19 @@ Subcommand register_sim(CLI::App& app) {
   cmd->add_option("--max-path-points", a->max_path_points, "A longer path in a reply ends the run")
       ->capture_default_str();
   cmd->add_option("--json", a->json, "Also write the report as JSON to this file");
+  cmd->add_option("--record", a->record,
+                  "Record a replay of the run to this file; watch it with `overtake view FILE`");
+  auto* live = cmd->add_flag(
+      "--live", a->live,
+      "Serve the run's live view (open the printed address in a browser); a lock-step run then\n"
+      "goes at real time, and the page stays served after the run until Ctrl-C");
+  cmd->add_option("--port", a->live_view.port, "With --live: TCP port of the page (0: any free port)")
+      ->capture_default_str()
+      ->needs(live);
+  cmd->add_option("--host", a->live_view.host,
+                  "With --live: address to serve the page on (loopback by default)")
+      ->capture_default_str()
+      ->needs(live);
   cmd->add_flag("--quiet,-q", a->quiet, "No progress line or extra messages");
   return {cmd, [a] { return cmd_sim(*a); }};
 }

@@ -68,7 +68,12 @@ json report_to_json(const sim::RunReport& r, const RunProvenance& p) {
   j["time_in_lane_s"] = r.time_in_lane_s;
   j["planner_cycles"] = r.planner_cycles;
   j["ended_early"] = r.ended_early.empty() ? json(nullptr) : json(r.ended_early);
-  j["timing"] = {{"p50_us", r.timing.p50_us}, {"p99_us", r.timing.p99_us}, {"max_us", r.timing.max_us}};
+  j["timing"] = {{"clock", r.timing.clock},
+                 {"p50_us", r.timing.p50_us},
+                 {"p99_us", r.timing.p99_us},
+                 {"max_us", r.timing.max_us},
+                 {"wall_p99_us", r.timing.wall_p99_us},
+                 {"wall_max_us", r.timing.wall_max_us}};
   j["config"] = {{"seed", p.seed},
                  {"policy", p.policy},
                  {"traffic", p.traffic},
@@ -108,8 +113,13 @@ std::string format_scorecard(const sim::RunReport& r, const RunProvenance& p) {
     os << printf_string(" %zu: %5.1f%%", l, pct);
   }
   os << "\n";
-  os << printf_string("  planner time       p50 %.1f us   p99 %.1f us   max %.1f us   (%ld cycles)\n",
-                      r.timing.p50_us, r.timing.p99_us, r.timing.max_us, r.planner_cycles);
+  os << printf_string("  planner time       p50 %.1f us   p99 %.1f us   max %.1f us   (%ld cycles, %s)\n",
+                      r.timing.p50_us, r.timing.p99_us, r.timing.max_us, r.planner_cycles,
+                      r.timing.clock == "thread_cpu" ? "thread CPU time" : "wall clock");
+  if (r.timing.clock != "wall") {
+    os << printf_string("  planner wall time  p99 %.1f us   max %.1f us\n", r.timing.wall_p99_us,
+                        r.timing.wall_max_us);
+  }
   constexpr std::size_t kShown = 10;
   if (!r.incidents.empty()) {
     os << "  first incidents:\n";

@@ -5,7 +5,6 @@
 #include <set>
 
 #include "overtake/app/config.hpp"
-#include "overtake/app/io.hpp"
 
 namespace overtake::app {
 namespace {
@@ -165,19 +164,7 @@ sim::Scenario parse_scenario(const json& j, std::string_view source, const core:
 }
 
 sim::Scenario load_scenario(const std::filesystem::path& path, const core::RoadParams& road) {
-  std::string text;
-  try {
-    text = read_file(path);
-  } catch (const std::exception& e) {
-    throw ConfigError(e.what());
-  }
-  json j;
-  try {
-    j = json::parse(text);
-  } catch (const json::parse_error& e) {
-    throw ConfigError(path.string() + ": not valid JSON: " + e.what());
-  }
-  return parse_scenario(j, path.string(), road);
+  return parse_scenario(read_json_file(path), path.string(), road);
 }
 
 }  // namespace overtake::app

@@ -106,6 +106,7 @@ void validate_reference(const PlannerParams& all, std::vector<std::string>& out)
                                {"trajectory.lat_time_weight", t.lat_time_weight},
                                {"trajectory.lane_weight", t.lane_weight},
                                {"trajectory.proximity_weight", t.proximity_weight},
+                               {"trajectory.change_early_window_s", t.change_early_window_s},
                                {"trajectory.rear_weight", t.rear_weight}}) {
     non_negative(key, v);
   }

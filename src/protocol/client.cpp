@@ -427,6 +427,8 @@ sim::RunReport run_realtime(sim::World& world, PlannerConnection& connection,
     awaiting_full = full;
   };
 
+  sim::RunObserver* const observer = run.observer;
+  if (observer) observer->on_state(world);
   auto next_tick = Clock::now() + period;
   try {
     try {
@@ -441,6 +443,7 @@ sim::RunReport run_realtime(sim::World& world, PlannerConnection& connection,
         while (Clock::now() >= next_tick && world.steps() < total_steps) {
           world.step();
           lanes.observe(world.ego().frenet.d_m, p.step_s);
+          if (observer) observer->on_state(world);
           next_tick += period;
           stepped = true;
         }
@@ -482,7 +485,10 @@ sim::RunReport run_realtime(sim::World& world, PlannerConnection& connection,
           cycle_us.push_back(
               std::chrono::duration<double, std::micro>(Clock::now() - sent_at).count());
         }
-        if (!reply.value().manual) world.apply_path(std::move(reply).value().path);
+        if (!reply.value().manual) {
+          if (observer) observer->on_path(world, reply.value().path);
+          world.apply_path(std::move(reply).value().path);
+        }
         // Next telemetry: full when anything stepped; null once when nothing did; after the
         // answer to a null one, the next step sends it.
         if (world.steps() > last_full_step) {

@@ -250,15 +250,6 @@ tcp::endpoint listen_endpoint(net::io_context& ioc, const ServeOptions& opts) {
 
 }  // namespace
 
-LogFn stderr_log(bool verbose) {
-  return [verbose](LogLevel level, std::string_view line) {
-    if (level == LogLevel::info && !verbose) return;
-    std::fprintf(stderr, "%s%.*s\n", level == LogLevel::warning ? "warning: " : "",
-                 static_cast<int>(line.size()), line.data());
-    std::fflush(stderr);
-  };
-}
-
 void run_server(net::io_context& ioc, const PlannerSetup& setup, const ServeOptions& opts,
                 const std::function<void(std::uint16_t)>& on_listening) {
   if (!setup.line) throw std::invalid_argument("run_server: no reference line");

@@ -144,6 +144,32 @@ void Referee::update_rubric(const EgoFrame& f, double curvature) {
   if (jerk >= p_.max_jerk_mps3) count(IncidentType::max_jerk, f, jerk);
 }
 
+StrictFigures Referee::current_strict() const {
+  StrictFigures out;
+  const long w = p_.strict_window_steps;
+  if (ring_filled_ < 2 * w + 1) return out;
+  const double window_s = static_cast<double>(w) * step_s_;
+  const core::Vec2 p0 = recent(0);
+  const core::Vec2 p1 = recent(w);
+  const core::Vec2 p2 = recent(2 * w);
+  // The same expressions as update_strict, so that the figures equal the peaks' inputs.
+  const core::Vec2 accel = (1.0 / (window_s * window_s)) * (p0 - 2.0 * p1 + p2);
+  out.acceleration_mps2 = core::norm(p0 - 2.0 * p1 + p2) / (window_s * window_s);
+  const core::Vec2 travel = p0 - p2;  // direction of travel at the window's centre
+  const double travel_m = core::norm(travel);
+  if (travel_m > 0.0) {
+    const core::Vec2 along = (1.0 / travel_m) * travel;
+    out.tangential_mps2 = core::dot(accel, along);
+    out.normal_mps2 = std::abs(core::cross(along, accel));
+  } else {
+    out.normal_mps2 = out.acceleration_mps2;  // standing: no direction of travel
+  }
+  if (ring_filled_ < 3 * w + 1) return out;
+  const core::Vec2 p3 = recent(3 * w);
+  out.jerk_mps3 = core::norm(p0 - 3.0 * p1 + 3.0 * p2 - p3) / (window_s * window_s * window_s);
+  return out;
+}
+
 void Referee::update_strict() {
   const long w = p_.strict_window_steps;
   if (ring_filled_ < 2 * w + 1) return;

@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 
+#include "overtake/core/cpu_clock.hpp"
 #include "overtake/core/random.hpp"
 
 namespace overtake::sim {
@@ -31,16 +32,41 @@ void LaneTracker::observe(double d_m, double dt_s) {
   settled_ = lane;
 }
 
+ObserverList::ObserverList(std::vector<RunObserver*> observers) {
+  for (RunObserver* o : observers) {
+    if (o) observers_.push_back(o);
+  }
+}
+
+void ObserverList::on_state(const World& world) {
+  for (RunObserver* o : observers_) o->on_state(world);
+}
+
+void ObserverList::on_path(const World& world, std::span<const core::Vec2> path) {
+  for (RunObserver* o : observers_) o->on_path(world, path);
+}
+
+RunObserver* ObserverList::get() {
+  if (observers_.empty()) return nullptr;
+  return observers_.size() == 1 ? observers_.front() : this;
+}
+
 RunReport run_drive(World& world, const PlannerFn& planner, const RunOptions& opts) {
   const WorldParams& p = world.params();
   const long total_steps = std::lround(opts.duration_s / p.step_s);
   core::Rng latency(core::derive_seed(opts.seed, kLatencyStream));
   LaneTracker lanes(p.road);
-  std::vector<double> cycle_us;
-  cycle_us.reserve(static_cast<std::size_t>(total_steps / std::max(1, p.min_steps_per_call)) + 1);
+  std::vector<double> cycle_us;  // thread CPU time
+  std::vector<double> wall_us;
+  const auto expected_cycles =
+      static_cast<std::size_t>(total_steps / std::max(1, p.min_steps_per_call)) + 1;
+  cycle_us.reserve(expected_cycles);
+  wall_us.reserve(expected_cycles);
 
   std::string ended_early;
   double next_progress_s = kProgressEveryS;
+  RunObserver* const observer = opts.observer;
+  if (observer) observer->on_state(world);
   while (world.steps() < total_steps) {
     if (opts.stop && opts.stop->load(std::memory_order_relaxed)) {
       ended_early = "stopped";
@@ -48,6 +74,7 @@ RunReport run_drive(World& world, const PlannerFn& planner, const RunOptions& op
     }
     const core::Telemetry telemetry = world.telemetry();
     std::vector<core::Vec2> path;
+    const double c0 = core::thread_cpu_us();
     const auto t0 = std::chrono::steady_clock::now();
     try {
       path = planner(telemetry);
@@ -57,7 +84,9 @@ RunReport run_drive(World& world, const PlannerFn& planner, const RunOptions& op
       break;
     }
     const auto t1 = std::chrono::steady_clock::now();
-    cycle_us.push_back(std::chrono::duration<double, std::micro>(t1 - t0).count());
+    cycle_us.push_back(core::thread_cpu_us() - c0);
+    wall_us.push_back(std::chrono::duration<double, std::micro>(t1 - t0).count());
+    if (observer) observer->on_path(world, path);
     world.apply_path(std::move(path));
 
     const int k = opts.steps_per_call
@@ -66,6 +95,7 @@ RunReport run_drive(World& world, const PlannerFn& planner, const RunOptions& op
     for (int i = 0; i < k && world.steps() < total_steps; ++i) {
       world.step();
       lanes.observe(world.ego().frenet.d_m, p.step_s);
+      if (observer) observer->on_state(world);
     }
     if (opts.progress && world.time_s() >= next_progress_s) {  // every 10 simulated seconds
       opts.progress(world.time_s(), world.referee().distance_m());
@@ -73,7 +103,12 @@ RunReport run_drive(World& world, const PlannerFn& planner, const RunOptions& op
     }
   }
 
-  return summarize(world, lanes, std::move(cycle_us), std::move(ended_early));
+  RunReport report = summarize(world, lanes, std::move(cycle_us), std::move(ended_early));
+  std::sort(wall_us.begin(), wall_us.end());
+  report.timing.clock = "thread_cpu";
+  report.timing.wall_p99_us = percentile(wall_us, 0.99);
+  report.timing.wall_max_us = wall_us.empty() ? 0.0 : wall_us.back();
+  return report;
 }
 
 RunReport summarize(const World& world, const LaneTracker& lanes, std::vector<double> cycle_us,
@@ -92,8 +127,13 @@ RunReport summarize(const World& world, const LaneTracker& lanes, std::vector<do
   report.time_in_lane_s = lanes.time_in_lane_s();
   report.planner_cycles = static_cast<long>(cycle_us.size());
   std::sort(cycle_us.begin(), cycle_us.end());
-  report.timing = {percentile(cycle_us, 0.5), percentile(cycle_us, 0.99),
-                   cycle_us.empty() ? 0.0 : cycle_us.back(), static_cast<long>(cycle_us.size())};
+  report.timing.p50_us = percentile(cycle_us, 0.5);
+  report.timing.p99_us = percentile(cycle_us, 0.99);
+  report.timing.max_us = cycle_us.empty() ? 0.0 : cycle_us.back();
+  report.timing.cycles = static_cast<long>(cycle_us.size());
+  report.timing.clock = "wall";
+  report.timing.wall_p99_us = report.timing.p99_us;
+  report.timing.wall_max_us = report.timing.max_us;
   return report;
 }
 

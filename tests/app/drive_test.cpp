@@ -70,6 +70,10 @@ TEST(DriveReport, TimingLivesUnderItsOwnKey) {
   EXPECT_GT(j["timing"]["p50_us"].get<double>(), 0.0);
   EXPECT_GE(j["timing"]["p99_us"].get<double>(), j["timing"]["p50_us"].get<double>());
   EXPECT_GE(j["timing"]["max_us"].get<double>(), j["timing"]["p99_us"].get<double>());
+  // An in-process planner is timed on its thread's CPU clock; the wall clock is kept beside.
+  EXPECT_EQ(j["timing"]["clock"], "thread_cpu");
+  EXPECT_GE(j["timing"]["wall_max_us"].get<double>(), j["timing"]["wall_p99_us"].get<double>());
+  EXPECT_GT(j["timing"]["wall_p99_us"].get<double>(), 0.0);
 }
 
 TEST(DriveReport, FixedStepsPerCallIsRecorded) {

@@ -11,6 +11,7 @@
 
 #include "overtake/app/cli.hpp"
 #include "overtake/app/io.hpp"
+#include "overtake/sim/replay.hpp"
 #include "test_support.hpp"
 
 namespace overtake::protocol {
@@ -91,6 +92,47 @@ TEST(ProtocolLoopback, RealTimeAgainstOurServer) {
   EXPECT_GT(got["planner_cycles"].get<long>(), 20);
   EXPECT_GT(got["distance_miles"].get<double>(), 0.0);
   EXPECT_EQ(server.log().warnings(), 0u) << server.log().dump();
+}
+
+TEST(ProtocolLoopback, SimRecordsTheSameRunAsDrive) {
+  ServerFixture server("walkthrough");
+  const auto dir = std::filesystem::temp_directory_path() /
+                   ("overtake-loopback-record-" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  app::DriveOptions o;
+  o.policy = "walkthrough";
+  o.minutes = 0.5;
+  o.seed = 7;
+  o.record = dir / "drive.otr";
+  (void)app::drive(o);
+  EXPECT_EQ(run_cli({"sim", "--planner", server.url(), "--name", "walkthrough", "--minutes", "0.5",
+                     "--seed", "7", "--record", (dir / "sim.otr").string(), "--quiet"}),
+            app::kExitOk);
+  const sim::Replay a = sim::read_replay(dir / "drive.otr");
+  const sim::Replay b = sim::read_replay(dir / "sim.otr");
+  // The same world states step by step, the same incidents, the same report.
+  ASSERT_EQ(a.frames.size(), b.frames.size());
+  for (std::size_t i = 0; i < a.frames.size(); ++i) {
+    ASSERT_EQ(a.frames[i].position, b.frames[i].position) << "frame " << i;
+    ASSERT_EQ(a.frames[i].cars.size(), b.frames[i].cars.size());
+    for (std::size_t c = 0; c < a.frames[i].cars.size(); ++c) {
+      ASSERT_EQ(a.frames[i].cars[c].position, b.frames[i].cars[c].position);
+    }
+  }
+  EXPECT_EQ(a.paths.size(), b.paths.size());
+  EXPECT_EQ(a.incidents.size(), b.incidents.size());
+  EXPECT_EQ(a.end_json, b.end_json);
+  EXPECT_EQ(b.header.provenance.policy, "walkthrough");
+
+  // Real time: every step, and the paths as they arrived.
+  EXPECT_EQ(run_cli({"sim", "--planner", server.url(), "--minutes", "0.02", "--realtime", "--record",
+                     (dir / "rt.otr").string(), "--quiet"}),
+            app::kExitOk);
+  const sim::Replay rt = sim::read_replay(dir / "rt.otr");
+  EXPECT_EQ(rt.frames.size(), 61u);
+  EXPECT_GT(rt.paths.size(), 20u);
+  EXPECT_DOUBLE_EQ(json::parse(rt.end_json)["duration_s"].get<double>(), 1.2);
+  std::filesystem::remove_all(dir);
 }
 
 }  // namespace

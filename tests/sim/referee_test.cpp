@@ -350,5 +350,45 @@ TEST(RefereeDistance, CountsAreIndexedByEnumOrder) {
   EXPECT_EQ(drv.referee.incidents()[2].type, IncidentType::outside_lane);
 }
 
+TEST(RefereeStrictNow, PeaksAreTheMaximaOfTheCurrentFigures) {
+  // Speeding up on a straight, then a circle at constant speed, then braking.
+  StraightDriver drv;
+  StrictFigures max_now;
+  const auto watch = [&] {
+    const StrictFigures f = drv.referee.current_strict();
+    max_now.acceleration_mps2 = std::max(max_now.acceleration_mps2, f.acceleration_mps2);
+    max_now.jerk_mps3 = std::max(max_now.jerk_mps3, f.jerk_mps3);
+    EXPECT_NEAR(std::hypot(f.tangential_mps2, f.normal_mps2), f.acceleration_mps2, 1e-9);
+  };
+  EXPECT_EQ(drv.referee.current_strict(), StrictFigures{});
+  for (int i = 0; i < 200; ++i) {
+    drv.step(2.0 * kDt * i);  // 2 m/s^2
+    watch();
+  }
+  // Constant acceleration along +x: all of it tangential, and positive.
+  EXPECT_NEAR(drv.referee.current_strict().tangential_mps2, 2.0, kFigureTol);
+  EXPECT_NEAR(drv.referee.current_strict().normal_mps2, 0.0, 1e-6);
+  for (int i = 0; i < 100; ++i) {
+    drv.step(std::max(0.0, 8.0 - 3.0 * kDt * i));  // slowing: negative tangential
+    watch();
+  }
+  EXPECT_NEAR(drv.referee.current_strict().tangential_mps2, -3.0, kFigureTol);
+  EXPECT_DOUBLE_EQ(max_now.acceleration_mps2, drv.referee.peaks().strict_acceleration_mps2);
+  EXPECT_DOUBLE_EQ(max_now.jerk_mps3, drv.referee.peaks().strict_jerk_mps3);
+}
+
+TEST(RefereeStrictNow, OnACircleItIsNormal) {
+  constexpr double kRadius = 100.0;
+  constexpr double kSpeed = 20.0;
+  Referee r{RefereeParams{}, kDt};
+  for (int i = 0; i < 100; ++i) {
+    const double a = kSpeed * kDt * i / kRadius;
+    r.observe({i * kDt, {kRadius * std::cos(a), kRadius * std::sin(a)}, kSpeed, 0.0, kLaneCentreD, {}});
+  }
+  const StrictFigures f = r.current_strict();
+  EXPECT_NEAR(f.normal_mps2, kSpeed * kSpeed / kRadius, kCircleRelTol * kSpeed * kSpeed / kRadius);
+  EXPECT_NEAR(f.tangential_mps2, 0.0, 1e-6);
+}
+
 }  // namespace
 }  // namespace overtake::sim

@@ -25,8 +25,6 @@ constexpr double kReverseTolerance = -1e-4;
 /// A gentle stop (to standstill behind a stopped car, or at a crawl): its braking and jerk.
 constexpr double kGentleStopMps2 = 2.0;
 constexpr double kGentleStopJerkMps3 = 2.5;
-/// The early window of a lane change, in which the ego is still in its first lane.
-constexpr double kEarlyWindowS = 2.0;
 /// Spacing of the samples that find a lane's largest along-road scale ahead.
 constexpr double kScaleSampleM = 10.0;
 /// Lane changes costed as this many seconds of lateral time at least.
@@ -239,7 +237,7 @@ ScaleRange lane_scale(const core::ReferenceLine& line, double s0, double s1, dou
 
 /// Soft costs of one longitudinal candidate in one lane: inside the RSS gap of the cars ahead,
 /// and leaving too little room to cars closing from behind; over the whole horizon and over
-/// its first kEarlyWindowS.
+/// its first change_early_window_s.
 struct LaneCost {
   double full = 0.0;
   double early = 0.0;
@@ -250,7 +248,7 @@ LaneCost lane_cost(const Track1d& lon, const Grid& g, const std::vector<const Ca
   const auto& b = p.behaviour;
   const auto& tp = p.trajectory;
   LaneCost c;
-  const int early_n = static_cast<int>(std::lround(kEarlyWindowS / g.h));
+  const int early_n = static_cast<int>(std::lround(tp.change_early_window_s / g.h));
   for (int k = 0; k <= g.n; ++k) {
     const auto e = static_cast<std::size_t>(k + kBack);
     const auto i = static_cast<std::size_t>(k);

@@ -30,6 +30,9 @@ struct BenchSpec {
   int shard_index = 1;  ///< 1-based
   int shard_count = 1;
   bool resume = false;
+  /// After the bench, run again with a replay recorded the N runs with most incidents (ties:
+  /// lower seed first), into out/replays/<policy>-<traffic>-seed<N>.otr.
+  int record_worst = 0;
 };
 
 /// One run of the sweep; `index` is its place in the full (unsharded) order.
@@ -64,6 +67,7 @@ struct BenchOutcome {
   double wall_s = 0.0;
   double simulated_s = 0.0;        ///< simulated by this call
   std::string summary_markdown;    ///< also written to summary.md
+  std::vector<std::filesystem::path> replays;  ///< recorded by record_worst
 };
 
 /// Checks everything before any run starts (UsageError / ConfigError / MapError), then runs
@@ -79,6 +83,10 @@ struct BenchOutcome {
 /// or doubled.
 [[nodiscard]] BenchOutcome merge_bench(const std::vector<std::filesystem::path>& dirs,
                                        const std::filesystem::path& out);
+
+/// The runs of a bench output folder (runs.jsonl), in sweep order; unreadable lines are
+/// dropped.
+[[nodiscard]] std::vector<nlohmann::json> load_bench_runs(const std::filesystem::path& dir);
 
 /// The summary rows (one per policy and traffic profile, in sweep order) of a set of runs.
 [[nodiscard]] nlohmann::json summarize_bench(const std::vector<nlohmann::json>& runs,

@@ -17,6 +17,10 @@
 #include "overtake/sim/run.hpp"
 #include "overtake/sim/scenario.hpp"
 
+namespace overtake::view {
+class LiveView;
+}  // namespace overtake::view
+
 namespace overtake::app {
 
 /// A bad flag value or combination; the message names the flag.
@@ -34,6 +38,14 @@ struct Track {
 /// The map file at `path`, or the built-in default track. Throws core::MapError.
 [[nodiscard]] std::shared_ptr<const Track> load_track(const std::optional<std::filesystem::path>& path);
 
+/// Where the live view of a run is served (`--live`).
+struct LiveOptions {
+  std::string host = "127.0.0.1";
+  int port = 8080;  ///< 0: any free port
+  /// Called with the page's address once the server listens, before the run starts.
+  std::function<void(const std::string& url)> on_listening;
+};
+
 /// Options of `overtake drive`.
 struct DriveOptions {
   std::optional<std::filesystem::path> map;
@@ -48,6 +60,10 @@ struct DriveOptions {
   /// Take the duration from the scenario file when it gives one (the CLI sets this when
   /// --minutes is not given).
   bool minutes_from_scenario = false;
+  /// Record a replay (docs/replay.md) to this file.
+  std::optional<std::filesystem::path> record;
+  /// Serve the live view of the run, which then goes at 1x real time.
+  std::optional<LiveOptions> live;
 };
 
 /// Checks flag values and names (UsageError naming the flag).
@@ -57,16 +73,22 @@ void validate_drive_options(const DriveOptions& opts);
 struct DriveResult {
   sim::RunReport report;
   RunProvenance provenance;
+  /// With DriveOptions::live: the view, still serving the page (the run is over).
+  std::shared_ptr<view::LiveView> live;
 };
 
 /// Checks the options (UsageError naming the flag), loads everything and runs the drive.
-/// `progress` (may be empty) is called now and then with simulated time and distance.
+/// `progress` (may be empty) is called now and then with simulated time and distance;
+/// `stop` (may be null) ends the run early when set.
 [[nodiscard]] DriveResult drive(const DriveOptions& opts,
-                                const std::function<void(double t_s, double distance_m)>& progress = {});
+                                const std::function<void(double t_s, double distance_m)>& progress = {},
+                                const std::atomic<bool>* stop = nullptr);
 
 /// Like drive(), with the map and config already loaded.
 /// `stop` (may be null) ends the run early when set; `scenario` (may be null) replaces the
-/// random traffic (opts.scenario is not read here).
+/// random traffic (opts.scenario is not read here). With opts.record the replay is written
+/// (also when the run fails: it ends with the report so far); with opts.live the run is
+/// served live and paced at real time.
 [[nodiscard]] DriveResult drive_on(const Track& track, const Config& config, const DriveOptions& opts,
                                    const std::function<void(double t_s, double distance_m)>& progress = {},
                                    const std::atomic<bool>* stop = nullptr,

@@ -31,6 +31,10 @@ class ConfigError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+/// A JSON file's contents; a file that cannot be read or is not JSON is a ConfigError naming
+/// the path (and, for bad JSON, where the parser stopped).
+[[nodiscard]] nlohmann::json read_json_file(const std::filesystem::path& path);
+
 /// Applies the keys present in `j` (any subset) on top of `base`. Unknown keys, wrong types
 /// and invalid values are errors naming `source` and the key. The road is copied into the
 /// world's and planner's params.

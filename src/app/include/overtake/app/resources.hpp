@@ -1,5 +1,6 @@
 #pragma once
-// Files built into the binary (the shipped config and the default track).
+// Files built into the binary: the shipped config, the default track, and the web pages
+// "viewer.html" and "report.html" (built from web/; placeholders in docs/replay.md).
 
 #include <optional>
 #include <string_view>

@@ -18,7 +18,7 @@
 #include <vector>
 
 #include "overtake/protocol/codec.hpp"
-#include "overtake/protocol/server.hpp"
+#include "overtake/protocol/log.hpp"
 #include "overtake/sim/run.hpp"
 #include "overtake/sim/world.hpp"
 
@@ -114,6 +114,7 @@ class RemotePlanner {
 /// anything stepped since the last one and `42["telemetry",null]` when nothing did (the
 /// planner's `manual` then waits for the next step). Ends early, with the report so far, on a
 /// stall, a disconnect or a malformed reply. Planner time = round trip of full telemetries.
+/// run.observer (when set) sees the start, every step, and each path when it arrives.
 [[nodiscard]] sim::RunReport run_realtime(sim::World& world, PlannerConnection& connection,
                                           const ClientOptions& options, const sim::RunOptions& run);
 

@@ -22,24 +22,13 @@
 #include "overtake/planner/params.hpp"
 #include "overtake/planner/policy.hpp"
 #include "overtake/protocol/codec.hpp"
+#include "overtake/protocol/log.hpp"
 
 namespace boost::asio {
 class io_context;
 }  // namespace boost::asio
 
 namespace overtake::protocol {
-
-/// Importance of a log line.
-enum class LogLevel {
-  info,     ///< connection events and status lines
-  warning,  ///< a bad frame or a failure
-};
-
-/// Where log lines go (one line per call, without a newline).
-using LogFn = std::function<void(LogLevel, std::string_view)>;
-
-/// Log lines to stderr; info lines only when `verbose`.
-[[nodiscard]] LogFn stderr_log(bool verbose);
 
 /// One websocket message as it came off the socket.
 struct Frame {

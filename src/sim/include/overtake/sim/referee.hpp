@@ -52,6 +52,16 @@ struct Peaks {
   friend bool operator==(const Peaks&, const Peaks&) = default;
 };
 
+/// The strict figures at the newest step: finite differences over 0.1 s windows
+/// (RefereeParams::strict_window_steps), centred one window back. Zero until enough steps.
+struct StrictFigures {
+  double tangential_mps2 = 0.0;    ///< along the direction of travel; negative when slowing
+  double normal_mps2 = 0.0;        ///< across it (magnitude)
+  double acceleration_mps2 = 0.0;  ///< total: the figure whose peak is Peaks::strict_acceleration_mps2
+  double jerk_mps3 = 0.0;          ///< the figure whose peak is Peaks::strict_jerk_mps3
+  friend bool operator==(const StrictFigures&, const StrictFigures&) = default;
+};
+
 /// Watches the ego step by step and counts incidents.
 class Referee {
  public:
@@ -68,6 +78,9 @@ class Referee {
   /// The longest incident-free stretch so far (m), including the current one.
   [[nodiscard]] double best_incident_free_m() const { return best_incident_free_m_; }
   [[nodiscard]] double distance_m() const { return distance_m_; }
+  /// The strict figures at the newest step (computed on demand from the recent positions;
+  /// for viewers, it changes nothing the referee counts).
+  [[nodiscard]] StrictFigures current_strict() const;
 
  private:
   void count(IncidentType type, const EgoFrame& f, double value);

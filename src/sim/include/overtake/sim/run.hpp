@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <functional>
 #include <optional>
+#include <span>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -26,6 +27,31 @@ struct PlannerFailure : std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+/// Watches a run as it goes (a replay recording, a live view). Called on the loop's thread;
+/// a run without an observer pays one pointer test per step.
+class RunObserver {
+ public:
+  virtual ~RunObserver() = default;
+  /// The world's state: once before the first step, then after every step.
+  virtual void on_state(const World& world) = 0;
+  /// A path the planner sent, as sent (before the wire rounding and the trim). Lock-step: it
+  /// was planned from the state last passed to on_state; real time: it arrived then.
+  virtual void on_path(const World& world, std::span<const core::Vec2> path) = 0;
+};
+
+/// Passes every call on to several observers, in the order given (null ones are skipped).
+class ObserverList final : public RunObserver {
+ public:
+  explicit ObserverList(std::vector<RunObserver*> observers);
+  void on_state(const World& world) override;
+  void on_path(const World& world, std::span<const core::Vec2> path) override;
+  /// The single observer when there is one, this list when there are more, else null.
+  [[nodiscard]] RunObserver* get();
+
+ private:
+  std::vector<RunObserver*> observers_;
+};
+
 /// How long and how to run.
 struct RunOptions {
   double duration_s = 1800.0;
@@ -36,14 +62,22 @@ struct RunOptions {
   std::function<void(double t_s, double distance_m)> progress;
   /// When set (and true), the run stops at the next cycle with ended_early = "stopped".
   const std::atomic<bool>* stop = nullptr;
+  /// When set, sees every state and every path (see RunObserver); not owned.
+  RunObserver* observer = nullptr;
 };
 
 /// Planner compute time per cycle (microseconds). Not part of the determinism promise.
+/// In-process planners (run_drive) are timed on the thread's CPU clock, so that other
+/// processes on a shared machine do not inflate the figures; the wall-clock p99 and max are
+/// kept beside them. A remote planner's cycle is its wall-clock round trip (clock "wall").
 struct PlannerTiming {
   double p50_us = 0.0;
   double p99_us = 0.0;
   double max_us = 0.0;
   long cycles = 0;
+  std::string clock = "wall";  ///< what p50/p99/max measure: "thread_cpu" or "wall"
+  double wall_p99_us = 0.0;    ///< wall-clock figures (equal to the above when clock is "wall")
+  double wall_max_us = 0.0;
 };
 
 /// Everything a run reports (SI; conversions at the report's edge).

@@ -1,0 +1,199 @@
+#pragma once
+// Replay files (docs/replay.md): a run recorded step by step for `overtake view`. A preamble
+// (magic, version, JSON header) and one zlib stream of records: a frame per step (the ego,
+// every car, the referee's running figures), the path of each planner cycle, each incident,
+// and the run's report at the end. The writer streams (deflating as the run goes), the
+// reader checks everything and says what is wrong and where.
+
+#include <cstddef>
+#include <cstdint>
+#include <filesystem>
+#include <memory>
+#include <span>
+#include <stdexcept>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "overtake/core/geometry.hpp"
+#include "overtake/core/reference_line.hpp"
+#include "overtake/sim/params.hpp"
+#include "overtake/sim/referee.hpp"
+#include "overtake/sim/run.hpp"
+#include "overtake/sim/world.hpp"
+
+namespace overtake::sim {
+
+inline constexpr std::string_view kReplayMagic = "OVTKRPLY";
+inline constexpr std::uint32_t kReplayVersion = 1;
+/// Bytes before the header JSON: magic, version, header length.
+inline constexpr std::size_t kReplayPreambleBytes = 16;
+/// Spacing of the lane lines' points along the reference line (m).
+inline constexpr double kReplayLaneLineSpacingM = 5.0;
+
+/// Kinds of records in the body.
+enum class ReplayRecordKind : std::uint8_t { frame = 1, path = 2, incident = 3, end = 4 };
+
+/// A replay that cannot be written or read; the message names the file and what is wrong
+/// (with the byte offset or the record where it went wrong).
+class ReplayError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+/// What was run (the header's "provenance").
+struct ReplayProvenance {
+  std::string policy;
+  std::string traffic;
+  std::uint64_t seed = 1;
+  std::string track = "default";  ///< "default" for the built-in track, else the map file
+  double duration_s = 0.0;        ///< the duration asked for
+  std::string overtake_version;
+  std::string config_hash;
+  friend bool operator==(const ReplayProvenance&, const ReplayProvenance&) = default;
+};
+
+/// The header: the road and the limits a viewer needs, and what was run.
+struct ReplayHeader {
+  double step_s = 0.02;
+  int lanes = 3;
+  double lane_width_m = 4.0;
+  double car_length_m = 4.7;
+  double car_width_m = 1.9;
+  double speed_limit_mps = 0.0;
+  double max_acceleration_mps2 = 0.0;
+  double max_jerk_mps3 = 0.0;
+  double track_length_m = 0.0;
+  /// lanes + 1 closed polylines (d = 0, w, 2w, ...), each flat [x, y, x, y, ...] in metres;
+  /// the last point repeats the first.
+  std::vector<std::vector<double>> lane_lines;
+  std::vector<std::string> incident_types;  ///< names, indexed by the incident records' type
+  ReplayProvenance provenance;
+};
+
+/// The header of a run on `line` with `params`: lane lines sampled every 5 m, rounded to cm.
+[[nodiscard]] ReplayHeader make_replay_header(const core::ReferenceLine& line,
+                                              const WorldParams& params,
+                                              ReplayProvenance provenance);
+/// The header as the file's JSON text.
+[[nodiscard]] std::string replay_header_json(const ReplayHeader& header);
+/// The file's uncompressed start: magic, version, header length, header JSON.
+[[nodiscard]] std::string replay_preamble(const ReplayHeader& header);
+
+/// Turns a run into records (u8 kind, u32 payload length, payload), appended to a buffer.
+/// The live view sends these as they are; the writer deflates them.
+class ReplayEncoder {
+ public:
+  /// The frame of the world's current step, then an incident record for each incident the
+  /// referee counted since the previous call.
+  void append_state(const World& world, std::string& out);
+  /// The path the planner sent at a cycle (at most 65535 points are kept).
+  static void append_path(std::span<const core::Vec2> path, std::string& out);
+  /// The last record: the run's report as JSON.
+  static void append_end(std::string_view report_json, std::string& out);
+
+ private:
+  std::size_t incidents_seen_ = 0;
+};
+
+/// Streams a replay to `path` while the run goes: records are deflated in chunks and written
+/// to `path` + ".partial" (flushed to a readable point about every megabyte of records), and
+/// finish() completes the stream and renames the file, so nothing half-written takes the
+/// final name. Use it as the run's observer (RunOptions::observer).
+/// A path that exists and is not a regular file (/dev/null, a pipe) is written in place.
+class ReplayWriter final : public RunObserver {
+ public:
+  /// Creates the partial file and writes the preamble. Throws ReplayError naming the file.
+  ReplayWriter(const std::filesystem::path& path, const ReplayHeader& header);
+  /// A recording that was not finished (the run threw) is ended properly: an end record
+  /// saying so, the stream completed, the file renamed. Errors are swallowed here.
+  ~ReplayWriter() override;
+  ReplayWriter(const ReplayWriter&) = delete;
+  ReplayWriter& operator=(const ReplayWriter&) = delete;
+
+  void on_state(const World& world) override;
+  void on_path(const World& world, std::span<const core::Vec2> path) override;
+
+  /// Writes the end record (the run's report, JSON), completes the stream and gives the file
+  /// its name. Throws ReplayError naming the file when anything could not be written (the
+  /// partial file is kept). Call once.
+  void finish(std::string_view report_json);
+  /// Compressed bytes written so far (preamble included).
+  [[nodiscard]] std::uint64_t bytes_written() const;
+  /// The file being written (the ".partial" name until finish()).
+  [[nodiscard]] const std::filesystem::path& partial_path() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+/// One car in a frame.
+struct ReplayCar {
+  int id = 0;
+  core::Vec2 position;     ///< m (stored in cm)
+  double yaw_rad = 0.0;    ///< stored in 1e-4 rad
+  double speed_mps = 0.0;  ///< stored in cm/s
+};
+
+/// One step of the run.
+struct ReplayFrame {
+  long step = 0;  ///< t = step * step_s
+  core::Vec2 position;
+  double yaw_rad = 0.0;
+  double speed_mps = 0.0;
+  double s_m = 0.0;
+  double d_m = 0.0;
+  StrictFigures strict;
+  double distance_m = 0.0;
+  double incident_free_m = 0.0;
+  double best_incident_free_m = 0.0;
+  std::vector<ReplayCar> cars;
+};
+
+/// A path the planner sent; `step` is the frame it belongs to.
+struct ReplayPath {
+  long step = 0;
+  std::vector<core::Vec2> points;
+};
+
+/// An incident the referee counted at frame `step`.
+struct ReplayIncident {
+  long step = 0;
+  int type = 0;        ///< index into ReplayHeader::incident_types (IncidentType's order)
+  double value = 0.0;  ///< as in the report: mph for speeding, else as Incident::value
+  double s_m = 0.0;
+  int lane = 0;
+  core::Vec2 position;  ///< where the ego was
+};
+
+/// A whole replay, decoded.
+struct Replay {
+  ReplayHeader header;
+  std::string header_json;
+  std::vector<ReplayFrame> frames;
+  std::vector<ReplayPath> paths;
+  std::vector<ReplayIncident> incidents;
+  std::string end_json;  ///< the run's report (the `drive --json` keys, without `timing`)
+  std::size_t unknown_records = 0;  ///< records of kinds this build does not know (skipped)
+};
+
+/// Reads and checks a replay file. Throws ReplayError naming the file and what is wrong: not
+/// a replay, another version, a damaged header, a truncated or corrupt body (with the byte
+/// offset and the last good record), no end record.
+[[nodiscard]] Replay read_replay(const std::filesystem::path& path);
+/// The same for bytes already in memory; `name` names them in errors.
+[[nodiscard]] Replay parse_replay(std::string_view bytes, std::string_view name);
+
+/// What checking a replay found.
+struct ReplayCheck {
+  std::string error;        ///< empty when the replay is whole and valid; else as ReplayError's
+  std::size_t records = 0;  ///< good records before the fault (all of them when valid)
+  std::size_t frames = 0;
+  std::size_t incidents = 0;
+  double duration_s = 0.0;  ///< time of the last good frame
+};
+/// Checks a replay in memory without keeping its records (for `overtake view`).
+[[nodiscard]] ReplayCheck check_replay(std::string_view bytes, std::string_view name);
+
+}  // namespace overtake::sim

@@ -1,0 +1,826 @@
+// Replay files: the record encoder, the streaming writer (zlib) and the checking reader.
+// The layout is docs/replay.md; web/src/replay.js decodes the same bytes.
+
+#include "overtake/sim/replay.hpp"
+
+#include <zlib.h>
+
+#include <algorithm>
+#include <bit>
+#include <cerrno>
+#include <climits>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <limits>
+#include <optional>
+#include <system_error>
+
+#include <nlohmann/json.hpp>
+
+#include "overtake/core/units.hpp"
+
+namespace overtake::sim {
+namespace {
+
+using nlohmann::json;
+
+constexpr double kCmPerM = 100.0;
+constexpr double kYawUnitsPerRad = 1e4;
+constexpr std::size_t kRecordHeadBytes = 5;   // u8 kind, u32 length
+constexpr std::size_t kFrameFixedBytes = 53;  // up to the car count, inclusive
+constexpr std::size_t kFrameCarBytes = 14;    // u16 id, i32 x, i32 y, i16 yaw, u16 speed
+constexpr std::size_t kIncidentBytes = 18;
+constexpr std::size_t kMaxCars = 255;
+constexpr std::size_t kMaxPathPoints = 65535;
+constexpr std::size_t kMaxRecordBytes = std::size_t{64} << 20;  // larger: corrupt
+constexpr std::size_t kDeflateChunkBytes = std::size_t{64} << 10;
+constexpr std::size_t kSyncEveryBytes = std::size_t{1} << 20;
+constexpr std::size_t kInflateChunkBytes = std::size_t{256} << 10;
+constexpr int kDeflateLevel = 6;  // zlib's default: level 9 is 0.2 % smaller and twice as slow
+constexpr const char* kUnfinishedReport =
+    R"({"ended_early":"the recording stopped before the run's report"})";
+
+// ---- little-endian fields -----------------------------------------------------------------
+
+void put_u8(std::string& out, std::uint8_t v) {
+  out.push_back(static_cast<char>(v));
+}
+
+void put_u16(std::string& out, std::uint16_t v) {
+  out.push_back(static_cast<char>(v & 0xff));
+  out.push_back(static_cast<char>(v >> 8));
+}
+
+void put_u32(std::string& out, std::uint32_t v) {
+  for (int i = 0; i < 4; ++i) out.push_back(static_cast<char>((v >> (8 * i)) & 0xff));
+}
+
+void put_i16(std::string& out, std::int16_t v) {
+  put_u16(out, static_cast<std::uint16_t>(v));
+}
+void put_i32(std::string& out, std::int32_t v) {
+  put_u32(out, static_cast<std::uint32_t>(v));
+}
+void put_f32(std::string& out, double v) {
+  put_u32(out, std::bit_cast<std::uint32_t>(static_cast<float>(v)));
+}
+
+// `v * scale` rounded and clamped to [lo, hi]; non-finite values become 0.
+long long fixed(double v, double scale, long long lo, long long hi) {
+  const double x = v * scale;
+  if (!std::isfinite(x)) return 0;
+  if (x <= static_cast<double>(lo)) return lo;
+  if (x >= static_cast<double>(hi)) return hi;
+  return std::llround(x);
+}
+
+std::int32_t cm(double m) {
+  return static_cast<std::int32_t>(fixed(m, kCmPerM, INT32_MIN, INT32_MAX));
+}
+std::int16_t yaw_units(double rad) {
+  return static_cast<std::int16_t>(
+      fixed(core::wrap_angle_rad(rad), kYawUnitsPerRad, -32767, 32767));
+}
+std::uint16_t speed_cmps(double mps) {
+  return static_cast<std::uint16_t>(fixed(mps, kCmPerM, 0, 65535));
+}
+
+// Starts a record; returns where its length goes.
+std::size_t begin_record(std::string& out, ReplayRecordKind kind) {
+  put_u8(out, static_cast<std::uint8_t>(kind));
+  const std::size_t at = out.size();
+  put_u32(out, 0);
+  return at;
+}
+
+void end_record(std::string& out, std::size_t length_at) {
+  const auto n = static_cast<std::uint32_t>(out.size() - length_at - 4);
+  for (int i = 0; i < 4; ++i) out[length_at + i] = static_cast<char>((n >> (8 * i)) & 0xff);
+}
+
+class Reader {
+ public:
+  explicit Reader(std::string_view bytes) : b_(bytes) {}
+  [[nodiscard]] std::uint8_t u8() { return static_cast<std::uint8_t>(b_[at_++]); }
+  [[nodiscard]] std::uint16_t u16() {
+    const auto v = static_cast<std::uint16_t>(byte(0) | (byte(1) << 8));
+    at_ += 2;
+    return v;
+  }
+  [[nodiscard]] std::uint32_t u32() {
+    const std::uint32_t v = byte(0) | (byte(1) << 8) | (byte(2) << 16) | (byte(3) << 24);
+    at_ += 4;
+    return v;
+  }
+  [[nodiscard]] std::int16_t i16() { return static_cast<std::int16_t>(u16()); }
+  [[nodiscard]] std::int32_t i32() { return static_cast<std::int32_t>(u32()); }
+  [[nodiscard]] double f32() { return static_cast<double>(std::bit_cast<float>(u32())); }
+  [[nodiscard]] double metres() { return static_cast<double>(i32()) / kCmPerM; }
+
+ private:
+  [[nodiscard]] std::uint32_t byte(std::size_t i) const {
+    return static_cast<unsigned char>(b_[at_ + i]);
+  }
+  std::string_view b_;
+  std::size_t at_ = 0;
+};
+
+std::string incident_type_name(std::size_t i) {
+  return std::string(to_string(static_cast<IncidentType>(i)));
+}
+
+}  // namespace
+
+// ---- header -------------------------------------------------------------------------------
+
+ReplayHeader make_replay_header(const core::ReferenceLine& line, const WorldParams& params,
+                                ReplayProvenance provenance) {
+  ReplayHeader h;
+  h.step_s = params.step_s;
+  h.lanes = params.road.lane_count;
+  h.lane_width_m = params.road.lane_width_m;
+  h.car_length_m = params.ego.length_m;
+  h.car_width_m = params.ego.width_m;
+  h.speed_limit_mps = params.referee.speed_limit_mps;
+  h.max_acceleration_mps2 = params.referee.max_accel_mps2;
+  h.max_jerk_mps3 = params.referee.max_jerk_mps3;
+  h.track_length_m = line.length_m();
+  const auto n = static_cast<long>(std::ceil(line.length_m() / kReplayLaneLineSpacingM));
+  const double ds = line.length_m() / static_cast<double>(n);
+  const auto round_cm = [](double m) { return std::round(m * kCmPerM) / kCmPerM; };
+  for (int k = 0; k <= h.lanes; ++k) {
+    const double d = k * h.lane_width_m;
+    std::vector<double> xy;
+    xy.reserve(static_cast<std::size_t>(2 * (n + 1)));
+    for (long i = 0; i < n; ++i) {
+      const core::Vec2 p = line.to_cartesian({line.start_s_m() + ds * static_cast<double>(i), d});
+      xy.push_back(round_cm(p.x));
+      xy.push_back(round_cm(p.y));
+    }
+    xy.push_back(xy[0]);  // closed: the last point is the first
+    xy.push_back(xy[1]);
+    h.lane_lines.push_back(std::move(xy));
+  }
+  for (std::size_t i = 0; i < kIncidentTypeCount; ++i)
+    h.incident_types.push_back(incident_type_name(i));
+  h.provenance = std::move(provenance);
+  return h;
+}
+
+std::string replay_header_json(const ReplayHeader& h) {
+  const ReplayProvenance& p = h.provenance;
+  json j = json::object();
+  j["format"] = "overtake-replay";
+  j["version"] = kReplayVersion;
+  j["step_s"] = h.step_s;
+  j["road"] = {{"lanes", h.lanes}, {"lane_width_m", h.lane_width_m}};
+  j["car"] = {{"length_m", h.car_length_m}, {"width_m", h.car_width_m}};
+  j["limits"] = {{"speed_mps", h.speed_limit_mps},
+                 {"acceleration_mps2", h.max_acceleration_mps2},
+                 {"jerk_mps3", h.max_jerk_mps3}};
+  j["track_length_m"] = h.track_length_m;
+  j["lane_lines"] = h.lane_lines;
+  j["incident_types"] = h.incident_types;
+  j["provenance"] = {{"policy", p.policy},
+                     {"traffic", p.traffic},
+                     {"seed", p.seed},
+                     {"track", p.track},
+                     {"duration_s", p.duration_s},
+                     {"overtake_version", p.overtake_version},
+                     {"config_hash", p.config_hash}};
+  return j.dump();
+}
+
+std::string replay_preamble(const ReplayHeader& header) {
+  const std::string text = replay_header_json(header);
+  std::string out(kReplayMagic);
+  put_u32(out, kReplayVersion);
+  put_u32(out, static_cast<std::uint32_t>(text.size()));
+  out += text;
+  return out;
+}
+
+// ---- encoder ------------------------------------------------------------------------------
+
+void ReplayEncoder::append_state(const World& world, std::string& out) {
+  const EgoState& ego = world.ego();
+  const Referee& ref = world.referee();
+  const StrictFigures strict = ref.current_strict();
+  const std::size_t at = begin_record(out, ReplayRecordKind::frame);
+  put_u32(out, static_cast<std::uint32_t>(world.steps()));
+  put_i32(out, cm(ego.position.x));
+  put_i32(out, cm(ego.position.y));
+  put_i16(out, yaw_units(ego.yaw_rad));
+  put_u16(out, speed_cmps(ego.speed_mps));
+  put_f32(out, ego.frenet.s_m);
+  put_f32(out, ego.frenet.d_m);
+  put_f32(out, strict.tangential_mps2);
+  put_f32(out, strict.normal_mps2);
+  put_f32(out, strict.acceleration_mps2);
+  put_f32(out, strict.jerk_mps3);
+  put_f32(out, ref.distance_m());
+  put_f32(out, ref.incident_free_m());
+  put_f32(out, ref.best_incident_free_m());
+  const Traffic& traffic = world.traffic();
+  const std::size_t count = std::min(traffic.cars().size(), kMaxCars);
+  put_u8(out, static_cast<std::uint8_t>(count));
+  for (std::size_t i = 0; i < count; ++i) {
+    const TrafficCar& c = traffic.cars()[i];
+    const core::OrientedBox box = traffic.footprint(c);
+    put_u16(out, static_cast<std::uint16_t>(std::clamp(c.id, 0, 65535)));
+    put_i32(out, cm(box.center.x));
+    put_i32(out, cm(box.center.y));
+    put_i16(out, yaw_units(box.heading_rad));
+    put_u16(out, speed_cmps(c.speed_mps));
+  }
+  end_record(out, at);
+
+  const std::vector<Incident>& incidents = ref.incidents();
+  for (; incidents_seen_ < incidents.size(); ++incidents_seen_) {
+    const Incident& i = incidents[incidents_seen_];
+    const std::size_t iat = begin_record(out, ReplayRecordKind::incident);
+    put_u8(out, static_cast<std::uint8_t>(i.type));
+    put_f32(out, i.type == IncidentType::speeding ? core::mps_to_mph(i.value) : i.value);
+    put_f32(out, i.s_m);
+    put_u8(out, static_cast<std::uint8_t>(std::clamp(i.lane, 0, 255)));
+    put_i32(out, cm(ego.position.x));
+    put_i32(out, cm(ego.position.y));
+    end_record(out, iat);
+  }
+}
+
+void ReplayEncoder::append_path(std::span<const core::Vec2> path, std::string& out) {
+  const std::size_t count = std::min(path.size(), kMaxPathPoints);
+  const std::size_t at = begin_record(out, ReplayRecordKind::path);
+  put_u16(out, static_cast<std::uint16_t>(count));
+  for (std::size_t i = 0; i < count; ++i) {
+    put_i32(out, cm(path[i].x));
+    put_i32(out, cm(path[i].y));
+  }
+  end_record(out, at);
+}
+
+void ReplayEncoder::append_end(std::string_view report_json, std::string& out) {
+  const std::size_t at = begin_record(out, ReplayRecordKind::end);
+  out += report_json;
+  end_record(out, at);
+}
+
+// ---- writer -------------------------------------------------------------------------------
+
+struct ReplayWriter::Impl {
+  std::filesystem::path final_path;
+  std::filesystem::path partial_path;
+  std::FILE* file = nullptr;
+  z_stream z{};
+  bool z_open = false;
+  ReplayEncoder encoder;
+  std::string pending;  // records not yet deflated
+  std::vector<unsigned char> out_buf = std::vector<unsigned char>(kDeflateChunkBytes);
+  std::size_t since_sync = 0;  // record bytes deflated since the last sync flush
+  std::uint64_t written = 0;
+  std::string error;  // the first failure; nothing more is written after it
+  bool finished = false;
+  bool in_place = false;  // a device or pipe: written directly, never renamed
+
+  void fail(const std::string& what) {
+    if (error.empty()) error = partial_path.string() + ": " + what;
+  }
+
+  void write(const void* data, std::size_t n) {
+    if (!error.empty() || n == 0) return;
+    if (std::fwrite(data, 1, n, file) != n) {
+      fail(std::string("cannot write (") + std::strerror(errno) + ")");
+      return;
+    }
+    written += n;
+  }
+
+  // Deflates `pending` with `flush` (Z_NO_FLUSH, Z_SYNC_FLUSH or Z_FINISH) and writes out.
+  void deflate_pending(int flush) {
+    if (!error.empty()) return;
+    z.next_in = reinterpret_cast<Bytef*>(pending.data());
+    z.avail_in = static_cast<uInt>(pending.size());
+    since_sync += pending.size();
+    for (;;) {
+      z.next_out = out_buf.data();
+      z.avail_out = static_cast<uInt>(out_buf.size());
+      const int rc = deflate(&z, flush);
+      if (rc == Z_STREAM_ERROR) {
+        fail("compression failed (zlib stream error)");
+        return;
+      }
+      write(out_buf.data(), out_buf.size() - z.avail_out);
+      if (!error.empty()) return;
+      if (flush == Z_FINISH ? rc == Z_STREAM_END : (z.avail_in == 0 && z.avail_out != 0)) break;
+    }
+    pending.clear();
+    if (flush != Z_NO_FLUSH) since_sync = 0;
+  }
+
+  void maybe_deflate() {
+    if (pending.size() < kDeflateChunkBytes) return;
+    deflate_pending(since_sync + pending.size() >= kSyncEveryBytes ? Z_SYNC_FLUSH : Z_NO_FLUSH);
+    if (error.empty() && since_sync == 0 && std::fflush(file) != 0) {
+      fail(std::string("cannot write (") + std::strerror(errno) + ")");
+    }
+  }
+
+  void close_all() {
+    if (z_open) {
+      deflateEnd(&z);
+      z_open = false;
+    }
+    if (file) {
+      if (std::fclose(file) != 0) fail(std::string("cannot write (") + std::strerror(errno) + ")");
+      file = nullptr;
+    }
+  }
+
+  void complete(std::string_view report_json) {
+    finished = true;
+    ReplayEncoder::append_end(report_json, pending);
+    deflate_pending(Z_FINISH);
+    close_all();
+    if (!error.empty() || in_place) return;
+    std::error_code ec;
+    std::filesystem::rename(partial_path, final_path, ec);
+    if (ec) {
+      error = final_path.string() + ": cannot rename " + partial_path.string() + " to it (" +
+              ec.message() + ")";
+    }
+  }
+};
+
+ReplayWriter::ReplayWriter(const std::filesystem::path& path, const ReplayHeader& header)
+    : impl_(std::make_unique<Impl>()) {
+  Impl& m = *impl_;
+  m.final_path = path;
+  m.partial_path = path;
+  // A device or a pipe (/dev/null, /dev/stdout) is written in place: a rename would replace
+  // it with a regular file.
+  std::error_code status_ec;
+  const auto status = std::filesystem::status(path, status_ec);
+  m.in_place =
+      !status_ec && std::filesystem::exists(status) && !std::filesystem::is_regular_file(status);
+  if (!m.in_place) m.partial_path += ".partial";
+  m.file = std::fopen(m.partial_path.c_str(), "wb");
+  if (!m.file) {
+    throw ReplayError(m.partial_path.string() + ": cannot create the replay file (" +
+                      std::strerror(errno) + ")");
+  }
+  if (deflateInit(&m.z, kDeflateLevel) != Z_OK) {
+    std::fclose(m.file);
+    m.file = nullptr;
+    throw ReplayError(m.partial_path.string() + ": cannot start the compressor (zlib)");
+  }
+  m.z_open = true;
+  const std::string preamble = replay_preamble(header);
+  m.write(preamble.data(), preamble.size());
+  if (!m.error.empty()) {
+    const std::string why = m.error;
+    m.close_all();
+    throw ReplayError(why);
+  }
+}
+
+ReplayWriter::~ReplayWriter() {
+  if (!impl_ || impl_->finished) return;
+  try {
+    impl_->complete(kUnfinishedReport);
+  } catch (...) {  // a destructor does not throw; the partial file stays
+  }
+  impl_->close_all();
+}
+
+void ReplayWriter::on_state(const World& world) {
+  Impl& m = *impl_;
+  if (m.finished || !m.error.empty()) return;
+  m.encoder.append_state(world, m.pending);
+  m.maybe_deflate();
+}
+
+void ReplayWriter::on_path(const World&, std::span<const core::Vec2> path) {
+  Impl& m = *impl_;
+  if (m.finished || !m.error.empty()) return;
+  ReplayEncoder::append_path(path, m.pending);
+  m.maybe_deflate();
+}
+
+void ReplayWriter::finish(std::string_view report_json) {
+  Impl& m = *impl_;
+  if (m.finished) throw ReplayError(m.final_path.string() + ": the replay was already finished");
+  m.complete(report_json);
+  if (!m.error.empty()) throw ReplayError(m.error);
+}
+
+std::uint64_t ReplayWriter::bytes_written() const {
+  return impl_->written;
+}
+
+const std::filesystem::path& ReplayWriter::partial_path() const {
+  return impl_->finished && impl_->error.empty() ? impl_->final_path : impl_->partial_path;
+}
+
+// ---- reader -------------------------------------------------------------------------------
+
+namespace {
+
+// What the decoder hands its visitor.
+struct Sink {
+  virtual ~Sink() = default;
+  virtual void header(ReplayHeader h, std::string text) = 0;
+  virtual void frame(const ReplayFrame& f) = 0;
+  virtual void path(ReplayPath&& p) = 0;
+  virtual void incident(const ReplayIncident& i) = 0;
+  virtual void end(std::string text) = 0;
+  virtual void unknown() = 0;
+};
+
+template <class T>
+T header_value(const json& j, const char* key, const char* where) {
+  try {
+    return j.at(key).get<T>();
+  } catch (const json::exception&) {
+    throw std::invalid_argument(std::string("missing or wrong key '") + where + key + "'");
+  }
+}
+
+ReplayHeader parse_header(const json& j) {
+  ReplayHeader h;
+  if (!j.is_object()) throw std::invalid_argument("not a JSON object");
+  if (header_value<std::string>(j, "format", "") != "overtake-replay") {
+    throw std::invalid_argument("'format' is not \"overtake-replay\"");
+  }
+  h.step_s = header_value<double>(j, "step_s", "");
+  if (!(h.step_s > 0.0)) throw std::invalid_argument("'step_s' must be positive");
+  const json& road = j.at("road");
+  h.lanes = header_value<int>(road, "lanes", "road.");
+  h.lane_width_m = header_value<double>(road, "lane_width_m", "road.");
+  const json& car = j.at("car");
+  h.car_length_m = header_value<double>(car, "length_m", "car.");
+  h.car_width_m = header_value<double>(car, "width_m", "car.");
+  const json& limits = j.at("limits");
+  h.speed_limit_mps = header_value<double>(limits, "speed_mps", "limits.");
+  h.max_acceleration_mps2 = header_value<double>(limits, "acceleration_mps2", "limits.");
+  h.max_jerk_mps3 = header_value<double>(limits, "jerk_mps3", "limits.");
+  h.track_length_m = header_value<double>(j, "track_length_m", "");
+  h.lane_lines = header_value<std::vector<std::vector<double>>>(j, "lane_lines", "");
+  h.incident_types = header_value<std::vector<std::string>>(j, "incident_types", "");
+  const json& p = j.at("provenance");
+  h.provenance.policy = header_value<std::string>(p, "policy", "provenance.");
+  h.provenance.traffic = header_value<std::string>(p, "traffic", "provenance.");
+  h.provenance.seed = header_value<std::uint64_t>(p, "seed", "provenance.");
+  h.provenance.track = header_value<std::string>(p, "track", "provenance.");
+  h.provenance.duration_s = header_value<double>(p, "duration_s", "provenance.");
+  h.provenance.overtake_version = header_value<std::string>(p, "overtake_version", "provenance.");
+  h.provenance.config_hash = header_value<std::string>(p, "config_hash", "provenance.");
+  return h;
+}
+
+std::string kind_name(std::uint8_t kind) {
+  switch (kind) {
+    case 1:
+      return "frame";
+    case 2:
+      return "path";
+    case 3:
+      return "incident";
+    case 4:
+      return "end";
+    default:
+      return "kind " + std::to_string(kind);
+  }
+}
+
+// Decodes bytes into the sink; throws ReplayError at the first fault. `state` tells the
+// caller how far it got.
+struct DecodeState {
+  std::size_t records = 0;
+  std::optional<long> last_step;
+  double step_s = 0.02;
+};
+
+class Decoder {
+ public:
+  Decoder(std::string_view bytes, std::string_view name, Sink& sink, DecodeState& state)
+      : bytes_(bytes), name_(name), sink_(sink), st_(state) {}
+
+  void run() {
+    preamble();
+    body();
+  }
+
+ private:
+  [[noreturn]] void fail(const std::string& what) const {
+    throw ReplayError(std::string(name_) + ": " + what);
+  }
+
+  // Where the last good record left off, for messages.
+  [[nodiscard]] std::string after_text() const {
+    if (st_.records == 0) return "before the first record";
+    std::string s = "after record #" + std::to_string(st_.records);
+    if (st_.last_step) {
+      char buf[64];
+      std::snprintf(buf, sizeof buf, " (step %ld, t = %.2f s)", *st_.last_step,
+                    static_cast<double>(*st_.last_step) * st_.step_s);
+      s += buf;
+    }
+    return s;
+  }
+
+  void preamble() {
+    const std::size_t n = bytes_.size();
+    const std::size_t magic_n = std::min(n, kReplayMagic.size());
+    if (n == 0) fail("not an overtake replay: the file is empty");
+    if (bytes_.substr(0, magic_n) != kReplayMagic.substr(0, magic_n)) {
+      fail("not an overtake replay: it does not start with \"OVTKRPLY\"");
+    }
+    if (n < kReplayPreambleBytes) {
+      fail("truncated: the file ends at byte " + std::to_string(n) + ", inside its " +
+           std::to_string(kReplayPreambleBytes) + "-byte preamble");
+    }
+    Reader r(bytes_.substr(8, 8));
+    const std::uint32_t version = r.u32();
+    const std::uint32_t header_bytes = r.u32();
+    if (version != kReplayVersion) {
+      fail("replay format version " + std::to_string(version) + "; this build reads version " +
+           std::to_string(kReplayVersion) + " (see docs/replay.md)");
+    }
+    if (header_bytes > n - kReplayPreambleBytes) {
+      fail("truncated: the header is " + std::to_string(header_bytes) +
+           " bytes but the file ends at byte " + std::to_string(n));
+    }
+    body_start_ = kReplayPreambleBytes + header_bytes;
+    std::string text(bytes_.substr(kReplayPreambleBytes, header_bytes));
+    ReplayHeader h;
+    try {
+      h = parse_header(json::parse(text));
+    } catch (const std::exception& e) {
+      fail("corrupt header (bytes 16-" + std::to_string(body_start_) + "): " + e.what());
+    }
+    st_.step_s = h.step_s;
+    incident_types_ = h.incident_types.size();
+    sink_.header(std::move(h), std::move(text));
+  }
+
+  void body() {
+    if (body_start_ == bytes_.size()) {
+      fail("truncated: the file ends after its header, with no records (at byte " +
+           std::to_string(body_start_) + ")");
+    }
+    z_stream z{};
+    if (inflateInit(&z) != Z_OK) fail("cannot start the decompressor (zlib)");
+    struct End {
+      z_stream& z;
+      ~End() { inflateEnd(&z); }
+    } end{z};
+    const std::string_view in = bytes_.substr(body_start_);
+    z.next_in = reinterpret_cast<Bytef*>(const_cast<char*>(in.data()));
+    z.avail_in = static_cast<uInt>(std::min<std::size_t>(in.size(), UINT_MAX));
+    std::size_t fed = z.avail_in;
+    std::string buf;
+    std::size_t used = 0;  // bytes of buf already parsed
+    bool stream_end = false;
+    while (!stream_end) {
+      const std::size_t old = buf.size();
+      buf.resize(old + kInflateChunkBytes);
+      z.next_out = reinterpret_cast<Bytef*>(buf.data() + old);
+      z.avail_out = static_cast<uInt>(kInflateChunkBytes);
+      const int rc = inflate(&z, Z_NO_FLUSH);
+      buf.resize(old + kInflateChunkBytes - z.avail_out);
+      if (rc == Z_STREAM_END) {
+        stream_end = true;
+      } else if (rc == Z_DATA_ERROR && z.msg && std::string_view(z.msg) == "incorrect data check") {
+        parse_records(buf, used);
+        fail("corrupt: the checksum at the end of the compressed body does not match, so bytes " +
+             std::to_string(body_start_) + "-" + std::to_string(bytes_.size()) +
+             " were damaged somewhere (the records decoded may hold wrong values), " +
+             after_text());
+      } else if (rc == Z_DATA_ERROR || rc == Z_NEED_DICT) {
+        fail("corrupt: the compressed body is damaged near byte " +
+             std::to_string(body_start_ + z.total_in) +
+             " (zlib: " + (z.msg ? z.msg : "data error") + "), " + after_text());
+      } else if (rc == Z_MEM_ERROR) {
+        fail("out of memory while decompressing");
+      } else if (rc == Z_BUF_ERROR || (rc == Z_OK && z.avail_in == 0 && z.avail_out != 0)) {
+        if (z.avail_in == 0 && fed < in.size()) {  // more than 4 GiB of body: feed the rest
+          const std::size_t more = std::min<std::size_t>(in.size() - fed, UINT_MAX);
+          z.next_in = reinterpret_cast<Bytef*>(const_cast<char*>(in.data() + fed));
+          z.avail_in = static_cast<uInt>(more);
+          fed += more;
+        } else if (z.avail_in == 0) {
+          parse_records(buf, used);
+          fail("truncated: the compressed body stops at byte " + std::to_string(bytes_.size()) +
+               " before its end, " + after_text());
+        }
+      }
+      parse_records(buf, used);
+      if (used > (std::size_t{1} << 20) && used * 2 > buf.size()) {
+        buf.erase(0, used);
+        inflated_base_ += used;
+        used = 0;
+      }
+    }
+    if (used != buf.size()) {
+      fail("corrupt: the body ends inside record #" + std::to_string(st_.records + 1) +
+           " (at inflated byte " + std::to_string(inflated_base_ + used) + "), " + after_text());
+    }
+    const std::size_t trailing = z.avail_in + (in.size() - fed);
+    if (trailing > 0) {
+      fail("corrupt: " + std::to_string(trailing) +
+           " unexpected bytes after the compressed body (from byte " +
+           std::to_string(bytes_.size() - trailing) + ")");
+    }
+    if (!ended_) fail("truncated: no end record, " + after_text());
+  }
+
+  void parse_records(const std::string& buf, std::size_t& used) {
+    while (buf.size() - used >= kRecordHeadBytes) {
+      Reader head(std::string_view(buf).substr(used, kRecordHeadBytes));
+      const std::uint8_t kind = head.u8();
+      const std::uint32_t n = head.u32();
+      if (n > kMaxRecordBytes) {
+        fail("corrupt: record #" + std::to_string(st_.records + 1) + " (" + kind_name(kind) +
+             ", at inflated byte " + std::to_string(inflated_base_ + used) + ") claims " +
+             std::to_string(n) + " bytes, " + after_text());
+      }
+      if (buf.size() - used - kRecordHeadBytes < n) return;  // not complete yet
+      record(kind, std::string_view(buf).substr(used + kRecordHeadBytes, n), inflated_base_ + used);
+      used += kRecordHeadBytes + n;
+      ++st_.records;
+    }
+  }
+
+  [[noreturn]] void bad_record(std::uint8_t kind, std::size_t at, const std::string& what) const {
+    fail("corrupt: record #" + std::to_string(st_.records + 1) + " (" + kind_name(kind) +
+         ", at inflated byte " + std::to_string(at) + "): " + what + ", " + after_text());
+  }
+
+  void record(std::uint8_t kind, std::string_view p, std::size_t at) {
+    if (ended_) bad_record(kind, at, "a record after the end record");
+    const auto need = [&](std::size_t bytes) {
+      if (p.size() < bytes) {
+        bad_record(
+            kind, at,
+            std::to_string(p.size()) + " bytes where " + std::to_string(bytes) + " are needed");
+      }
+    };
+    Reader r(p);
+    switch (kind) {
+      case static_cast<std::uint8_t>(ReplayRecordKind::frame): {
+        need(kFrameFixedBytes);
+        ReplayFrame& f = frame_;
+        f.step = static_cast<long>(r.u32());
+        if (st_.last_step && f.step <= *st_.last_step) {
+          bad_record(kind, at,
+                     "step " + std::to_string(f.step) + " does not follow step " +
+                         std::to_string(*st_.last_step));
+        }
+        f.position.x = r.metres();
+        f.position.y = r.metres();
+        f.yaw_rad = r.i16() / kYawUnitsPerRad;
+        f.speed_mps = r.u16() / kCmPerM;
+        f.s_m = r.f32();
+        f.d_m = r.f32();
+        f.strict.tangential_mps2 = r.f32();
+        f.strict.normal_mps2 = r.f32();
+        f.strict.acceleration_mps2 = r.f32();
+        f.strict.jerk_mps3 = r.f32();
+        f.distance_m = r.f32();
+        f.incident_free_m = r.f32();
+        f.best_incident_free_m = r.f32();
+        const std::size_t cars = r.u8();
+        need(kFrameFixedBytes + cars * kFrameCarBytes);
+        f.cars.resize(cars);
+        for (ReplayCar& c : f.cars) {
+          c.id = r.u16();
+          c.position.x = r.metres();
+          c.position.y = r.metres();
+          c.yaw_rad = r.i16() / kYawUnitsPerRad;
+          c.speed_mps = r.u16() / kCmPerM;
+        }
+        st_.last_step = f.step;
+        sink_.frame(f);
+        return;
+      }
+      case static_cast<std::uint8_t>(ReplayRecordKind::path): {
+        if (!st_.last_step) bad_record(kind, at, "a path before the first frame");
+        need(2);
+        ReplayPath path;
+        path.step = *st_.last_step;
+        const std::size_t m = r.u16();
+        need(2 + 8 * m);
+        path.points.resize(m);
+        for (core::Vec2& q : path.points) {
+          q.x = r.metres();
+          q.y = r.metres();
+        }
+        sink_.path(std::move(path));
+        return;
+      }
+      case static_cast<std::uint8_t>(ReplayRecordKind::incident): {
+        if (!st_.last_step) bad_record(kind, at, "an incident before the first frame");
+        need(kIncidentBytes);
+        ReplayIncident i;
+        i.step = *st_.last_step;
+        i.type = r.u8();
+        if (static_cast<std::size_t>(i.type) >= incident_types_) {
+          bad_record(kind, at,
+                     "incident type " + std::to_string(i.type) + " is not in the header's " +
+                         std::to_string(incident_types_) + " incident_types");
+        }
+        i.value = r.f32();
+        i.s_m = r.f32();
+        i.lane = r.u8();
+        i.position.x = r.metres();
+        i.position.y = r.metres();
+        sink_.incident(i);
+        return;
+      }
+      case static_cast<std::uint8_t>(ReplayRecordKind::end): {
+        std::string text(p);
+        if (!json::accept(text)) bad_record(kind, at, "the report is not valid JSON");
+        ended_ = true;
+        sink_.end(std::move(text));
+        return;
+      }
+      default:
+        sink_.unknown();
+        return;
+    }
+  }
+
+  std::string_view bytes_;
+  std::string_view name_;
+  Sink& sink_;
+  DecodeState& st_;
+  std::size_t body_start_ = 0;
+  std::size_t inflated_base_ = 0;  // inflated offset of buf[0]
+  std::size_t incident_types_ = 0;
+  bool ended_ = false;
+  ReplayFrame frame_;  // reused
+};
+
+struct BuildSink final : Sink {
+  Replay out;
+  void header(ReplayHeader h, std::string text) override {
+    out.header = std::move(h);
+    out.header_json = std::move(text);
+  }
+  void frame(const ReplayFrame& f) override { out.frames.push_back(f); }
+  void path(ReplayPath&& p) override { out.paths.push_back(std::move(p)); }
+  void incident(const ReplayIncident& i) override { out.incidents.push_back(i); }
+  void end(std::string text) override { out.end_json = std::move(text); }
+  void unknown() override { ++out.unknown_records; }
+};
+
+struct CountSink final : Sink {
+  ReplayCheck* check = nullptr;
+  void header(ReplayHeader, std::string) override {}
+  void frame(const ReplayFrame&) override { ++check->frames; }
+  void path(ReplayPath&&) override {}
+  void incident(const ReplayIncident&) override { ++check->incidents; }
+  void end(std::string) override {}
+  void unknown() override {}
+};
+
+}  // namespace
+
+Replay parse_replay(std::string_view bytes, std::string_view name) {
+  BuildSink sink;
+  DecodeState state;
+  Decoder(bytes, name, sink, state).run();
+  return std::move(sink.out);
+}
+
+Replay read_replay(const std::filesystem::path& path) {
+  std::FILE* f = std::fopen(path.c_str(), "rb");
+  if (!f) throw ReplayError(path.string() + ": cannot open (" + std::strerror(errno) + ")");
+  std::string bytes;
+  char chunk[1 << 16];
+  std::size_t n = 0;
+  while ((n = std::fread(chunk, 1, sizeof chunk, f)) > 0) bytes.append(chunk, n);
+  const bool bad = std::ferror(f) != 0;
+  std::fclose(f);
+  if (bad) throw ReplayError(path.string() + ": read error");
+  return parse_replay(bytes, path.string());
+}
+
+ReplayCheck check_replay(std::string_view bytes, std::string_view name) {
+  ReplayCheck check;
+  CountSink sink;
+  sink.check = &check;
+  DecodeState state;
+  try {
+    Decoder(bytes, name, sink, state).run();
+  } catch (const ReplayError& e) {
+    check.error = e.what();
+  }
+  check.records = state.records;
+  if (state.last_step) check.duration_s = static_cast<double>(*state.last_step) * state.step_s;
+  return check;
+}
+
+}  // namespace overtake::sim

@@ -1,0 +1,469 @@
+// Replay files: write -> read round trips (fixed-point fields bit for bit), the writer's
+// temporary file and rename, and clear errors for damaged files.
+
+#include "overtake/sim/replay.hpp"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+#include <zlib.h>
+
+#include <bit>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "overtake/core/units.hpp"
+#include "overtake/sim/run.hpp"
+#include "overtake/sim/world.hpp"
+#include "sim/test_maps.hpp"
+
+namespace overtake::sim {
+namespace {
+
+using ::testing::HasSubstr;
+
+constexpr double kCruiseMps = 24.0;  // above the 50 mph limit: speeding incidents
+constexpr double kLaneD = 6.0;
+constexpr const char* kReport = R"({"distance_miles":1.5,"ended_early":null})";
+
+// What the world looked like at each on_state, exactly, to compare with the file.
+struct Seen {
+  long step = 0;
+  EgoState ego;
+  StrictFigures strict;
+  double distance_m = 0.0, incident_free_m = 0.0, best_m = 0.0;
+  std::vector<core::OrientedBox> boxes;
+  std::vector<int> ids;
+  std::vector<double> speeds;
+};
+
+class Capture final : public RunObserver {
+ public:
+  void on_state(const World& w) override {
+    Seen s;
+    s.step = w.steps();
+    s.ego = w.ego();
+    s.strict = w.referee().current_strict();
+    s.distance_m = w.referee().distance_m();
+    s.incident_free_m = w.referee().incident_free_m();
+    s.best_m = w.referee().best_incident_free_m();
+    for (const TrafficCar& c : w.traffic().cars()) {
+      s.boxes.push_back(w.traffic().footprint(c));
+      s.ids.push_back(c.id);
+      s.speeds.push_back(c.speed_mps);
+    }
+    states.push_back(std::move(s));
+  }
+  void on_path(const World& w, std::span<const core::Vec2> path) override {
+    paths.emplace_back(path.begin(), path.end());
+    path_steps.push_back(w.steps());
+  }
+  std::vector<Seen> states;
+  std::vector<std::vector<core::Vec2>> paths;
+  std::vector<long> path_steps;
+};
+
+long long cm(double m) {
+  return std::llround(m * 100.0);
+}
+long long yaw_units(double rad) {
+  return std::llround(core::wrap_angle_rad(rad) * 1e4);
+}
+float f32(double v) {
+  return static_cast<float>(v);
+}
+
+std::string read_bytes(const std::filesystem::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::ostringstream os;
+  os << in.rdbuf();
+  return os.str();
+}
+
+// The header length field of a replay's preamble.
+std::size_t r_header_bytes(const std::string& bytes) {
+  std::size_t n = 0;
+  for (int i = 0; i < 4; ++i)
+    n |= static_cast<std::size_t>(static_cast<unsigned char>(bytes[12 + i])) << (8 * i);
+  return n;
+}
+
+void write_bytes(const std::filesystem::path& p, const std::string& bytes) {
+  std::ofstream out(p, std::ios::binary | std::ios::trunc);
+  out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+}
+
+std::string deflate_all(const std::string& raw) {
+  uLongf n = compressBound(static_cast<uLong>(raw.size()));
+  std::string out(n, '\0');
+  EXPECT_EQ(compress(reinterpret_cast<Bytef*>(out.data()), &n,
+                     reinterpret_cast<const Bytef*>(raw.data()), static_cast<uLong>(raw.size())),
+            Z_OK);
+  out.resize(n);
+  return out;
+}
+
+class ReplayTest : public ::testing::Test {
+ protected:
+  ReplayTest() : map_(test::circle_map()), line_(map_) {
+    dir_ = std::filesystem::temp_directory_path() /
+           ("overtake_replay_test_" +
+            std::to_string(::testing::UnitTest::GetInstance()->random_seed()) + "_" +
+            ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    std::filesystem::remove_all(dir_);
+    std::filesystem::create_directories(dir_);
+  }
+  ~ReplayTest() override { std::filesystem::remove_all(dir_); }
+
+  ReplayHeader header() const {
+    ReplayProvenance p;
+    p.policy = "test-cruise";
+    p.traffic = "faithful";
+    p.seed = 5;
+    p.track = "test:circle";
+    p.duration_s = 20.0;
+    p.overtake_version = "test";
+    p.config_hash = "0123456789abcdef";
+    return make_replay_header(line_, params_, p);
+  }
+
+  // Cruises lane 1 at kCruiseMps from a standing start: speeding and acceleration incidents.
+  PlannerFn cruise() const {
+    return [this](const core::Telemetry& t) {
+      std::vector<core::Vec2> path;
+      for (int i = 1; i <= 50; ++i) {
+        path.push_back(line_.to_cartesian({t.ego.s_m + kCruiseMps * params_.step_s * i, kLaneD}));
+      }
+      return path;
+    };
+  }
+
+  // Records a run of `seconds` into `file`; returns what the capture saw.
+  Capture record(const std::filesystem::path& file, double seconds, std::uint64_t seed = 5) {
+    World world(map_, line_, params_, TrafficProfile::faithful, seed);
+    ReplayWriter writer(file, header());
+    Capture capture;
+    ObserverList both({&writer, &capture});
+    RunOptions opts;
+    opts.duration_s = seconds;
+    opts.seed = seed;
+    opts.observer = both.get();
+    report_ = run_drive(world, cruise(), opts);
+    writer.finish(kReport);
+    return capture;
+  }
+
+  core::Map map_;
+  core::ReferenceLine line_;
+  WorldParams params_;
+  RunReport report_;
+  std::filesystem::path dir_;
+};
+
+TEST_F(ReplayTest, RoundTripKeepsEveryFieldBitForBit) {
+  const auto file = dir_ / "run.otr";
+  const Capture seen = record(file, 20.0);
+  const Replay r = read_replay(file);
+
+  // Header.
+  const ReplayHeader h = header();
+  EXPECT_EQ(r.header.provenance, h.provenance);
+  EXPECT_DOUBLE_EQ(r.header.step_s, 0.02);
+  EXPECT_EQ(r.header.lanes, 3);
+  EXPECT_DOUBLE_EQ(r.header.track_length_m, line_.length_m());
+  EXPECT_DOUBLE_EQ(r.header.speed_limit_mps, params_.referee.speed_limit_mps);
+  ASSERT_EQ(r.header.lane_lines.size(), 4u);
+  for (const auto& l : r.header.lane_lines) {
+    ASSERT_GE(l.size(), 4u);
+    EXPECT_EQ(l[0], l[l.size() - 2]);  // closed
+    EXPECT_EQ(l[1], l[l.size() - 1]);
+    EXPECT_LE(2.0 * line_.length_m() / kReplayLaneLineSpacingM, static_cast<double>(l.size()));
+  }
+  EXPECT_EQ(r.header.incident_types.size(), kIncidentTypeCount);
+  EXPECT_EQ(r.header.incident_types[1], "speeding");
+  EXPECT_EQ(r.end_json, kReport);
+  EXPECT_EQ(r.unknown_records, 0u);
+
+  // Frames: step 0 and every step after it.
+  ASSERT_EQ(r.frames.size(), seen.states.size());
+  ASSERT_EQ(r.frames.size(), 1001u);
+  for (std::size_t i = 0; i < r.frames.size(); ++i) {
+    const ReplayFrame& f = r.frames[i];
+    const Seen& s = seen.states[i];
+    SCOPED_TRACE("frame " + std::to_string(i));
+    ASSERT_EQ(f.step, s.step);
+    EXPECT_EQ(cm(f.position.x), cm(s.ego.position.x));
+    EXPECT_EQ(cm(f.position.y), cm(s.ego.position.y));
+    EXPECT_EQ(std::llround(f.yaw_rad * 1e4), yaw_units(s.ego.yaw_rad));
+    EXPECT_EQ(std::llround(f.speed_mps * 100.0), cm(s.ego.speed_mps));
+    EXPECT_EQ(f32(f.s_m), f32(s.ego.frenet.s_m));
+    EXPECT_EQ(f32(f.d_m), f32(s.ego.frenet.d_m));
+    EXPECT_EQ(f32(f.strict.tangential_mps2), f32(s.strict.tangential_mps2));
+    EXPECT_EQ(f32(f.strict.normal_mps2), f32(s.strict.normal_mps2));
+    EXPECT_EQ(f32(f.strict.acceleration_mps2), f32(s.strict.acceleration_mps2));
+    EXPECT_EQ(f32(f.strict.jerk_mps3), f32(s.strict.jerk_mps3));
+    EXPECT_EQ(f32(f.distance_m), f32(s.distance_m));
+    EXPECT_EQ(f32(f.incident_free_m), f32(s.incident_free_m));
+    EXPECT_EQ(f32(f.best_incident_free_m), f32(s.best_m));
+    ASSERT_EQ(f.cars.size(), s.boxes.size());
+    for (std::size_t c = 0; c < f.cars.size(); ++c) {
+      EXPECT_EQ(f.cars[c].id, s.ids[c]);
+      EXPECT_EQ(cm(f.cars[c].position.x), cm(s.boxes[c].center.x));
+      EXPECT_EQ(cm(f.cars[c].position.y), cm(s.boxes[c].center.y));
+      EXPECT_EQ(std::llround(f.cars[c].yaw_rad * 1e4), yaw_units(s.boxes[c].heading_rad));
+      EXPECT_EQ(std::llround(f.cars[c].speed_mps * 100.0), cm(s.speeds[c]));
+    }
+  }
+  EXPECT_EQ(r.frames.front().step, 0);
+  EXPECT_EQ(r.frames.front().strict, StrictFigures{});
+
+  // Paths: one per planner cycle, each after the frame it was planned from.
+  ASSERT_EQ(r.paths.size(), seen.paths.size());
+  EXPECT_EQ(static_cast<long>(r.paths.size()), report_.planner_cycles);
+  for (std::size_t i = 0; i < r.paths.size(); ++i) {
+    EXPECT_EQ(r.paths[i].step, seen.path_steps[i]);
+    ASSERT_EQ(r.paths[i].points.size(), seen.paths[i].size());
+    for (std::size_t k = 0; k < r.paths[i].points.size(); ++k) {
+      EXPECT_EQ(cm(r.paths[i].points[k].x), cm(seen.paths[i][k].x));
+      EXPECT_EQ(cm(r.paths[i].points[k].y), cm(seen.paths[i][k].y));
+    }
+  }
+
+  // Incidents: the referee's, at the frame of their time, values as in the report.
+  ASSERT_FALSE(report_.incidents.empty());
+  ASSERT_EQ(r.incidents.size(), report_.incidents.size());
+  for (std::size_t i = 0; i < r.incidents.size(); ++i) {
+    const Incident& want = report_.incidents[i];
+    const ReplayIncident& got = r.incidents[i];
+    EXPECT_EQ(got.type, static_cast<int>(want.type));
+    EXPECT_EQ(got.step, std::lround(want.t_s / 0.02));
+    const double value =
+        want.type == IncidentType::speeding ? core::mps_to_mph(want.value) : want.value;
+    EXPECT_EQ(f32(got.value), f32(value));
+    EXPECT_EQ(f32(got.s_m), f32(want.s_m));
+    EXPECT_EQ(got.lane, want.lane);
+    const auto at = static_cast<std::size_t>(got.step);
+    EXPECT_EQ(cm(got.position.x), cm(seen.states[at].ego.position.x));
+  }
+}
+
+TEST_F(ReplayTest, ChecksAReplayWithoutKeepingIt) {
+  const auto file = dir_ / "run.otr";
+  (void)record(file, 5.0);
+  const ReplayCheck c = check_replay(read_bytes(file), file.string());
+  EXPECT_EQ(c.error, "");
+  EXPECT_EQ(c.frames, 251u);
+  EXPECT_DOUBLE_EQ(c.duration_s, 5.0);
+  EXPECT_GT(c.records, c.frames);
+}
+
+TEST_F(ReplayTest, SameRunGivesTheSameBytes) {
+  (void)record(dir_ / "a.otr", 10.0, 9);
+  (void)record(dir_ / "b.otr", 10.0, 9);
+  const std::string a = read_bytes(dir_ / "a.otr");
+  EXPECT_FALSE(a.empty());
+  EXPECT_EQ(a, read_bytes(dir_ / "b.otr"));
+}
+
+TEST_F(ReplayTest, WritesAPartialFileAndRenamesItAtTheEnd) {
+  const auto file = dir_ / "run.otr";
+  World world(map_, line_, params_, TrafficProfile::faithful, 1);
+  ReplayWriter writer(file, header());
+  RunOptions opts;
+  opts.duration_s = 2.0;
+  opts.observer = &writer;
+  (void)run_drive(world, cruise(), opts);
+  EXPECT_FALSE(std::filesystem::exists(file));
+  EXPECT_TRUE(std::filesystem::exists(writer.partial_path()));
+  writer.finish(kReport);
+  EXPECT_TRUE(std::filesystem::exists(file));
+  EXPECT_FALSE(std::filesystem::exists(dir_ / "run.otr.partial"));
+  EXPECT_EQ(writer.bytes_written(), std::filesystem::file_size(file));
+  EXPECT_THROW(writer.finish(kReport), ReplayError);
+}
+
+TEST_F(ReplayTest, AnUnfinishedRecordingIsEndedProperly) {
+  const auto file = dir_ / "run.otr";
+  {
+    World world(map_, line_, params_, TrafficProfile::faithful, 1);
+    ReplayWriter writer(file, header());
+    RunOptions opts;
+    opts.duration_s = 3.0;
+    opts.observer = &writer;
+    (void)run_drive(world, cruise(), opts);
+  }  // no finish(): as when the run throws
+  const Replay r = read_replay(file);
+  EXPECT_EQ(r.frames.size(), 151u);
+  EXPECT_THAT(r.end_json, HasSubstr("ended_early"));
+}
+
+TEST_F(ReplayTest, AFailedRunKeepsItsRecordsAndReport) {
+  const auto file = dir_ / "run.otr";
+  World world(map_, line_, params_, TrafficProfile::faithful, 1);
+  ReplayWriter writer(file, header());
+  RunOptions opts;
+  opts.duration_s = 10.0;
+  opts.observer = &writer;
+  int calls = 0;
+  const PlannerFn inner = cruise();
+  const RunReport rep = run_drive(
+      world,
+      [&](const core::Telemetry& t) {
+        if (++calls > 100) throw PlannerFailure("stalled");
+        return inner(t);
+      },
+      opts);
+  ASSERT_FALSE(rep.ended_early.empty());
+  writer.finish(R"({"ended_early":"planner failed"})");
+  const Replay r = read_replay(file);
+  EXPECT_EQ(r.paths.size(), 100u);
+  EXPECT_EQ(r.frames.back().step, world.steps());
+}
+
+TEST_F(ReplayTest, CannotCreateTheFileIsAClearError) {
+  try {
+    ReplayWriter writer(dir_ / "no-such-dir" / "run.otr", header());
+    FAIL() << "expected ReplayError";
+  } catch (const ReplayError& e) {
+    EXPECT_THAT(e.what(), HasSubstr("no-such-dir/run.otr.partial"));
+    EXPECT_THAT(e.what(), HasSubstr("cannot create"));
+  }
+}
+
+std::string error_of(const std::filesystem::path& file) {
+  try {
+    (void)read_replay(file);
+  } catch (const ReplayError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST_F(ReplayTest, ATruncatedFileIsReportedWithItsNameAndWhere) {
+  const auto file = dir_ / "run.otr";
+  (void)record(file, 20.0);
+  const std::string bytes = read_bytes(file);
+  const auto cut = dir_ / "cut.otr";
+  write_bytes(cut, bytes.substr(0, bytes.size() * 6 / 10));
+  const std::string e = error_of(cut);
+  EXPECT_THAT(e, HasSubstr(cut.string()));
+  EXPECT_THAT(e, HasSubstr("truncated"));
+  EXPECT_THAT(e, HasSubstr("after record #"));
+  // The records before the cut are still readable.
+  const ReplayCheck c = check_replay(read_bytes(cut), "cut.otr");
+  EXPECT_THAT(c.error, HasSubstr("truncated"));
+  EXPECT_GT(c.frames, 100u);
+
+  write_bytes(cut, bytes.substr(0, 12));
+  EXPECT_THAT(error_of(cut), HasSubstr("inside its 16-byte preamble"));
+  write_bytes(cut, bytes.substr(0, 200));
+  EXPECT_THAT(error_of(cut), HasSubstr("truncated: the header is"));
+  const std::size_t header_end = kReplayPreambleBytes + r_header_bytes(bytes);
+  write_bytes(cut, bytes.substr(0, header_end));
+  EXPECT_THAT(error_of(cut), HasSubstr("with no records"));
+}
+
+TEST_F(ReplayTest, ACorruptedByteIsReported) {
+  const auto file = dir_ / "run.otr";
+  (void)record(file, 20.0);
+  std::string bytes = read_bytes(file);
+  const std::size_t header_end = kReplayPreambleBytes + r_header_bytes(bytes);
+  const auto bad = dir_ / "bad.otr";
+  // A byte in the middle of the compressed body: zlib finds it (bad code or checksum).
+  std::string body = bytes;
+  body[header_end + (bytes.size() - header_end) / 2] ^= 0x5a;
+  write_bytes(bad, body);
+  std::string e = error_of(bad);
+  EXPECT_THAT(e, HasSubstr(bad.string()));
+  EXPECT_THAT(e, HasSubstr("corrupt"));
+  // The last byte (the checksum).
+  body = bytes;
+  body.back() ^= 0x01;
+  write_bytes(bad, body);
+  EXPECT_THAT(error_of(bad), HasSubstr("corrupt"));
+  // A byte of the header's JSON.
+  body = bytes;
+  body[kReplayPreambleBytes] = '#';
+  write_bytes(bad, body);
+  EXPECT_THAT(error_of(bad), HasSubstr("corrupt header"));
+  // Bytes after the end of the stream.
+  write_bytes(bad, bytes + "xyz");
+  EXPECT_THAT(error_of(bad), HasSubstr("3 unexpected bytes after the compressed body"));
+}
+
+TEST_F(ReplayTest, NotAReplayOrAnotherVersion) {
+  const auto file = dir_ / "run.otr";
+  (void)record(file, 1.0);
+  std::string bytes = read_bytes(file);
+  const auto bad = dir_ / "bad.otr";
+  write_bytes(bad, "x y s dx dy\n1 2 3 4 5\n");
+  EXPECT_THAT(error_of(bad), HasSubstr("not an overtake replay"));
+  write_bytes(bad, "");
+  EXPECT_THAT(error_of(bad), HasSubstr("empty"));
+  bytes[8] = 2;
+  write_bytes(bad, bytes);
+  EXPECT_THAT(error_of(bad), HasSubstr("version 2; this build reads version 1"));
+  EXPECT_THAT(error_of(dir_ / "missing.otr"), HasSubstr("cannot open"));
+}
+
+// A file made by hand: the preamble of a real header and the given records.
+std::string handmade(const ReplayHeader& h, const std::string& records) {
+  return replay_preamble(h) + deflate_all(records);
+}
+
+std::string record_of(std::uint8_t kind, const std::string& payload) {
+  std::string out(1, static_cast<char>(kind));
+  const auto n = static_cast<std::uint32_t>(payload.size());
+  for (int i = 0; i < 4; ++i) out.push_back(static_cast<char>((n >> (8 * i)) & 0xff));
+  return out + payload;
+}
+
+TEST_F(ReplayTest, NoEndRecordIsTruncated) {
+  World world(map_, line_, params_, TrafficProfile::faithful, 1);
+  ReplayEncoder enc;
+  std::string records;
+  enc.append_state(world, records);
+  const auto bad = dir_ / "bad.otr";
+  write_bytes(bad, handmade(header(), records));
+  const std::string e = error_of(bad);
+  EXPECT_THAT(e, HasSubstr("no end record"));
+  EXPECT_THAT(e, HasSubstr("after record #1 (step 0, t = 0.00 s)"));
+}
+
+TEST_F(ReplayTest, UnknownKindsAreSkippedAndBadRecordsNamed) {
+  World world(map_, line_, params_, TrafficProfile::faithful, 1);
+  ReplayEncoder enc;
+  std::string records;
+  enc.append_state(world, records);
+  records += record_of(42, "future");
+  ReplayEncoder::append_end("{}", records);
+  const auto file = dir_ / "ok.otr";
+  write_bytes(file, handmade(header(), records));
+  const Replay r = read_replay(file);
+  EXPECT_EQ(r.unknown_records, 1u);
+  EXPECT_EQ(r.frames.size(), 1u);
+
+  // A frame too short for its cars; a path before any frame; a second frame with the same step.
+  std::string short_frame;
+  enc.append_state(world, short_frame);
+  short_frame = record_of(1, short_frame.substr(5, 60));
+  write_bytes(file, handmade(header(), short_frame));
+  EXPECT_THAT(error_of(file), HasSubstr("record #1 (frame, at inflated byte 0): 60 bytes where"));
+  std::string path_first;
+  ReplayEncoder::append_path(std::vector<core::Vec2>{{1.0, 2.0}}, path_first);
+  write_bytes(file, handmade(header(), path_first));
+  EXPECT_THAT(error_of(file), HasSubstr("a path before the first frame"));
+  std::string twice;
+  ReplayEncoder e1, e2;
+  e1.append_state(world, twice);
+  e2.append_state(world, twice);
+  write_bytes(file, handmade(header(), twice));
+  EXPECT_THAT(error_of(file), HasSubstr("step 0 does not follow step 0"));
+}
+
+}  // namespace
+}  // namespace overtake::sim

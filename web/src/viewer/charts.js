@@ -1,0 +1,195 @@
+// Speed, total acceleration and jerk against time (uPlot), with the limits drawn, a playhead
+// linked to the timeline, and click-to-seek.
+import uPlot from 'uplot';
+import 'uplot/dist/uPlot.min.css';
+
+import { clock, MPH_PER_MPS } from './format.js';
+
+const AXIS = { stroke: '#8a94a3', grid: { stroke: '#2a3038', width: 1 }, ticks: { stroke: '#2a3038', width: 1 } };
+const LIMIT_COLOR = '#ff4d4f';
+
+// Axis ticks: "m:ss", or "h:mm:ss" from an hour on.
+function shortClock(v) {
+  const s = Math.max(0, Math.round(v));
+  const h = Math.floor(s / 3600);
+  const m = Math.floor((s % 3600) / 60);
+  const sec = String(s % 60).padStart(2, '0');
+  return h ? `${h}:${String(m).padStart(2, '0')}:${sec}` : `${m}:${sec}`;
+}
+
+function limitLine(limit) {
+  return (u) => {
+    if (!(limit > 0)) return;
+    const ctx = u.ctx;
+    const y = Math.round(u.valToPos(limit, 'y', true)) + 0.5;
+    if (y < u.bbox.top || y > u.bbox.top + u.bbox.height) return;
+    ctx.save();
+    ctx.strokeStyle = LIMIT_COLOR;
+    ctx.lineWidth = Math.max(1, devicePixelRatio || 1);
+    ctx.setLineDash([6 * (devicePixelRatio || 1), 4 * (devicePixelRatio || 1)]);
+    ctx.beginPath();
+    ctx.moveTo(u.bbox.left, y);
+    ctx.lineTo(u.bbox.left + u.bbox.width, y);
+    ctx.stroke();
+    ctx.restore();
+  };
+}
+
+// A y range that shows the limit with some room, and clips rare spikes at a few times it.
+function rangeFor(limit) {
+  return (u, dataMin, dataMax) => {
+    const lo = Math.min(0, Number.isFinite(dataMin) ? dataMin : 0);
+    const top = Number.isFinite(dataMax) ? dataMax : 0;
+    const hi = limit > 0 ? Math.max(limit * 1.2, Math.min(top * 1.05, limit * 3)) : Math.max(1, top * 1.05);
+    return [lo, hi];
+  };
+}
+
+/// The three charts. `onSeek(t_s)` is called when a chart is clicked.
+export class Charts {
+  constructor(root, replay, onSeek) {
+    this.root = root;
+    this.onSeek = onSeek;
+    this.windowS = 0;
+    this.plots = [];
+    this.playheads = [];
+    this.lastCentre = -1;
+    this.lastScaleAt = 0;
+    this.setReplay(replay);
+  }
+
+  setReplay(replay) {
+    for (const p of this.plots) p.destroy();
+    this.plots = [];
+    this.playheads = [];
+    this.replay = replay;
+    this.speedMph = new Float32Array(0);
+    this.filled = 0;
+    const lim = replay.limits || {};
+    const specs = [
+      { el: 'chart-speed', title: `Speed (mph), limit ${((lim.speed_mps || 0) * MPH_PER_MPS).toFixed(0)}`, label: 'speed', unit: 'mph', color: '#4fb3ff', limit: (lim.speed_mps || 0) * MPH_PER_MPS },
+      { el: 'chart-acc', title: `Total acceleration (m/s²), limit ${lim.acceleration_mps2 ?? '–'}`, label: 'acceleration', unit: 'm/s²', color: '#3ddc84', limit: lim.acceleration_mps2 || 0 },
+      { el: 'chart-jerk', title: `Jerk (m/s³), limit ${lim.jerk_mps3 ?? '–'}`, label: 'jerk', unit: 'm/s³', color: '#f5a623', limit: lim.jerk_mps3 || 0 },
+    ];
+    const width = this._width();
+    for (const s of specs) {
+      const el = this.root.querySelector(`#${s.el}`);
+      el.textContent = '';
+      const opts = {
+        title: s.title,
+        width,
+        height: 150,
+        pxAlign: 0,
+        scales: { x: { time: false }, y: { range: rangeFor(s.limit) } },
+        axes: [
+          { ...AXIS, size: 28, values: (u, vals) => vals.map((v) => shortClock(v)) },
+          { ...AXIS, size: 44 },
+        ],
+        series: [
+          { label: 't', value: (u, v) => (v == null ? '–' : clock(v)) },
+          { label: s.label, stroke: s.color, width: 1, points: { show: false }, value: (u, v) => (v == null ? '–' : `${v.toFixed(2)} ${s.unit}`) },
+        ],
+        cursor: { sync: { key: 'overtake-charts' }, drag: { x: false, y: false, setScale: false }, points: { size: 5 } },
+        legend: { show: true, live: true },
+        hooks: { draw: [limitLine(s.limit)], setScale: [() => this._placeHeads()] },
+      };
+      const plot = new uPlot(opts, this._data(s.label), el);
+      const head = document.createElement('div');
+      head.className = 'playhead';
+      plot.over.appendChild(head);
+      plot.over.addEventListener('click', (e) => {
+        const t = plot.posToVal(e.offsetX, 'x');
+        if (Number.isFinite(t)) this.onSeek(t);
+      });
+      this.plots.push(plot);
+      this.playheads.push(head);
+    }
+  }
+
+  _width() {
+    return Math.max(240, Math.floor(this.root.clientWidth - 12));
+  }
+
+  _fill() {
+    const r = this.replay;
+    if (this.speedMph.length < r.frames) {
+      const next = new Float32Array(Math.max(r.frames, this.speedMph.length * 2));
+      next.set(this.speedMph.subarray(0, this.filled));
+      this.speedMph = next;
+    }
+    for (let i = this.filled; i < r.frames; ++i) this.speedMph[i] = r.egoSpeed[i] * MPH_PER_MPS;
+    this.filled = r.frames;
+  }
+
+  _data(label) {
+    const r = this.replay;
+    this._fill();
+    const n = r.frames;
+    const x = r.time.subarray(0, n);
+    if (label === 'speed') return [x, this.speedMph.subarray(0, n)];
+    if (label === 'acceleration') return [x, r.accTotal.subarray(0, n)];
+    return [x, r.jerk.subarray(0, n)];
+  }
+
+  /// New frames arrived (live): redraw with all of them.
+  refresh() {
+    const labels = ['speed', 'acceleration', 'jerk'];
+    this.plots.forEach((p, k) => p.setData(this._data(labels[k]), this.windowS === 0));
+    this.lastCentre = -1;
+  }
+
+  /// Shows the whole run, or a window of `seconds` around the playhead.
+  setWindow(seconds) {
+    this.windowS = seconds;
+    this.lastCentre = -1;
+    if (seconds === 0) {
+      const r = this.replay;
+      const n = r.frames;
+      if (n > 0) for (const p of this.plots) p.setScale('x', { min: r.time[0], max: r.time[n - 1] });
+    }
+  }
+
+  /// Moves the playheads to time `t` (seconds), and the window with it.
+  setTime(t) {
+    this.t = t;
+    if (this.windowS > 0) {
+      const now = performance.now();
+      const w = this.windowS;
+      if (this.lastCentre < 0 || Math.abs(t - this.lastCentre) > w * 0.25 || now - this.lastScaleAt > 250) {
+        if (t !== this.lastCentre) {
+          this.lastCentre = t;
+          this.lastScaleAt = now;
+          const r = this.replay;
+          const t0 = r.frames ? r.time[0] : 0;
+          const t1 = r.frames ? r.time[r.frames - 1] : 0;
+          let min = t - w * 0.7;
+          let max = t + w * 0.3;
+          if (min < t0) [min, max] = [t0, t0 + w];
+          else if (max > t1 && t1 - w > t0) [min, max] = [t1 - w, t1];
+          // uPlot applies a new scale later (a microtask); its setScale hook places the heads
+          for (const p of this.plots) p.setScale('x', { min, max });
+        }
+      }
+    }
+    this._placeHeads();
+  }
+
+  _placeHeads() {
+    const t = this.t;
+    if (t === undefined) return;
+    for (let k = 0; k < this.plots.length; ++k) {
+      const p = this.plots[k];
+      const left = p.valToPos(t, 'x');
+      const head = this.playheads[k];
+      const inside = Number.isFinite(left) && left >= 0 && left <= p.over.clientWidth;
+      head.style.display = inside ? '' : 'none';
+      if (inside) head.style.transform = `translateX(${left.toFixed(1)}px)`;
+    }
+  }
+
+  resize() {
+    const width = this._width();
+    for (const p of this.plots) p.setSize({ width, height: 150 });
+    this.lastCentre = -1;
+  }
+}

@@ -1,0 +1,158 @@
+// The decoder against the test writer (docs/replay.md): round trip, truncation, corruption,
+// live records split over messages.
+import assert from 'node:assert/strict';
+import { test } from 'node:test';
+
+import { adler32, base64ToBytes, decodeReplay, decodeReplayAsync, parseHeader, Replay, ReplayError } from '../src/replay.js';
+import { concat, encodeReplay, frameRecord, syntheticDrive } from './encode.mjs';
+
+const close = (a, b, tol, what) => assert.ok(Math.abs(a - b) <= tol, `${what}: ${a} vs ${b}`);
+
+test('round trip: every frame, car, path and incident comes back', () => {
+  const drive = syntheticDrive({ seconds: 6, incidents: [{ step: 120, type: 'collision', value: 3 }, { step: 200, type: 'max_jerk', value: 12.5 }] });
+  const r = decodeReplay(drive.bytes);
+  assert.equal(r.problem, null);
+  assert.equal(r.frames, drive.frames.length);
+  assert.equal(r.cars, drive.frames.length * 12);
+  assert.equal(r.paths, drive.frames.length / 2);
+  assert.equal(r.incidents, 2);
+  assert.equal(r.incidentTypeName(r.incType[0]), 'collision');
+  assert.equal(r.incFrame[1], 200);
+  close(r.incValue[1], 12.5, 1e-6, 'incident value');
+  assert.ok(r.ended);
+  assert.equal(r.report.incidents.length, 2);
+  for (const i of [0, 1, 137, drive.frames.length - 1]) {
+    const f = drive.frames[i];
+    assert.equal(r.step[i], f.step);
+    close(r.egoX[i], f.x, 0.006, 'x');
+    close(r.egoY[i], f.y, 0.006, 'y');
+    close(r.egoSpeed[i], f.speed, 0.006, 'speed');
+    close(r.accTotal[i], f.accTotal, 1e-5, 'acc');
+    close(r.bestFree[i], f.bestFree, 1e-3, 'best');
+    const c0 = r.carStart[i];
+    assert.equal(r.carStart[i + 1] - c0, 12);
+    assert.equal(r.carId[c0 + 5], 5);
+    close(r.carX[c0 + 5], f.cars[5].x, 0.006, 'car x');
+    close(r.carSpeed[c0 + 5], f.cars[5].speed, 0.006, 'car speed');
+    let dyaw = Math.abs(r.egoYaw[i] - f.yaw) % (2 * Math.PI);
+    dyaw = Math.min(dyaw, 2 * Math.PI - dyaw);
+    assert.ok(dyaw < 1e-3, `yaw ${r.egoYaw[i]} vs ${f.yaw}`);
+  }
+  // frame 3's path is the one sent at frame 2
+  assert.equal(r.framePath[3], 1);
+  assert.equal(r.pathFrame[1], 2);
+  assert.equal(r.pathStart[2] - r.pathStart[1], 50);
+  assert.equal(r.frameOfStep(150), 150);
+  assert.equal(r.frameOfStep(1e9), r.frames - 1);
+});
+
+test('a truncated file keeps the frames before the cut and says so', () => {
+  const drive = syntheticDrive({ seconds: 20 });
+  const cut = drive.bytes.subarray(0, Math.floor(drive.bytes.length * 0.6));
+  const r = decodeReplay(cut, 'cut.otr');
+  assert.match(r.problem, /cut\.otr/);
+  assert.match(r.problem, /truncated|ends early/);
+  assert.ok(r.frames > 0, 'some frames survive');
+  assert.ok(r.frames < drive.frames.length);
+  assert.ok(!r.ended);
+  // what survives is right
+  const i = r.frames - 1;
+  assert.ok(Math.abs(r.egoX[i] - drive.frames[i].x) < 0.006);
+});
+
+test('a corrupted byte is reported, not thrown', () => {
+  const drive = syntheticDrive({ seconds: 10 });
+  const body = 16 + new DataView(drive.bytes.buffer).getUint32(12, true);
+  for (const at of [0.01, 0.3, 0.7, 0.999]) {
+    const bad = drive.bytes.slice();
+    const k = body + Math.floor((bad.length - body) * at);
+    bad[k] ^= 0x5a;
+    const r = decodeReplay(bad, 'bad.otr');
+    assert.ok(r.problem, `corruption at ${k} is noticed`);
+    assert.match(r.problem, /bad\.otr/);
+  }
+  const inHeader = drive.bytes.slice();
+  inHeader[16] = 0x78; // the header's opening brace becomes 'x'
+  assert.throws(() => decodeReplay(inHeader, 'h.otr'), /h\.otr: the header is not JSON/);
+});
+
+test('missing end record is a warning', () => {
+  const drive = syntheticDrive({ seconds: 2, end: false });
+  const r = decodeReplay(drive.bytes);
+  assert.equal(r.frames, 100);
+  assert.match(r.problem, /no end record/);
+});
+
+test('bad magic, version and header throw ReplayError', () => {
+  const drive = syntheticDrive({ seconds: 1 });
+  const b1 = drive.bytes.slice();
+  b1[0] = 0x58;
+  assert.throws(() => decodeReplay(b1), ReplayError);
+  const b2 = drive.bytes.slice();
+  b2[8] = 9;
+  assert.throws(() => decodeReplay(b2), /version 9/);
+  assert.throws(() => decodeReplay(drive.bytes.subarray(0, 40)), /truncated/);
+  assert.throws(() => decodeReplay(new Uint8Array(3)), /too short/);
+  assert.throws(() => parseHeader('{nope'), /not JSON/);
+});
+
+test('unknown record kinds are skipped', () => {
+  const drive = syntheticDrive({ seconds: 1, end: false });
+  const odd = new Uint8Array([99, 3, 0, 0, 0, 1, 2, 3]);
+  const bytes = encodeReplay(drive.header, [drive.records[0], odd, drive.records[1], drive.records[2]]);
+  const r = decodeReplay(bytes);
+  assert.equal(r.frames, 2);
+  assert.equal(r.paths, 1);
+});
+
+test('live: records split across messages are joined', () => {
+  const drive = syntheticDrive({ seconds: 1, end: false });
+  const all = concat(drive.records);
+  const r = new Replay(drive.header);
+  let at = 0;
+  for (const size of [7, 300, 1, 1000, 53]) {
+    r.appendRecords(all.subarray(at, at + size), { live: true });
+    at += size;
+  }
+  r.appendRecords(all.subarray(at), { live: true });
+  assert.equal(r.problem, null);
+  assert.equal(r.frames, 50);
+  assert.equal(r.paths, 25);
+});
+
+test('a frame whose length does not match its car count is malformed', () => {
+  const f = frameRecord({ step: 0, x: 0, y: 0, yaw: 0, speed: 0, s: 0, d: 0, accT: 0, accN: 0, accTotal: 0, jerk: 0, distance: 0, distanceSince: 0, bestFree: 0, cars: [] });
+  f[5 + 52] = 3; // claims three cars
+  const r = new Replay({ step_s: 0.02 });
+  r.appendRecords(f);
+  assert.match(r.problem, /malformed/);
+  assert.equal(r.frames, 0);
+});
+
+test('adler32 and base64 helpers', () => {
+  assert.equal(adler32(new TextEncoder().encode('Wikipedia')), 0x11e60398);
+  const bytes = new Uint8Array(1000).map((_, i) => (i * 37) & 255);
+  for (const n of [0, 1, 2, 3, 4, 999, 1000]) {
+    const part = bytes.subarray(0, n);
+    assert.deepEqual(base64ToBytes(Buffer.from(part).toString('base64')), part);
+  }
+  assert.deepEqual(base64ToBytes('AQID\nBA=='), new Uint8Array([1, 2, 3, 4]));
+});
+
+test('the native inflate path reads the same, and falls back on a fault', async () => {
+  const drive = syntheticDrive({ seconds: 4, incidents: [{ step: 50, type: 'speeding', value: 51 }] });
+  const a = decodeReplay(drive.bytes);
+  const b = await decodeReplayAsync(drive.bytes);
+  assert.equal(b.problem, null);
+  assert.equal(b.frames, a.frames);
+  assert.equal(b.incidents, 1);
+  assert.deepEqual(b.egoX.subarray(0, b.frames), a.egoX.subarray(0, a.frames));
+  const body = 16 + new DataView(drive.bytes.buffer).getUint32(12, true);
+  const cut = await decodeReplayAsync(drive.bytes.subarray(0, body + Math.floor((drive.bytes.length - body) / 2)), 'cut.otr');
+  assert.match(cut.problem, /truncated/);
+  assert.ok(cut.frames > 0 && cut.frames < a.frames);
+  const bad = drive.bytes.slice();
+  bad[bad.length - 2] ^= 1; // inside the Adler-32
+  const c = await decodeReplayAsync(bad, 'sum.otr');
+  assert.match(c.problem, /checksum/);
+});
