@@ -435,6 +435,40 @@ BenchOutcome run_bench(const BenchSpec& spec, const std::atomic<bool>* stop,
   return outcome;
 }
 
+namespace {
+
+// Copies the shards' recorded replays (replays/*.otr) into out/replays/, as an unsharded
+// bench would hold them (each run is in one shard only, so the names do not clash). Returns
+// the replays now in out/replays/ that came from the shards, in name order.
+std::vector<std::filesystem::path> merge_replays(const std::vector<std::filesystem::path>& dirs,
+                                                 const std::filesystem::path& out) {
+  namespace fs = std::filesystem;
+  const fs::path to = out / kReplaysFolder;
+  std::set<fs::path> merged;
+  std::error_code ec;
+  for (const auto& dir : dirs) {
+    const fs::path from = dir / kReplaysFolder;
+    if (!fs::is_directory(from, ec)) continue;
+    std::set<fs::path> otrs;  // in name order: the same copies whatever the listing order
+    for (const auto& entry : fs::directory_iterator(from)) {
+      if (entry.path().extension() == ".otr" && entry.is_regular_file(ec)) otrs.insert(entry.path());
+    }
+    for (const fs::path& otr : otrs) {
+      const fs::path dest = to / otr.filename();
+      merged.insert(dest);
+      if (fs::equivalent(otr, dest, ec)) continue;  // merging into one of the shards
+      fs::create_directories(to, ec);
+      if (!fs::copy_file(otr, dest, fs::copy_options::overwrite_existing, ec) || ec) {
+        throw std::runtime_error(dest.string() + ": cannot copy the replay " + otr.string() + " here (" +
+                                 ec.message() + ")");
+      }
+    }
+  }
+  return {merged.begin(), merged.end()};
+}
+
+}  // namespace
+
 BenchOutcome merge_bench(const std::vector<std::filesystem::path>& dirs, const std::filesystem::path& out) {
   if (dirs.empty()) throw UsageError("merge: name the bench output folders to join");
   std::optional<json> identity;
@@ -475,6 +509,7 @@ BenchOutcome merge_bench(const std::vector<std::filesystem::path>& dirs, const s
   write_file_atomic(out / kManifestFile, manifest.dump(2) + "\n");
   BenchOutcome outcome;
   write_outputs(out, runs, manifest, outcome);
+  outcome.replays = merge_replays(dirs, out);
   return outcome;
 }
 

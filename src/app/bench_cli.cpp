@@ -65,7 +65,7 @@ Subcommand register_bench(CLI::App& app) {
     std::string map, config, out = "bench-out", shard, html;
     bool quiet = false;
     std::vector<std::string> merge_dirs;
-    std::string merge_out;
+    std::string merge_out, merge_html;
   };
   auto st = std::make_shared<State>();
   st->spec.jobs = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
@@ -95,13 +95,28 @@ Subcommand register_bench(CLI::App& app) {
   cmd->add_flag("--quiet,-q", st->quiet, "No progress bar or summary");
   auto* merge = cmd->add_subcommand("merge", "Join the output folders of the shards of one bench into --out.");
   merge->add_option("dirs", st->merge_dirs, "Shard output folders")->required()->check(CLI::ExistingDirectory);
-  merge->add_option("--out,-o", st->merge_out, "Folder for the joined output")->required();
+  merge->add_option("--out,-o", st->merge_out, "Folder for the joined output (the shards' replays are copied\n"
+                                               "into its replays/)")->required();
+  merge->add_option("--html", st->merge_html,
+                    "Also write the bench report page of the joined output to this file, each run\n"
+                    "linked to its replay when a shard recorded it (pages written into --out/replays/)");
 
   return {cmd, [st, merge] {
             if (merge->parsed()) {
+              if (!st->merge_html.empty()) {  // the pages come from the binary: check first
+                (void)embedded_page(kReportPageName);
+                (void)embedded_page(kViewerPageName);
+              }
               const BenchOutcome o = merge_bench(
                   std::vector<std::filesystem::path>(st->merge_dirs.begin(), st->merge_dirs.end()), st->merge_out);
               std::cout << "merged " << o.runs_done << " runs into " << st->merge_out << "\n\n" << o.summary_markdown;
+              for (const auto& r : o.replays) std::cout << "replay: " << r.string() << "\n";
+              if (!st->merge_html.empty()) {
+                const auto pages = write_bench_report(st->merge_out, st->merge_html, embedded_page(kReportPageName),
+                                                      embedded_page(kViewerPageName));
+                std::cout << "report: " << st->merge_html << " (" << pages.size() << " replay page"
+                          << (pages.size() == 1 ? "" : "s") << " linked)\n";
+              }
               return kExitOk;
             }
             BenchSpec spec = st->spec;

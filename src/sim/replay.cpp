@@ -28,9 +28,10 @@ using nlohmann::json;
 constexpr double kCmPerM = 100.0;
 constexpr double kYawUnitsPerRad = 1e4;
 constexpr std::size_t kRecordHeadBytes = 5;   // u8 kind, u32 length
-constexpr std::size_t kFrameFixedBytes = 53;  // up to the car count, inclusive
-constexpr std::size_t kFrameCarBytes = 14;    // u16 id, i32 x, i32 y, i16 yaw, u16 speed
+constexpr std::size_t kFrameFloatBytes = 36;  // f32 s, d, 4 strict figures, 3 distances
 constexpr std::size_t kIncidentBytes = 18;
+constexpr std::size_t kMaxVarintBytes = 5;  // 35 bits: the zigzag of a difference of two i32
+constexpr std::size_t kIdCount = 65536;     // car ids are u16
 constexpr std::size_t kMaxCars = 255;
 constexpr std::size_t kMaxPathPoints = 65535;
 constexpr std::size_t kMaxRecordBytes = std::size_t{64} << 20;  // larger: corrupt
@@ -56,14 +57,39 @@ void put_u32(std::string& out, std::uint32_t v) {
   for (int i = 0; i < 4; ++i) out.push_back(static_cast<char>((v >> (8 * i)) & 0xff));
 }
 
-void put_i16(std::string& out, std::int16_t v) {
-  put_u16(out, static_cast<std::uint16_t>(v));
-}
 void put_i32(std::string& out, std::int32_t v) {
   put_u32(out, static_cast<std::uint32_t>(v));
 }
 void put_f32(std::string& out, double v) {
   put_u32(out, std::bit_cast<std::uint32_t>(static_cast<float>(v)));
+}
+
+// LEB128: 7 bits a byte, low first, the high bit set on every byte but the last.
+void put_uvarint(std::string& out, std::uint64_t v) {
+  while (v >= 0x80) {
+    out.push_back(static_cast<char>((v & 0x7f) | 0x80));
+    v >>= 7;
+  }
+  out.push_back(static_cast<char>(v));
+}
+
+// A signed difference, zigzagged (0, -1, 1, -2, ... -> 0, 1, 2, 3, ...) then LEB128.
+void put_delta(std::string& out, std::int64_t now, std::int64_t before) {
+  const std::int64_t d = now - before;
+  put_uvarint(out, (static_cast<std::uint64_t>(d) << 1) ^ static_cast<std::uint64_t>(d >> 63));
+}
+
+using Fixed = ReplayEncoder::Fixed;
+using FixedCar = ReplayEncoder::FixedCar;
+
+// Where car `id` is in `cars` (ids unique), or -1; it is usually at `hint` (same order as in
+// the frame before).
+long find_car(const std::vector<FixedCar>& cars, int id, std::size_t hint) {
+  if (hint < cars.size() && cars[hint].id == id) return static_cast<long>(hint);
+  for (std::size_t j = 0; j < cars.size(); ++j) {
+    if (cars[j].id == id) return static_cast<long>(j);
+  }
+  return -1;
 }
 
 // `v * scale` rounded and clamped to [lo, hi]; non-finite values become 0.
@@ -114,6 +140,26 @@ class Reader {
     return v;
   }
   [[nodiscard]] std::int16_t i16() { return static_cast<std::int16_t>(u16()); }
+  [[nodiscard]] std::size_t remaining() const { return b_.size() - at_; }
+  // An unsigned LEB128 varint of at most kMaxVarintBytes bytes; nullopt when the payload ends
+  // inside it or it is longer (then overlong() is true).
+  [[nodiscard]] std::optional<std::uint64_t> uvarint() {
+    std::uint64_t v = 0;
+    for (std::size_t i = 0; i < kMaxVarintBytes && at_ < b_.size(); ++i) {
+      const auto byte = static_cast<unsigned char>(b_[at_++]);
+      v |= static_cast<std::uint64_t>(byte & 0x7f) << (7 * i);
+      if (byte < 0x80) return v;
+      if (i + 1 == kMaxVarintBytes) overlong_ = true;
+    }
+    return std::nullopt;
+  }
+  [[nodiscard]] bool overlong() const { return overlong_; }
+  // A zigzag varint: a signed difference.
+  [[nodiscard]] std::optional<std::int64_t> delta() {
+    const auto z = uvarint();
+    if (!z) return std::nullopt;
+    return static_cast<std::int64_t>(*z >> 1) ^ -static_cast<std::int64_t>(*z & 1);
+  }
   [[nodiscard]] std::int32_t i32() { return static_cast<std::int32_t>(u32()); }
   [[nodiscard]] double f32() { return static_cast<double>(std::bit_cast<float>(u32())); }
   [[nodiscard]] double metres() { return static_cast<double>(i32()) / kCmPerM; }
@@ -124,6 +170,7 @@ class Reader {
   }
   std::string_view b_;
   std::size_t at_ = 0;
+  bool overlong_ = false;
 };
 
 std::string incident_type_name(std::size_t i) {
@@ -203,38 +250,74 @@ std::string replay_preamble(const ReplayHeader& header) {
 
 // ---- encoder ------------------------------------------------------------------------------
 
+void ReplayEncoder::append_frame(const ReplayFrame& f, std::string& out) {
+  const std::size_t at = begin_record(out, ReplayRecordKind::frame);
+  put_u32(out, static_cast<std::uint32_t>(f.step));
+  const Fixed e{cm(f.position.x), cm(f.position.y), yaw_units(f.yaw_rad), speed_cmps(f.speed_mps)};
+  put_delta(out, e.x, ego_.x);
+  put_delta(out, e.y, ego_.y);
+  put_delta(out, e.yaw, ego_.yaw);
+  put_delta(out, e.speed, ego_.speed);
+  ego_ = e;
+  put_f32(out, f.s_m);
+  put_f32(out, f.d_m);
+  put_f32(out, f.strict.tangential_mps2);
+  put_f32(out, f.strict.normal_mps2);
+  put_f32(out, f.strict.acceleration_mps2);
+  put_f32(out, f.strict.jerk_mps3);
+  put_f32(out, f.distance_m);
+  put_f32(out, f.incident_free_m);
+  put_f32(out, f.best_incident_free_m);
+
+  // The cars, ids unique (the traffic's are: a repeat can only come from clamping).
+  if (in_frame_.empty()) in_frame_.resize(kIdCount);
+  next_.clear();
+  for (const ReplayCar& c : f.cars) {
+    if (next_.size() == kMaxCars) break;
+    const int id = std::clamp(c.id, 0, static_cast<int>(kIdCount - 1));
+    if (in_frame_[static_cast<std::size_t>(id)]) continue;
+    in_frame_[static_cast<std::size_t>(id)] = true;
+    next_.push_back(
+        {id, {cm(c.position.x), cm(c.position.y), yaw_units(c.yaw_rad), speed_cmps(c.speed_mps)}});
+  }
+  base_.assign(next_.size(), Fixed{});
+  for (std::size_t k = 0; k < next_.size(); ++k) {
+    in_frame_[static_cast<std::size_t>(next_[k].id)] = false;
+    const long j = find_car(cars_, next_[k].id, k);
+    if (j >= 0) base_[k] = cars_[static_cast<std::size_t>(j)].at;  // else: from zero
+  }
+  put_u8(out, static_cast<std::uint8_t>(next_.size()));
+  for (const FixedCar& c : next_) put_uvarint(out, static_cast<std::uint64_t>(c.id));
+  for (std::size_t k = 0; k < next_.size(); ++k) put_delta(out, next_[k].at.x, base_[k].x);
+  for (std::size_t k = 0; k < next_.size(); ++k) put_delta(out, next_[k].at.y, base_[k].y);
+  for (std::size_t k = 0; k < next_.size(); ++k) put_delta(out, next_[k].at.yaw, base_[k].yaw);
+  for (std::size_t k = 0; k < next_.size(); ++k) put_delta(out, next_[k].at.speed, base_[k].speed);
+  cars_.swap(next_);
+  end_record(out, at);
+}
+
 void ReplayEncoder::append_state(const World& world, std::string& out) {
   const EgoState& ego = world.ego();
   const Referee& ref = world.referee();
-  const StrictFigures strict = ref.current_strict();
-  const std::size_t at = begin_record(out, ReplayRecordKind::frame);
-  put_u32(out, static_cast<std::uint32_t>(world.steps()));
-  put_i32(out, cm(ego.position.x));
-  put_i32(out, cm(ego.position.y));
-  put_i16(out, yaw_units(ego.yaw_rad));
-  put_u16(out, speed_cmps(ego.speed_mps));
-  put_f32(out, ego.frenet.s_m);
-  put_f32(out, ego.frenet.d_m);
-  put_f32(out, strict.tangential_mps2);
-  put_f32(out, strict.normal_mps2);
-  put_f32(out, strict.acceleration_mps2);
-  put_f32(out, strict.jerk_mps3);
-  put_f32(out, ref.distance_m());
-  put_f32(out, ref.incident_free_m());
-  put_f32(out, ref.best_incident_free_m());
+  ReplayFrame& f = frame_;
+  f.step = world.steps();
+  f.position = ego.position;
+  f.yaw_rad = ego.yaw_rad;
+  f.speed_mps = ego.speed_mps;
+  f.s_m = ego.frenet.s_m;
+  f.d_m = ego.frenet.d_m;
+  f.strict = ref.current_strict();
+  f.distance_m = ref.distance_m();
+  f.incident_free_m = ref.incident_free_m();
+  f.best_incident_free_m = ref.best_incident_free_m();
   const Traffic& traffic = world.traffic();
-  const std::size_t count = std::min(traffic.cars().size(), kMaxCars);
-  put_u8(out, static_cast<std::uint8_t>(count));
-  for (std::size_t i = 0; i < count; ++i) {
+  f.cars.resize(traffic.cars().size());
+  for (std::size_t i = 0; i < f.cars.size(); ++i) {
     const TrafficCar& c = traffic.cars()[i];
     const core::OrientedBox box = traffic.footprint(c);
-    put_u16(out, static_cast<std::uint16_t>(std::clamp(c.id, 0, 65535)));
-    put_i32(out, cm(box.center.x));
-    put_i32(out, cm(box.center.y));
-    put_i16(out, yaw_units(box.heading_rad));
-    put_u16(out, speed_cmps(c.speed_mps));
+    f.cars[i] = {c.id, box.center, box.heading_rad, c.speed_mps};
   }
-  end_record(out, at);
+  append_frame(f, out);
 
   const std::vector<Incident>& incidents = ref.incidents();
   for (; incidents_seen_ < incidents.size(); ++incidents_seen_) {
@@ -244,19 +327,25 @@ void ReplayEncoder::append_state(const World& world, std::string& out) {
     put_f32(out, i.type == IncidentType::speeding ? core::mps_to_mph(i.value) : i.value);
     put_f32(out, i.s_m);
     put_u8(out, static_cast<std::uint8_t>(std::clamp(i.lane, 0, 255)));
-    put_i32(out, cm(ego.position.x));
-    put_i32(out, cm(ego.position.y));
+    put_i32(out, ego_.x);  // where the ego is (this frame's)
+    put_i32(out, ego_.y);
     end_record(out, iat);
   }
 }
 
-void ReplayEncoder::append_path(std::span<const core::Vec2> path, std::string& out) {
+void ReplayEncoder::append_path(std::span<const core::Vec2> path, std::string& out) const {
   const std::size_t count = std::min(path.size(), kMaxPathPoints);
   const std::size_t at = begin_record(out, ReplayRecordKind::path);
   put_u16(out, static_cast<std::uint16_t>(count));
+  std::int32_t x = ego_.x;  // the first point against the ego, the others against the point before
+  std::int32_t y = ego_.y;
   for (std::size_t i = 0; i < count; ++i) {
-    put_i32(out, cm(path[i].x));
-    put_i32(out, cm(path[i].y));
+    const std::int32_t px = cm(path[i].x);
+    const std::int32_t py = cm(path[i].y);
+    put_delta(out, px, x);
+    put_delta(out, py, y);
+    x = px;
+    y = py;
   }
   end_record(out, at);
 }
@@ -404,7 +493,7 @@ void ReplayWriter::on_state(const World& world) {
 void ReplayWriter::on_path(const World&, std::span<const core::Vec2> path) {
   Impl& m = *impl_;
   if (m.finished || !m.error.empty()) return;
-  ReplayEncoder::append_path(path, m.pending);
+  m.encoder.append_path(path, m.pending);
   m.maybe_deflate();
 }
 
@@ -544,6 +633,10 @@ class Decoder {
     Reader r(bytes_.substr(8, 8));
     const std::uint32_t version = r.u32();
     const std::uint32_t header_bytes = r.u32();
+    if (version == 1) {
+      fail("replay format version 1 is not supported (this build reads version " +
+           std::to_string(kReplayVersion) + "); re-record the run with this build");
+    }
     if (version != kReplayVersion) {
       fail("replay format version " + std::to_string(version) + "; this build reads version " +
            std::to_string(kReplayVersion) + " (see docs/replay.md)");
@@ -658,6 +751,88 @@ class Decoder {
          ", at inflated byte " + std::to_string(at) + "): " + what + ", " + after_text());
   }
 
+  // `v` when it lies in [lo, hi], else the record is corrupt (`who`'s `what` is out of range).
+  std::int64_t in_range(std::uint8_t kind, std::size_t at, std::int64_t v, std::int64_t lo,
+                        std::int64_t hi, const char* who, const char* what) const {
+    if (v < lo || v > hi) {
+      bad_record(kind, at,
+                 std::string(who) + "'s " + what + " comes to " + std::to_string(v) +
+                     ", outside [" + std::to_string(lo) + ", " + std::to_string(hi) + "]");
+    }
+    return v;
+  }
+
+  // A varint of `what` could not be read.
+  [[noreturn]] void bad_varint(std::uint8_t kind, std::size_t at, const Reader& r,
+                               const std::string& what, std::size_t payload_bytes) const {
+    bad_record(kind, at,
+               what + (r.overlong() ? " hold a varint longer than " +
+                                          std::to_string(kMaxVarintBytes) + " bytes"
+                                    : " run past the end of the " + std::to_string(payload_bytes) +
+                                          "-byte payload"));
+  }
+
+  // The ego's x, y, yaw and speed as differences from the frame before (zigzag varints).
+  Fixed ego_after(std::uint8_t kind, std::size_t at, Reader& r, std::size_t payload_bytes) const {
+    std::int64_t d[4];
+    for (std::int64_t& v : d) {
+      const auto got = r.delta();
+      if (!got) bad_varint(kind, at, r, "the ego's position and speed", payload_bytes);
+      v = *got;
+    }
+    constexpr const char* kEgo = "the ego";
+    Fixed f;
+    f.x = static_cast<std::int32_t>(
+        in_range(kind, at, ego_.x + d[0], INT32_MIN, INT32_MAX, kEgo, "x"));
+    f.y = static_cast<std::int32_t>(
+        in_range(kind, at, ego_.y + d[1], INT32_MIN, INT32_MAX, kEgo, "y"));
+    f.yaw = static_cast<std::int32_t>(
+        in_range(kind, at, ego_.yaw + d[2], INT16_MIN, INT16_MAX, kEgo, "yaw"));
+    f.speed = static_cast<std::int32_t>(
+        in_range(kind, at, ego_.speed + d[3], 0, UINT16_MAX, kEgo, "speed"));
+    return f;
+  }
+
+  // A frame's `count` cars into next_: ids, then the columns of differences from the same
+  // car in the frame before (from zero for a car that was not in it).
+  void cars_after(std::uint8_t kind, std::size_t at, Reader& r, std::size_t count,
+                  std::size_t payload_bytes) {
+    const auto what = [count](const char* column) {
+      return std::string("the ") + column + " of its " + std::to_string(count) + " cars";
+    };
+    if (in_frame_.empty()) in_frame_.resize(kIdCount);
+    next_.resize(count);
+    base_.assign(count, Fixed{});
+    for (std::size_t k = 0; k < count; ++k) {
+      const auto id = r.uvarint();
+      if (!id) bad_varint(kind, at, r, what("ids"), payload_bytes);
+      if (*id >= kIdCount)
+        bad_record(kind, at, "car id " + std::to_string(*id) + " is above 65535");
+      // A repeated id is corrupt (the decoder stops, so its marks need no clearing).
+      if (in_frame_[*id]) bad_record(kind, at, "car id " + std::to_string(*id) + " appears twice");
+      in_frame_[*id] = true;
+      next_[k].id = static_cast<int>(*id);
+    }
+    for (std::size_t k = 0; k < count; ++k) {
+      in_frame_[static_cast<std::size_t>(next_[k].id)] = false;
+      const long j = find_car(cars_, next_[k].id, k);
+      if (j >= 0) base_[k] = cars_[static_cast<std::size_t>(j)].at;  // else: from zero
+    }
+    const auto column = [&](const char* name, std::int32_t Fixed::*field, std::int64_t lo,
+                            std::int64_t hi) {
+      for (std::size_t k = 0; k < count; ++k) {
+        const auto d = r.delta();
+        if (!d) bad_varint(kind, at, r, what(name), payload_bytes);
+        next_[k].at.*field = static_cast<std::int32_t>(
+            in_range(kind, at, base_[k].*field + *d, lo, hi, "a car", name));
+      }
+    };
+    column("x", &Fixed::x, INT32_MIN, INT32_MAX);
+    column("y", &Fixed::y, INT32_MIN, INT32_MAX);
+    column("yaw", &Fixed::yaw, INT16_MIN, INT16_MAX);
+    column("speed", &Fixed::speed, 0, UINT16_MAX);
+  }
+
   void record(std::uint8_t kind, std::string_view p, std::size_t at) {
     if (ended_) bad_record(kind, at, "a record after the end record");
     const auto need = [&](std::size_t bytes) {
@@ -670,7 +845,7 @@ class Decoder {
     Reader r(p);
     switch (kind) {
       case static_cast<std::uint8_t>(ReplayRecordKind::frame): {
-        need(kFrameFixedBytes);
+        need(4);
         ReplayFrame& f = frame_;
         f.step = static_cast<long>(r.u32());
         if (st_.last_step && f.step <= *st_.last_step) {
@@ -678,10 +853,11 @@ class Decoder {
                      "step " + std::to_string(f.step) + " does not follow step " +
                          std::to_string(*st_.last_step));
         }
-        f.position.x = r.metres();
-        f.position.y = r.metres();
-        f.yaw_rad = r.i16() / kYawUnitsPerRad;
-        f.speed_mps = r.u16() / kCmPerM;
+        const Fixed e = ego_after(kind, at, r, p.size());
+        need(p.size() - r.remaining() + kFrameFloatBytes + 1);
+        f.position = {e.x / kCmPerM, e.y / kCmPerM};
+        f.yaw_rad = e.yaw / kYawUnitsPerRad;
+        f.speed_mps = e.speed / kCmPerM;
         f.s_m = r.f32();
         f.d_m = r.f32();
         f.strict.tangential_mps2 = r.f32();
@@ -692,15 +868,17 @@ class Decoder {
         f.incident_free_m = r.f32();
         f.best_incident_free_m = r.f32();
         const std::size_t cars = r.u8();
-        need(kFrameFixedBytes + cars * kFrameCarBytes);
+        cars_after(kind, at, r, cars, p.size());
         f.cars.resize(cars);
-        for (ReplayCar& c : f.cars) {
-          c.id = r.u16();
-          c.position.x = r.metres();
-          c.position.y = r.metres();
-          c.yaw_rad = r.i16() / kYawUnitsPerRad;
-          c.speed_mps = r.u16() / kCmPerM;
+        for (std::size_t k = 0; k < cars; ++k) {
+          const FixedCar& c = next_[k];
+          f.cars[k] = {c.id,
+                       {c.at.x / kCmPerM, c.at.y / kCmPerM},
+                       c.at.yaw / kYawUnitsPerRad,
+                       c.at.speed / kCmPerM};
         }
+        ego_ = e;
+        cars_.swap(next_);
         st_.last_step = f.step;
         sink_.frame(f);
         return;
@@ -711,11 +889,21 @@ class Decoder {
         ReplayPath path;
         path.step = *st_.last_step;
         const std::size_t m = r.u16();
-        need(2 + 8 * m);
         path.points.resize(m);
-        for (core::Vec2& q : path.points) {
-          q.x = r.metres();
-          q.y = r.metres();
+        std::int64_t x = ego_.x;
+        std::int64_t y = ego_.y;
+        for (std::size_t i = 0; i < m; ++i) {
+          const auto dx = r.delta();
+          const auto dy = dx ? r.delta() : std::nullopt;
+          if (!dy) {
+            bad_varint(
+                kind, at, r,
+                "its " + std::to_string(m) + " points (from point " + std::to_string(i + 1) + ")",
+                p.size());
+          }
+          x = in_range(kind, at, x + *dx, INT32_MIN, INT32_MAX, "a path point", "x");
+          y = in_range(kind, at, y + *dy, INT32_MIN, INT32_MAX, "a path point", "y");
+          path.points[i] = {static_cast<double>(x) / kCmPerM, static_cast<double>(y) / kCmPerM};
         }
         sink_.path(std::move(path));
         return;
@@ -760,7 +948,12 @@ class Decoder {
   std::size_t inflated_base_ = 0;  // inflated offset of buf[0]
   std::size_t incident_types_ = 0;
   bool ended_ = false;
-  ReplayFrame frame_;  // reused
+  ReplayFrame frame_;           // reused
+  Fixed ego_;                   // the last frame's ego, as stored (zero before the first)
+  std::vector<FixedCar> cars_;  // the last frame's cars, as stored
+  std::vector<FixedCar> next_;  // the frame being read
+  std::vector<Fixed> base_;     // what each car of next_ is coded against
+  std::vector<bool> in_frame_;  // ids seen in next_ (65536 flags)
 };
 
 struct BuildSink final : Sink {

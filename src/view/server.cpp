@@ -257,7 +257,7 @@ void LiveRecorder::on_state(const sim::World& world) {
 }
 
 void LiveRecorder::on_path(const sim::World&, std::span<const core::Vec2> path) {
-  sim::ReplayEncoder::append_path(path, pending_);
+  encoder_.append_path(path, pending_);
 }
 
 void LiveRecorder::finish(std::string_view report_json) {

@@ -9,6 +9,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <string>
 #include <thread>
 #include <vector>
@@ -549,6 +550,71 @@ TEST_F(ViewerTest, BenchRecordsItsWorstRunsAndLinksThemFromTheReport) {
     EXPECT_EQ(view::base64_decode(element_text(read_file(page), "overtake-data")), bytes_of(otr));
   }
   EXPECT_EQ(linked, 2);
+}
+
+TEST_F(ViewerTest, BenchMergeJoinsTheShardsReplaysAndWritesTheReport) {
+  // Two shards of one sweep, each recording its worst run.
+  std::vector<fs::path> shards;
+  for (int i = 1; i <= 2; ++i) {
+    BenchSpec spec;
+    spec.policies = {"walkthrough"};
+    spec.traffic = {"faithful"};
+    spec.seeds = {1, 2, 3, 4};
+    spec.minutes = 0.2;
+    spec.jobs = 2;
+    spec.shard_index = i;
+    spec.shard_count = 2;
+    spec.record_worst = 1;
+    spec.out = dir_ / ("shard-" + std::to_string(i));
+    ASSERT_EQ(run_bench(spec, nullptr, {}).replays.size(), 1u);
+    shards.push_back(spec.out);
+  }
+  // Merged: both replays copied into the joined folder, the report links each to its page.
+  const fs::path out = dir_ / "merged";
+  const BenchOutcome m = merge_bench(shards, out);
+  EXPECT_EQ(m.runs_done, 4u);
+  ASSERT_EQ(m.replays.size(), 2u);
+  for (const fs::path& r : m.replays) {
+    EXPECT_EQ(r.parent_path(), out / "replays");
+    const fs::path a = shards[0] / "replays" / r.filename();
+    const fs::path b = shards[1] / "replays" / r.filename();
+    EXPECT_EQ(bytes_of(r), bytes_of(fs::exists(a) ? a : b)) << r;
+  }
+  const fs::path html = dir_ / "report.html";
+  ASSERT_EQ(write_bench_report(out, html, kReportFixture, kViewerFixture).size(), 2u);
+  const auto check_report = [&](const fs::path& page, const std::string& folder) {
+    const json object = json::parse(element_text(read_file(page), "overtake-bench"));
+    EXPECT_EQ(object["shard"], "1/1");
+    EXPECT_EQ(object["runs"].size(), 4u);
+    EXPECT_EQ(object["summary"].size(), 1u);
+    int linked = 0;
+    for (const json& r : object["runs"]) {
+      if (r["replay"].is_null()) continue;
+      ++linked;
+      EXPECT_EQ(r["replay"].get<std::string>().rfind(folder + "/replays/", 0), 0u) << r["replay"];
+      EXPECT_TRUE(fs::exists(page.parent_path() / r["replay"].get<std::string>())) << r["replay"];
+    }
+    EXPECT_EQ(linked, 2);
+  };
+  check_report(html, "merged");
+
+  // Merging into one of the shards: its own replay stays, the other's is copied beside it.
+  const fs::path into = dir_ / "into";
+  fs::copy(shards[0], into, fs::copy_options::recursive);
+  EXPECT_EQ(merge_bench({into, shards[1]}, into).replays.size(), 2u);
+  EXPECT_EQ(std::distance(fs::directory_iterator(into / "replays"), fs::directory_iterator{}), 2);
+
+  // At the command line, with the shipped pages: `bench merge ... --html`.
+  if (!has_embedded_pages()) GTEST_SKIP() << "this build has no embedded web pages";
+  const fs::path html2 = dir_ / "cli-report.html";
+  testing::internal::CaptureStdout();
+  EXPECT_EQ(cli({"bench", "merge", shards[0].string(), shards[1].string(), "--out",
+                 (dir_ / "joined").string(), "--html", html2.string()}),
+            0);
+  const std::string said = testing::internal::GetCapturedStdout();
+  EXPECT_THAT(said, HasSubstr("merged 4 runs into"));
+  EXPECT_THAT(said, HasSubstr("report: " + html2.string() + " (2 replay pages linked)"));
+  check_report(html2, "joined");
 }
 
 }  // namespace

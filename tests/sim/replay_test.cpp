@@ -1,5 +1,6 @@
-// Replay files: write -> read round trips (fixed-point fields bit for bit), the writer's
-// temporary file and rename, and clear errors for damaged files.
+// Replay files: write -> read round trips (fixed-point fields bit for bit, positions coded as
+// differences: cars coming and going, far jumps), the writer's temporary file and rename, and
+// clear errors for damaged files (every cut of a record, values out of range).
 
 #include "overtake/sim/replay.hpp"
 
@@ -348,7 +349,8 @@ TEST_F(ReplayTest, ATruncatedFileIsReportedWithItsNameAndWhere) {
   (void)record(file, 20.0);
   const std::string bytes = read_bytes(file);
   const auto cut = dir_ / "cut.otr";
-  write_bytes(cut, bytes.substr(0, bytes.size() * 6 / 10));
+  const std::size_t body = kReplayPreambleBytes + r_header_bytes(bytes);
+  write_bytes(cut, bytes.substr(0, body + (bytes.size() - body) * 6 / 10));
   const std::string e = error_of(cut);
   EXPECT_THAT(e, HasSubstr(cut.string()));
   EXPECT_THAT(e, HasSubstr("truncated"));
@@ -404,9 +406,13 @@ TEST_F(ReplayTest, NotAReplayOrAnotherVersion) {
   EXPECT_THAT(error_of(bad), HasSubstr("not an overtake replay"));
   write_bytes(bad, "");
   EXPECT_THAT(error_of(bad), HasSubstr("empty"));
-  bytes[8] = 2;
+  bytes[8] = 1;
   write_bytes(bad, bytes);
-  EXPECT_THAT(error_of(bad), HasSubstr("version 2; this build reads version 1"));
+  EXPECT_THAT(error_of(bad), HasSubstr("bad.otr: replay format version 1 is not supported"));
+  EXPECT_THAT(error_of(bad), HasSubstr("re-record the run"));
+  bytes[8] = 3;
+  write_bytes(bad, bytes);
+  EXPECT_THAT(error_of(bad), HasSubstr("version 3; this build reads version 2"));
   EXPECT_THAT(error_of(dir_ / "missing.otr"), HasSubstr("cannot open"));
 }
 
@@ -414,6 +420,8 @@ TEST_F(ReplayTest, NotAReplayOrAnotherVersion) {
 std::string handmade(const ReplayHeader& h, const std::string& records) {
   return replay_preamble(h) + deflate_all(records);
 }
+
+constexpr std::size_t kRecordHead = 5;  // u8 kind, u32 length
 
 std::string record_of(std::uint8_t kind, const std::string& payload) {
   std::string out(1, static_cast<char>(kind));
@@ -449,12 +457,14 @@ TEST_F(ReplayTest, UnknownKindsAreSkippedAndBadRecordsNamed) {
 
   // A frame too short for its cars; a path before any frame; a second frame with the same step.
   std::string short_frame;
-  enc.append_state(world, short_frame);
+  ReplayEncoder fresh;
+  fresh.append_state(world, short_frame);
   short_frame = record_of(1, short_frame.substr(5, 60));
   write_bytes(file, handmade(header(), short_frame));
-  EXPECT_THAT(error_of(file), HasSubstr("record #1 (frame, at inflated byte 0): 60 bytes where"));
+  EXPECT_THAT(error_of(file), HasSubstr("record #1 (frame, at inflated byte 0): the ids of its 12 "
+                                        "cars run past the end of the 60-byte payload"));
   std::string path_first;
-  ReplayEncoder::append_path(std::vector<core::Vec2>{{1.0, 2.0}}, path_first);
+  ReplayEncoder().append_path(std::vector<core::Vec2>{{1.0, 2.0}}, path_first);
   write_bytes(file, handmade(header(), path_first));
   EXPECT_THAT(error_of(file), HasSubstr("a path before the first frame"));
   std::string twice;
@@ -463,6 +473,186 @@ TEST_F(ReplayTest, UnknownKindsAreSkippedAndBadRecordsNamed) {
   e2.append_state(world, twice);
   write_bytes(file, handmade(header(), twice));
   EXPECT_THAT(error_of(file), HasSubstr("step 0 does not follow step 0"));
+}
+
+// ---- positions as differences ---------------------------------------------------------------
+
+ReplayCar car(int id, double x, double y, double yaw = 0.0, double speed = 10.0) {
+  return {id, {x, y}, yaw, speed};
+}
+
+ReplayFrame frame_at(long step, double x, double y, std::vector<ReplayCar> cars) {
+  ReplayFrame f;
+  f.step = step;
+  f.position = {x, y};
+  f.yaw_rad = 0.1 * static_cast<double>(step);
+  f.speed_mps = 20.0 + 0.01 * static_cast<double>(step);
+  f.s_m = static_cast<double>(step);
+  f.cars = std::move(cars);
+  return f;
+}
+
+TEST_F(ReplayTest, CarsComingGoingAndJumpingFarComeBackExactly) {
+  // 2.1e7 m is 2.1e9 cm, near the end of i32: a jump from one end to the other is a 5-byte
+  // difference. Yaw goes round through ±π, speeds reach both ends of u16.
+  constexpr double kFar = 2.1e7;
+  std::vector<ReplayFrame> frames;
+  frames.push_back(frame_at(0, 1.0, 2.0, {car(1, 10, 20), car(2, -5, 7), car(3, 0, 0)}));
+  frames.push_back(frame_at(1, 1.5, 2.5, {car(3, 0.4, 0), car(1, 10.4, 20)}));  // 2 leaves
+  frames.push_back(frame_at(
+      2, kFar, -kFar, {car(2, -4, 7), car(3, 0.8, 0), car(1, 10.8, 20), car(65535, kFar, -kFar)}));
+  frames.push_back(frame_at(3, -kFar, kFar, {}));  // everyone leaves
+  frames.push_back(frame_at(
+      5, 0.0, 0.0, {car(65535, -kFar, kFar, 3.14159, 655.35), car(1, 11, 20, -3.14159, 0.0)}));
+  frames.push_back(
+      frame_at(6, 0.01, 0.0, {car(1, 11.01, 20, 3.14159, 0.0), car(65535, kFar, -kFar)}));
+  const std::vector<core::Vec2> path = {{kFar, kFar}, {-kFar, -kFar}, {0.0, 0.0}, {0.01, -0.01}};
+
+  ReplayEncoder enc;
+  std::string records;
+  for (std::size_t i = 0; i < frames.size(); ++i) {
+    enc.append_frame(frames[i], records);
+    if (i == 2 || i == 4) enc.append_path(path, records);
+  }
+  // A repeated id is left out, an id beyond u16 clamped.
+  enc.append_frame(frame_at(7, 0.0, 0.0, {car(1, 11, 20), car(1, 99, 99), car(70000, 1, 1)}),
+                   records);
+  ReplayEncoder::append_end("{}", records);
+  const Replay r = parse_replay(handmade(header(), records), "far.otr");
+
+  ASSERT_EQ(r.frames.size(), frames.size() + 1);
+  for (std::size_t i = 0; i < frames.size(); ++i) {
+    SCOPED_TRACE("frame " + std::to_string(i));
+    const ReplayFrame& want = frames[i];
+    const ReplayFrame& got = r.frames[i];
+    EXPECT_EQ(got.step, want.step);
+    EXPECT_EQ(cm(got.position.x), cm(want.position.x));
+    EXPECT_EQ(cm(got.position.y), cm(want.position.y));
+    EXPECT_EQ(std::llround(got.yaw_rad * 1e4), yaw_units(want.yaw_rad));
+    EXPECT_EQ(cm(got.speed_mps), cm(want.speed_mps));
+    EXPECT_EQ(f32(got.s_m), f32(want.s_m));
+    ASSERT_EQ(got.cars.size(), want.cars.size());
+    for (std::size_t k = 0; k < got.cars.size(); ++k) {
+      EXPECT_EQ(got.cars[k].id, want.cars[k].id);
+      EXPECT_EQ(cm(got.cars[k].position.x), cm(want.cars[k].position.x));
+      EXPECT_EQ(cm(got.cars[k].position.y), cm(want.cars[k].position.y));
+      EXPECT_EQ(std::llround(got.cars[k].yaw_rad * 1e4), yaw_units(want.cars[k].yaw_rad));
+      EXPECT_EQ(cm(got.cars[k].speed_mps), cm(want.cars[k].speed_mps));
+    }
+  }
+  ASSERT_EQ(r.paths.size(), 2u);
+  EXPECT_EQ(r.paths[0].step, 2);
+  EXPECT_EQ(r.paths[1].step, 5);
+  for (const ReplayPath& p : r.paths) {
+    ASSERT_EQ(p.points.size(), path.size());
+    for (std::size_t k = 0; k < path.size(); ++k) {
+      EXPECT_EQ(cm(p.points[k].x), cm(path[k].x));
+      EXPECT_EQ(cm(p.points[k].y), cm(path[k].y));
+    }
+  }
+  const ReplayFrame& last = r.frames.back();
+  ASSERT_EQ(last.cars.size(), 2u);
+  EXPECT_EQ(last.cars[0].id, 1);
+  EXPECT_EQ(cm(last.cars[0].position.x), 1100);
+  EXPECT_EQ(last.cars[1].id, 65535);
+  EXPECT_EQ(cm(last.cars[1].position.x), 100);  // 70000, clamped to 65535
+}
+
+TEST_F(ReplayTest, EveryCutOfAFrameOrPathIsNamedAndWhatCameBeforeKept) {
+  ReplayEncoder enc;
+  std::string first, frame, path;
+  enc.append_frame(frame_at(0, 1.0, 2.0, {car(1, 10, 20), car(2, -5, 7)}), first);
+  enc.append_frame(frame_at(1, 2.1e7, -3.0, {car(2, 2.1e7, 7), car(1, -2.1e7, 20), car(300, 1, 1)}),
+                   frame);
+  enc.append_path(std::vector<core::Vec2>{{1e7, 0.0}, {-1e7, 5.0}}, path);
+  for (const std::string* rec : {&frame, &path}) {
+    const std::string payload = rec->substr(kRecordHead);
+    for (std::size_t cut = 0; cut < payload.size(); ++cut) {
+      SCOPED_TRACE("cut at " + std::to_string(cut) + " of " + std::to_string(payload.size()));
+      std::string records =
+          first + record_of(static_cast<std::uint8_t>((*rec)[0]), payload.substr(0, cut));
+      ReplayEncoder::append_end("{}", records);
+      const ReplayCheck c = check_replay(handmade(header(), records), "cut.otr");
+      EXPECT_THAT(c.error, HasSubstr("cut.otr: corrupt: record #2 ("));
+      EXPECT_THAT(c.error, HasSubstr("after record #1 (step 0, t = 0.00 s)"));
+      EXPECT_EQ(c.frames, 1u);
+    }
+    std::string records = first + frame + path;
+    ReplayEncoder::append_end("{}", records);
+    EXPECT_EQ(check_replay(handmade(header(), records), "whole.otr").error, "");
+  }
+}
+
+// A frame payload by hand (docs/replay.md): step, the ego's differences, floats, cars.
+class FramePayload {
+ public:
+  explicit FramePayload(std::uint32_t step) { u32(step); }
+  FramePayload& delta(std::int64_t v) {
+    return uvarint((static_cast<std::uint64_t>(v) << 1) ^ static_cast<std::uint64_t>(v >> 63));
+  }
+  FramePayload& uvarint(std::uint64_t v) {
+    for (; v >= 0x80; v >>= 7) bytes_.push_back(static_cast<char>((v & 0x7f) | 0x80));
+    bytes_.push_back(static_cast<char>(v));
+    return *this;
+  }
+  FramePayload& floats_and_count(std::uint8_t cars) {
+    bytes_.append(36, '\0');
+    bytes_.push_back(static_cast<char>(cars));
+    return *this;
+  }
+  FramePayload& raw(std::string_view b) {
+    bytes_ += b;
+    return *this;
+  }
+  [[nodiscard]] std::string record() const { return record_of(1, bytes_); }
+
+ private:
+  void u32(std::uint32_t v) {
+    for (int i = 0; i < 4; ++i) bytes_.push_back(static_cast<char>((v >> (8 * i)) & 0xff));
+  }
+  std::string bytes_;
+};
+
+TEST_F(ReplayTest, BadDifferencesAndIdsAreNamed) {
+  const auto error = [&](const std::string& records) {
+    return check_replay(handmade(header(), records), "bad.otr").error;
+  };
+  const auto still = [](std::uint32_t step) {
+    FramePayload p(step);
+    p.delta(0).delta(0).delta(0).delta(0);
+    return p;
+  };
+  // Well made by hand: read.
+  EXPECT_EQ(
+      error(still(0).floats_and_count(1).uvarint(4).delta(-5).delta(6).delta(0).delta(1).record() +
+            record_of(4, "{}")),
+      "");
+  EXPECT_THAT(error(still(0).floats_and_count(2).uvarint(4).uvarint(4).record()),
+              HasSubstr("record #1 (frame, at inflated byte 0): car id 4 appears twice"));
+  EXPECT_THAT(error(still(0).floats_and_count(1).uvarint(65536).record()),
+              HasSubstr("car id 65536 is above 65535"));
+  EXPECT_THAT(
+      error(still(0).floats_and_count(1).uvarint(4).delta(0).delta(0).delta(0).delta(-1).record()),
+      HasSubstr("a car's speed comes to -1, outside [0, 65535]"));
+  EXPECT_THAT(
+      error(still(0).floats_and_count(1).uvarint(4).delta(0).delta(0).delta(32768).record()),
+      HasSubstr("a car's yaw comes to 32768, outside [-32768, 32767]"));
+  FramePayload far(0);
+  far.delta(std::int64_t{INT32_MAX} + 1).delta(0).delta(0).delta(0);
+  EXPECT_THAT(error(far.record()), HasSubstr("the ego's x comes to 2147483648"));
+  FramePayload endless(0);
+  endless.raw("\xff\xff\xff\xff\xff\x01");  // six bytes: longer than a varint may be
+  EXPECT_THAT(error(endless.record()),
+              HasSubstr("the ego's position and speed hold a varint longer than 5 bytes"));
+  EXPECT_THAT(error(still(0).record()),
+              HasSubstr("8 bytes where 45 are needed"));  // no floats, no car count
+  // A path whose sum leaves i32: one point, x = 0 + 2^31 (the zigzag 2^32), y = 0.
+  const std::string path =
+      record_of(2, std::string("\x01\x00", 2) + "\x80\x80\x80\x80\x10" + std::string(1, '\0'));
+  EXPECT_THAT(error(still(0).floats_and_count(0).record() + path),
+              HasSubstr("record #2 (path, at inflated byte"));
+  EXPECT_THAT(error(still(0).floats_and_count(0).record() + path),
+              HasSubstr("a path point's x comes to 2147483648"));
 }
 
 }  // namespace

@@ -1,28 +1,71 @@
-// The replay decoder: the binary layout of docs/replay.md (version 1), read into typed arrays.
+// The replay decoder: the binary layout of docs/replay.md (version 2), read into typed arrays.
 //
 // Works in the browser and in Node (the tests). A replay is decoded into one `Replay` whose
 // columns are typed arrays indexed by frame (one frame per world step), by car entry, by path
 // point and by incident; nothing is built per frame. The same object grows as live records
-// arrive (`appendRecords`).
+// arrive (`appendRecords`). Positions are stored as differences from the frame before (zigzag
+// varints of fixed-point integers), so records are read in order, from the first, and the
+// decoder keeps the last frame's integers.
 import { Inflate, unzlibSync } from 'fflate';
 
 export const MAGIC = 'OVTKRPLY';
-export const FORMAT_VERSION = 1;
+export const FORMAT_VERSION = 2;
 export const RECORD = Object.freeze({ frame: 1, path: 2, incident: 3, end: 4 });
 const RECORD_NAMES = { 1: 'frame', 2: 'path', 3: 'incident', 4: 'end' };
 
 const CM = 0.01; // metres per centimetre
 const YAW_UNIT = 1e-4; // radians per yaw unit
-const FRAME_FIXED_BYTES = 4 + 4 + 4 + 2 + 2 + 4 * 2 + 4 * 4 + 4 * 3 + 1; // 53
-const CAR_BYTES = 2 + 4 + 4 + 2 + 2; // 14
+const FRAME_FLOATS_BYTES = 4 * 2 + 4 * 4 + 4 * 3; // s, d, strict figures, distances: 36
 const INCIDENT_BYTES = 1 + 4 + 4 + 1 + 4 + 4; // 18
+const MAX_CARS = 255;
+const I32_MIN = -2147483648;
+const I32_MAX = 2147483647;
+
+// The varint readers' cursor: set it, call them, read it back; `overlong` is set when a
+// varint had more than 5 bytes.
+let at = 0;
+let overlong = false;
+
+// What is wrong when a varint could not be read.
+const varintFault = (what, n) => (overlong ? `${what} hold a varint longer than 5 bytes` : `${what} run past the end of the ${n}-byte payload`);
+
+/// An unsigned LEB128 varint of at most 5 bytes in bytes[at, end); -1 when it runs past `end`
+/// or is longer (setting `overlong`). Advances `at`.
+function readUvarint(bytes, end) {
+  if (at >= end) return -1;
+  let b = bytes[at++];
+  if (b < 0x80) return b;
+  let v = b & 0x7f;
+  let scale = 0x80;
+  for (let i = 1; i < 5; ++i) {
+    if (at >= end) return -1;
+    b = bytes[at++];
+    v += (b & 0x7f) * scale; // arithmetic, not bit operations: up to 35 bits
+    if (b < 0x80) return v;
+    scale *= 0x80;
+  }
+  overlong = true;
+  return -1;
+}
+
+/// A zigzag varint (a signed difference); NaN when it runs past `end` or is too long.
+function readDelta(bytes, end) {
+  if (at < end && bytes[at] < 0x80) {
+    const z = bytes[at++];
+    return (z >>> 1) ^ -(z & 1);
+  }
+  const z = readUvarint(bytes, end);
+  if (z < 0) return NaN;
+  return z % 2 === 0 ? z / 2 : -(z + 1) / 2;
+}
 
 /// A replay that could not be read at all (bad magic, version, header).
 export class ReplayError extends Error {}
 
-function grow(arr, need) {
+// `arr` with room for `need` entries: doubled (or exactly `need` when `exact`).
+function grow(arr, need, exact = false) {
   if (need <= arr.length) return arr;
-  let cap = Math.max(arr.length * 2, 1024);
+  let cap = exact ? need : Math.max(arr.length * 2, 1024);
   while (cap < need) cap *= 2;
   const next = new arr.constructor(cap);
   next.set(arr);
@@ -50,6 +93,17 @@ export class Replay {
     this.recordsRead = 0;
     this.bodyBytesRead = 0;
     this._pending = null; // live: bytes of a record split over messages
+    // The last frame as stored (what the next frame's differences are from): the ego's x, y,
+    // yaw, speed; its cars' ids and the same four values (car k at 4k). `_cur*` is the frame
+    // being read; `_base` what its cars are coded against (-1: from zero); `_seen` marks ids.
+    this._ego = new Int32Array(4);
+    this._prevCount = 0;
+    this._prevId = new Int32Array(MAX_CARS);
+    this._prevVal = new Int32Array(4 * MAX_CARS);
+    this._curId = new Int32Array(MAX_CARS);
+    this._curVal = new Int32Array(4 * MAX_CARS);
+    this._base = new Int32Array(MAX_CARS);
+    this._seen = new Uint8Array(65536);
     this._alloc(0, 0, 0, 0);
   }
 
@@ -90,34 +144,69 @@ export class Replay {
     this.incY = f32(incidents);
   }
 
-  _growFrames(need) {
+  _growFrames(need, exact = false) {
     if (need <= this.step.length) return;
     for (const k of ['step', 'egoX', 'egoY', 'egoYaw', 'egoSpeed', 'egoS', 'egoD', 'accT', 'accN',
       'accTotal', 'jerk', 'distance', 'distanceSince', 'bestFree', 'time', 'framePath']) {
-      this[k] = grow(this[k], need);
+      this[k] = grow(this[k], need, exact);
     }
-    this.carStart = grow(this.carStart, need + 1);
+    this.carStart = grow(this.carStart, need + 1, exact);
   }
 
-  _growCars(need) {
+  _growCars(need, exact = false) {
     if (need <= this.carId.length) return;
-    for (const k of ['carId', 'carX', 'carY', 'carYaw', 'carSpeed']) this[k] = grow(this[k], need);
+    for (const k of ['carId', 'carX', 'carY', 'carYaw', 'carSpeed']) this[k] = grow(this[k], need, exact);
   }
 
-  _growPaths(needPaths, needPoints) {
-    if (needPaths > this.pathFrame.length) this.pathFrame = grow(this.pathFrame, needPaths);
-    if (needPaths + 1 > this.pathStart.length) this.pathStart = grow(this.pathStart, needPaths + 1);
+  _growPaths(needPaths, needPoints, exact = false) {
+    if (needPaths > this.pathFrame.length) this.pathFrame = grow(this.pathFrame, needPaths, exact);
+    if (needPaths + 1 > this.pathStart.length) this.pathStart = grow(this.pathStart, needPaths + 1, exact);
     if (needPoints > this.pathX.length) {
-      this.pathX = grow(this.pathX, needPoints);
-      this.pathY = grow(this.pathY, needPoints);
+      this.pathX = grow(this.pathX, needPoints, exact);
+      this.pathY = grow(this.pathY, needPoints, exact);
     }
   }
 
-  _growIncidents(need) {
+  _growIncidents(need, exact = false) {
     if (need <= this.incFrame.length) return;
     for (const k of ['incFrame', 'incType', 'incValue', 'incS', 'incLane', 'incX', 'incY']) {
-      this[k] = grow(this[k], need);
+      this[k] = grow(this[k], need, exact);
     }
+  }
+
+  /// Makes room for the records in `bytes` at once (a quick pass over their heads and counts),
+  /// so that a whole file is read without growing the columns again and again.
+  reserve(bytes) {
+    const view = new DataView(bytes.buffer, bytes.byteOffset, bytes.byteLength);
+    const total = bytes.length;
+    let frames = 0;
+    let cars = 0;
+    let paths = 0;
+    let points = 0;
+    let incidents = 0;
+    for (let off = 0; off + 5 <= total;) {
+      const kind = bytes[off];
+      const p = off + 5;
+      const end = p + view.getUint32(off + 1, true);
+      if (end > total) break;
+      if (kind === RECORD.frame) {
+        frames += 1;
+        let q = p + 4; // after the step: the ego's four varints, the floats, the car count
+        for (let v = 0; v < 4 && q < end; ++q) if (bytes[q] < 0x80) v += 1;
+        q += FRAME_FLOATS_BYTES;
+        if (q < end) cars += bytes[q];
+      } else if (kind === RECORD.path && end - p >= 2) {
+        paths += 1;
+        points += view.getUint16(p, true);
+      } else if (kind === RECORD.incident) {
+        incidents += 1;
+      }
+      off = end;
+    }
+    this._growFrames(this.frames + frames, true);
+    this._growCars(this.cars + cars, true);
+    this._growPaths(this.paths + paths, this.pathPoints + points, true);
+    this._growIncidents(this.incidents + incidents, true);
   }
 
   /// Reads whole records from `bytes` (a Uint8Array of kind, length, payload, ...). Returns
@@ -171,65 +260,103 @@ export class Replay {
   _record(kind, v, bytes, p, n) {
     switch (kind) {
       case RECORD.frame: {
-        if (n < FRAME_FIXED_BYTES) return `a frame needs at least ${FRAME_FIXED_BYTES} bytes, has ${n}`;
-        const c = bytes[p + FRAME_FIXED_BYTES - 1];
-        if (n !== FRAME_FIXED_BYTES + c * CAR_BYTES) {
-          return `a frame with ${c} cars needs ${FRAME_FIXED_BYTES + c * CAR_BYTES} bytes, has ${n}`;
-        }
+        const end = p + n;
+        if (n < 4) return `a frame needs at least 4 bytes, has ${n}`;
         const i = this.frames;
-        this._growFrames(i + 1);
         const stepIndex = v.getUint32(p, true);
         if (i > 0 && stepIndex <= this.step[i - 1]) {
           return `step ${stepIndex} does not follow step ${this.step[i - 1]}`;
         }
+        at = p + 4;
+        overlong = false;
+        const eg = this._ego;
+        const ex = eg[0] + readDelta(bytes, end);
+        const ey = eg[1] + readDelta(bytes, end);
+        const eyaw = eg[2] + readDelta(bytes, end);
+        const espeed = eg[3] + readDelta(bytes, end);
+        if (ex !== ex || ey !== ey || eyaw !== eyaw || espeed !== espeed) {
+          return varintFault('the ego\'s position and speed', n);
+        }
+        if (ex < I32_MIN || ex > I32_MAX || ey < I32_MIN || ey > I32_MAX || eyaw < -32768 || eyaw > 32767 ||
+            espeed < 0 || espeed > 65535) {
+          return `the ego's position or speed is out of range (${ex}, ${ey}, ${eyaw}, ${espeed})`;
+        }
+        if (at + FRAME_FLOATS_BYTES + 1 > end) {
+          return `a frame needs ${at + FRAME_FLOATS_BYTES + 1 - p} bytes up to its car count, has ${n}`;
+        }
+        this._growFrames(i + 1);
         this.step[i] = stepIndex;
         this.time[i] = stepIndex * this.stepS;
-        this.egoX[i] = v.getInt32(p + 4, true) * CM;
-        this.egoY[i] = v.getInt32(p + 8, true) * CM;
-        this.egoYaw[i] = v.getInt16(p + 12, true) * YAW_UNIT;
-        this.egoSpeed[i] = v.getUint16(p + 14, true) * CM;
-        this.egoS[i] = v.getFloat32(p + 16, true);
-        this.egoD[i] = v.getFloat32(p + 20, true);
-        this.accT[i] = v.getFloat32(p + 24, true);
-        this.accN[i] = v.getFloat32(p + 28, true);
-        this.accTotal[i] = v.getFloat32(p + 32, true);
-        this.jerk[i] = v.getFloat32(p + 36, true);
-        this.distance[i] = v.getFloat32(p + 40, true);
-        this.distanceSince[i] = v.getFloat32(p + 44, true);
-        this.bestFree[i] = v.getFloat32(p + 48, true);
+        this.egoX[i] = ex * CM;
+        this.egoY[i] = ey * CM;
+        this.egoYaw[i] = eyaw * YAW_UNIT;
+        this.egoSpeed[i] = espeed * CM;
+        this.egoS[i] = v.getFloat32(at, true);
+        this.egoD[i] = v.getFloat32(at + 4, true);
+        this.accT[i] = v.getFloat32(at + 8, true);
+        this.accN[i] = v.getFloat32(at + 12, true);
+        this.accTotal[i] = v.getFloat32(at + 16, true);
+        this.jerk[i] = v.getFloat32(at + 20, true);
+        this.distance[i] = v.getFloat32(at + 24, true);
+        this.distanceSince[i] = v.getFloat32(at + 28, true);
+        this.bestFree[i] = v.getFloat32(at + 32, true);
+        const c = bytes[at + 36];
+        at += FRAME_FLOATS_BYTES + 1;
+        const why = this._cars(bytes, end, c, n);
+        if (why) return why;
         this.framePath[i] = this.paths - 1;
-        const base = this.cars;
-        this._growCars(base + c);
-        let q = p + FRAME_FIXED_BYTES;
-        for (let k = 0; k < c; ++k, q += CAR_BYTES) {
-          const j = base + k;
-          this.carId[j] = v.getUint16(q, true);
-          this.carX[j] = v.getInt32(q + 2, true) * CM;
-          this.carY[j] = v.getInt32(q + 6, true) * CM;
-          this.carYaw[j] = v.getInt16(q + 10, true) * YAW_UNIT;
-          this.carSpeed[j] = v.getUint16(q + 12, true) * CM;
-        }
-        this.carStart[i] = base;
-        this.cars = base + c;
+        eg[0] = ex;
+        eg[1] = ey;
+        eg[2] = eyaw;
+        eg[3] = espeed;
+        this.carStart[i] = this.cars;
+        this.cars += c;
         this.carStart[i + 1] = this.cars;
         this.frames = i + 1;
         return null;
       }
       case RECORD.path: {
         if (n < 2) return 'a path needs its 2-byte count';
-        const m = v.getUint16(p, true);
-        if (n !== 2 + m * 8) return `a path of ${m} points needs ${2 + m * 8} bytes, has ${n}`;
         if (this.frames === 0) return 'a path before the first frame';
+        const m = v.getUint16(p, true);
+        const end = p + n;
         const k = this.paths;
         this._growPaths(k + 1, this.pathPoints + m);
-        this.pathFrame[k] = this.frames - 1;
-        this.pathStart[k] = this.pathPoints;
+        const px = this.pathX;
+        const py = this.pathY;
+        const o = this.pathPoints;
+        // the first point from the ego of the frame before, the others from the point before
+        let x = this._ego[0];
+        let y = this._ego[1];
         let q = p + 2;
-        for (let j = 0; j < m; ++j, q += 8) {
-          this.pathX[this.pathPoints + j] = v.getInt32(q, true) * CM;
-          this.pathY[this.pathPoints + j] = v.getInt32(q + 4, true) * CM;
+        let b = 0;
+        overlong = false;
+        for (let j = 0; j < m; ++j) {
+          // one-byte differences inline (most of them), longer ones by readDelta
+          if (q < end && (b = bytes[q]) < 0x80) {
+            x += (b >>> 1) ^ -(b & 1);
+            ++q;
+          } else {
+            at = q;
+            x += readDelta(bytes, end);
+            q = at;
+          }
+          if (q < end && (b = bytes[q]) < 0x80) {
+            y += (b >>> 1) ^ -(b & 1);
+            ++q;
+          } else {
+            at = q;
+            y += readDelta(bytes, end);
+            q = at;
+          }
+          if (x !== x || y !== y) return varintFault(`its ${m} points (from point ${j + 1})`, n);
+          if (x < I32_MIN || x > I32_MAX || y < I32_MIN || y > I32_MAX) return `point ${j + 1} is out of range (${x}, ${y})`;
+          px[o + j] = x * CM;
+          py[o + j] = y * CM;
         }
-        this.pathPoints += m;
+        this.pathFrame[k] = this.frames - 1;
+        this.pathStart[k] = o;
+        this.pathPoints = o + m;
         this.pathStart[k + 1] = this.pathPoints;
         this.paths = k + 1;
         this.framePath[this.frames - 1] = k;
@@ -262,6 +389,110 @@ export class Replay {
       default:
         return null; // unknown kinds are skipped
     }
+  }
+
+  // A frame's `c` cars from `at`: ids, then x, y, yaw and speed each as a column of
+  // differences from the same car in the frame before (from zero for a car that was not in
+  // it). Writes the car columns from index `this.cars` on and, when the frame is whole, makes
+  // it the frame before. Returns an error text or null.
+  _cars(bytes, end, c, n) {
+    const base = this.cars;
+    this._growCars(base + c);
+    const ids = this._curId;
+    const ref = this._base;
+    const prevId = this._prevId;
+    const prevCount = this._prevCount;
+    const carId = this.carId;
+    let same = c === prevCount; // the same ids in the same order as the frame before
+    let q = at;
+    let b = 0;
+    for (let k = 0; k < c; ++k) {
+      let id;
+      if (q < end && (b = bytes[q]) < 0x80) {
+        id = b;
+        ++q;
+      } else {
+        at = q;
+        id = readUvarint(bytes, end);
+        q = at;
+        if (id < 0) return varintFault(`the ids of its ${c} cars`, n);
+        if (id > 65535) return `car id ${id} is above 65535`;
+      }
+      ids[k] = id;
+      carId[base + k] = id;
+      if (same && prevId[k] !== id) same = false;
+    }
+    at = q;
+    if (same) {
+      // unique, as the frame before's were
+      for (let k = 0; k < c; ++k) ref[k] = k;
+    } else {
+      const seen = this._seen;
+      for (let k = 0; k < c; ++k) {
+        if (seen[ids[k]]) {
+          for (let j = 0; j < k; ++j) seen[ids[j]] = 0;
+          return `car id ${ids[k]} appears twice`;
+        }
+        seen[ids[k]] = 1;
+      }
+      for (let k = 0; k < c; ++k) {
+        const id = ids[k];
+        seen[id] = 0;
+        let j = k < prevCount && prevId[k] === id ? k : -1;
+        if (j < 0) {
+          for (let i = 0; i < prevCount; ++i) {
+            if (prevId[i] === id) {
+              j = i;
+              break;
+            }
+          }
+        }
+        ref[k] = j;
+      }
+    }
+    const why = this._column(bytes, end, c, n, base, 0, this.carX, CM, I32_MIN, I32_MAX, 'x') ||
+      this._column(bytes, end, c, n, base, 1, this.carY, CM, I32_MIN, I32_MAX, 'y') ||
+      this._column(bytes, end, c, n, base, 2, this.carYaw, YAW_UNIT, -32768, 32767, 'yaw') ||
+      this._column(bytes, end, c, n, base, 3, this.carSpeed, CM, 0, 65535, 'speed');
+    if (why) return why;
+    // this frame is now the frame before
+    const prevVal = this._prevVal;
+    this._prevId = ids;
+    this._curId = prevId;
+    this._prevVal = this._curVal;
+    this._curVal = prevVal;
+    this._prevCount = c;
+    return null;
+  }
+
+  // One column of a frame's cars from `at`: value f (x, y, yaw, speed) of each car, as a
+  // difference from `_base`'s car in the frame before, into `_curVal` and out[base + k] (times
+  // `scale`). Returns an error text or null.
+  _column(bytes, end, c, n, base, f, out, scale, min, max, name) {
+    const ref = this._base;
+    const prevVal = this._prevVal;
+    const cur = this._curVal;
+    let q = at;
+    let b = 0;
+    for (let k = 0; k < c; ++k) {
+      let d;
+      if (q < end && (b = bytes[q]) < 0x80) {
+        d = (b >>> 1) ^ -(b & 1);
+        ++q;
+      } else {
+        at = q;
+        d = readDelta(bytes, end);
+        q = at;
+        if (d !== d) return varintFault(`the ${name} of its ${c} cars`, n);
+      }
+      const j = ref[k];
+      const val = (j >= 0 ? prevVal[4 * j + f] : 0) + d;
+      if (val < min || val > max) return `a car's ${name} comes to ${val}, outside [${min}, ${max}]`;
+      cur[4 * k + f] = val;
+      out[base + k] = val * scale;
+    }
+    at = q;
+    return null;
   }
 
   /// The index of the frame whose step is `step`, or of the last frame before it (0 if none).
@@ -302,6 +533,10 @@ export function parseHeader(text) {
   if (!header || typeof header !== 'object') throw new ReplayError('the header is not a JSON object');
   if (header.format !== undefined && header.format !== 'overtake-replay') {
     throw new ReplayError(`the header's format is '${header.format}', not 'overtake-replay'`);
+  }
+  if (header.version !== undefined && header.version !== FORMAT_VERSION) {
+    throw new ReplayError(`the header says format version ${header.version}; this page reads version ${FORMAT_VERSION}` +
+      (header.version === 1 ? ' (version 1 is no longer supported: re-record the run with this build of overtake)' : ''));
   }
   return header;
 }
@@ -359,8 +594,11 @@ function inflateZlib(body, bodyOffset) {
   let at = 0;
   let problem = null;
   try {
-    for (; at + CHUNK < raw.length; at += CHUNK) inf.push(raw.subarray(at, at + CHUNK), false);
-    inf.push(raw.subarray(at), true);
+    // every byte as non-final chunks (fflate hands out all it can inflate of them), then an
+    // empty final one: a stream cut short still gives everything before the cut
+    for (; at < raw.length; at += CHUNK) inf.push(raw.subarray(at, Math.min(at + CHUNK, raw.length)), false);
+    at = Math.max(0, raw.length - 1);
+    inf.push(new Uint8Array(0), true);
     problem = `the data stream has trailing bytes or a bad checksum: the file is corrupt`;
   } catch (e) {
     const msg = String((e && e.message) || e);
@@ -414,6 +652,9 @@ function readPreamble(fileBytes, name) {
   if (magic !== MAGIC) throw new ReplayError(`${name} is not an overtake replay (it does not start with ${MAGIC})`);
   const dv = new DataView(bytes.buffer, bytes.byteOffset, bytes.byteLength);
   const version = dv.getUint32(8, true);
+  if (version === 1) {
+    throw new ReplayError(`${name} is replay format version 1, which is no longer supported: re-record the run with this build of overtake (it writes version ${FORMAT_VERSION})`);
+  }
   if (version !== FORMAT_VERSION) {
     throw new ReplayError(`${name} is replay format version ${version}; this page reads version ${FORMAT_VERSION}`);
   }
@@ -431,6 +672,7 @@ function readPreamble(fileBytes, name) {
 }
 
 function finish(replay, data, problem, name) {
+  replay.reserve(data);
   replay.appendRecords(data);
   const problems = [];
   if (problem) problems.push(problem);

@@ -15,12 +15,13 @@
 //       --bench-dir DIR --report-template report.html, fills the template from DIR's
 //       bench.json and runs.jsonl (linking every run to a replay page of its own)
 //
-// Asserts: no console errors and no network requests; the road and the cars are drawn
-// (pixels differ from the background); after seek(step) the HUD speed equals the speed
-// recorded at that step (read from the replay with the page's own decoder, here in Node); an
-// incident marker exists when the run has incidents, and clicking it seeks there; a
-// truncated copy of the replay shows the warning banner and what could be read. Saves a
-// screenshot per page into the artifacts folder.
+// Asserts: no console errors and no network requests; the replay's positions (stored as
+// differences) agree with the incidents' absolute ones and each path starts at the ego; the
+// road and the cars are drawn (pixels differ from the background); after seek(step) the HUD
+// speed equals the speed recorded at that step (read from the replay with the page's own
+// decoder, here in Node); an incident marker exists when the run has incidents, and clicking
+// it seeks there; a truncated copy of the replay shows the warning banner and what could be
+// read. Saves a screenshot per page into the artifacts folder.
 import { execFileSync, spawn } from 'node:child_process';
 import { copyFileSync, existsSync, mkdirSync, mkdtempSync, readFileSync, rmSync, writeFileSync } from 'node:fs';
 import { tmpdir } from 'node:os';
@@ -104,6 +105,22 @@ async function testPage(context, spec, artifacts) {
   const bytes = readFileSync(spec.replay);
   const replay = decodeReplay(bytes, basename(spec.replay));
   check(replay.problem === null, `the replay decodes in Node without a problem (${replay.problem || replay.summary()})`);
+  // Positions are stored as differences (docs/replay.md); an incident record holds the ego's
+  // position as is, so it checks the chain of differences the writer coded and this decoder
+  // summed. And every path starts near the ego it was coded against.
+  let astray = 0;
+  for (let k = 0; k < replay.incidents; ++k) {
+    const f = replay.incFrame[k];
+    if (replay.incX[k] !== replay.egoX[f] || replay.incY[k] !== replay.egoY[f]) astray += 1;
+  }
+  check(astray === 0, `the ego's summed positions equal the incidents' absolute ones (${replay.incidents} incidents, ${astray} differ)`);
+  let farPaths = 0;
+  for (let k = 0; k < replay.paths; ++k) {
+    const f = replay.pathFrame[k];
+    const j = replay.pathStart[k];
+    if (replay.pathStart[k + 1] > j && Math.hypot(replay.pathX[j] - replay.egoX[f], replay.pathY[j] - replay.egoY[f]) > 30) farPaths += 1;
+  }
+  check(farPaths === 0, `every path starts within 30 m of the ego (${replay.paths} paths, ${farPaths} do not)`);
 
   const page = await context.newPage();
   const { errors, requests } = watchPage(page);

@@ -1,4 +1,4 @@
-// A replay writer for the tests, following docs/replay.md (version 1) to the letter, and a
+// A replay writer for the tests, following docs/replay.md (version 2) to the letter, and a
 // synthetic drive on a circular track to feed it.
 import { zlibSync } from 'fflate';
 
@@ -12,56 +12,91 @@ function record(kind, payload) {
   return out;
 }
 
-const cm = (m) => Math.round(m * 100);
-const yawUnits = (rad) => {
+/// The stored fixed point (docs/replay.md): cm, 1e-4 rad, cm/s, rounded and clamped.
+export const cm = (m) => Math.max(-2147483648, Math.min(2147483647, Math.round(m * 100)));
+export const yawUnits = (rad) => {
   let a = rad;
   while (a > Math.PI) a -= 2 * Math.PI;
   while (a < -Math.PI) a += 2 * Math.PI;
   return Math.max(-31415, Math.min(31415, Math.round(a * 1e4)));
 };
+export const speedUnits = (mps) => Math.max(0, Math.min(65535, Math.round(mps * 100)));
 
-/// kind 1: one world step.
-export function frameRecord(f) {
-  const cars = f.cars || [];
-  const buf = new Uint8Array(53 + 14 * cars.length);
-  const v = new DataView(buf.buffer);
-  v.setUint32(0, f.step, true);
-  v.setInt32(4, cm(f.x), true);
-  v.setInt32(8, cm(f.y), true);
-  v.setInt16(12, yawUnits(f.yaw), true);
-  v.setUint16(14, Math.round(f.speed * 100), true);
-  v.setFloat32(16, f.s, true);
-  v.setFloat32(20, f.d, true);
-  v.setFloat32(24, f.accT, true);
-  v.setFloat32(28, f.accN, true);
-  v.setFloat32(32, f.accTotal, true);
-  v.setFloat32(36, f.jerk, true);
-  v.setFloat32(40, f.distance, true);
-  v.setFloat32(44, f.distanceSince, true);
-  v.setFloat32(48, f.bestFree, true);
-  v.setUint8(52, cars.length);
-  let o = 53;
-  for (const c of cars) {
-    v.setUint16(o, c.id, true);
-    v.setInt32(o + 2, cm(c.x), true);
-    v.setInt32(o + 6, cm(c.y), true);
-    v.setInt16(o + 10, yawUnits(c.yaw), true);
-    v.setUint16(o + 12, Math.round(c.speed * 100), true);
-    o += 14;
+// A growing payload: little-endian fields and LEB128 varints.
+class Bytes {
+  constructor() {
+    this.a = [];
   }
-  return record(1, buf);
+  u8(v) {
+    this.a.push(v & 0xff);
+  }
+  u16(v) {
+    this.a.push(v & 0xff, (v >> 8) & 0xff);
+  }
+  u32(v) {
+    for (let i = 0; i < 4; ++i) this.a.push(Math.floor(v / 2 ** (8 * i)) & 0xff);
+  }
+  f32(v) {
+    const b = new Uint8Array(4);
+    new DataView(b.buffer).setFloat32(0, v, true);
+    this.a.push(...b);
+  }
+  uvarint(v) {
+    while (v >= 0x80) {
+      this.a.push((v % 0x80) | 0x80);
+      v = Math.floor(v / 0x80);
+    }
+    this.a.push(v);
+  }
+  /// A signed difference: zigzag (0, -1, 1, -2 ... -> 0, 1, 2, 3 ...), then LEB128.
+  delta(d) {
+    this.uvarint(d >= 0 ? 2 * d : -2 * d - 1);
+  }
+  bytes() {
+    return Uint8Array.from(this.a);
+  }
 }
 
-/// kind 2: the path sent at a cycle, [[x, y], ...] in metres.
-export function pathRecord(points) {
-  const buf = new Uint8Array(2 + 8 * points.length);
-  const v = new DataView(buf.buffer);
-  v.setUint16(0, points.length, true);
-  points.forEach(([x, y], i) => {
-    v.setInt32(2 + 8 * i, cm(x), true);
-    v.setInt32(6 + 8 * i, cm(y), true);
-  });
-  return record(2, buf);
+/// Writes the records of one run: frames and paths are coded against the frame before, so
+/// one writer sees the run from its first frame.
+export class RecordWriter {
+  constructor() {
+    this.ego = [0, 0, 0, 0]; // the last frame's ego: x, y (cm), yaw (1e-4 rad), speed (cm/s)
+    this.cars = new Map(); // the last frame's cars: id -> [x, y, yaw, speed]
+  }
+
+  /// kind 1: one world step. `f.cars` holds {id, x, y, yaw, speed} with unique ids.
+  frame(f) {
+    const b = new Bytes();
+    b.u32(f.step);
+    const ego = [cm(f.x), cm(f.y), yawUnits(f.yaw), speedUnits(f.speed)];
+    ego.forEach((v, i) => b.delta(v - this.ego[i]));
+    this.ego = ego;
+    for (const k of ['s', 'd', 'accT', 'accN', 'accTotal', 'jerk', 'distance', 'distanceSince', 'bestFree']) b.f32(f[k]);
+    const cars = f.cars || [];
+    b.u8(cars.length);
+    const now = cars.map((c) => [cm(c.x), cm(c.y), yawUnits(c.yaw), speedUnits(c.speed)]);
+    for (const c of cars) b.uvarint(c.id);
+    for (let j = 0; j < 4; ++j) {
+      cars.forEach((c, k) => b.delta(now[k][j] - (this.cars.has(c.id) ? this.cars.get(c.id)[j] : 0)));
+    }
+    this.cars = new Map(cars.map((c, k) => [c.id, now[k]]));
+    return record(1, b.bytes());
+  }
+
+  /// kind 2: the path sent at a cycle, [[x, y], ...] in metres; the first point from the
+  /// ego of the last frame, the others from the point before.
+  path(points) {
+    const b = new Bytes();
+    b.u16(points.length);
+    let [x, y] = this.ego;
+    for (const [px, py] of points) {
+      b.delta(cm(px) - x);
+      b.delta(cm(py) - y);
+      [x, y] = [cm(px), cm(py)];
+    }
+    return record(2, b.bytes());
+  }
 }
 
 /// kind 3: an incident at the preceding frame.
@@ -94,12 +129,12 @@ export function concat(parts) {
 }
 
 /// The whole file: magic, version, header, zlib body.
-export function encodeReplay(header, records) {
+export function encodeReplay(header, records, version = 2) {
   const head = enc.encode(JSON.stringify(header));
   const pre = new Uint8Array(16);
   pre.set(enc.encode('OVTKRPLY'), 0);
   const v = new DataView(pre.buffer);
-  v.setUint32(8, 1, true);
+  v.setUint32(8, version, true);
   v.setUint32(12, head.length, true);
   return concat([pre, head, zlibSync(concat(records), { level: 6 })]);
 }
@@ -107,9 +142,11 @@ export function encodeReplay(header, records) {
 const INCIDENT_TYPES = ['collision', 'speeding', 'max_acceleration', 'max_jerk', 'outside_lane'];
 
 /// A drive on a circular track of `trackLength` metres: the ego accelerates in lane 1 among
-/// `carCount` cars; `incidents` is a list of {step, type} to record. Returns the file bytes
-/// and the frames as plain objects for the assertions.
-export function syntheticDrive({ seconds = 20, carCount = 12, incidents = [], trackLength = 6945.554, end = true } = {}) {
+/// `carCount` cars; `incidents` is a list of {step, type} to record. With `churn`, the cars
+/// come and go: each leaves for 6 steps in every 90, the order of the list flips every 37
+/// steps, and a car with the id 65535 jumps between two far ends of the i32 range (5-byte
+/// differences). Returns the file bytes and the frames as plain objects for the assertions.
+export function syntheticDrive({ seconds = 20, carCount = 12, incidents = [], trackLength = 6945.554, end = true, churn = false } = {}) {
   const stepS = 0.02;
   const R = trackLength / (2 * Math.PI);
   const at = (s, d) => {
@@ -126,7 +163,7 @@ export function syntheticDrive({ seconds = 20, carCount = 12, incidents = [], tr
     return pts;
   });
   const header = {
-    format: 'overtake-replay', version: 1, step_s: stepS,
+    format: 'overtake-replay', version: 2, step_s: stepS,
     road: { lanes: 3, lane_width_m: 4.0 },
     car: { length_m: 4.7, width_m: 1.9 },
     limits: { speed_mps: 22.352, acceleration_mps2: 10.0, jerk_mps3: 10.0 },
@@ -135,8 +172,10 @@ export function syntheticDrive({ seconds = 20, carCount = 12, incidents = [], tr
     incident_types: INCIDENT_TYPES,
     provenance: { policy: 'synthetic', traffic: 'faithful', seed: 1, track: 'circle', duration_s: seconds },
   };
+  const writer = new RecordWriter();
   const records = [];
   const frames = [];
+  const paths = [];
   const steps = Math.round(seconds / stepS);
   let s = 100;
   let v = 0;
@@ -154,12 +193,20 @@ export function syntheticDrive({ seconds = 20, carCount = 12, incidents = [], tr
     best = Math.max(best, since);
     const d = 6;
     const p = at(s, d);
-    const cars = [];
+    let cars = [];
     for (let k = 0; k < carCount; ++k) {
+      if (churn && (step + 13 * k) % 90 < 6) continue;
       const cs = s + (k - carCount / 2) * 25 + 8;
       const cd = 2 + 4 * (k % 3);
       const cp = at(cs, cd);
-      cars.push({ id: k, x: cp.x, y: cp.y, yaw: cp.yaw, speed: 18 + (k % 4) });
+      cars.push({ id: churn ? (k * 5003) % 65535 : k, x: cp.x, y: cp.y, yaw: cp.yaw, speed: 18 + (k % 4) });
+    }
+    if (churn) {
+      if (Math.floor(step / 37) % 2 === 1) cars.reverse();
+      if (step % 10 < 7) {
+        const far = step % 2 === 0 ? 21e6 : -21e6; // metres: near the ends of the i32 range in cm
+        cars.splice(step % (cars.length + 1), 0, { id: 65535, x: far, y: -far, yaw: 3.14159, speed: 655.35 });
+      }
     }
     const f = {
       step, x: p.x, y: p.y, yaw: p.yaw, speed: v, s: s % trackLength, d,
@@ -167,14 +214,15 @@ export function syntheticDrive({ seconds = 20, carCount = 12, incidents = [], tr
       distance: dist, distanceSince: since, bestFree: best, cars,
     };
     frames.push(f);
-    records.push(frameRecord(f));
+    records.push(writer.frame(f));
     if (step % 2 === 0) {
       const pts = [];
       for (let j = 1; j <= 50; ++j) {
         const q = at(s + j * Math.max(v, 1) * stepS, d);
         pts.push([q.x, q.y]);
       }
-      records.push(pathRecord(pts));
+      paths.push(pts);
+      records.push(writer.path(pts));
     }
     const inc = incidentAt.get(step);
     if (inc) {
@@ -191,5 +239,5 @@ export function syntheticDrive({ seconds = 20, carCount = 12, incidents = [], tr
     incidents: recorded.map((r) => ({ type: INCIDENT_TYPES[r.type], t_s: r.step * stepS, s_m: r.s, lane: 1, value: r.value, unit: '' })),
   };
   if (end) records.push(endRecord(report));
-  return { bytes: encodeReplay(header, records), header, frames, incidents: recorded, records };
+  return { bytes: encodeReplay(header, records), header, frames, paths, incidents: recorded, records };
 }

@@ -4,7 +4,7 @@ import assert from 'node:assert/strict';
 import { test } from 'node:test';
 
 import { adler32, base64ToBytes, decodeReplay, decodeReplayAsync, parseHeader, Replay, ReplayError } from '../src/replay.js';
-import { concat, encodeReplay, frameRecord, syntheticDrive } from './encode.mjs';
+import { cm, concat, encodeReplay, RecordWriter, speedUnits, syntheticDrive, yawUnits } from './encode.mjs';
 
 const close = (a, b, tol, what) => assert.ok(Math.abs(a - b) <= tol, `${what}: ${a} vs ${b}`);
 
@@ -48,7 +48,8 @@ test('round trip: every frame, car, path and incident comes back', () => {
 
 test('a truncated file keeps the frames before the cut and says so', () => {
   const drive = syntheticDrive({ seconds: 20 });
-  const cut = drive.bytes.subarray(0, Math.floor(drive.bytes.length * 0.6));
+  const body = 16 + new DataView(drive.bytes.buffer).getUint32(12, true);
+  const cut = drive.bytes.subarray(0, body + Math.floor((drive.bytes.length - body) * 0.6));
   const r = decodeReplay(cut, 'cut.otr');
   assert.match(r.problem, /cut\.otr/);
   assert.match(r.problem, /truncated|ends early/);
@@ -120,13 +121,126 @@ test('live: records split across messages are joined', () => {
   assert.equal(r.paths, 25);
 });
 
+const STILL = { step: 0, x: 0, y: 0, yaw: 0, speed: 0, s: 0, d: 0, accT: 0, accN: 0, accTotal: 0, jerk: 0, distance: 0, distanceSince: 0, bestFree: 0, cars: [] };
+
 test('a frame whose length does not match its car count is malformed', () => {
-  const f = frameRecord({ step: 0, x: 0, y: 0, yaw: 0, speed: 0, s: 0, d: 0, accT: 0, accN: 0, accTotal: 0, jerk: 0, distance: 0, distanceSince: 0, bestFree: 0, cars: [] });
-  f[5 + 52] = 3; // claims three cars
+  const f = new RecordWriter().frame(STILL);
+  f[f.length - 1] = 3; // the car count, the last byte of a frame without cars: claims three
   const r = new Replay({ step_s: 0.02 });
   r.appendRecords(f);
-  assert.match(r.problem, /malformed/);
+  assert.match(r.problem, /malformed: the ids of its 3 cars run past the end/);
   assert.equal(r.frames, 0);
+});
+
+// The value as the page holds it: the stored integer times its unit, in a Float32Array.
+const m32 = (m) => Math.fround(cm(m) * 0.01);
+
+test('positions come back exactly, with cars leaving, coming back, reordered and jumping far', () => {
+  const drive = syntheticDrive({ seconds: 12, churn: true, incidents: [{ step: 300, type: 'speeding', value: 51 }] });
+  const r = decodeReplay(drive.bytes, 'churn.otr');
+  assert.equal(r.problem, null);
+  assert.equal(r.frames, drive.frames.length);
+  let entries = 0;
+  let far = 0;
+  for (let i = 0; i < r.frames; ++i) {
+    const f = drive.frames[i];
+    assert.equal(r.egoX[i], m32(f.x), `ego x at ${i}`);
+    assert.equal(r.egoY[i], m32(f.y), `ego y at ${i}`);
+    assert.equal(r.egoYaw[i], Math.fround(yawUnits(f.yaw) * 1e-4), `ego yaw at ${i}`);
+    assert.equal(r.egoSpeed[i], Math.fround(speedUnits(f.speed) * 0.01), `ego speed at ${i}`);
+    assert.equal(r.carStart[i + 1] - r.carStart[i], f.cars.length, `cars at ${i}`);
+    f.cars.forEach((c, k) => {
+      const j = r.carStart[i] + k;
+      assert.equal(r.carId[j], c.id);
+      assert.equal(r.carX[j], m32(c.x), `car ${c.id} x at ${i}`);
+      assert.equal(r.carY[j], m32(c.y), `car ${c.id} y at ${i}`);
+      assert.equal(r.carYaw[j], Math.fround(yawUnits(c.yaw) * 1e-4), `car ${c.id} yaw at ${i}`);
+      assert.equal(r.carSpeed[j], Math.fround(speedUnits(c.speed) * 0.01), `car ${c.id} speed at ${i}`);
+      entries += 1;
+      if (c.id === 65535) far += 1;
+    });
+  }
+  assert.ok(entries > 0 && far > 100, `the drive has cars (${entries}) and far jumps (${far})`);
+  assert.equal(r.paths, drive.paths.length);
+  drive.paths.forEach((pts, k) => {
+    pts.forEach(([x, y], j) => {
+      assert.equal(r.pathX[r.pathStart[k] + j], m32(x));
+      assert.equal(r.pathY[r.pathStart[k] + j], m32(y));
+    });
+  });
+  assert.equal(r.incX[0], r.egoX[300], 'the incident (absolute) is where the ego (differences) is');
+});
+
+test('every cut of a frame or path record is malformed, not thrown, and keeps what came before', () => {
+  const w = new RecordWriter();
+  const first = w.frame({ ...STILL, cars: [{ id: 7, x: 10, y: 20, yaw: 1, speed: 3 }] });
+  const frame = w.frame({ ...STILL, step: 1, x: -2e7, y: 3e3, cars: [{ id: 7, x: 2e7, y: -20, yaw: -1, speed: 600 }, { id: 300, x: 1, y: 1, yaw: 0, speed: 0 }] });
+  const path = w.path([[1e7, 0], [-1e7, 5]]);
+  for (const rec of [frame, path]) {
+    const n = rec.length - 5;
+    for (let cut = 0; cut < n; ++cut) {
+      const bad = rec.slice(0, 5 + cut);
+      new DataView(bad.buffer).setUint32(1, cut, true);
+      const r = new Replay({ step_s: 0.02 });
+      r.appendRecords(concat([first, bad]));
+      assert.match(r.problem || '', /record 2 \((frame|path)\) at byte \d+ of the data is malformed/, `cut at ${cut} of ${n}: ${r.problem}`);
+      assert.equal(r.frames, 1);
+      assert.equal(r.carX[0], m32(10));
+    }
+    const r = new Replay({ step_s: 0.02 });
+    r.appendRecords(concat([first, frame, path]));
+    assert.equal(r.problem, null);
+    assert.equal(r.egoX[1], m32(-2e7));
+    assert.equal(r.carX[r.carStart[1]], m32(2e7));
+    assert.equal(r.pathX[1], m32(-1e7));
+  }
+});
+
+test('a repeated car id, an id above 65535, an overlong varint and a value out of range are malformed', () => {
+  const car = (id) => ({ id, x: 1, y: 2, yaw: 0, speed: 1 });
+  const twice = new RecordWriter().frame({ ...STILL, cars: [car(4), car(9), car(4)] });
+  let r = new Replay({ step_s: 0.02 });
+  r.appendRecords(twice);
+  assert.match(r.problem, /car id 4 appears twice/);
+  // the marks are cleared: the same replay object reads a good frame afterwards
+  r = new Replay({ step_s: 0.02 });
+  r.appendRecords(twice);
+  r.problem = null;
+  r.appendRecords(new RecordWriter().frame({ ...STILL, cars: [car(4), car(9)] }));
+  assert.equal(r.problem, null);
+  assert.equal(r.carStart[1] - r.carStart[0], 2);
+
+  const big = new RecordWriter().frame({ ...STILL, cars: [{ id: 65535, x: 0, y: 0, yaw: 0, speed: 0 }] });
+  const at = big.length - 4 - 3; // the id: 3 bytes, then four 1-byte differences (zeros)
+  assert.deepEqual([...big.subarray(at, at + 3)], [0xff, 0xff, 0x03]);
+  big[at + 2] = 0x04; // 0x7f + 0x7f << 7 + 4 << 14 = 81919
+  r = new Replay({ step_s: 0.02 });
+  r.appendRecords(big);
+  assert.match(r.problem, /car id 81919 is above 65535/);
+
+  const long = new Uint8Array([1, 10, 0, 0, 0, 0, 0, 0, 0, 0xff, 0xff, 0xff, 0xff, 0xff, 0x01]); // a 6-byte varint
+  r = new Replay({ step_s: 0.02 });
+  r.appendRecords(long);
+  assert.match(r.problem, /the ego's position and speed hold a varint longer than 5 bytes/);
+
+  const w = new RecordWriter();
+  const moving = w.frame({ ...STILL, cars: [car(1)] });
+  const stopped = w.frame({ ...STILL, step: 1, speed: 0, cars: [{ ...car(1), speed: 0 }] });
+  r = new Replay({ step_s: 0.02 });
+  // read the second frame first: its car's speed difference (-100 cm/s) from zero is negative
+  r.appendRecords(stopped);
+  assert.match(r.problem, /a car's speed comes to -100, outside \[0, 65535\]/);
+  r = new Replay({ step_s: 0.02 });
+  r.appendRecords(concat([moving, stopped]));
+  assert.equal(r.problem, null);
+});
+
+test('version 1 is refused with a clear message', () => {
+  const drive = syntheticDrive({ seconds: 1 });
+  const v1 = drive.bytes.slice();
+  v1[8] = 1;
+  assert.throws(() => decodeReplay(v1, 'old.otr'), /old\.otr is replay format version 1, which is no longer supported: re-record/);
+  assert.throws(() => parseHeader(JSON.stringify({ ...drive.header, version: 1 })), /version 1 is no longer supported/);
 });
 
 test('adler32 and base64 helpers', () => {

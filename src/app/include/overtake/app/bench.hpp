@@ -67,7 +67,7 @@ struct BenchOutcome {
   double wall_s = 0.0;
   double simulated_s = 0.0;        ///< simulated by this call
   std::string summary_markdown;    ///< also written to summary.md
-  std::vector<std::filesystem::path> replays;  ///< recorded by record_worst
+  std::vector<std::filesystem::path> replays;  ///< recorded by record_worst (merge: copied)
 };
 
 /// Checks everything before any run starts (UsageError / ConfigError / MapError), then runs
@@ -78,9 +78,10 @@ struct BenchOutcome {
 [[nodiscard]] BenchOutcome run_bench(const BenchSpec& spec, const std::atomic<bool>* stop,
                                      const std::function<void(const BenchProgress&)>& progress);
 
-/// Joins the outputs of shards of one sweep into `out` (runs.jsonl, summaries). Throws
-/// UsageError when the directories come from different configurations or a run is missing
-/// or doubled.
+/// Joins the outputs of shards of one sweep into `out` (runs.jsonl, summaries), and copies
+/// the replays the shards recorded (replays/*.otr, `--record-worst`) into out/replays/
+/// (listed in `replays`). Throws UsageError when the directories come from different
+/// configurations or a run is missing or doubled.
 [[nodiscard]] BenchOutcome merge_bench(const std::vector<std::filesystem::path>& dirs,
                                        const std::filesystem::path& out);
 

@@ -2,8 +2,10 @@
 // Replay files (docs/replay.md): a run recorded step by step for `overtake view`. A preamble
 // (magic, version, JSON header) and one zlib stream of records: a frame per step (the ego,
 // every car, the referee's running figures), the path of each planner cycle, each incident,
-// and the run's report at the end. The writer streams (deflating as the run goes), the
-// reader checks everything and says what is wrong and where.
+// and the run's report at the end. Positions are fixed-point integers stored as differences
+// from the previous frame (version 2), so the records must be read in order from the first.
+// The writer streams (deflating as the run goes), the reader checks everything and says what
+// is wrong and where.
 
 #include <cstddef>
 #include <cstdint>
@@ -25,7 +27,9 @@
 namespace overtake::sim {
 
 inline constexpr std::string_view kReplayMagic = "OVTKRPLY";
-inline constexpr std::uint32_t kReplayVersion = 1;
+/// Version 2: positions as zigzag-varint differences (docs/replay.md). Version 1 (absolute
+/// positions) is not read.
+inline constexpr std::uint32_t kReplayVersion = 2;
 /// Bytes before the header JSON: magic, version, header length.
 inline constexpr std::size_t kReplayPreambleBytes = 16;
 /// Spacing of the lane lines' points along the reference line (m).
@@ -80,20 +84,66 @@ struct ReplayHeader {
 /// The file's uncompressed start: magic, version, header length, header JSON.
 [[nodiscard]] std::string replay_preamble(const ReplayHeader& header);
 
+/// One car in a frame.
+struct ReplayCar {
+  int id = 0;
+  core::Vec2 position;     ///< m (stored in cm)
+  double yaw_rad = 0.0;    ///< stored in 1e-4 rad
+  double speed_mps = 0.0;  ///< stored in cm/s
+};
+
+/// One step of the run.
+struct ReplayFrame {
+  long step = 0;  ///< t = step * step_s
+  core::Vec2 position;
+  double yaw_rad = 0.0;
+  double speed_mps = 0.0;
+  double s_m = 0.0;
+  double d_m = 0.0;
+  StrictFigures strict;
+  double distance_m = 0.0;
+  double incident_free_m = 0.0;
+  double best_incident_free_m = 0.0;
+  std::vector<ReplayCar> cars;
+};
+
 /// Turns a run into records (u8 kind, u32 payload length, payload), appended to a buffer.
-/// The live view sends these as they are; the writer deflates them.
+/// The live view sends these as they are; the writer deflates them. Positions are coded as
+/// differences from the previous frame's (and a path's points from the ego and from each
+/// other), so one encoder must see the whole run, and its records be read from the first.
 class ReplayEncoder {
  public:
   /// The frame of the world's current step, then an incident record for each incident the
   /// referee counted since the previous call.
   void append_state(const World& world, std::string& out);
-  /// The path the planner sent at a cycle (at most 65535 points are kept).
-  static void append_path(std::span<const core::Vec2> path, std::string& out);
+  /// A frame from plain values, rounded to the stored fixed point (append_state's frame; for
+  /// tests and tools). A car whose id is outside [0, 65535] is clamped into it; a car whose
+  /// id repeats one before it in the frame, and cars beyond the 255th, are left out.
+  void append_frame(const ReplayFrame& frame, std::string& out);
+  /// The path the planner sent at a cycle (at most 65535 points are kept); its first point is
+  /// coded against the ego of the last frame appended.
+  void append_path(std::span<const core::Vec2> path, std::string& out) const;
   /// The last record: the run's report as JSON.
   static void append_end(std::string_view report_json, std::string& out);
 
+  /// A position as stored: x, y in cm, yaw in 1e-4 rad, speed in cm/s.
+  struct Fixed {
+    std::int32_t x = 0, y = 0, yaw = 0, speed = 0;
+  };
+  /// A car of a frame, as stored.
+  struct FixedCar {
+    int id = 0;
+    Fixed at;
+  };
+
  private:
   std::size_t incidents_seen_ = 0;
+  Fixed ego_;                   // the last frame's ego (zero before the first frame)
+  std::vector<FixedCar> cars_;  // the last frame's cars (ids unique)
+  std::vector<FixedCar> next_;  // scratch: the frame being written
+  std::vector<Fixed> base_;     // scratch: what each car of next_ is coded against
+  std::vector<bool> in_frame_;  // scratch: ids already in next_ (65536 flags)
+  ReplayFrame frame_;           // scratch: append_state's frame
 };
 
 /// Streams a replay to `path` while the run goes: records are deflated in chunks and written
@@ -126,29 +176,6 @@ class ReplayWriter final : public RunObserver {
  private:
   struct Impl;
   std::unique_ptr<Impl> impl_;
-};
-
-/// One car in a frame.
-struct ReplayCar {
-  int id = 0;
-  core::Vec2 position;     ///< m (stored in cm)
-  double yaw_rad = 0.0;    ///< stored in 1e-4 rad
-  double speed_mps = 0.0;  ///< stored in cm/s
-};
-
-/// One step of the run.
-struct ReplayFrame {
-  long step = 0;  ///< t = step * step_s
-  core::Vec2 position;
-  double yaw_rad = 0.0;
-  double speed_mps = 0.0;
-  double s_m = 0.0;
-  double d_m = 0.0;
-  StrictFigures strict;
-  double distance_m = 0.0;
-  double incident_free_m = 0.0;
-  double best_incident_free_m = 0.0;
-  std::vector<ReplayCar> cars;
 };
 
 /// A path the planner sent; `step` is the frame it belongs to.
