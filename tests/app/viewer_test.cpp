@@ -36,6 +36,7 @@
 #include "overtake/sim/world.hpp"
 #include "overtake/view/page.hpp"
 #include "overtake/view/server.hpp"
+#include "zlib_support.hpp"
 
 namespace overtake::app {
 namespace {
@@ -404,16 +405,6 @@ LiveReceived watch_live(std::uint16_t port) {
   return out;
 }
 
-std::string deflated(const std::string& raw) {
-  uLongf n = compressBound(static_cast<uLong>(raw.size()));
-  std::string out(n, '\0');
-  EXPECT_EQ(compress(reinterpret_cast<Bytef*>(out.data()), &n,
-                     reinterpret_cast<const Bytef*>(raw.data()), static_cast<uLong>(raw.size())),
-            Z_OK);
-  out.resize(n);
-  return out;
-}
-
 std::string inflated(const std::string& body) {
   z_stream z{};
   EXPECT_EQ(inflateInit(&z), Z_OK);
@@ -484,7 +475,7 @@ TEST_F(ViewerTest, LiveViewStreamsTheSameRecordsAsTheReplay) {
   // The live records are the replay file's body, inflated: the same decoding works.
   const sim::Replay from_file = sim::read_replay(dir_ / "r.otr");
   const sim::Replay from_live =
-      sim::parse_replay(sim::replay_preamble(header) + deflated(got_records), "live");
+      sim::parse_replay(sim::replay_preamble(header) + test::deflate_all(got_records), "live");
   EXPECT_EQ(from_live.frames.size(), from_file.frames.size());
   EXPECT_EQ(from_live.paths.size(), from_file.paths.size());
   EXPECT_EQ(from_live.end_json, from_file.end_json);

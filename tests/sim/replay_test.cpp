@@ -21,6 +21,7 @@
 #include "overtake/sim/run.hpp"
 #include "overtake/sim/world.hpp"
 #include "sim/test_maps.hpp"
+#include "zlib_support.hpp"
 
 namespace overtake::sim {
 namespace {
@@ -96,16 +97,6 @@ std::size_t r_header_bytes(const std::string& bytes) {
 void write_bytes(const std::filesystem::path& p, const std::string& bytes) {
   std::ofstream out(p, std::ios::binary | std::ios::trunc);
   out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
-}
-
-std::string deflate_all(const std::string& raw) {
-  uLongf n = compressBound(static_cast<uLong>(raw.size()));
-  std::string out(n, '\0');
-  EXPECT_EQ(compress(reinterpret_cast<Bytef*>(out.data()), &n,
-                     reinterpret_cast<const Bytef*>(raw.data()), static_cast<uLong>(raw.size())),
-            Z_OK);
-  out.resize(n);
-  return out;
 }
 
 class ReplayTest : public ::testing::Test {
@@ -418,7 +409,7 @@ TEST_F(ReplayTest, NotAReplayOrAnotherVersion) {
 
 // A file made by hand: the preamble of a real header and the given records.
 std::string handmade(const ReplayHeader& h, const std::string& records) {
-  return replay_preamble(h) + deflate_all(records);
+  return replay_preamble(h) + test::deflate_all(records);
 }
 
 constexpr std::size_t kRecordHead = 5;  // u8 kind, u32 length
