@@ -25,20 +25,25 @@ std::shared_ptr<const app::Track> track() {
   return t;
 }
 
-// A world on the default track with a 50-point queue ahead of the ego and 12 cars.
-sim::World world_with_path() {
+// A telemetry on the default track, 30 s into a drive (every car placed), with a 50-point
+// queue ahead of the ego.
+core::Telemetry snapshot() {
   const auto t = track();
   sim::World world(t->map, t->line, app::default_config().world, sim::TrafficProfile::faithful, 1);
-  std::vector<core::Vec2> path;
-  const double s0 = world.ego().frenet.s_m;
-  for (int i = 1; i <= 50; ++i) path.push_back(t->line.to_cartesian({s0 + 0.42 * i, 6.0}));
-  world.apply_path(path);
-  return world;
+  const auto lane_path = [&](int n) {
+    std::vector<core::Vec2> path;
+    const double s0 = world.ego().frenet.s_m;
+    for (int i = 1; i <= n; ++i) path.push_back(t->line.to_cartesian({s0 + 0.42 * i, 6.0}));
+    return path;
+  };
+  world.apply_path(lane_path(1600));
+  for (int i = 0; i < 1500; ++i) world.step();
+  world.apply_path(lane_path(50));
+  return world.telemetry();
 }
 
 void BM_ProtocolParseTelemetry(benchmark::State& state) {
-  const sim::World world = world_with_path();
-  const core::Telemetry t = world.telemetry();
+  const core::Telemetry t = snapshot();
   const std::string text = protocol::format_telemetry(t);
   if (t.previous_path.size() != 50 || t.cars.size() != 12)
     state.SkipWithError("unexpected snapshot");
@@ -52,8 +57,7 @@ void BM_ProtocolParseTelemetry(benchmark::State& state) {
 BENCHMARK(BM_ProtocolParseTelemetry);
 
 void BM_ProtocolFormatTelemetry(benchmark::State& state) {
-  const sim::World world = world_with_path();
-  const core::Telemetry t = world.telemetry();
+  const core::Telemetry t = snapshot();
   std::string text;
   for (auto _ : state) {
     text.clear();
@@ -65,8 +69,7 @@ void BM_ProtocolFormatTelemetry(benchmark::State& state) {
 BENCHMARK(BM_ProtocolFormatTelemetry);
 
 void BM_ProtocolParseControl(benchmark::State& state) {
-  const sim::World world = world_with_path();
-  const std::string text = protocol::format_control(world.telemetry().previous_path);
+  const std::string text = protocol::format_control(snapshot().previous_path);
   for (auto _ : state) {
     auto r = protocol::parse_reply(text);
     benchmark::DoNotOptimize(r);

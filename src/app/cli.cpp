@@ -197,7 +197,7 @@ int run_cli(int argc, const char* const* argv) {
   const std::vector<Subcommand> commands{register_drive(app), register_track(app),
                                          register_config(app), register_bench(app),
                                          register_serve(app), register_sim(app),
-                                         register_view(app)};
+                                         register_view(app), register_calibrate(app)};
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -105,7 +105,14 @@ DriveResult drive_on(const Track& track, const Config& config, const DriveOption
   sim::ObserverList observers({writer.get(), result.live ? &result.live->observer() : nullptr});
   run.observer = observers.get();
 
-  result.report = sim::run_drive(world, [&pol](const core::Telemetry& t) { return pol.plan(t); }, run);
+  const auto& tap = opts.telemetry_tap;
+  result.report = sim::run_drive(
+      world,
+      [&pol, &tap, &world](const core::Telemetry& t) {
+        if (tap) tap(world.time_s(), t);
+        return pol.plan(t);
+      },
+      run);
 
   if (writer || result.live) {
     const std::string end = replay_report_json(result.report, p);

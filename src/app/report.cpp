@@ -49,6 +49,7 @@ json report_to_json(const sim::RunReport& r, const RunProvenance& p) {
     counts[std::string(sim::to_string(static_cast<sim::IncidentType>(i)))] = r.incident_counts[i];
   }
   j["incident_counts"] = counts;
+  j["exact_outside_lane"] = r.exact_outside_lane;
   json incidents = json::array();
   for (const sim::Incident& i : r.incidents) {
     incidents.push_back({{"type", sim::to_string(i.type)},
@@ -103,6 +104,9 @@ std::string format_scorecard(const sim::RunReport& r, const RunProvenance& p) {
        << r.incident_counts[i];
   }
   os << ")\n";
+  if (r.exact_outside_lane != r.incident_counts[static_cast<std::size_t>(sim::IncidentType::outside_lane)]) {
+    os << "  outside of lane on the exact d (not the rubric's): " << r.exact_outside_lane << "\n";
+  }
   os << printf_string("  peak, rubric       speed %.2f mph   acceleration %.2f m/s^2   jerk %.2f m/s^3\n",
                       core::mps_to_mph(r.peak.speed_mps), r.peak.acceleration_mps2, r.peak.jerk_mps3);
   os << printf_string("  peak, strict 0.1 s acceleration %.2f m/s^2   jerk %.2f m/s^3\n",

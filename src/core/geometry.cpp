@@ -2,6 +2,8 @@
 
 #include <array>
 #include <cmath>
+#include <limits>
+#include <utility>
 
 namespace overtake::core {
 namespace {
@@ -33,6 +35,45 @@ bool boxes_overlap(const OrientedBox& a, const OrientedBox& b) {
     if (gap > 0.0) return false;
   }
   return true;
+}
+
+std::optional<Penetration> box_penetration(const OrientedBox& a, const OrientedBox& b) {
+  const Axes aa = axes_of(a);
+  const Axes ab = axes_of(b);
+  const Vec2 delta = b.center - a.center;
+  const std::array<Vec2, 4> axes{aa.u, aa.v, ab.u, ab.v};
+  Penetration best{{}, std::numeric_limits<double>::infinity()};
+  for (const Vec2 n : axes) {
+    const double along = dot(delta, n);
+    const double depth = half_extent(a, aa, n) + half_extent(b, ab, n) - std::abs(along);
+    if (depth < 0.0) return std::nullopt;
+    if (depth < best.depth_m) best = {along >= 0.0 ? n : -1.0 * n, depth};
+  }
+  return best;
+}
+
+std::optional<double> ray_box_distance(Vec2 origin, Vec2 direction, const OrientedBox& box) {
+  // In the box's own axes: a slab test on each axis.
+  const Axes ax = axes_of(box);
+  const Vec2 rel = origin - box.center;
+  const std::array<double, 2> o{dot(rel, ax.u), dot(rel, ax.v)};
+  const std::array<double, 2> d{dot(direction, ax.u), dot(direction, ax.v)};
+  const std::array<double, 2> half{0.5 * box.length_m, 0.5 * box.width_m};
+  double enter = 0.0;
+  double leave = std::numeric_limits<double>::infinity();
+  for (std::size_t k = 0; k < 2; ++k) {
+    if (std::abs(d[k]) < 1e-12) {
+      if (std::abs(o[k]) > half[k]) return std::nullopt;  // parallel and outside the slab
+      continue;
+    }
+    double t0 = (-half[k] - o[k]) / d[k];
+    double t1 = (half[k] - o[k]) / d[k];
+    if (t0 > t1) std::swap(t0, t1);
+    enter = std::max(enter, t0);
+    leave = std::min(leave, t1);
+    if (enter > leave) return std::nullopt;
+  }
+  return enter;
 }
 
 double menger_curvature(Vec2 a, Vec2 b, Vec2 c) {

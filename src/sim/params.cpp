@@ -65,65 +65,85 @@ std::vector<std::string> validate(const WorldParams& p) {
   c.in_range("world.traffic.car_count", t.car_count, 0, 64);
   c.positive("world.traffic.car_length_m", t.car_length_m);
   c.positive("world.traffic.car_width_m", t.car_width_m);
-  c.positive("world.traffic.despawn_distance_m", t.despawn_distance_m);
-  c.in_range("world.traffic.behind_probability", t.behind_probability, 0.0, 1.0);
-  c.in_range("world.traffic.behind_min_waypoints", t.behind_min_waypoints, 1, 100);
-  c.in_range("world.traffic.behind_max_waypoints", t.behind_max_waypoints, 1, 100);
-  c.ordered("world.traffic.behind_min_waypoints", t.behind_min_waypoints,
-            "world.traffic.behind_max_waypoints", t.behind_max_waypoints);
-  c.in_range("world.traffic.ahead_min_waypoints", t.ahead_min_waypoints, 1, 100);
-  c.in_range("world.traffic.ahead_max_waypoints", t.ahead_max_waypoints, 1, 100);
-  c.ordered("world.traffic.ahead_min_waypoints", t.ahead_min_waypoints,
-            "world.traffic.ahead_max_waypoints", t.ahead_max_waypoints);
-  c.non_negative("world.traffic.behind_min_speed_mps", t.behind_min_speed_mps);
-  c.ordered("world.traffic.behind_min_speed_mps", t.behind_min_speed_mps,
-            "world.traffic.behind_max_speed_mps", t.behind_max_speed_mps);
-  c.non_negative("world.traffic.ahead_min_speed_mps", t.ahead_min_speed_mps);
-  c.ordered("world.traffic.ahead_min_speed_mps", t.ahead_min_speed_mps,
-            "world.traffic.ahead_max_speed_mps", t.ahead_max_speed_mps);
-  c.non_negative("world.traffic.min_spawn_distance_m", t.min_spawn_distance_m);
-  c.positive("world.traffic.spawn_brake_mps2", t.spawn_brake_mps2);
-  c.in_range("world.traffic.max_spawn_attempts", t.max_spawn_attempts, 1, 100000);
-  c.in_range("world.traffic.batch_min_frames", t.batch_min_frames, 1, 100000);
-  c.in_range("world.traffic.batch_max_frames", t.batch_max_frames, 1, 100000);
-  c.ordered("world.traffic.batch_min_frames", t.batch_min_frames, "world.traffic.batch_max_frames",
-            t.batch_max_frames);
-  c.in_range("world.traffic.batch_min_cars", t.batch_min_cars, 1, 64);
-  c.in_range("world.traffic.batch_max_cars", t.batch_max_cars, 1, 64);
-  c.ordered("world.traffic.batch_min_cars", t.batch_min_cars, "world.traffic.batch_max_cars",
-            t.batch_max_cars);
-  c.non_negative("world.traffic.wander_amplitude_m", t.wander_amplitude_m);
-  c.positive("world.traffic.wander_min_period_s", t.wander_min_period_s);
-  c.ordered("world.traffic.wander_min_period_s", t.wander_min_period_s,
-            "world.traffic.wander_max_period_s", t.wander_max_period_s);
-  c.positive("world.traffic.lane_change_duration_s", t.lane_change_duration_s);
+
+  const auto& pl = t.placement;
+  const std::string pk = "world.traffic.placement.";
+  c.positive(pk + "despawn_distance_m", pl.despawn_distance_m);
+  c.in_range(pk + "behind_probability", pl.behind_probability, 0.0, 1.0);
+  c.in_range(pk + "behind_min_waypoints", pl.behind_min_waypoints, 1, 100);
+  c.in_range(pk + "behind_max_waypoints", pl.behind_max_waypoints, 1, 100);
+  c.ordered(pk + "behind_min_waypoints", pl.behind_min_waypoints, pk + "behind_max_waypoints",
+            pl.behind_max_waypoints);
+  c.in_range(pk + "ahead_min_waypoints", pl.ahead_min_waypoints, 1, 100);
+  c.in_range(pk + "ahead_max_waypoints", pl.ahead_max_waypoints, 1, 100);
+  c.ordered(pk + "ahead_min_waypoints", pl.ahead_min_waypoints, pk + "ahead_max_waypoints",
+            pl.ahead_max_waypoints);
+  c.non_negative(pk + "behind_min_speed_mps", pl.behind_min_speed_mps);
+  c.ordered(pk + "behind_min_speed_mps", pl.behind_min_speed_mps, pk + "behind_max_speed_mps",
+            pl.behind_max_speed_mps);
+  c.non_negative(pk + "ahead_min_speed_mps", pl.ahead_min_speed_mps);
+  c.ordered(pk + "ahead_min_speed_mps", pl.ahead_min_speed_mps, pk + "ahead_max_speed_mps",
+            pl.ahead_max_speed_mps);
+  c.non_negative(pk + "min_spawn_distance_m", pl.min_spawn_distance_m);
+  c.in_range(pk + "max_spawn_attempts", pl.max_spawn_attempts, 1, 100000);
+  c.in_range(pk + "batch_min_frames", pl.batch_min_frames, 1, 100000);
+  c.in_range(pk + "batch_max_frames", pl.batch_max_frames, 1, 100000);
+  c.ordered(pk + "batch_min_frames", pl.batch_min_frames, pk + "batch_max_frames",
+            pl.batch_max_frames);
+  c.in_range(pk + "batch_min_cars", pl.batch_min_cars, 1, 64);
+  c.in_range(pk + "batch_max_cars", pl.batch_max_cars, 1, 64);
+  c.ordered(pk + "batch_min_cars", pl.batch_min_cars, pk + "batch_max_cars", pl.batch_max_cars);
 
   const auto& f = t.faithful;
-  c.non_negative("world.traffic.faithful.reaction_gain_m", f.reaction_gain_m);
-  c.positive("world.traffic.faithful.min_reaction_m", f.min_reaction_m);
-  c.ordered("world.traffic.faithful.min_reaction_m", f.min_reaction_m,
-            "world.traffic.faithful.max_reaction_m", f.max_reaction_m);
-  c.positive("world.traffic.faithful.ego_reaction_m", f.ego_reaction_m);
-  c.positive("world.traffic.faithful.brake_mps2", f.brake_mps2);
-  c.positive("world.traffic.faithful.accel_mps2", f.accel_mps2);
-  c.non_negative("world.traffic.faithful.lane_change_min_speed_mps", f.lane_change_min_speed_mps);
-  c.non_negative("world.traffic.faithful.lane_change_interval_s", f.lane_change_interval_s);
-  c.positive("world.traffic.faithful.waypoint_trigger_m", f.waypoint_trigger_m);
-  c.non_negative("world.traffic.faithful.clear_gap_m", f.clear_gap_m);
-  c.in_range("world.traffic.faithful.clear_steps", f.clear_steps, 0, 100000);
-  c.non_negative("world.traffic.faithful.ego_lane_radius_m", f.ego_lane_radius_m);
+  const std::string fk = "world.traffic.faithful.";
+  if (!std::isfinite(f.parked_d_m)) out.push_back(fk + "parked_d_m must be finite");
+  c.non_negative(fk + "parked_s_before_end_m", f.parked_s_before_end_m);
+  c.non_negative(fk + "accel_sensitivity_per_mph", f.accel_sensitivity_per_mph);
+  c.non_negative(fk + "brake_sensitivity_per_mph", f.brake_sensitivity_per_mph);
+  c.in_range(fk + "accel_wander_amount", f.accel_wander_amount, 0.0, 1.0);
+  c.non_negative(fk + "wander_rate_hz", f.wander_rate_hz);
+  c.positive(fk + "engine_mps2", f.engine_mps2);
+  c.non_negative(fk + "drag_per_s", f.drag_per_s);
+  c.positive(fk + "brake_mps2", f.brake_mps2);
+  c.non_negative(fk + "reaction_gain_m", f.reaction_gain_m);
+  c.non_negative(fk + "no_body_reaction_m", f.no_body_reaction_m);
+  c.in_range(fk + "ray_horizon_m", f.ray_horizon_m, 1.0, 5000.0);
+  c.non_negative(fk + "scenery_margin_m", f.scenery_margin_m);
+  c.non_negative(fk + "lane_change_min_speed_mps", f.lane_change_min_speed_mps);
+  c.in_range(fk + "lane_change_wait_steps", f.lane_change_wait_steps, 0, 1000000);
+  c.positive(fk + "waypoint_trigger_m", f.waypoint_trigger_m);
+  c.non_negative(fk + "clear_gap_m", f.clear_gap_m);
+  c.non_negative(fk + "car_lane_half_width_m", f.car_lane_half_width_m);
+  c.non_negative(fk + "ego_lane_half_width_m", f.ego_lane_half_width_m);
+  c.in_range(fk + "clear_steps", f.clear_steps, 0, 100000);
+  c.non_negative(fk + "steer_sensitivity_per_deg", f.steer_sensitivity_per_deg);
+  c.in_range(fk + "max_steer_deg", f.max_steer_deg, 0.0, 80.0);
+  c.positive(fk + "wheelbase_m", f.wheelbase_m);
+  c.positive(fk + "max_lateral_accel_mps2", f.max_lateral_accel_mps2);
+  c.non_negative(fk + "target_reach_m", f.target_reach_m);
+  c.non_negative(fk + "target_reach_per_lane_m", f.target_reach_per_lane_m);
+  c.non_negative(fk + "lateral_wander_m", f.lateral_wander_m);
+  c.non_negative(fk + "avoid_time_s", f.avoid_time_s);
+  c.in_range(fk + "avoid_slowdown", f.avoid_slowdown, 0.0, 1.0);
 
   const auto& m = t.calm;
-  c.positive("world.traffic.calm.time_headway_s", m.time_headway_s);
-  c.non_negative("world.traffic.calm.min_gap_m", m.min_gap_m);
-  c.positive("world.traffic.calm.max_accel_mps2", m.max_accel_mps2);
-  c.positive("world.traffic.calm.comfort_decel_mps2", m.comfort_decel_mps2);
-  c.positive("world.traffic.calm.accel_exponent", m.accel_exponent);
-  c.positive("world.traffic.calm.max_brake_mps2", m.max_brake_mps2);
-  c.in_range("world.traffic.calm.politeness", m.politeness, 0.0, 10.0);
-  c.non_negative("world.traffic.calm.change_threshold_mps2", m.change_threshold_mps2);
-  c.positive("world.traffic.calm.safe_decel_mps2", m.safe_decel_mps2);
-  c.non_negative("world.traffic.calm.lane_change_interval_s", m.lane_change_interval_s);
+  const std::string mk = "world.traffic.calm.";
+  c.positive(mk + "time_headway_s", m.time_headway_s);
+  c.non_negative(mk + "min_gap_m", m.min_gap_m);
+  c.positive(mk + "max_accel_mps2", m.max_accel_mps2);
+  c.positive(mk + "comfort_decel_mps2", m.comfort_decel_mps2);
+  c.positive(mk + "accel_exponent", m.accel_exponent);
+  c.positive(mk + "max_brake_mps2", m.max_brake_mps2);
+  c.in_range(mk + "politeness", m.politeness, 0.0, 10.0);
+  c.non_negative(mk + "change_threshold_mps2", m.change_threshold_mps2);
+  c.positive(mk + "safe_decel_mps2", m.safe_decel_mps2);
+  c.non_negative(mk + "lane_change_interval_s", m.lane_change_interval_s);
+  c.positive(mk + "spawn_brake_mps2", m.spawn_brake_mps2);
+  c.non_negative(mk + "wander_amplitude_m", m.wander_amplitude_m);
+  c.positive(mk + "wander_min_period_s", m.wander_min_period_s);
+  c.ordered(mk + "wander_min_period_s", m.wander_min_period_s, mk + "wander_max_period_s",
+            m.wander_max_period_s);
+  c.positive(mk + "lane_change_duration_s", m.lane_change_duration_s);
 
   const auto& r = p.referee;
   c.positive("world.referee.speed_limit_mps", r.speed_limit_mps);
@@ -136,8 +156,6 @@ std::vector<std::string> validate(const WorldParams& p) {
   c.in_range("world.referee.straddle_max_steps", r.straddle_max_steps, 1, 1000000);
   c.in_range("world.referee.latch_steps", r.latch_steps, 1, 1000000);
   c.in_range("world.referee.strict_window_steps", r.strict_window_steps, 1, 1000);
-  c.positive("world.referee.car_length_m", r.car_length_m);
-  c.positive("world.referee.car_width_m", r.car_width_m);
   return out;
 }
 

@@ -13,14 +13,32 @@ constexpr std::size_t index_of(IncidentType t) {
   return static_cast<std::size_t>(t);
 }
 
-/// True when `d_m` lies within `half_width_m` of a lane line between two lanes.
+/// True when `d_m` lies strictly within `half_width_m` of a lane line between two lanes.
 bool on_inner_line(double d_m, const core::RoadParams& road, double half_width_m) {
   if (road.lane_count < 2) return false;
   // The nearest inner line is the only candidate: if any inner line is within the band,
   // the nearest one is.
   const double k = std::clamp(std::round(d_m / road.lane_width_m), 1.0,
                               static_cast<double>(road.lane_count - 1));
-  return std::abs(d_m - k * road.lane_width_m) <= half_width_m;
+  return std::abs(d_m - k * road.lane_width_m) < half_width_m;
+}
+
+/// The original's curvature of one block: over each three consecutive positions, 2 sin(turn)
+/// / |third - first| (unsigned); a triple with a zero step counts 0, a reversal 10^6; the
+/// sum divided by the number of triples.
+constexpr double kReversalCurvature = 1e6;
+
+double triple_curvature(core::Vec2 a, core::Vec2 b, core::Vec2 c) {
+  const core::Vec2 r1 = b - a;
+  const core::Vec2 r2 = c - b;
+  const double n1 = core::norm(r1);
+  const double n2 = core::norm(r2);
+  if (n1 == 0.0 || n2 == 0.0) return 0.0;
+  const double chord = core::norm(c - a);
+  const double cos_turn = std::clamp(core::dot(r1, r2) / (n1 * n2), -1.0, 1.0);
+  if (chord == 0.0 || cos_turn <= -1.0) return kReversalCurvature;
+  const double sin_turn = std::abs(core::cross(r1, r2)) / (n1 * n2);
+  return 2.0 * sin_turn / chord;
 }
 
 void require(bool ok, const char* what) {
@@ -53,8 +71,9 @@ Referee::Referee(const RefereeParams& params, double step_s, const core::RoadPar
   require(p_.latch_steps >= 1, "referee.latch_steps must be at least 1");
   require(p_.strict_window_steps >= 1, "referee.strict_window_steps must be at least 1");
   require(road_.lane_width_m > 0.0, "road.lane_width_m must be positive");
-  // Curvature needs 3 positions, the strict jerk 3w + 1.
-  const auto needed = static_cast<std::size_t>(std::max(3, 3 * p_.strict_window_steps + 1));
+  // A rubric block needs its positions, the strict jerk 3w + 1.
+  const auto needed = static_cast<std::size_t>(
+      std::max(std::max(3, 3 * p_.strict_window_steps + 1), p_.accel_block_steps));
   ring_.assign(std::bit_ceil(needed), core::Vec2{});
   ring_mask_ = ring_.size() - 1;
 }
@@ -72,7 +91,8 @@ core::Vec2 Referee::recent(long back) const {
 }
 
 void Referee::count(IncidentType type, const EgoFrame& f, double value) {
-  if (latched(type)) return;
+  const bool per_block = type == IncidentType::max_acceleration || type == IncidentType::max_jerk;
+  if (!per_block && latched(type)) return;
   incidents_.push_back({type, f.t_s, f.s_m, core::lane_of(f.d_m, road_), value});
   latch_until_step_[index_of(type)] = step_ + p_.latch_steps;
   ++counts_[index_of(type)];
@@ -96,36 +116,46 @@ void Referee::observe(const EgoFrame& f) {
   // Per-step rules.
   if (f.collided_with) count(IncidentType::collision, f, static_cast<double>(*f.collided_with));
   if (f.speed_mps > p_.speed_limit_mps) count(IncidentType::speeding, f, f.speed_mps);
-  straddle_steps_ =
-      on_inner_line(f.d_m, road_, p_.line_band_half_width_m) ? straddle_steps_ + 1 : 0;
-  if (f.d_m < p_.min_d_m || f.d_m > p_.max_d_m || straddle_steps_ > p_.straddle_max_steps) {
-    count(IncidentType::outside_lane, f, f.d_m);
+  if (outside_lane(f.d_m, straddle_steps_)) count(IncidentType::outside_lane, f, f.d_m);
+  if (outside_lane(f.exact_d_m, exact_straddle_steps_) && step_ >= exact_latch_until_step_) {
+    ++exact_outside_lane_;
+    exact_latch_until_step_ = step_ + p_.latch_steps;
   }
 
-  const double curvature =
-      ring_filled_ >= 3 ? core::menger_curvature(recent(2), recent(1), recent(0)) : 0.0;
-  update_rubric(f, curvature);
+  update_rubric(f);
   update_strict();
   ++step_;
 }
 
-void Referee::update_rubric(const EgoFrame& f, double curvature) {
+bool Referee::outside_lane(double d_m, int& straddle) const {
+  // CarAIControl: off the road counts at once (the band timer holds); in a line band the
+  // timer runs, elsewhere it resets; more than straddle_max_steps in a band counts.
+  if (d_m < p_.min_d_m || d_m > p_.max_d_m) return true;
+  straddle = on_inner_line(d_m, road_, p_.line_band_half_width_m) ? straddle + 1 : 0;
+  return straddle > p_.straddle_max_steps;
+}
+
+void Referee::update_rubric(const EgoFrame& f) {
   block_speed_sum_ += f.speed_mps;
-  block_curvature_sum_ += curvature;
   if (++block_fill_ < p_.accel_block_steps) return;
 
-  const double block_s = p_.accel_block_steps * step_s_;
-  const double mean_speed = block_speed_sum_ / p_.accel_block_steps;
-  const double mean_curvature = block_curvature_sum_ / p_.accel_block_steps;
+  // The block's positions are the newest accel_block_steps of the ring (it holds enough).
+  const int n = p_.accel_block_steps;
+  const long have = std::min<long>(ring_filled_, n);
+  double curvature_sum = 0.0;
+  for (long k = 0; k + 2 < have; ++k) {
+    curvature_sum += triple_curvature(recent(have - 1 - k), recent(have - 2 - k), recent(have - 3 - k));
+  }
+  const double mean_curvature = have > 2 ? curvature_sum / static_cast<double>(have - 2) : 0.0;
+  const double block_s = n * step_s_;
+  const double mean_speed = block_speed_sum_ / n;
   block_fill_ = 0;
   block_speed_sum_ = 0.0;
-  block_curvature_sum_ = 0.0;
-  const std::optional<double> prev_speed = prev_block_mean_speed_;
+  const double prev_speed = prev_block_mean_speed_;
   prev_block_mean_speed_ = mean_speed;
-  if (!prev_speed) return;  // the first block has no total
 
-  const double tangential = (mean_speed - *prev_speed) / block_s;
-  const double normal = mean_speed * mean_speed * std::abs(mean_curvature);
+  const double tangential = (mean_speed - prev_speed) / block_s;
+  const double normal = mean_speed * mean_speed * mean_curvature;
   const double total = std::sqrt(tangential * tangential + normal * normal);
   peaks_.acceleration_mps2 = std::max(peaks_.acceleration_mps2, total);
   if (total >= p_.max_accel_mps2) count(IncidentType::max_acceleration, f, total);
@@ -135,11 +165,10 @@ void Referee::update_rubric(const EgoFrame& f, double curvature) {
   const double group_mean = group_sum_ / p_.jerk_group_blocks;
   group_fill_ = 0;
   group_sum_ = 0.0;
-  const std::optional<double> prev_mean = prev_group_mean_;
+  const double prev_mean = prev_group_mean_;
   prev_group_mean_ = group_mean;
-  if (!prev_mean) return;
 
-  const double jerk = std::abs(group_mean - *prev_mean) / (p_.jerk_group_blocks * block_s);
+  const double jerk = std::abs(group_mean - prev_mean) / (p_.jerk_group_blocks * block_s);
   peaks_.jerk_mps3 = std::max(peaks_.jerk_mps3, jerk);
   if (jerk >= p_.max_jerk_mps3) count(IncidentType::max_jerk, f, jerk);
 }

@@ -122,6 +122,7 @@ RunReport summarize(const World& world, const LaneTracker& lanes, std::vector<do
   report.best_incident_free_m = ref.best_incident_free_m();
   report.incidents = ref.incidents();
   report.incident_counts = ref.counts();
+  report.exact_outside_lane = ref.exact_outside_lane_count();
   report.peak = ref.peaks();
   report.lane_changes = lanes.lane_changes();
   report.time_in_lane_s = lanes.time_in_lane_s();

@@ -10,8 +10,9 @@ namespace overtake::sim {
 namespace {
 
 constexpr std::uint64_t kTrafficStream = 10;
-// Cars farther apart than this along the road cannot touch (footprints are ~5 m long).
-constexpr double kCollisionCullM = 12.0;
+/// The start position is rounded to this (m), and its heading to this (degrees).
+constexpr double kStartPositionStepM = 0.01;
+constexpr double kStartHeadingStepDeg = 1.0;
 
 double yaw_0_2pi(double yaw) {
   double y = std::fmod(yaw, 2.0 * core::kPi);
@@ -19,20 +20,19 @@ double yaw_0_2pi(double yaw) {
   return y;
 }
 
+double round_to(double v, double step) { return std::round(v / step) * step; }
+
 }  // namespace
 
 World::World(const core::Map& map, const core::ReferenceLine& line, const WorldParams& params,
              TrafficProfile profile, std::uint64_t seed)
     : line_(line),
+      chords_(map),
       params_(params),
-      traffic_(map, line, params.traffic, params.road, profile,
+      traffic_(map, line, chords_, params.traffic, params.road, profile,
                core::derive_seed(seed, kTrafficStream)),
       referee_(params.referee, params.step_s, params.road) {
-  const core::FrenetPoint start{line.wrap_s(params.ego.start_s_m), params.ego.start_d_m};
-  ego_.position = line.to_cartesian(start);
-  ego_.frenet = line.to_frenet(ego_.position, start.s_m);
-  ego_.yaw_rad = line.frame(start.s_m).heading_rad;
-  ego_.speed_mps = 0.0;
+  place_ego({params.ego.start_s_m, params.ego.start_d_m});
   traffic_.place_initial(ego_view());
 }
 
@@ -50,18 +50,37 @@ World::World(const core::Map& map, const core::ReferenceLine& line, const WorldP
   events_ = scenario.events;
   if (scenario.ego_speed_mps > 0.0) {
     ego_.speed_mps = scenario.ego_speed_mps;
+    referee_.set_initial_speed(scenario.ego_speed_mps);
     const double ds = scenario.ego_speed_mps * params_.step_s;
     const auto points = static_cast<int>(std::lround(1.0 / params_.step_s));
     std::vector<core::Vec2> path;
     for (int i = 1; i <= points; ++i) {
-      path.push_back(line_.to_cartesian({ego_.frenet.s_m + ds * i, scenario.ego_d_m}));
+      path.push_back(line_.to_cartesian({ego_.frenet.s_m + ds * i, ego_.frenet.d_m}));
     }
     apply_path(std::move(path));
   }
 }
 
+void World::place_ego(core::FrenetPoint start) {
+  // Where the original's scene puts the car: the chord point of the start s and d, on whole
+  // centimetres, facing along the chord to a whole degree.
+  const core::Vec2 at = chords_.to_cartesian(start);
+  ego_.position = {round_to(at.x, kStartPositionStepM), round_to(at.y, kStartPositionStepM)};
+  ego_.yaw_rad = core::deg_to_rad(
+      round_to(core::rad_to_deg(chords_.chord_heading_rad(start.s_m)), kStartHeadingStepDeg));
+  ego_.speed_mps = 0.0;
+  ego_.closest_waypoint = chords_.closest(ego_.position);
+  ego_.frenet = line_.to_frenet(ego_.position, line_.wrap_s(start.s_m));
+  update_ego_frenet();
+}
+
+void World::update_ego_frenet() {
+  ego_.closest_waypoint = chords_.closest(ego_.position, ego_.closest_waypoint);
+  ego_.map_frenet = chords_.to_frenet(ego_.position, ego_.closest_waypoint);
+}
+
 EgoView World::ego_view() const {
-  return {ego_.frenet.s_m, ego_.frenet.d_m, ego_.speed_mps};
+  return {ego_footprint(), ego_.speed_mps, ego_.frenet, ego_.map_frenet, ego_.closest_waypoint};
 }
 
 core::OrientedBox World::ego_footprint() const {
@@ -70,11 +89,12 @@ core::OrientedBox World::ego_footprint() const {
 
 core::Telemetry World::telemetry() const {
   core::Telemetry t;
-  t.ego = {ego_.position, yaw_0_2pi(ego_.yaw_rad), ego_.speed_mps, ego_.frenet.s_m,
-           ego_.frenet.d_m};
+  t.ego = {ego_.position, yaw_0_2pi(ego_.yaw_rad), ego_.speed_mps, ego_.map_frenet.s_m,
+           ego_.map_frenet.d_m};
   t.previous_path.assign(queue_.begin(), queue_.end());
   if (!queue_.empty()) {
-    t.end_path = line_.to_frenet(queue_.back(), ego_.frenet.s_m);
+    // The original measures the end of the path from the ego's closest waypoint.
+    t.end_path = chords_.to_frenet(queue_.back(), ego_.closest_waypoint);
   }
   t.cars.reserve(traffic_.cars().size());
   for (const TrafficCar& c : traffic_.cars()) t.cars.push_back(traffic_.observe(c));
@@ -88,15 +108,6 @@ void World::apply_path(std::vector<core::Vec2> path) {
   queue_.assign(kept.begin(), kept.end());
 }
 
-std::optional<int> World::collision() const {
-  const core::OrientedBox ego_box = ego_footprint();
-  for (const TrafficCar& c : traffic_.cars()) {
-    if (std::abs(line_.s_ahead(ego_.frenet.s_m, c.s_m)) > kCollisionCullM) continue;
-    if (core::boxes_overlap(ego_box, traffic_.footprint(c))) return c.id;
-  }
-  return std::nullopt;
-}
-
 void World::step() {
   while (next_event_ < events_.size() && events_[next_event_].t_s <= time_s() + 1e-9) {
     traffic_.apply_event(events_[next_event_++]);
@@ -104,7 +115,8 @@ void World::step() {
   // Traffic decides from the frame before this step, then moves.
   traffic_.step(ego_view(), params_.step_s);
 
-  // The ego's perfect controller: onto the next point, facing the one after it.
+  // The ego's perfect controller: onto the next point, facing the one after it. With one
+  // point left the car stays where it is and the point is dropped.
   if (queue_.size() >= 2) {
     const core::Vec2 next = queue_.front();
     queue_.pop_front();
@@ -113,13 +125,16 @@ void World::step() {
     ego_.position = next;
     if (!(after == next)) ego_.yaw_rad = std::atan2(after.y - next.y, after.x - next.x);
     ego_.frenet = line_.to_frenet(ego_.position, ego_.frenet.s_m);
+    update_ego_frenet();
   } else {
+    queue_.clear();
     ego_.speed_mps = 0.0;
   }
   ++steps_;
 
-  referee_.observe({time_s(), ego_.position, ego_.speed_mps, ego_.frenet.s_m, ego_.frenet.d_m,
-                    collision()});
+  const std::optional<int> touched = traffic_.resolve_contacts(ego_view());
+  referee_.observe({time_s(), ego_.position, ego_.speed_mps, ego_.map_frenet.s_m,
+                    ego_.map_frenet.d_m, ego_.frenet.d_m, touched});
 }
 
 }  // namespace overtake::sim

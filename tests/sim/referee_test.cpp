@@ -36,17 +36,20 @@ std::vector<Incident> of_type(const Referee& r, IncidentType t) {
 }
 
 /// Drives the ego along a straight road on +x: each step advances x by speed * dt, then the
-/// referee sees the frame. d is given directly (it does not move the position).
+/// referee sees the frame. d is given directly (it does not move the position). Unless
+/// `from_rest`, the car was already going at its first step's speed.
 struct StraightDriver {
   Referee referee{RefereeParams{}, kDt};
   double x_m = 0.0;
   long steps = 0;
+  bool from_rest = false;
 
   void step(double speed_mps, double d_m = kLaneCentreD,
             std::optional<int> collided_with = std::nullopt) {
+    if (steps == 0 && !from_rest) referee.set_initial_speed(speed_mps);
     x_m += speed_mps * kDt;
     ++steps;
-    referee.observe({steps * kDt, {x_m, 0.0}, speed_mps, x_m, d_m, collided_with});
+    referee.observe({steps * kDt, {x_m, 0.0}, speed_mps, x_m, d_m, d_m, collided_with});
   }
   void hold(double speed_mps, double seconds, double d_m = kLaneCentreD) {
     const long n = std::lround(seconds / kDt);
@@ -217,7 +220,8 @@ TEST(RefereeAcceleration, ConstantAccelerationReadsTheSameUnderBothRules) {
   const Peaks& pk = drv.referee.peaks();
   EXPECT_NEAR(pk.acceleration_mps2, 2.0, kFigureTol);
   EXPECT_NEAR(pk.strict_acceleration_mps2, 2.0, kFigureTol);
-  EXPECT_NEAR(pk.jerk_mps3, 0.0, kFigureTol);
+  // The original's first group of totals compares with 0: about 2 m/s^3 once, then 0.
+  EXPECT_LT(pk.jerk_mps3, 2.0);
   EXPECT_TRUE(drv.referee.incidents().empty());
 }
 
@@ -225,19 +229,40 @@ TEST(RefereeAcceleration, CircleGivesNormalAcceleration) {
   constexpr double kRadius = 150.0;
   constexpr double kSpeed = 20.0;
   Referee r{RefereeParams{}, kDt};
+  r.set_initial_speed(kSpeed);
   for (int i = 1; i <= 500; ++i) {
     const double angle = kSpeed * i * kDt / kRadius;
     const core::Vec2 p{kRadius * std::sin(angle), kRadius * (1.0 - std::cos(angle))};
-    r.observe({i * kDt, p, kSpeed, kRadius * angle, kLaneCentreD, std::nullopt});
+    r.observe({i * kDt, p, kSpeed, kRadius * angle, kLaneCentreD, kLaneCentreD, std::nullopt});
   }
   const double expected = kSpeed * kSpeed / kRadius;  // 2.67 m/s^2
   EXPECT_NEAR(r.peaks().acceleration_mps2, expected, kCircleRelTol * expected);
   EXPECT_NEAR(r.peaks().strict_acceleration_mps2, expected, kCircleRelTol * expected);
-  EXPECT_LT(r.peaks().jerk_mps3, 1.0);
+  // The first group of totals compares with 0 (the original's start): once, 2.67 m/s^3.
+  EXPECT_NEAR(r.peaks().jerk_mps3, expected, kCircleRelTol * expected);
   EXPECT_TRUE(r.incidents().empty());
 }
 
-TEST(RefereeAcceleration, SustainedHardAccelerationCountsOncePerSecond) {
+/// The rubric's peak acceleration after one block at 10 m/s, from rest or already moving.
+double first_block_peak(bool from_rest, int* counted) {
+  StraightDriver drv;
+  drv.from_rest = from_rest;
+  drv.hold(10.0, 0.2);
+  *counted = count_of(drv.referee, IncidentType::max_acceleration);
+  return drv.referee.peaks().acceleration_mps2;
+}
+
+TEST(RefereeAcceleration, TheFirstBlockComparesWithRest) {
+  // The original's first block compares its mean speed with 0: a car that is already
+  // moving when the referee starts reads a jump.
+  int counted = 0;
+  EXPECT_NEAR(first_block_peak(true, &counted), 10.0 / 0.2, 1e-9);
+  EXPECT_EQ(counted, 1);
+  EXPECT_NEAR(first_block_peak(false, &counted), 0.0, 1e-9);
+  EXPECT_EQ(counted, 0);
+}
+
+TEST(RefereeAcceleration, SustainedHardAccelerationCountsEveryBlock) {
   RefereeParams p;
   p.speed_limit_mps = 1000.0;  // this test is about acceleration only
   Referee r{p, kDt};
@@ -246,10 +271,11 @@ TEST(RefereeAcceleration, SustainedHardAccelerationCountsOncePerSecond) {
   for (int i = 1; i <= 150; ++i) {  // 3 s at 12 m/s^2
     v += 12.0 * kDt;
     x += v * kDt;
-    r.observe({i * kDt, {x, 0.0}, v, x, kLaneCentreD, std::nullopt});
+    r.observe({i * kDt, {x, 0.0}, v, x, kLaneCentreD, kLaneCentreD, std::nullopt});
   }
-  // Block totals from t = 0.4 s, every 0.2 s; latched for 1 s: at 0.4, 1.4, 2.4 s.
-  EXPECT_EQ(count_of(r, IncidentType::max_acceleration), 3);
+  // Not latched: every block at or over the limit counts. The first block (to 0.2 s)
+  // compares its mean speed, 1.32 m/s, with rest: 6.6 m/s^2; the 14 others read 12.
+  EXPECT_EQ(count_of(r, IncidentType::max_acceleration), 14);
   EXPECT_NEAR(r.peaks().acceleration_mps2, 12.0, 1e-6);
   EXPECT_NEAR(r.incidents().front().t_s, 0.4, 1e-9);
   EXPECT_NEAR(r.incidents().front().value, 12.0, 1e-6);
@@ -267,7 +293,7 @@ Referee ramp(double jerk) {
     a += jerk * kDt;
     v += a * kDt;
     x += v * kDt;
-    r.observe({i * kDt, {x, 0.0}, v, x, kLaneCentreD, std::nullopt});
+    r.observe({i * kDt, {x, 0.0}, v, x, kLaneCentreD, kLaneCentreD, std::nullopt});
   }
   return r;
 }
@@ -275,19 +301,20 @@ Referee ramp(double jerk) {
 TEST(RefereeJerk, RampAboveTheLimitCounts) {
   const Referee r = ramp(12.0);
   EXPECT_EQ(count_of(r, IncidentType::max_jerk), 1);
-  EXPECT_NEAR(r.peaks().jerk_mps3, 12.0, 1e-6);
-  // Jerk is evaluated at the end of the second group of totals (block 11, t = 2.2 s).
+  // The first group (to 1 s) compares with 0 and reads 4.9; the second (to 2 s) reads 11.94
+  // (its first block compared with rest, so slightly under 12).
+  EXPECT_NEAR(r.peaks().jerk_mps3, 11.94, 0.01);
   const std::vector<Incident> jerks = of_type(r, IncidentType::max_jerk);
   ASSERT_EQ(jerks.size(), 1u);
-  EXPECT_NEAR(jerks.front().t_s, 2.2, 1e-9);
-  EXPECT_NEAR(jerks.front().value, 12.0, 1e-6);
+  EXPECT_NEAR(jerks.front().t_s, 2.0, 1e-9);
+  EXPECT_NEAR(jerks.front().value, 11.94, 0.01);
   EXPECT_GT(r.peaks().strict_jerk_mps3, 11.0);
 }
 
 TEST(RefereeJerk, RampBelowTheLimitDoesNot) {
   const Referee r = ramp(8.0);
   EXPECT_EQ(count_of(r, IncidentType::max_jerk), 0);
-  EXPECT_NEAR(r.peaks().jerk_mps3, 8.0, 1e-6);
+  EXPECT_NEAR(r.peaks().jerk_mps3, 7.96, 0.01);
 }
 
 // --- collisions -------------------------------------------------------------------------
@@ -295,13 +322,14 @@ TEST(RefereeJerk, RampBelowTheLimitDoesNot) {
 TEST(RefereeCollision, DrivingThroughAParkedCarCountsOncePerSecondOfOverlap) {
   constexpr int kCarId = 7;
   constexpr double kSpeed = 3.0;
-  const RefereeParams p;
-  const core::OrientedBox parked{{100.0, 0.0}, 0.0, p.car_length_m, p.car_width_m};
+  constexpr double kLength = 4.7;
+  constexpr double kWidth = 1.9;
+  const core::OrientedBox parked{{100.0, 0.0}, 0.0, kLength, kWidth};
   StraightDriver drv;
   long overlap_steps = 0;
   while (drv.x_m < 120.0) {
     const double next_x = drv.x_m + kSpeed * kDt;
-    const core::OrientedBox ego{{next_x, 0.0}, 0.0, p.car_length_m, p.car_width_m};
+    const core::OrientedBox ego{{next_x, 0.0}, 0.0, kLength, kWidth};
     const bool hit = core::boxes_overlap(ego, parked);
     if (hit) ++overlap_steps;
     drv.step(kSpeed, kLaneCentreD, hit ? std::optional<int>(kCarId) : std::nullopt);
@@ -317,7 +345,7 @@ TEST(RefereeCollision, DrivingThroughAParkedCarCountsOncePerSecondOfOverlap) {
     EXPECT_EQ(i.value, kCarId);
     EXPECT_EQ(i.lane, 1);
   }
-  EXPECT_NEAR(drv.referee.incidents().front().s_m, 100.0 - p.car_length_m, kSpeed * kDt);
+  EXPECT_NEAR(drv.referee.incidents().front().s_m, 100.0 - kLength, kSpeed * kDt);
 }
 
 // --- incident-free distance -------------------------------------------------------------
@@ -383,11 +411,52 @@ TEST(RefereeStrictNow, OnACircleItIsNormal) {
   Referee r{RefereeParams{}, kDt};
   for (int i = 0; i < 100; ++i) {
     const double a = kSpeed * kDt * i / kRadius;
-    r.observe({i * kDt, {kRadius * std::cos(a), kRadius * std::sin(a)}, kSpeed, 0.0, kLaneCentreD, {}});
+    r.observe({i * kDt, {kRadius * std::cos(a), kRadius * std::sin(a)}, kSpeed, 0.0, kLaneCentreD,
+               kLaneCentreD, {}});
   }
   const StrictFigures f = r.current_strict();
   EXPECT_NEAR(f.normal_mps2, kSpeed * kSpeed / kRadius, kCircleRelTol * kSpeed * kSpeed / kRadius);
   EXPECT_NEAR(f.tangential_mps2, 0.0, 1e-6);
+}
+
+
+// --- the original's ways of measuring ------------------------------------------------------
+
+TEST(RefereeAcceleration, BlockCurvatureIsUnsignedLikeTheOriginals) {
+  // A zigzag whose signed curvatures cancel within a block: the original adds each triple's
+  // unsigned curvature, so the normal acceleration does not vanish.
+  RefereeParams p;
+  p.speed_limit_mps = 1000.0;
+  Referee r{p, kDt};
+  r.set_initial_speed(20.0);
+  for (int i = 1; i <= 20; ++i) {
+    const core::Vec2 at{0.4 * i, (i % 2 == 0) ? 0.0 : 0.01};
+    r.observe({i * kDt, at, 20.0, at.x, kLaneCentreD, kLaneCentreD, std::nullopt});
+  }
+  EXPECT_GT(r.peaks().acceleration_mps2, 20.0);
+}
+
+TEST(RefereeOutsideLane, TheBandTimerHoldsWhileOffTheRoad) {
+  // Off the road counts at once and does not reset the timer of a line band.
+  StraightDriver drv;
+  drv.hold(20.0, 2.0, 7.5);  // 100 steps in the band
+  drv.step(20.0, 11.5);      // off the road: one count
+  drv.hold(20.0, 1.1, 7.5);  // 55 more steps in the band: past 150 in all
+  EXPECT_EQ(count_of(drv.referee, IncidentType::outside_lane), 2);
+}
+
+TEST(RefereeOutsideLane, TheExactDIsCountedBesideTheRubric) {
+  Referee r{RefereeParams{}, kDt};
+  r.set_initial_speed(20.0);
+  double x = 0.0;
+  for (int i = 1; i <= 100; ++i) {
+    x += 20.0 * kDt;
+    // The original's d (on the chords) stays in the lane; the exact d crosses the edge.
+    r.observe({i * kDt, {x, 0.0}, 20.0, x, 10.9, 11.4, std::nullopt});
+  }
+  EXPECT_EQ(count_of(r, IncidentType::outside_lane), 0);
+  EXPECT_EQ(r.exact_outside_lane_count(), 2);  // latched like the rubric: steps 1 and 51
+  EXPECT_TRUE(r.incidents().empty());
 }
 
 }  // namespace

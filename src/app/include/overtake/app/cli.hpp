@@ -28,6 +28,7 @@ Subcommand register_bench(CLI::App& app);
 Subcommand register_serve(CLI::App& app);
 Subcommand register_sim(CLI::App& app);
 Subcommand register_view(CLI::App& app);
+Subcommand register_calibrate(CLI::App& app);
 
 /// Whether progress lines may be drawn (stderr is a terminal).
 [[nodiscard]] bool stderr_is_terminal();

@@ -64,6 +64,9 @@ struct DriveOptions {
   std::optional<std::filesystem::path> record;
   /// Serve the live view of the run, which then goes at 1x real time.
   std::optional<LiveOptions> live;
+  /// Sees every telemetry the planner receives, with the world time (not a flag: for
+  /// `calibrate` and tests).
+  std::function<void(double t_s, const core::Telemetry& telemetry)> telemetry_tap;
 };
 
 /// Checks flag values and names (UsageError naming the flag).

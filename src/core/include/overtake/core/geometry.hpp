@@ -2,6 +2,7 @@
 // Plain value types for planar geometry and Frenet coordinates.
 
 #include <cmath>
+#include <optional>
 
 namespace overtake::core {
 
@@ -43,6 +44,22 @@ struct OrientedBox {
 
 /// True when the two rectangles overlap (separating-axis test); touching edges count.
 [[nodiscard]] bool boxes_overlap(const OrientedBox& a, const OrientedBox& b);
+
+/// How two overlapping rectangles interpenetrate: the shortest push that separates them.
+struct Penetration {
+  Vec2 normal;          ///< unit, pointing from the first box towards the second
+  double depth_m = 0.0; ///< moving the second box this far along `normal` separates them
+};
+
+/// The penetration of two rectangles (separating-axis test, smallest overlap over the four
+/// axes); nullopt when they do not overlap. Touching edges give depth 0.
+[[nodiscard]] std::optional<Penetration> box_penetration(const OrientedBox& a,
+                                                         const OrientedBox& b);
+
+/// Distance along a ray from `origin` in the unit direction `direction` to where it enters
+/// the rectangle; 0 when the origin is inside it; nullopt when the ray misses it.
+[[nodiscard]] std::optional<double> ray_box_distance(Vec2 origin, Vec2 direction,
+                                                     const OrientedBox& box);
 
 /// Curvature (1/m) of the circle through three points, signed positive for a left turn;
 /// 0 when two of them coincide or they are collinear.

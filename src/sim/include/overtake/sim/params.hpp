@@ -13,36 +13,86 @@ namespace overtake::sim {
 
 /// The ego car.
 struct EgoParams {
-  double start_s_m = 124.8336;   ///< where it starts, at rest (the original's s)
-  double start_d_m = 6.164833;   ///< middle lane, as in the original
-  double length_m = 4.7;         ///< (ours) footprint for collisions
+  /// Where it starts, at rest: s and d as the original reports them at the start (measured on
+  /// the waypoint chords). The position is the chord point there rounded to whole centimetres,
+  /// the yaw the chord's heading rounded to a whole degree: on the original map exactly the
+  /// original's start (x 909.48, y 1128.67, yaw 0).
+  double start_s_m = 124.8336;
+  double start_d_m = 6.164833;
+  double length_m = 4.7;         ///< (ours) its body, for contact: the original's collider size is a scene setting
   double width_m = 1.9;          ///< (ours)
   /// A new path's first point is dropped when the car stands on it: within this distance.
   double stand_on_tolerance_m = 1e-3;
   friend bool operator==(const EgoParams&, const EgoParams&) = default;
 };
 
-/// Following and lane changes of the faithful (original) traffic profile.
+/// Where traffic cars are put around the ego (the original's CarAIControl.Spawn and
+/// CarTraffic's batches). Speeds are the cars' speed caps.
+struct PlacementParams {
+  double despawn_distance_m = 200.0;     ///< farther than this from the ego: placed again
+  double behind_probability = 0.5;
+  int behind_min_waypoints = 2;          ///< behind the ego's closest waypoint ...
+  int behind_max_waypoints = 3;
+  int ahead_min_waypoints = 4;           ///< ... or ahead of it
+  int ahead_max_waypoints = 5;
+  double behind_min_speed_mps = core::mph_to_mps(50.0);
+  double behind_max_speed_mps = core::mph_to_mps(60.0);
+  double ahead_min_speed_mps = core::mph_to_mps(40.0);
+  double ahead_max_speed_mps = core::mph_to_mps(50.0);
+  double min_spawn_distance_m = 6.0;     ///< a spot closer than this to another car is drawn again
+  int max_spawn_attempts = 500;
+  int batch_min_frames = 20;             ///< a batch every 20-60 frames ...
+  int batch_max_frames = 60;
+  int batch_min_cars = 1;                ///< ... places 1-3 waiting cars
+  int batch_max_cars = 3;
+  friend bool operator==(const PlacementParams&, const PlacementParams&) = default;
+};
+
+/// The faithful (original) traffic profile: the original's CarAIControl driving a car body.
+/// Numbers the original's source leaves to its scene (engine, drag, brakes, steering
+/// response, wander) are (ours) and calibrated against telemetry recorded from it.
 struct FaithfulTrafficParams {
-  /// Reaction distance = gain * (own cruise speed in mph - leader's speed in m/s), in metres
-  /// (the original's mixed units, 10/20 m per unit), clamped to [min, max].
-  double reaction_gain_m = 0.5;
-  double min_reaction_m = 10.0;
-  double max_reaction_m = 20.0;
-  double ego_reaction_m = 10.0;    ///< when the vehicle ahead is the ego (not a car)
-  double brake_mps2 = 8.0;         ///< (ours) full braking inside the reaction distance
-  double accel_mps2 = 3.0;         ///< (ours) acceleration back to cruise speed
+  // Start: the cars wait off the road until the batches place them.
+  double parked_d_m = -280.0;            ///< (ours) waiting cars stand this far on the divider's side ...
+  double parked_s_before_end_m = 260.0;  ///< ... around s = loop length - this, 6 m apart
+  // Speed law: throttle = (cap - speed) in mph * sensitivity, braking likewise, times a wander.
+  double accel_sensitivity_per_mph = 0.04;
+  double brake_sensitivity_per_mph = 1.0;
+  double accel_wander_amount = 0.1;      ///< throttle scaled by 1 - this + this * noise
+  double wander_rate_hz = 0.1;           ///< the noise is sampled at time * this
+  double engine_mps2 = 7.5;              ///< (ours) acceleration at full throttle
+  double drag_per_s = 0.13;              ///< (ours) deceleration per m/s of speed
+  double brake_mps2 = 8.0;               ///< (ours) deceleration at full brake
+  // Following: one ray straight ahead from the front of the car.
+  double reaction_gain_m = 0.5;          ///< reaction distance = this * (own cap in mph - body's speed in m/s)
+  double no_body_reaction_m = 10.0;      ///< reaction distance when the ray meets no body
+  double ray_horizon_m = 250.0;          ///< (ours) a ray still on the road this far meets nothing
+  double scenery_margin_m = 3.0;         ///< (ours) a ray this far beyond the road's edges meets scenery
+  // Lane changes (each counted step: reacting, fast enough, settled, near a waypoint).
   double lane_change_min_speed_mps = core::mph_to_mps(15.0);
-  double lane_change_interval_s = 2.0;   ///< since the car's last lane change
-  double waypoint_trigger_m = 15.0;      ///< looks only within this of its next waypoint
-  double clear_gap_m = 20.0;             ///< no vehicle within this ahead or behind in s
-  int clear_steps = 50;                  ///< target lane clear for more than this many steps
-  double ego_lane_radius_m = 3.0;        ///< the ego counts in a lane when d within this of its centre
+  int lane_change_wait_steps = 100;      ///< steps since its last lane change
+  double waypoint_trigger_m = 15.0;      ///< within this of its next waypoint
+  double clear_gap_m = 20.0;             ///< a lane is clear with no car within this in s ...
+  double car_lane_half_width_m = 2.0;    ///< ... among the cars with d within this of its centre ...
+  double ego_lane_half_width_m = 3.0;    ///< ... and the ego within this
+  int clear_steps = 50;                  ///< moves after more than this many clear counted steps
+  // Steering towards the next waypoint's lane point.
+  double steer_sensitivity_per_deg = 0.05;
+  double max_steer_deg = 25.0;           ///< (ours) full steering lock
+  double wheelbase_m = 2.7;              ///< (ours)
+  double max_lateral_accel_mps2 = 6.0;   ///< (ours) grip: turning is limited to this
+  double target_reach_m = 5.0;           ///< the target waypoint advances within this + ...
+  double target_reach_per_lane_m = 4.0;  ///< ... this * lane of the car
+  double lateral_wander_m = 0.35;        ///< (ours) the target is offset by (2 noise - 1) * this
+  // After a contact with another car or the ego.
+  double avoid_time_s = 1.0;             ///< evasive action for this long:
+  double avoid_slowdown = 0.5;           ///< desired speed times this when the other is in front
   friend bool operator==(const FaithfulTrafficParams&, const FaithfulTrafficParams&) = default;
 };
 
 /// (ours) The calm profile: IDM following (Treiber et al. 2000) and MOBIL lane changes
-/// (Kesting et al. 2007), standard highway parameters.
+/// (Kesting et al. 2007), standard highway parameters; placed as the original places cars,
+/// between waypoints, with room to brake; all twelve from the start.
 struct CalmTrafficParams {
   double time_headway_s = 1.5;
   double min_gap_m = 2.0;
@@ -54,36 +104,21 @@ struct CalmTrafficParams {
   double change_threshold_mps2 = 0.2;
   double safe_decel_mps2 = 4.0;          ///< a change may not force the new follower to brake harder
   double lane_change_interval_s = 4.0;
+  /// In its lane, a spot must also leave room to brake to the other car's speed.
+  double spawn_brake_mps2 = 6.0;
+  double wander_amplitude_m = 0.3;       ///< lateral wander about the lane centre
+  double wander_min_period_s = 8.0;
+  double wander_max_period_s = 20.0;
+  double lane_change_duration_s = 3.0;   ///< minimum-jerk lateral profile (also scripted cars)
   friend bool operator==(const CalmTrafficParams&, const CalmTrafficParams&) = default;
 };
 
 /// The twelve other cars.
 struct TrafficParams {
   int car_count = 12;
-  double car_length_m = 4.7;
+  double car_length_m = 4.7;             ///< (ours) their bodies
   double car_width_m = 1.9;
-  double despawn_distance_m = 200.0;     ///< farther than this from the ego (along s): placed again
-  double behind_probability = 0.5;
-  int behind_min_waypoints = 2;
-  int behind_max_waypoints = 3;
-  int ahead_min_waypoints = 4;
-  int ahead_max_waypoints = 5;
-  double behind_min_speed_mps = core::mph_to_mps(50.0);
-  double behind_max_speed_mps = core::mph_to_mps(60.0);
-  double ahead_min_speed_mps = core::mph_to_mps(40.0);
-  double ahead_max_speed_mps = core::mph_to_mps(50.0);
-  double min_spawn_distance_m = 6.0;     ///< a spot closer than this to another car is drawn again
-  /// (ours) in its lane, a spot must also leave room to brake to the other car's speed.
-  double spawn_brake_mps2 = 6.0;
-  int max_spawn_attempts = 50;
-  int batch_min_frames = 20;
-  int batch_max_frames = 60;
-  int batch_min_cars = 1;
-  int batch_max_cars = 3;
-  double wander_amplitude_m = 0.3;       ///< (ours) lateral wander about the lane centre
-  double wander_min_period_s = 8.0;
-  double wander_max_period_s = 20.0;
-  double lane_change_duration_s = 3.0;   ///< "a few seconds"
+  PlacementParams placement;
   FaithfulTrafficParams faithful;
   CalmTrafficParams calm;
   friend bool operator==(const TrafficParams&, const TrafficParams&) = default;
@@ -102,8 +137,6 @@ struct RefereeParams {
   int straddle_max_steps = 150;          ///< in a band for more than this: outside of lane
   int latch_steps = 50;                  ///< a persisting incident counts again after this
   int strict_window_steps = 5;           ///< (ours) 0.1 s windows for the strict figures
-  double car_length_m = 4.7;             ///< (ours) footprints for collisions
-  double car_width_m = 1.9;
   friend bool operator==(const RefereeParams&, const RefereeParams&) = default;
 };
 
@@ -148,19 +181,56 @@ void describe(V& v, EgoParams& p) {
 }
 
 template <class V>
+void describe(V& v, PlacementParams& p) {
+  v("despawn_distance_m", p.despawn_distance_m);
+  v("behind_probability", p.behind_probability);
+  v("behind_min_waypoints", p.behind_min_waypoints);
+  v("behind_max_waypoints", p.behind_max_waypoints);
+  v("ahead_min_waypoints", p.ahead_min_waypoints);
+  v("ahead_max_waypoints", p.ahead_max_waypoints);
+  v("behind_min_speed_mps", p.behind_min_speed_mps);
+  v("behind_max_speed_mps", p.behind_max_speed_mps);
+  v("ahead_min_speed_mps", p.ahead_min_speed_mps);
+  v("ahead_max_speed_mps", p.ahead_max_speed_mps);
+  v("min_spawn_distance_m", p.min_spawn_distance_m);
+  v("max_spawn_attempts", p.max_spawn_attempts);
+  v("batch_min_frames", p.batch_min_frames);
+  v("batch_max_frames", p.batch_max_frames);
+  v("batch_min_cars", p.batch_min_cars);
+  v("batch_max_cars", p.batch_max_cars);
+}
+
+template <class V>
 void describe(V& v, FaithfulTrafficParams& p) {
-  v("reaction_gain_m", p.reaction_gain_m);
-  v("min_reaction_m", p.min_reaction_m);
-  v("max_reaction_m", p.max_reaction_m);
-  v("ego_reaction_m", p.ego_reaction_m);
+  v("parked_d_m", p.parked_d_m);
+  v("parked_s_before_end_m", p.parked_s_before_end_m);
+  v("accel_sensitivity_per_mph", p.accel_sensitivity_per_mph);
+  v("brake_sensitivity_per_mph", p.brake_sensitivity_per_mph);
+  v("accel_wander_amount", p.accel_wander_amount);
+  v("wander_rate_hz", p.wander_rate_hz);
+  v("engine_mps2", p.engine_mps2);
+  v("drag_per_s", p.drag_per_s);
   v("brake_mps2", p.brake_mps2);
-  v("accel_mps2", p.accel_mps2);
+  v("reaction_gain_m", p.reaction_gain_m);
+  v("no_body_reaction_m", p.no_body_reaction_m);
+  v("ray_horizon_m", p.ray_horizon_m);
+  v("scenery_margin_m", p.scenery_margin_m);
   v("lane_change_min_speed_mps", p.lane_change_min_speed_mps);
-  v("lane_change_interval_s", p.lane_change_interval_s);
+  v("lane_change_wait_steps", p.lane_change_wait_steps);
   v("waypoint_trigger_m", p.waypoint_trigger_m);
   v("clear_gap_m", p.clear_gap_m);
+  v("car_lane_half_width_m", p.car_lane_half_width_m);
+  v("ego_lane_half_width_m", p.ego_lane_half_width_m);
   v("clear_steps", p.clear_steps);
-  v("ego_lane_radius_m", p.ego_lane_radius_m);
+  v("steer_sensitivity_per_deg", p.steer_sensitivity_per_deg);
+  v("max_steer_deg", p.max_steer_deg);
+  v("wheelbase_m", p.wheelbase_m);
+  v("max_lateral_accel_mps2", p.max_lateral_accel_mps2);
+  v("target_reach_m", p.target_reach_m);
+  v("target_reach_per_lane_m", p.target_reach_per_lane_m);
+  v("lateral_wander_m", p.lateral_wander_m);
+  v("avoid_time_s", p.avoid_time_s);
+  v("avoid_slowdown", p.avoid_slowdown);
 }
 
 template <class V>
@@ -175,6 +245,11 @@ void describe(V& v, CalmTrafficParams& p) {
   v("change_threshold_mps2", p.change_threshold_mps2);
   v("safe_decel_mps2", p.safe_decel_mps2);
   v("lane_change_interval_s", p.lane_change_interval_s);
+  v("spawn_brake_mps2", p.spawn_brake_mps2);
+  v("wander_amplitude_m", p.wander_amplitude_m);
+  v("wander_min_period_s", p.wander_min_period_s);
+  v("wander_max_period_s", p.wander_max_period_s);
+  v("lane_change_duration_s", p.lane_change_duration_s);
 }
 
 template <class V>
@@ -182,27 +257,7 @@ void describe(V& v, TrafficParams& p) {
   v("car_count", p.car_count);
   v("car_length_m", p.car_length_m);
   v("car_width_m", p.car_width_m);
-  v("despawn_distance_m", p.despawn_distance_m);
-  v("behind_probability", p.behind_probability);
-  v("behind_min_waypoints", p.behind_min_waypoints);
-  v("behind_max_waypoints", p.behind_max_waypoints);
-  v("ahead_min_waypoints", p.ahead_min_waypoints);
-  v("ahead_max_waypoints", p.ahead_max_waypoints);
-  v("behind_min_speed_mps", p.behind_min_speed_mps);
-  v("behind_max_speed_mps", p.behind_max_speed_mps);
-  v("ahead_min_speed_mps", p.ahead_min_speed_mps);
-  v("ahead_max_speed_mps", p.ahead_max_speed_mps);
-  v("min_spawn_distance_m", p.min_spawn_distance_m);
-  v("spawn_brake_mps2", p.spawn_brake_mps2);
-  v("max_spawn_attempts", p.max_spawn_attempts);
-  v("batch_min_frames", p.batch_min_frames);
-  v("batch_max_frames", p.batch_max_frames);
-  v("batch_min_cars", p.batch_min_cars);
-  v("batch_max_cars", p.batch_max_cars);
-  v("wander_amplitude_m", p.wander_amplitude_m);
-  v("wander_min_period_s", p.wander_min_period_s);
-  v("wander_max_period_s", p.wander_max_period_s);
-  v("lane_change_duration_s", p.lane_change_duration_s);
+  v.section("placement", p.placement);
   v.section("faithful", p.faithful);
   v.section("calm", p.calm);
 }
@@ -220,8 +275,6 @@ void describe(V& v, RefereeParams& p) {
   v("straddle_max_steps", p.straddle_max_steps);
   v("latch_steps", p.latch_steps);
   v("strict_window_steps", p.strict_window_steps);
-  v("car_length_m", p.car_length_m);
-  v("car_width_m", p.car_width_m);
 }
 
 template <class V>

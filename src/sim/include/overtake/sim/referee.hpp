@@ -37,8 +37,9 @@ struct EgoFrame {
   core::Vec2 position;
   double speed_mps = 0.0;
   double s_m = 0.0;
-  double d_m = 0.0;
-  /// Id of a car whose footprint overlaps the ego's this step, if any.
+  double d_m = 0.0;        ///< as the original measures it (waypoint chords): the rubric's
+  double exact_d_m = 0.0;  ///< on the reference line: the extra figure
+  /// Id of a car whose body touched the ego's this step, if any.
   std::optional<int> collided_with;
 };
 
@@ -62,16 +63,25 @@ struct StrictFigures {
   friend bool operator==(const StrictFigures&, const StrictFigures&) = default;
 };
 
-/// Watches the ego step by step and counts incidents.
+/// Watches the ego step by step and counts incidents, as the original does: collision,
+/// speeding and outside-of-lane latched (counted again while they persist, once per
+/// latch_steps); acceleration counted for each block and jerk for each group at or over the
+/// limit. The lane rule is applied to the original's d; the same rule on the exact d is
+/// counted beside it as a figure (not an incident).
 class Referee {
  public:
   Referee(const RefereeParams& params, double step_s, const core::RoadParams& road = {});
 
+  /// The ego's speed before the first step (the rubric's first block compares against it;
+  /// the original starts from rest).
+  void set_initial_speed(double speed_mps) { prev_block_mean_speed_ = speed_mps; }
   /// Feeds the state after one step. Frames must come once per step, in order.
   void observe(const EgoFrame& frame);
 
   [[nodiscard]] const std::vector<Incident>& incidents() const { return incidents_; }
   [[nodiscard]] std::array<int, kIncidentTypeCount> counts() const;
+  /// Outside-of-lane counts under the same rule and latching on the exact d.
+  [[nodiscard]] int exact_outside_lane_count() const { return exact_outside_lane_; }
   [[nodiscard]] const Peaks& peaks() const { return peaks_; }
   /// Distance driven (m) since the last incident.
   [[nodiscard]] double incident_free_m() const { return incident_free_m_; }
@@ -85,9 +95,11 @@ class Referee {
  private:
   void count(IncidentType type, const EgoFrame& f, double value);
   [[nodiscard]] bool latched(IncidentType type) const;
+  /// The lane rule on one d: true when it counts (straddle: steps in a line band so far).
+  [[nodiscard]] bool outside_lane(double d_m, int& straddle) const;
   /// The position `back` steps before the newest one (0: the newest).
   [[nodiscard]] core::Vec2 recent(long back) const;
-  void update_rubric(const EgoFrame& f, double curvature);
+  void update_rubric(const EgoFrame& f);
   void update_strict();
 
   RefereeParams p_;
@@ -101,15 +113,18 @@ class Referee {
   std::array<long, kIncidentTypeCount> latch_until_step_{};  // may count again from this step
   std::array<int, kIncidentTypeCount> counts_{};
   long step_ = 0;  // index of the frame being observed
-  // rubric acceleration: block accumulation
+  // rubric acceleration: block accumulation (the block's positions are the ring's newest)
   int block_fill_ = 0;
   double block_speed_sum_ = 0.0;
-  double block_curvature_sum_ = 0.0;
-  std::optional<double> prev_block_mean_speed_;
+  double prev_block_mean_speed_ = 0.0;  // the original starts from 0
   // rubric jerk: group accumulation of block totals
   int group_fill_ = 0;
   double group_sum_ = 0.0;
-  std::optional<double> prev_group_mean_;
+  double prev_group_mean_ = 0.0;
+  // outside of lane on the exact d
+  int exact_outside_lane_ = 0;
+  long exact_latch_until_step_ = 0;
+  int exact_straddle_steps_ = 0;
   // recent positions for curvature and the strict windows: a ring whose size is a power of
   // two (allocated once), newest at `ring_head_`; `ring_filled_` of them are valid.
   std::vector<core::Vec2> ring_;

@@ -88,6 +88,9 @@ struct RunReport {
   double best_incident_free_m = 0.0;
   std::vector<Incident> incidents;
   std::array<int, kIncidentTypeCount> incident_counts{};
+  /// Outside-of-lane counts under the same rule on the exact d (the rubric uses the
+  /// original's d on the waypoint chords); a figure, not an incident.
+  int exact_outside_lane = 0;
   Peaks peak;
   int lane_changes = 0;
   std::vector<double> time_in_lane_s;  ///< index = lane

@@ -1,17 +1,20 @@
 #pragma once
-// The twelve other cars: placement and re-placement around the ego, lane keeping with a
-// small wander, following, and lane changes, in one of two profiles.
+// The twelve other cars as bodies on the road: what the world, the telemetry and the viewers
+// see of them, the profiles that drive them (faithful_traffic.hpp: the original's rules;
+// calm_traffic.hpp: ours, and scripted scenarios), and contact between bodies.
 
+#include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <optional>
 #include <string_view>
 #include <vector>
 
 #include "overtake/core/geometry.hpp"
 #include "overtake/core/map.hpp"
-#include "overtake/core/random.hpp"
 #include "overtake/core/reference_line.hpp"
 #include "overtake/core/telemetry.hpp"
+#include "overtake/core/waypoint_frenet.hpp"
 #include "overtake/sim/params.hpp"
 #include "overtake/sim/scenario.hpp"
 
@@ -19,84 +22,82 @@ namespace overtake::sim {
 
 /// How traffic behaves.
 enum class TrafficProfile {
-  faithful,  ///< the original simulator's rules (bang-bang following, gap-held lane changes)
+  faithful,  ///< the original simulator's rules
   calm,      ///< (ours) IDM following with MOBIL lane changes
 };
 
 [[nodiscard]] std::optional<TrafficProfile> parse_traffic_profile(std::string_view name);
 [[nodiscard]] std::string_view to_string(TrafficProfile p);
 
-/// The ego as traffic sees it (for following, lane-clear checks and placement).
+/// The ego as traffic sees it: a body to react to and to keep clear of.
 struct EgoView {
-  double s_m = 0.0;
-  double d_m = 0.0;
+  core::OrientedBox body;         ///< its footprint now
   double speed_mps = 0.0;
+  core::FrenetPoint frenet;       ///< on the reference line
+  core::FrenetPoint map_frenet;   ///< as the original measures it (waypoint chords)
+  std::size_t closest_waypoint = 0;
 };
 
-/// A lane change under way.
-struct LaneManoeuvre {
-  int from_lane = 0;
-  int to_lane = 0;
-  double from_d_m = 0.0;  ///< lateral position when it started
-  double elapsed_s = 0.0;  ///< time into it (its clock runs slower when the car crawls)
-  double duration_s = 0.0;
-};
-
-/// One traffic car. Position and motion in Frenet coordinates of the reference line.
+/// One traffic car as a body: where it is, where it points, how fast it goes.
 struct TrafficCar {
   int id = 0;
-  double s_m = 0.0;
-  double d_m = 0.0;
-  double speed_mps = 0.0;     ///< along its lane
-  double accel_mps2 = 0.0;    ///< along its lane, over the last step
-  double d_rate_mps = 0.0;    ///< lateral speed (dd/dt)
-  double cruise_mps = 0.0;    ///< the speed it wants to drive
-  int lane = 1;               ///< lane it keeps, or moves to during a lane change
-  std::optional<LaneManoeuvre> manoeuvre;
-  double since_lane_change_s = 1e9;
-  // faithful lane-change bookkeeping
-  std::optional<int> candidate_lane;
-  int clear_steps = 0;
-  bool held_up = false;       ///< reacting to a vehicle ahead (this step)
-  double since_held_up_s = 1e9;  ///< time since it last reacted to a vehicle ahead
-  // wander
-  double wander_phase_rad = 0.0;
-  double wander_omega_rps = 0.0;
-  double lane_offset_m = 0.0;  ///< current wander offset from the lane centre
-  /// Set for a car of a scripted scenario: it keeps its lane and speed until an event.
-  struct Script {
-    double target_speed_mps = 0.0;
-    double rate_mps2 = 3.0;       ///< how fast it reaches the target speed
-    double brake_mps2 = 0.0;      ///< braking under way ...
-    double brake_left_s = 0.0;    ///< ... for this much longer
-    int change_to_lane = -1;      ///< a lane change to start at the next step
-  };
-  std::optional<Script> script;
-  bool far = false;            ///< farther than the despawn distance; waiting to be placed again
-  core::Rng rng;               ///< this car's own random stream
+  core::Vec2 position;            ///< centre of its body
+  double heading_rad = 0.0;       ///< where its body points
+  double speed_mps = 0.0;         ///< along its heading
+  /// What sensor fusion reports as its velocity: heading * speed, except on the first frame
+  /// after it was placed, when the original reports its speed cap read as m/s.
+  core::Vec2 reported_velocity_mps;
+  core::FrenetPoint map_frenet;   ///< s and d as the original reports them (waypoint chords)
+  std::size_t closest_waypoint = 0;
+  int lane = 1;                   ///< the lane it keeps, or moves into
+  bool parked = false;            ///< waiting off the road to be placed (not a body on the road)
 };
 
-/// All traffic. Deterministic from the seed. Keeps a reference to the line and map.
+/// What drives the cars. Implementations keep their own state and publish the bodies.
+class TrafficModel {
+ public:
+  virtual ~TrafficModel() = default;
+  /// Before the first step.
+  virtual void start(const EgoView& ego) = 0;
+  /// One step of dt_s: every car decides from the frame before, then all move, then cars
+  /// far from the ego are placed again.
+  virtual void step(const EgoView& ego, double dt_s) = 0;
+  [[nodiscard]] virtual const std::vector<TrafficCar>& cars() const = 0;
+  /// A contact pushed car i by `shift_m` and left it `speed_mps` along its heading; `other`
+  /// is the body it touched (the car's reaction is the model's).
+  virtual void on_contact(std::size_t i, core::Vec2 shift_m, double speed_mps,
+                          const core::OrientedBox& other) = 0;
+};
+
+/// All traffic. Deterministic from the seed. Keeps references to the map, its line and its
+/// chords, which must outlive it.
 class Traffic {
  public:
-  Traffic(const core::Map& map, const core::ReferenceLine& line, const TrafficParams& params,
-          const core::RoadParams& road, TrafficProfile profile, std::uint64_t seed);
+  Traffic(const core::Map& map, const core::ReferenceLine& line, const core::WaypointFrenet& chords,
+          const TrafficParams& params, const core::RoadParams& road, TrafficProfile profile,
+          std::uint64_t seed);
+  ~Traffic();
+  Traffic(const Traffic&) = delete;
+  Traffic& operator=(const Traffic&) = delete;
 
-  /// Places every car before the first step (no car behind the ego in the ego's lane).
+  /// Before the first step: faithful, every car parked off the road (the first batch places
+  /// 1-3 at the first step); calm, all twelve placed around the ego.
   void place_initial(const EgoView& ego);
-  /// Advances one step of dt_s: every car decides from the current frame, then all move,
-  /// then far cars are placed again in batches.
+  /// Advances one step of dt_s (see TrafficModel::step).
   void step(const EgoView& ego, double dt_s);
+  /// Separates bodies that overlap after a step. The ego goes where its path takes it, so
+  /// only traffic is pushed: out of the ego, and pairs of cars apart; a push takes away the
+  /// speed with which they closed. Returns the id of a car that touched the ego, if any.
+  std::optional<int> resolve_contacts(const EgoView& ego);
 
-  [[nodiscard]] const std::vector<TrafficCar>& cars() const { return cars_; }
+  [[nodiscard]] const std::vector<TrafficCar>& cars() const { return model_->cars(); }
   /// A car as sensor fusion reports it (exact values; rounding is the caller's).
   [[nodiscard]] core::CarObservation observe(const TrafficCar& car) const;
   /// The car's footprint in map axes.
   [[nodiscard]] core::OrientedBox footprint(const TrafficCar& car) const;
   [[nodiscard]] TrafficProfile profile() const { return profile_; }
-
-  /// Testing hook: replaces the cars (ids are reassigned in order).
-  void set_cars(std::vector<TrafficCar> cars);
+  [[nodiscard]] TrafficModel& model() { return *model_; }
+  [[nodiscard]] const TrafficModel& model() const { return *model_; }
 
   /// Replaces the random traffic by a scenario's scripted cars: they keep their lane and
   /// speed (no following, no re-placement) until an event (apply_event) says otherwise.
@@ -108,36 +109,13 @@ class Traffic {
  private:
   const core::Map& map_;
   const core::ReferenceLine& line_;
+  const core::WaypointFrenet& chords_;
   TrafficParams params_;
   core::RoadParams road_;
   TrafficProfile profile_;
-  core::Rng spawn_rng_;
-  int frames_to_batch_ = 0;
+  std::uint64_t seed_;
   bool scripted_ = false;
-  std::vector<TrafficCar> cars_;
-  // Per-step scratch, reused so that step() does not allocate.
-  struct Vehicle {               // a car or the ego as the others see it this step
-    double s_m = 0.0;            // wrapped
-    double speed_mps = 0.0;
-    double accel_mps2 = 0.0;     // over the last step
-    unsigned follow_lanes = 0;   // lanes it occupies for following (bit per lane)
-    unsigned now_lanes = 0;      // lanes it counts in for lane-clear checks
-    int car = -1;                // index into cars_, -1 for the ego
-  };
-  struct Decision {              // what a car does this step, from the previous frame
-    double accel_mps2 = 0.0;     // applied
-    double idm_mps2 = 0.0;       // (calm) plain IDM, unclamped, for MOBIL
-    double new_speed_mps = 0.0;
-    int leader = -1;             // index into vehicles_, -1 when none
-    double leader_gap_m = 0.0;   // centre to centre along s
-    int change_to_lane = -1;     // start a lane change into this lane, -1 for none
-  };
-  std::vector<Vehicle> vehicles_;
-  std::vector<Decision> decisions_;
-  std::vector<core::Vec2> positions_;
-  double ego_prev_speed_mps_ = -1.0;  // the ego's speed at the previous step (-1: none yet)
-  // implementation helpers live in traffic.cpp
-  friend struct TrafficImpl;
+  std::unique_ptr<TrafficModel> model_;
 };
 
 }  // namespace overtake::sim

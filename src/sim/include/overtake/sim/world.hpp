@@ -9,6 +9,7 @@
 #include "overtake/core/map.hpp"
 #include "overtake/core/reference_line.hpp"
 #include "overtake/core/telemetry.hpp"
+#include "overtake/core/waypoint_frenet.hpp"
 #include "overtake/sim/params.hpp"
 #include "overtake/sim/referee.hpp"
 #include "overtake/sim/scenario.hpp"
@@ -21,7 +22,9 @@ struct EgoState {
   core::Vec2 position;
   double yaw_rad = 0.0;
   double speed_mps = 0.0;
-  core::FrenetPoint frenet;
+  core::FrenetPoint frenet;       ///< on the reference line
+  core::FrenetPoint map_frenet;   ///< as the original measures and reports it (waypoint chords)
+  std::size_t closest_waypoint = 0;
 };
 
 /// One simulated world. The map and line must outlive it.
@@ -32,6 +35,8 @@ class World {
   /// A scripted world: the scenario's start state, its cars instead of random traffic, and
   /// its events at their times. An ego starting at speed has one second of path queued
   /// along its lane at that speed.
+  /// The ego starts at rest at the chord point of (ego.start_s_m, ego.start_d_m), rounded to
+  /// whole centimetres, facing the chord's heading rounded to a whole degree.
   World(const core::Map& map, const core::ReferenceLine& line, const WorldParams& params,
         const Scenario& scenario);
 
@@ -40,7 +45,9 @@ class World {
   /// Takes a planner's path: rounds it as the original reads it, then trims it by the
   /// original's rule (path_queue.hpp) and makes the rest the ego's queue.
   void apply_path(std::vector<core::Vec2> path);
-  /// Advances one step: traffic decides and moves, the ego moves, the referee checks.
+  /// Advances one step: traffic decides and moves, the ego moves onto its next point (with
+  /// one point left it stays and the point is dropped), bodies that touch are pushed apart,
+  /// the referee checks.
   void step();
 
   [[nodiscard]] double time_s() const { return static_cast<double>(steps_) * params_.step_s; }
@@ -52,14 +59,18 @@ class World {
   [[nodiscard]] const Referee& referee() const { return referee_; }
   [[nodiscard]] const WorldParams& params() const { return params_; }
   [[nodiscard]] const core::ReferenceLine& line() const { return line_; }
+  /// The map's waypoint chords, on which the original measures s and d.
+  [[nodiscard]] const core::WaypointFrenet& chords() const { return chords_; }
   /// The ego's footprint in map axes.
   [[nodiscard]] core::OrientedBox ego_footprint() const;
 
  private:
   [[nodiscard]] EgoView ego_view() const;
-  [[nodiscard]] std::optional<int> collision() const;
+  void place_ego(core::FrenetPoint start);
+  void update_ego_frenet();
 
   const core::ReferenceLine& line_;
+  core::WaypointFrenet chords_;
   WorldParams params_;
   EgoState ego_;
   std::deque<core::Vec2> queue_;
