@@ -175,15 +175,25 @@ Subcommand register_track(CLI::App& app) {
 }
 
 Subcommand register_config(CLI::App& app) {
-  auto file = std::make_shared<std::string>();
+  struct State {
+    std::string file;
+    bool defaults = false;
+  };
+  auto st = std::make_shared<State>();
   auto* cmd = app.add_subcommand(
       "config", "Print the parameters in effect as JSON (the defaults, or with --config applied).");
-  cmd->add_option("--config", *file, "JSON file overriding any default parameters")
+  cmd->add_option("--config", st->file, "JSON file overriding any default parameters")
       ->check(CLI::ExistingFile);
-  return {cmd, [file] {
+  cmd->add_flag("--defaults", st->defaults,
+                "Print this build's own defaults (the params structs), without reading the built-in\n"
+                "config/overtake.json: the file's contents, when regenerating it")
+      ->excludes("--config");
+  return {cmd, [st] {
             std::optional<std::filesystem::path> path;
-            if (!file->empty()) path = *file;
-            std::cout << config_to_json(load_config(path)).dump(2) << "\n";
+            if (!st->file.empty()) path = st->file;
+            const Config c = st->defaults ? Config{} : load_config(path);
+            std::cout << config_to_json(c).dump(2) << "\n";
+            std::cout.flush();
             return kExitOk;
           }};
 }

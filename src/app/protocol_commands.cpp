@@ -217,6 +217,7 @@ int cmd_sim(const SimArgs& a) {
     report = protocol::run_realtime(world, connection, client, run);
   } else {
     protocol::RemotePlanner remote(connection, client);
+    run.remote_planner = true;
     report = sim::run_drive(
         world, [&remote](const core::Telemetry& t) { return remote(t); }, run);
   }

@@ -42,6 +42,9 @@ void validate_reference(const PlannerParams& all, std::vector<std::string>& out)
   non_negative("prediction.braking_threshold_mps2", pr.braking_threshold_mps2);
   non_negative("prediction.braking_horizon_s", pr.braking_horizon_s);
   positive("prediction.max_track_jump_m", pr.max_track_jump_m);
+  positive("prediction.max_plausible_speed_mps", pr.max_plausible_speed_mps);
+  positive("prediction.max_plausible_accel_mps2", pr.max_plausible_accel_mps2);
+  non_negative("prediction.off_road_margin_m", pr.off_road_margin_m);
   const auto& b = p.behaviour;
   positive("behaviour.cruise_speed_mps", b.cruise_speed_mps);
   positive("behaviour.lookahead_m", b.lookahead_m);

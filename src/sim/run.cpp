@@ -84,8 +84,9 @@ RunReport run_drive(World& world, const PlannerFn& planner, const RunOptions& op
       break;
     }
     const auto t1 = std::chrono::steady_clock::now();
-    cycle_us.push_back(core::thread_cpu_us() - c0);
-    wall_us.push_back(std::chrono::duration<double, std::micro>(t1 - t0).count());
+    const double wall = std::chrono::duration<double, std::micro>(t1 - t0).count();
+    cycle_us.push_back(opts.remote_planner ? wall : core::thread_cpu_us() - c0);
+    wall_us.push_back(wall);
     if (observer) observer->on_path(world, path);
     world.apply_path(std::move(path));
 
@@ -103,16 +104,16 @@ RunReport run_drive(World& world, const PlannerFn& planner, const RunOptions& op
     }
   }
 
-  RunReport report = summarize(world, lanes, std::move(cycle_us), std::move(ended_early));
+  RunReport report = summarize(world, lanes, std::move(cycle_us), std::move(ended_early),
+                               opts.remote_planner ? "round_trip" : "thread_cpu");
   std::sort(wall_us.begin(), wall_us.end());
-  report.timing.clock = "thread_cpu";
   report.timing.wall_p99_us = percentile(wall_us, 0.99);
   report.timing.wall_max_us = wall_us.empty() ? 0.0 : wall_us.back();
   return report;
 }
 
 RunReport summarize(const World& world, const LaneTracker& lanes, std::vector<double> cycle_us,
-                    std::string ended_early) {
+                    std::string ended_early, std::string clock) {
   RunReport report;
   report.ended_early = std::move(ended_early);
   const Referee& ref = world.referee();
@@ -132,7 +133,7 @@ RunReport summarize(const World& world, const LaneTracker& lanes, std::vector<do
   report.timing.p99_us = percentile(cycle_us, 0.99);
   report.timing.max_us = cycle_us.empty() ? 0.0 : cycle_us.back();
   report.timing.cycles = static_cast<long>(cycle_us.size());
-  report.timing.clock = "wall";
+  report.timing.clock = std::move(clock);
   report.timing.wall_p99_us = report.timing.p99_us;
   report.timing.wall_max_us = report.timing.max_us;
   return report;

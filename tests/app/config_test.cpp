@@ -34,7 +34,7 @@ std::string error_of(const json& j) {
 TEST(ConfigDefaults, ShippedFileHoldsExactlyTheStructDefaults) {
   EXPECT_EQ(config_to_json(Config{}), shipped())
       << "config/overtake.json is out of step with the params structs; regenerate it with "
-         "`overtake config > config/overtake.json`";
+         "`overtake config --defaults > config/overtake.json`";
   EXPECT_EQ(apply_config_json(Config{}, shipped(), "shipped"), Config{});
   EXPECT_EQ(default_config(), Config{});
 }

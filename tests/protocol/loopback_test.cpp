@@ -38,7 +38,7 @@ json in_process(const app::DriveOptions& o) {
 }
 
 json over_the_wire(const ServerFixture& server, const std::string& policy,
-                   const std::vector<std::string>& extra) {
+                   const std::vector<std::string>& extra, json* timing = nullptr) {
   const auto path = std::filesystem::temp_directory_path() /
                     ("overtake-loopback-" + std::to_string(::getpid()) + ".json");
   std::vector<std::string> args = {"sim",  "--planner", server.url(),  "--name",
@@ -47,6 +47,7 @@ json over_the_wire(const ServerFixture& server, const std::string& policy,
   EXPECT_EQ(run_cli(args), app::kExitOk);
   json j = json::parse(app::read_file(path));
   std::filesystem::remove(path);
+  if (timing) *timing = j["timing"];
   return without_timing(j);
 }
 
@@ -76,8 +77,14 @@ TEST(ProtocolLoopback, LockStepOverTheWireEqualsInProcessDrive) {
       extra.push_back("--steps-per-call");
       extra.push_back(std::to_string(v.steps_per_call));
     }
-    const json got = over_the_wire(server, v.policy, extra);
+    json timing;
+    const json got = over_the_wire(server, v.policy, extra, &timing);
     EXPECT_EQ(got.dump(), expected.dump());
+    // A remote planner's time is the round trip over the wire (overtake's own thread time
+    // would not measure the planner at all).
+    EXPECT_EQ(timing["clock"], "round_trip");
+    EXPECT_GT(timing["p50_us"].get<double>(), 0.0);
+    EXPECT_EQ(timing["p99_us"], timing["wall_p99_us"]);
     EXPECT_GT(got["planner_cycles"].get<long>(), 1000);
     EXPECT_TRUE(got["ended_early"].is_null());
     EXPECT_EQ(server.log().warnings(), 0u) << server.log().dump();
@@ -86,7 +93,10 @@ TEST(ProtocolLoopback, LockStepOverTheWireEqualsInProcessDrive) {
 
 TEST(ProtocolLoopback, RealTimeAgainstOurServer) {
   ServerFixture server;
-  const json got = over_the_wire(server, "walkthrough", {"--minutes", "0.02", "--realtime"});
+  json timing;
+  const json got =
+      over_the_wire(server, "walkthrough", {"--minutes", "0.02", "--realtime"}, &timing);
+  EXPECT_EQ(timing["clock"], "round_trip");
   EXPECT_TRUE(got["ended_early"].is_null());
   EXPECT_DOUBLE_EQ(got["duration_s"].get<double>(), 1.2);
   EXPECT_GT(got["planner_cycles"].get<long>(), 20);

@@ -1,31 +1,128 @@
 #include "overtake/planner/reference/frenet.hpp"
 
-namespace overtake::planner::reference {
+#include <algorithm>
+#include <cmath>
 
-RoadPoint road_point(const core::ReferenceLine& line, double s_m, double d_m) {
+#include "overtake/core/map.hpp"
+#include "overtake/core/waypoint_frenet.hpp"
+
+namespace overtake::planner::reference {
+namespace {
+
+/// The chord reading is sampled at this d (the middle of the road) every metre of s ...
+constexpr double kSampleD = 6.0;
+/// ... averaged over the local waypoint spacing, then over this much more to round it off.
+constexpr double kRoundOffM = 20.0;
+
+/// Centred moving average of a periodic sequence, over `width[i]` samples at sample i.
+std::vector<double> moving_average(const std::vector<double>& v, const std::vector<double>& width) {
+  const std::size_t n = v.size();
+  std::vector<double> prefix(n + 1, 0.0);
+  for (std::size_t i = 0; i < n; ++i) prefix[i + 1] = prefix[i] + v[i];
+  const auto sum = [&](long a, long b) {  // sum of v[a .. b) with wrapping, b - a <= n
+    const auto ln = static_cast<long>(n);
+    double total = 0.0;
+    while (a < 0) {
+      a += ln;
+      b += ln;
+    }
+    if (b <= ln) return prefix[static_cast<std::size_t>(b)] - prefix[static_cast<std::size_t>(a)];
+    total = prefix[n] - prefix[static_cast<std::size_t>(a)];
+    return total + prefix[static_cast<std::size_t>(b - ln)];
+  };
+  std::vector<double> out(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const long half = std::max(1L, std::lround(0.5 * width[i]));
+    const long a = static_cast<long>(i) - half;
+    const long b = static_cast<long>(i) + half + 1;
+    out[i] = sum(a, b) / static_cast<double>(b - a);
+  }
+  return out;
+}
+
+}  // namespace
+
+LaneFrame::LaneFrame(const core::ReferenceLine& line) : line_(&line) {}
+
+LaneFrame LaneFrame::chord_aligned(const core::ReferenceLine& line) {
+  LaneFrame f(line);
+  // The waypoints, as the line passes through them.
+  core::Map map;
+  for (const double s : line.waypoint_s()) {
+    const core::RoadFrame r = line.frame(s);
+    map.waypoints.push_back({r.position.x, r.position.y, s, r.normal.x, r.normal.y});
+  }
+  map.loop_length_m = line.length_m();
+  if (map.waypoints.size() < 3) return f;
+  const core::WaypointFrenet chords(map);
+  const auto bins = static_cast<std::size_t>(std::ceil(line.length_m()));
+  std::vector<double> reading(bins);
+  std::vector<double> spacing(bins);
+  std::size_t hint = 0;
+  for (std::size_t b = 0; b < bins; ++b) {
+    const double s = line.start_s_m() + static_cast<double>(b);
+    const core::Vec2 p = line.to_cartesian({s, kSampleD});
+    hint = chords.closest(p, hint);
+    reading[b] = chords.to_frenet(p, hint).d_m - kSampleD;
+    const std::size_t next = chords.next(p, hint);
+    const std::size_t prev = chords.wrap_index(static_cast<long>(next) - 1);
+    spacing[b] = core::distance(chords.position(prev), chords.position(next));
+  }
+  const std::vector<double> once = moving_average(reading, spacing);
+  f.offset_ = moving_average(once, std::vector<double>(bins, kRoundOffM));
+  return f;
+}
+
+double LaneFrame::bin(double s_m) const {
+  double x = std::fmod(s_m - line_->start_s_m(), line_->length_m());
+  if (x < 0.0) x += line_->length_m();
+  return x;
+}
+
+double LaneFrame::offset(double s_m) const {
+  if (offset_.empty()) return 0.0;
+  const double x = bin(s_m);
+  const auto i = static_cast<std::size_t>(x);
+  const double f = x - static_cast<double>(i);
+  const std::size_t n = offset_.size();
+  return offset_[i % n] * (1.0 - f) + offset_[(i + 1) % n] * f;
+}
+
+double LaneFrame::slope(double s_m) const {
+  if (offset_.empty()) return 0.0;
+  const auto i = static_cast<std::size_t>(bin(s_m));
+  const std::size_t n = offset_.size();
+  return offset_[(i + 1) % n] - offset_[i % n];
+}
+
+RoadPoint road_point(const LaneFrame& frame, double s_m, double d_m) {
+  const core::ReferenceLine& line = frame.line();
   const core::RoadFrame f = line.frame(s_m);
+  const double d_line = d_m - frame.offset(s_m);
   // +1 when the normal points to the right of travel; the line's curvature-at-offset rule
   // depends on it.
   const double side = core::dot(f.normal, core::right_of(f.tangent)) >= 0.0 ? 1.0 : -1.0;
-  const double stretch = 1.0 + side * f.curvature_1pm * d_m;
+  const double stretch = 1.0 + side * f.curvature_1pm * d_line;
   RoadPoint p;
-  p.position = f.position + d_m * f.normal;
+  p.position = f.position + d_line * f.normal;
   p.tangent = f.tangent;
   p.normal = f.normal;
   p.along_scale = f.ds_scale * stretch;
   p.curvature_1pm = f.curvature_1pm / stretch;
+  p.offset_slope = frame.slope(s_m);
   return p;
 }
 
-FrenetState frenet_from_cartesian(const core::ReferenceLine& line, core::Vec2 position,
-                                  core::Vec2 velocity, double s_hint_m) {
-  const core::FrenetPoint f = line.to_frenet(position, s_hint_m);
-  const RoadPoint at = road_point(line, f.s_m, f.d_m);
+FrenetState frenet_from_cartesian(const LaneFrame& frame, core::Vec2 position, core::Vec2 velocity,
+                                  double s_hint_m) {
+  const core::FrenetPoint f = frame.line().to_frenet(position, s_hint_m);
+  const double d = f.d_m + frame.offset(f.s_m);
+  const RoadPoint at = road_point(frame, f.s_m, d);
   FrenetState x;
   x.s_m = f.s_m;
-  x.d_m = f.d_m;
+  x.d_m = d;
   x.s_dot = at.along_scale > 1e-9 ? core::dot(velocity, at.tangent) / at.along_scale : 0.0;
-  x.d_dot_mps = core::dot(velocity, at.normal);
+  x.d_dot_mps = core::dot(velocity, at.normal) + at.offset_slope * x.s_dot;
   return x;
 }
 

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "overtake/core/units.hpp"
 #include "overtake/planner/reference/frenet.hpp"
 
 namespace overtake::planner::reference {
@@ -120,7 +121,7 @@ CarPrediction predict_car(int id, double s_m, double s_dot, double s_ddot, doubl
 }
 
 std::vector<CarPrediction> predict_cars(const core::Telemetry& telemetry,
-                                        const core::ReferenceLine& line, double ego_s_m,
+                                        const LaneFrame& frame, double ego_s_m,
                                         double elapsed_s, std::vector<CarTrack>& tracks,
                                         const ReferencePredictionParams& params,
                                         const core::RoadParams& road) {
@@ -128,9 +129,17 @@ std::vector<CarPrediction> predict_cars(const core::Telemetry& telemetry,
   out.reserve(telemetry.cars.size());
   std::vector<CarTrack> next;
   next.reserve(telemetry.cars.size());
+  const core::ReferenceLine& line = frame.line();
+  const double road_width = road.lane_count * road.lane_width_m;
   for (const core::CarObservation& car : telemetry.cars) {
-    const FrenetState x = frenet_from_cartesian(line, car.position, car.velocity_mps, car.s_m);
-    const RoadPoint at = road_point(line, x.s_m, x.d_m);
+    // The original reports a newly placed car's speed cap read as m/s for one frame (2.24
+    // times its real speed); no car on its roads goes that fast.
+    core::Vec2 velocity = car.velocity_mps;
+    if (core::norm(velocity) > params.max_plausible_speed_mps) velocity = (1.0 / core::kMphPerMps) * velocity;
+    const FrenetState x = frenet_from_cartesian(frame, car.position, velocity, car.s_m);
+    // Cars waiting off the road (the original parks them far beside it) are no traffic.
+    if (x.d_m < -params.off_road_margin_m || x.d_m > road_width + params.off_road_margin_m) continue;
+    const RoadPoint at = road_point(frame, x.s_m, x.d_m);
     const double speed = x.s_dot * at.along_scale;
     double accel = 0.0;
     const auto prev = std::find_if(tracks.begin(), tracks.end(),
@@ -138,6 +147,8 @@ std::vector<CarPrediction> predict_cars(const core::Telemetry& telemetry,
     if (prev != tracks.end() && elapsed_s > 0.0 &&
         std::abs(line.s_ahead(prev->s_m, x.s_m) - prev->s_dot * elapsed_s) < params.max_track_jump_m) {
       accel = (x.s_dot - prev->s_dot) / elapsed_s;
+      // A change no car's brakes or engine make is a glitch of the report, not a motion.
+      if (std::abs(accel * at.along_scale) > params.max_plausible_accel_mps2) accel = 0.0;
     }
     next.push_back({car.id, x.s_m, x.s_dot, accel});
     const double s_unwrapped = ego_s_m + line.s_ahead(ego_s_m, x.s_m);

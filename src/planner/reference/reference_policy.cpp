@@ -10,14 +10,31 @@ namespace {
 /// is 0.1 mm on a track within +-1000 m).
 constexpr double kSyncToleranceM = 0.01;
 
+/// The speed the wire's rounding may add to a step: positions go out with 7 significant
+/// digits, so on a map reaching 1000 m or more from the origin a point moves by up to half a
+/// millimetre (and the next by as much the other way).
+double wire_speed_error_mps(const core::ReferenceLine& line, double step_s) {
+  double reach = 0.0;
+  for (const double s : line.waypoint_s()) {
+    const core::Vec2 p = line.frame(s).position;
+    reach = std::max({reach, std::abs(p.x), std::abs(p.y)});
+  }
+  reach += 20.0;  // the road's width and more
+  const double digits = std::floor(std::log10(std::max(reach, 1.0))) + 1.0;
+  const double resolution = std::pow(10.0, digits - 7.0);
+  return 2.0 * resolution / step_s;
+}
+
 }  // namespace
 
 ReferencePolicy::ReferencePolicy(const core::ReferenceLine& line, const PlannerParams& params)
-    : line_(line), road_(params.road), p_(params.reference) {}
+    : line_(line), frame_(LaneFrame::chord_aligned(line)), road_(params.road), p_(params.reference) {
+  p_.trajectory.max_speed_mps -= wire_speed_error_mps(line, p_.trajectory.step_s);
+}
 
 FrenetState ReferencePolicy::observed_state(const core::Telemetry& t) const {
   const core::Vec2 v = t.ego.speed_mps * core::Vec2{std::cos(t.ego.yaw_rad), std::sin(t.ego.yaw_rad)};
-  return frenet_from_cartesian(line_, t.ego.position, v, t.ego.s_m);
+  return frenet_from_cartesian(frame_, t.ego.position, v, t.ego.s_m);
 }
 
 std::vector<core::Vec2> ReferencePolicy::plan(const core::Telemetry& t) {
@@ -69,8 +86,8 @@ std::vector<core::Vec2> ReferencePolicy::plan(const core::Telemetry& t) {
   const double elapsed = synced_ ? static_cast<double>(consumed) * dt : 0.0;
 
   // Prediction, behaviour, trajectory.
-  predictions_ = predict_cars(t, line_, car.s_m, elapsed, tracks_, p_.prediction, road_);
-  const RoadPoint at_car = road_point(line_, car.s_m, car.d_m);
+  predictions_ = predict_cars(t, frame_, car.s_m, elapsed, tracks_, p_.prediction, road_);
+  const RoadPoint at_car = road_point(frame_, car.s_m, car.d_m);
   EgoSnapshot ego;
   ego.s_m = car.s_m;
   ego.d_m = car.d_m;
@@ -85,7 +102,7 @@ std::vector<core::Vec2> ReferencePolicy::plan(const core::Telemetry& t) {
   req.wanted_speed_mps = decision_.speed_mps;
   req.band_time_s = band_time;
   req.cars = &predictions_;
-  plan_ = plan_trajectory(line_, req, p_, road_);
+  plan_ = plan_trajectory(frame_, req, p_, road_);
   const TrajectoryPlan& chosen = plan_;
   status_ = chosen.status;
   if (chosen.trajectory.end_lane != behaviour_.target_lane) {
@@ -98,7 +115,7 @@ std::vector<core::Vec2> ReferencePolicy::plan(const core::Telemetry& t) {
   for (std::size_t i = 1; i <= fresh; ++i) {
     const FrenetState x = chosen.trajectory.at(static_cast<double>(i) * dt);
     states.push_back(x);
-    points.push_back(road_point(line_, x.s_m, x.d_m).position);
+    points.push_back(road_point(frame_, x.s_m, x.d_m).position);
   }
   sent_ = core::round_like_wire(points);
   states_ = std::move(states);

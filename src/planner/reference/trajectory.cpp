@@ -34,6 +34,8 @@ constexpr double kSidewaysM = 0.5;
 /// Cost of a lateral motion that stays on a lane line too long (an incident, but better than
 /// a collision).
 constexpr double kLingerCost = 1e4;
+/// A follower's sensor meets the ego once the ego's middle is this close sideways to its own.
+constexpr double kSensorCoverM = 0.8;
 /// Longest a collision-failed candidate list is searched for a least-bad one.
 constexpr int kLeastBadChecks = 12;
 
@@ -127,6 +129,12 @@ std::vector<CarSamples> sample_cars(const std::vector<CarPrediction>& cars, doub
 
 /// The collision check over samples (indexed k + kBack). `ego_changing`: the ego moves into
 /// another lane; `sideways`: it is off its lane's centre or moving into another lane.
+///
+/// A car behind the ego is the ego's concern only when the ego moves across its path: a
+/// follower reacts to one ray straight ahead from the middle of its front, so it does not
+/// react to the ego until the ego's middle is within kSensorCoverM of its own sideways. Until
+/// then it keeps going (and must not reach the ego); once it sees the ego within its reaction
+/// gap, it must have room to stop closing (rear_room).
 CollisionReport collide(const Track1d& lon, const Track1d& lat, bool ego_changing, bool sideways,
                         const Grid& g, const std::vector<CarSamples>& cars, double mps,
                         const ReferenceParams& p) {
@@ -141,45 +149,43 @@ CollisionReport collide(const Track1d& lon, const Track1d& lat, bool ego_changin
     for (int k = 0; k <= g.n; ++k) {
       const auto e = static_cast<std::size_t>(k + kBack);
       const auto i = static_cast<std::size_t>(k);
+      const double t = g.t(k);
+      if (t >= r.first_collision_s) break;
       const double ve = std::max(lon.v[e] * mps, kMinHeadingSpeedMps);
       const double vc = std::max(c.s_dot[i] * mps, kMinHeadingSpeedMps);
+      const double side_gap = std::abs(lat.x[e] - c.d[i]);
       const double lat_need =
           lat_base + 0.5 * length * (std::abs(lat.v[e]) / ve + std::abs(c.d_dot[i]) / vc);
-      if (std::abs(lat.x[e] - c.d[i]) >= lat_need) {
-        if (follower) break;  // the ego has left its lane
+      if (side_gap >= lat_need) {
+        if (follower) break;  // the ego has left its path
         continue;
       }
       const double ahead = (c.s[i] - lon.x[e]) * mps;
-      const double t = g.t(k);
-      if (k == 0 && ahead < 0.0) {
-        // It follows the ego already: its business, unless the ego is on its way across
-        // lanes and it closes too fast to stop once it reacts.
-        if (!sideways || -ahead <= react_gap) break;
-        follower = true;
-        continue;
-      }
-      if (follower) {
-        if (-ahead > react_gap) continue;
-        const double closing = (c.s_dot[i] - lon.v[e]) * mps;
-        if (rear_room(-ahead, closing, length, p.behaviour) < 0.0 && t < r.first_collision_s) {
-          r = {false, t, c.id};
-        }
-        break;
-      }
-      if (std::abs(ahead) < lon_need) {
-        if (t < r.first_collision_s) r = {false, t, c.id};
-        break;
-      }
-      if (!seen && ahead < 0.0 && ego_changing) {
-        // The ego moves in front of it: it must have room to stop closing.
-        const double closing = (c.s_dot[i] - lon.v[e]) * mps;
-        if (rear_room(-ahead, closing, length, p.behaviour) < 0.0) {
-          if (t < r.first_collision_s) r = {false, t, c.id};
-          break;
+      if (!follower) {
+        if (ahead < 0.0 && (k == 0 || (!seen && ego_changing))) {
+          // It follows the ego already and sees it (its business), or the ego moves in
+          // front of it.
+          if (k == 0 && !sideways) break;
+          follower = true;
+        } else {
+          if (std::abs(ahead) < lon_need) {
+            r = {false, t, c.id};
+            break;
+          }
+          seen = true;
+          if (ahead < 0.0) break;  // from here on it follows the ego
+          continue;
         }
       }
-      seen = true;
-      if (ahead < 0.0) break;  // from here on it follows the ego
+      const double closing = (c.s_dot[i] - lon.v[e]) * mps;
+      if (side_gap < kSensorCoverM && -ahead <= react_gap) {
+        if (rear_room(-ahead, closing, length, p.behaviour) < 0.0) r = {false, t, c.id};
+        break;
+      }
+      if (-ahead < lon_need) {
+        r = {false, t, c.id};
+        break;
+      }
     }
   }
   return r;
@@ -187,7 +193,7 @@ CollisionReport collide(const Track1d& lon, const Track1d& lat, bool ego_changin
 
 /// The Cartesian check over samples.
 KinematicReport kinematics(const Track1d& lon, const Track1d& lat, const Grid& g,
-                           const core::ReferenceLine& line, const ReferenceTrajectoryParams& p,
+                           const LaneFrame& line, const ReferenceTrajectoryParams& p,
                            bool stop_at_first) {
   KinematicReport r;
   const double h2 = g.h * g.h;
@@ -202,7 +208,7 @@ KinematicReport kinematics(const Track1d& lon, const Track1d& lat, const Grid& g
     back[0] = at.position;
     if (k < 0) continue;
     const double t = g.t(k);
-    const double speed = std::hypot(lon.v[e] * at.along_scale, lat.v[e]);
+    const double speed = std::hypot(lon.v[e] * at.along_scale, lat.v[e] - at.offset_slope * lon.v[e]);
     const double accel = core::norm(back[0] - 2.0 * back[1] + back[2]) / h2;
     const double jerk = core::norm(back[0] - 3.0 * back[1] + 3.0 * back[2] - back[3]) / h3;
     r.peak_speed_mps = std::max(r.peak_speed_mps, speed);
@@ -223,7 +229,7 @@ struct ScaleRange {
   double min = 1.0;
 };
 
-ScaleRange lane_scale(const core::ReferenceLine& line, double s0, double s1, double d) {
+ScaleRange lane_scale(const LaneFrame& line, double s0, double s1, double d) {
   ScaleRange r{0.0, kInf};
   const int n = std::max(1, static_cast<int>(std::ceil((s1 - s0) / kScaleSampleM)));
   for (int i = 0; i <= n; ++i) {
@@ -306,7 +312,7 @@ FrenetState Trajectory::at(double t) const {
   return {s.x, s.v, s.a, d.x, d.v, d.a};
 }
 
-KinematicReport check_kinematics(const Trajectory& t, const core::ReferenceLine& line,
+KinematicReport check_kinematics(const Trajectory& t, const LaneFrame& line,
                                  const ReferenceTrajectoryParams& p) {
   const Grid g = grid_of(p);
   const Track1d lon = sample(g, [&](double x) { return t.longitudinal.at(x); });
@@ -326,7 +332,7 @@ CollisionReport check_collisions(const Trajectory& t, const std::vector<CarPredi
   return collide(lon, lat, changing, sideways, g, sample_cars(cars, start_delay_s, lon.x[kBack], g), metres_per_s, p);
 }
 
-TrajectoryPlan plan_trajectory(const core::ReferenceLine& line, const TrajectoryRequest& req,
+TrajectoryPlan plan_trajectory(const LaneFrame& line, const TrajectoryRequest& req,
                                const ReferenceParams& params, const core::RoadParams& road) {
   const auto& tp = params.trajectory;
   const auto& bp = params.behaviour;

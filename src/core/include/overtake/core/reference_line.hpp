@@ -3,6 +3,7 @@
 // waypoints) with Frenet <-> Cartesian conversion. s wraps at the loop length.
 
 #include <optional>
+#include <span>
 #include <vector>
 
 #include "overtake/core/geometry.hpp"
@@ -36,6 +37,12 @@ class ReferenceLine {
   /// Signed distance along the road from `from_s_m` to `to_s_m`, the shorter way round:
   /// positive when `to` is ahead. In (-length/2, length/2].
   [[nodiscard]] double s_ahead(double from_s_m, double to_s_m) const;
+
+  /// s of the map's waypoints, through which the line passes (in the map's order).
+  [[nodiscard]] std::span<const double> waypoint_s() const {
+    const std::span<const double> k = x_.knots();
+    return k.first(k.size() - 1);
+  }
 
   [[nodiscard]] RoadFrame frame(double s_m) const;
   [[nodiscard]] Vec2 to_cartesian(FrenetPoint p) const;

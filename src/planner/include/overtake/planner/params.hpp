@@ -84,6 +84,13 @@ struct ReferencePredictionParams {
   double braking_horizon_s = 1.0;
   /// A car that moved farther than this between two cycles was placed again: history dropped.
   double max_track_jump_m = 15.0;
+  /// A reported speed above this is the original's unit slip (a placed car's first frame
+  /// shows its cap read as m/s): it is read back in mph.
+  double max_plausible_speed_mps = 35.0;
+  /// An acceleration estimate beyond this is a glitch of the reports, taken as 0.
+  double max_plausible_accel_mps2 = 15.0;
+  /// Cars farther than this beyond the road's edges are parked off it.
+  double off_road_margin_m = 3.0;
   friend bool operator==(const ReferencePredictionParams&, const ReferencePredictionParams&) = default;
 };
 
@@ -248,6 +255,9 @@ void describe(V& v, ReferencePredictionParams& p) {
   v("braking_threshold_mps2", p.braking_threshold_mps2);
   v("braking_horizon_s", p.braking_horizon_s);
   v("max_track_jump_m", p.max_track_jump_m);
+  v("max_plausible_speed_mps", p.max_plausible_speed_mps);
+  v("max_plausible_accel_mps2", p.max_plausible_accel_mps2);
+  v("off_road_margin_m", p.off_road_margin_m);
 }
 
 template <class V>

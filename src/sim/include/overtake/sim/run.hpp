@@ -64,19 +64,24 @@ struct RunOptions {
   const std::atomic<bool>* stop = nullptr;
   /// When set, sees every state and every path (see RunObserver); not owned.
   RunObserver* observer = nullptr;
+  /// The planner runs in another process (over the protocol): its time per cycle is the
+  /// wall-clock round trip from telemetry sent to reply received (clock "round_trip"); the
+  /// loop's own thread CPU time would measure overtake, not the planner.
+  bool remote_planner = false;
 };
 
 /// Planner compute time per cycle (microseconds). Not part of the determinism promise.
 /// In-process planners (run_drive) are timed on the thread's CPU clock, so that other
 /// processes on a shared machine do not inflate the figures; the wall-clock p99 and max are
-/// kept beside them. A remote planner's cycle is its wall-clock round trip (clock "wall").
+/// kept beside them. A remote planner's cycle is the wall-clock round trip of a telemetry
+/// and its reply (clock "round_trip": the planner's time plus the transport's).
 struct PlannerTiming {
   double p50_us = 0.0;
   double p99_us = 0.0;
   double max_us = 0.0;
   long cycles = 0;
-  std::string clock = "wall";  ///< what p50/p99/max measure: "thread_cpu" or "wall"
-  double wall_p99_us = 0.0;    ///< wall-clock figures (equal to the above when clock is "wall")
+  std::string clock = "round_trip";  ///< what p50/p99/max measure: "thread_cpu" or "round_trip"
+  double wall_p99_us = 0.0;    ///< wall-clock figures (equal to the above for "round_trip")
   double wall_max_us = 0.0;
 };
 
@@ -108,8 +113,10 @@ class LaneTracker;
 
 /// The report of a world as it stands (for loops other than run_drive, e.g. real time).
 /// `cycle_us`: planner time of each cycle; `ended_early`: empty, or why the run stopped.
+/// `cycle_us` are measured on `clock` ("thread_cpu" or "round_trip").
 [[nodiscard]] RunReport summarize(const World& world, const LaneTracker& lanes,
-                                  std::vector<double> cycle_us, std::string ended_early);
+                                  std::vector<double> cycle_us, std::string ended_early,
+                                  std::string clock = "round_trip");
 
 /// Tracks lane changes and time per lane from the ego's d (with hysteresis: the lane counts
 /// as changed once the car is within `settle_m` of another lane's centre).

@@ -3,6 +3,8 @@
 // smooth reference line (core::ReferenceLine), and the line's local geometry at a lateral
 // offset, which turns Frenet rates into metres per second on the road.
 
+#include <vector>
+
 #include "overtake/core/geometry.hpp"
 #include "overtake/core/reference_line.hpp"
 
@@ -21,6 +23,32 @@ struct FrenetState {
   friend constexpr bool operator==(const FrenetState&, const FrenetState&) = default;
 };
 
+/// The planner's lateral frame: the reference line's d, shifted by a smooth offset of s so
+/// that it reads as the original measures d (on the straight segments between waypoints,
+/// the chords). On a bend a chord runs inside the curve: a car on a lane's true centre reads
+/// up to L^2 / 8R outside it (L the waypoint spacing, R the radius), and the original's
+/// referee and traffic go by that reading. The offset is the chord reading's average over
+/// the local waypoint spacing, so a car on the frame's lane centre stays within a fraction of
+/// that bulge of the original's lane centre.
+class LaneFrame {
+ public:
+  /// The line's own d (no offset). Implicit: any function taking a frame takes a line.
+  LaneFrame(const core::ReferenceLine& line);  // NOLINT(google-explicit-constructor)
+  /// The frame that matches the original's d on the line's waypoints.
+  [[nodiscard]] static LaneFrame chord_aligned(const core::ReferenceLine& line);
+
+  [[nodiscard]] const core::ReferenceLine& line() const { return *line_; }
+  /// Frame d minus the line's d at s.
+  [[nodiscard]] double offset(double s_m) const;
+  /// d(offset)/ds at s.
+  [[nodiscard]] double slope(double s_m) const;
+
+ private:
+  [[nodiscard]] double bin(double s_m) const;
+  const core::ReferenceLine* line_;
+  std::vector<double> offset_;  // per metre of s from the line's start; empty: no offset
+};
+
 /// The reference line's geometry at one (s, d).
 struct RoadPoint {
   core::Vec2 position;        ///< map position of (s, d)
@@ -28,14 +56,16 @@ struct RoadPoint {
   core::Vec2 normal;          ///< unit, increasing d
   double along_scale = 1.0;   ///< metres travelled along the road at d per unit of s
   double curvature_1pm = 0.0; ///< signed curvature of the line at offset d (left turn > 0)
+  double offset_slope = 0.0;  ///< the frame's d(offset)/ds there
 };
 
-/// The line's geometry at (s, d) with one evaluation of the line.
-[[nodiscard]] RoadPoint road_point(const core::ReferenceLine& line, double s_m, double d_m);
+/// The frame's geometry at (s, d) with one evaluation of the line.
+[[nodiscard]] RoadPoint road_point(const LaneFrame& frame, double s_m, double d_m);
 
 /// Map velocity of a Frenet state (its position given by `at`).
 [[nodiscard]] inline core::Vec2 cartesian_velocity(const RoadPoint& at, const FrenetState& x) {
-  return (x.s_dot * at.along_scale) * at.tangent + x.d_dot_mps * at.normal;
+  return (x.s_dot * at.along_scale) * at.tangent +
+         (x.d_dot_mps - at.offset_slope * x.s_dot) * at.normal;
 }
 
 /// Speed (m/s) of a Frenet state.
@@ -45,7 +75,7 @@ struct RoadPoint {
 
 /// The Frenet state of a car at `position` with map velocity `velocity` (acceleration 0);
 /// `s_hint_m` as for ReferenceLine::to_frenet.
-[[nodiscard]] FrenetState frenet_from_cartesian(const core::ReferenceLine& line, core::Vec2 position,
+[[nodiscard]] FrenetState frenet_from_cartesian(const LaneFrame& frame, core::Vec2 position,
                                                 core::Vec2 velocity, double s_hint_m);
 
 }  // namespace overtake::planner::reference

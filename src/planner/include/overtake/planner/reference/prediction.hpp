@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "overtake/core/reference_line.hpp"
+#include "overtake/planner/reference/frenet.hpp"
 #include "overtake/core/road.hpp"
 #include "overtake/core/telemetry.hpp"
 #include "overtake/planner/params.hpp"
@@ -59,11 +60,12 @@ struct CarPrediction {
 /// Inverse of min_jerk_fraction on [0, 1].
 [[nodiscard]] double min_jerk_progress(double fraction);
 
-/// Predicts every observed car. `ego_s_m` (unwrapped) anchors the cars' unwrapped s;
+/// Predicts every car on the road (cars parked off it are left out). `ego_s_m` (unwrapped)
+/// anchors the cars' unwrapped s;
 /// `tracks` holds last cycle's tracks and is replaced by this cycle's; `elapsed_s` is the
 /// time since the last cycle (0: unknown, no acceleration estimate).
 [[nodiscard]] std::vector<CarPrediction> predict_cars(const core::Telemetry& telemetry,
-                                                      const core::ReferenceLine& line,
+                                                      const LaneFrame& frame,
                                                       double ego_s_m, double elapsed_s,
                                                       std::vector<CarTrack>& tracks,
                                                       const ReferencePredictionParams& params,

@@ -42,6 +42,7 @@ class ReferencePolicy final : public Policy {
   [[nodiscard]] FrenetState observed_state(const core::Telemetry& t) const;
 
   const core::ReferenceLine& line_;
+  LaneFrame frame_;  // d as the original measures it
   core::RoadParams road_;
   ReferenceParams p_;
   std::vector<FrenetState> states_;  // state at each point sent last cycle

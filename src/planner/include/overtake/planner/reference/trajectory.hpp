@@ -70,7 +70,7 @@ struct TrajectoryPlan {
 };
 
 /// Chooses this cycle's trajectory. Never fails: the braking fallback always exists.
-[[nodiscard]] TrajectoryPlan plan_trajectory(const core::ReferenceLine& line, const TrajectoryRequest& request,
+[[nodiscard]] TrajectoryPlan plan_trajectory(const LaneFrame& line, const TrajectoryRequest& request,
                                              const ReferenceParams& params, const core::RoadParams& road);
 
 /// Result of the Cartesian check of one trajectory.
@@ -84,7 +84,7 @@ struct KinematicReport {
 
 /// Checks speed, total acceleration and jerk of `t` converted to Cartesian on the line,
 /// sampled every check_step_s over the horizon, against the limits.
-[[nodiscard]] KinematicReport check_kinematics(const Trajectory& t, const core::ReferenceLine& line,
+[[nodiscard]] KinematicReport check_kinematics(const Trajectory& t, const LaneFrame& line,
                                                const ReferenceTrajectoryParams& p);
 
 /// Result of the collision check of one trajectory.
