@@ -45,6 +45,12 @@ void validate_reference(const PlannerParams& all, std::vector<std::string>& out)
   positive("prediction.max_plausible_speed_mps", pr.max_plausible_speed_mps);
   positive("prediction.max_plausible_accel_mps2", pr.max_plausible_accel_mps2);
   non_negative("prediction.off_road_margin_m", pr.off_road_margin_m);
+  non_negative("prediction.follower_speed_up_mps2", pr.follower_speed_up_mps2);
+  positive("prediction.follower_top_speed_mps", pr.follower_top_speed_mps);
+  positive("prediction.free_speed_share", pr.free_speed_share);
+  positive("prediction.max_cap_mph", pr.max_cap_mph);
+  non_negative("prediction.reaction_gain_m", pr.reaction_gain_m);
+  positive("prediction.wave_brake_mps2", pr.wave_brake_mps2);
   const auto& b = p.behaviour;
   positive("behaviour.cruise_speed_mps", b.cruise_speed_mps);
   positive("behaviour.lookahead_m", b.lookahead_m);

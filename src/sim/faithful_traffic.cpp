@@ -12,9 +12,10 @@ namespace {
 
 constexpr std::uint64_t kSpawnStream = 0;
 constexpr std::uint64_t kFirstCarStream = 100;
-/// A parked car stands at least this far from every waypoint (off any road of the map);
-/// when its spot is not, it moves this much farther out, up to kParkTries times.
-constexpr double kParkClearanceM = 150.0;
+/// A parked car stands at least this far from every waypoint (off any road of the map, and
+/// farther from the ego than the distance that releases it); when its spot is not, it moves
+/// this much farther out, up to kParkTries times.
+constexpr double kParkClearanceM = 250.0;
 constexpr int kParkTries = 20;
 constexpr double kParkSpacingM = 6.0;
 /// Bodies farther than this sideways from a ray cannot be hit by it (half a diagonal + slack).
@@ -433,8 +434,9 @@ void FaithfulTraffic::move(std::size_t i, const Command& cmd, double dt_s) {
   TrafficCar& c = cars_[i];
   Driver& dr = drivers_[i];
   if (cmd.new_lane >= 0) {
+    // The original resets its counter and, later in the same update, counts this step.
     c.lane = cmd.new_lane;
-    dr.lane_change_time = 0;
+    dr.lane_change_time = std::min(1, f_.lane_change_wait_steps);
   }
   // The cap holds the body's speed (the first step after placement clamps the cap read as
   // m/s); then throttle against drag, or the brake.

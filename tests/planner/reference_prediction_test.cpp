@@ -89,12 +89,12 @@ TEST_F(PredictionTest, TracksGiveAccelerationAndForgetCarsPlacedAgain) {
   std::vector<CarTrack> tracks;
   core::Telemetry t;
   t.cars = {test::observed_car(line_, 0, 300.0, 6.0, 20.0), test::observed_car(line_, 1, 400.0, 2.0, 20.0)};
-  auto first = predict_cars(t, line_, 280.0, 0.0, tracks, params_, road_);
+  auto first = predict_cars(t, line_, 280.0, 0.0, tracks, params_, road_, 4.7);
   ASSERT_EQ(first.size(), 2u);
   EXPECT_EQ(first[0].s_ddot, 0.0);
   // 0.04 s later: car 0 slowed by 0.32 m/s (8 m/s^2); car 1 jumped 150 m (placed again).
   t.cars = {test::observed_car(line_, 0, 300.8, 6.0, 19.68), test::observed_car(line_, 1, 250.0, 2.0, 19.68)};
-  auto second = predict_cars(t, line_, 281.0, 0.04, tracks, params_, road_);
+  auto second = predict_cars(t, line_, 281.0, 0.04, tracks, params_, road_, 4.7);
   EXPECT_NEAR(second[0].s_ddot, -8.0, 0.05);
   EXPECT_EQ(second[1].s_ddot, 0.0);
   EXPECT_EQ(tracks.size(), 2u);
@@ -105,7 +105,7 @@ TEST_F(PredictionTest, CarsAcrossTheLapWrapGetSNearTheEgo) {
   core::Telemetry t;
   const double end = line_.start_s_m() + line_.length_m();
   t.cars = {test::observed_car(line_, 0, end + 20.0, 6.0, 20.0)};  // just past the wrap
-  const auto cars = predict_cars(t, line_, end - 10.0, 0.0, tracks, params_, road_);
+  const auto cars = predict_cars(t, line_, end - 10.0, 0.0, tracks, params_, road_, 4.7);
   EXPECT_NEAR(cars[0].s_m - (end - 10.0), 30.0, 1e-6);
 }
 

@@ -11,8 +11,10 @@ namespace {
 
 /// The chord reading is sampled at this d (the middle of the road) every metre of s ...
 constexpr double kSampleD = 6.0;
-/// ... averaged over the local waypoint spacing, then over this much more to round it off.
-constexpr double kRoundOffM = 20.0;
+/// ... averaged over the local waypoint spacing, then twice over this to round it off ...
+constexpr double kRoundOffM = 25.0;
+/// ... and drawn through knots this far apart.
+constexpr double kKnotSpacingM = 5.0;
 
 /// Centred moving average of a periodic sequence, over `width[i]` samples at sample i.
 std::vector<double> moving_average(const std::vector<double>& v, const std::vector<double>& width) {
@@ -68,31 +70,40 @@ LaneFrame LaneFrame::chord_aligned(const core::ReferenceLine& line) {
     const std::size_t prev = chords.wrap_index(static_cast<long>(next) - 1);
     spacing[b] = core::distance(chords.position(prev), chords.position(next));
   }
-  const std::vector<double> once = moving_average(reading, spacing);
-  f.offset_ = moving_average(once, std::vector<double>(bins, kRoundOffM));
+  const std::vector<double> round_off(bins, kRoundOffM);
+  const std::vector<double> smooth =
+      moving_average(moving_average(moving_average(reading, spacing), round_off), round_off);
+  std::vector<double> knots;
+  std::vector<double> values;
+  const auto every = static_cast<std::size_t>(kKnotSpacingM);
+  for (std::size_t b = 0; b + every / 2 < bins; b += every) {
+    knots.push_back(line.start_s_m() + static_cast<double>(b));
+    values.push_back(smooth[b]);
+  }
+  f.offset_ = core::PiecewiseCubic::periodic(knots, values, line.length_m());
+  f.reading_ = std::move(reading);
   return f;
 }
 
-double LaneFrame::bin(double s_m) const {
+double LaneFrame::original_d(double s_m, double d_m) const {
+  if (!offset_ || reading_.empty()) return d_m;
   double x = std::fmod(s_m - line_->start_s_m(), line_->length_m());
   if (x < 0.0) x += line_->length_m();
-  return x;
+  const auto i = static_cast<std::size_t>(x);
+  const double f = x - static_cast<double>(i);
+  const std::size_t n = reading_.size();
+  const double raw = reading_[i % n] * (1.0 - f) + reading_[(i + 1) % n] * f;
+  return d_m - offset(s_m) + raw;
 }
 
 double LaneFrame::offset(double s_m) const {
-  if (offset_.empty()) return 0.0;
-  const double x = bin(s_m);
-  const auto i = static_cast<std::size_t>(x);
-  const double f = x - static_cast<double>(i);
-  const std::size_t n = offset_.size();
-  return offset_[i % n] * (1.0 - f) + offset_[(i + 1) % n] * f;
+  if (!offset_) return 0.0;
+  return (*offset_)(line_->wrap_s(s_m));
 }
 
 double LaneFrame::slope(double s_m) const {
-  if (offset_.empty()) return 0.0;
-  const auto i = static_cast<std::size_t>(bin(s_m));
-  const std::size_t n = offset_.size();
-  return offset_[(i + 1) % n] - offset_[i % n];
+  if (!offset_) return 0.0;
+  return offset_->eval(line_->wrap_s(s_m)).d1;
 }
 
 RoadPoint road_point(const LaneFrame& frame, double s_m, double d_m) {

@@ -77,9 +77,15 @@ CarPrediction predict_car(int id, double s_m, double s_dot, double s_ddot, doubl
     c.s_ddot = s_ddot;
     c.brake_time_s = params.braking_horizon_s;
   }
-  if (speeding_up && s_ddot > params.braking_threshold_mps2) {
-    c.s_ddot = s_ddot;
-    c.brake_time_s = params.braking_horizon_s;
+  if (speeding_up && c.speed_mps < params.follower_top_speed_mps) {
+    // A car behind may speed up towards the fastest speed traffic settles at, as fast as it
+    // does now or at least at follower_speed_up_mps2 (traffic in front of it may pull away).
+    const double scale = c.s_dot > 1e-9 && c.speed_mps > 1e-9 ? c.speed_mps / c.s_dot : 1.0;
+    const double accel = std::max(s_ddot, params.follower_speed_up_mps2 / scale);
+    if (accel > 0.0) {
+      c.s_ddot = accel;
+      c.brake_time_s = (params.follower_top_speed_mps / scale - c.s_dot) / accel;
+    }
   }
 
   // Lane change: moving sideways faster than lane keeping does. Away from its lane's
@@ -120,11 +126,38 @@ CarPrediction predict_car(int id, double s_m, double s_dot, double s_ddot, doubl
   return c;
 }
 
+void anticipate_waves(std::vector<CarPrediction>& cars, const std::vector<CarTrack>& tracks,
+                      double ego_s_m, double car_length_m, const ReferencePredictionParams& p) {
+  const double length = car_length_m;
+  for (CarPrediction& c : cars) {
+    if (c.s_m <= ego_s_m || c.s_ddot < 0.0) continue;  // ahead of the ego, not braking already
+    // Its leader: the nearest car ahead in its lane.
+    const CarPrediction* lead = nullptr;
+    for (const CarPrediction& o : cars) {
+      if (&o == &c || !o.occupies(c.lane) || o.s_m <= c.s_m) continue;
+      if (!lead || o.s_m < lead->s_m) lead = &o;
+    }
+    if (!lead) continue;
+    const auto track = std::find_if(tracks.begin(), tracks.end(), [&](const CarTrack& t) { return t.id == c.id; });
+    const double top = track == tracks.end() ? c.speed_mps : track->top_speed_mps;
+    // Traffic settles at a share of its speed cap: the cap in mph, at most the highest drawn.
+    const double cap_mph = std::min(core::mps_to_mph(top / p.free_speed_share), p.max_cap_mph);
+    const double scale = c.s_dot > 1e-9 && c.speed_mps > 1e-9 ? c.speed_mps / c.s_dot : 1.0;
+    const double gap = (lead->s_m - c.s_m) * scale - length;
+    const double reaction = p.reaction_gain_m * (cap_mph - lead->speed_mps);
+    const double target = lead->speed_mps / core::kMphPerMps;  // the leader's m/s read as mph
+    if (gap < reaction && c.speed_mps > target + p.braking_threshold_mps2) {
+      c.s_ddot = -p.wave_brake_mps2 / scale;
+      c.brake_time_s = (c.speed_mps - target) / p.wave_brake_mps2;
+    }
+  }
+}
+
 std::vector<CarPrediction> predict_cars(const core::Telemetry& telemetry,
                                         const LaneFrame& frame, double ego_s_m,
                                         double elapsed_s, std::vector<CarTrack>& tracks,
                                         const ReferencePredictionParams& params,
-                                        const core::RoadParams& road) {
+                                        const core::RoadParams& road, double car_length_m) {
   std::vector<CarPrediction> out;
   out.reserve(telemetry.cars.size());
   std::vector<CarTrack> next;
@@ -142,6 +175,7 @@ std::vector<CarPrediction> predict_cars(const core::Telemetry& telemetry,
     const RoadPoint at = road_point(frame, x.s_m, x.d_m);
     const double speed = x.s_dot * at.along_scale;
     double accel = 0.0;
+    double top_speed = speed;
     const auto prev = std::find_if(tracks.begin(), tracks.end(),
                                    [&](const CarTrack& t) { return t.id == car.id; });
     if (prev != tracks.end() && elapsed_s > 0.0 &&
@@ -149,14 +183,16 @@ std::vector<CarPrediction> predict_cars(const core::Telemetry& telemetry,
       accel = (x.s_dot - prev->s_dot) / elapsed_s;
       // A change no car's brakes or engine make is a glitch of the report, not a motion.
       if (std::abs(accel * at.along_scale) > params.max_plausible_accel_mps2) accel = 0.0;
+      top_speed = std::max(top_speed, prev->top_speed_mps);
     }
-    next.push_back({car.id, x.s_m, x.s_dot, accel});
+    next.push_back({car.id, x.s_m, x.s_dot, accel, top_speed});
     const double s_unwrapped = ego_s_m + line.s_ahead(ego_s_m, x.s_m);
     // Cars behind: a car speeding up is predicted to keep doing so for a while (it may be
     // closing on the ego); ahead, only braking is extrapolated.
     out.push_back(predict_car(car.id, s_unwrapped, x.s_dot, accel, speed, x.d_m, x.d_dot_mps,
                               params, road, s_unwrapped < ego_s_m));
   }
+  anticipate_waves(out, next, ego_s_m, car_length_m, params);
   tracks = std::move(next);
   return out;
 }

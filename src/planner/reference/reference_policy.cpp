@@ -54,8 +54,11 @@ std::vector<core::Vec2> ReferencePolicy::plan(const core::Telemetry& t) {
     if (queue_matches && car_matches) {
       car = consumed == 0 ? origin_ : states_[consumed - 1];
       synced_ = true;
+      driven_.insert(driven_.end(), states_.begin(), states_.begin() + static_cast<std::ptrdiff_t>(consumed));
       for (std::size_t i = 0; i < consumed; ++i) {
-        band_time_s_ = in_line_band(states_[i].d_m, tp.line_band_m, road_) ? band_time_s_ + dt : 0.0;
+        band_time_s_ = in_line_band(frame_.original_d(states_[i].s_m, states_[i].d_m), tp.line_band_m, road_)
+                           ? band_time_s_ + dt
+                           : 0.0;
       }
     }
   }
@@ -74,9 +77,17 @@ std::vector<core::Vec2> ReferencePolicy::plan(const core::Telemetry& t) {
     car = observed_state(t);
     tracks_.clear();
     band_time_s_ = 0.0;
+    driven_.clear();
+  }
+  // Enough history for the checks across the joint (3 check steps), no more.
+  const auto history_steps = static_cast<std::size_t>(std::lround(3.0 * tp.check_step_s / dt)) + 1;
+  if (driven_.size() > history_steps) {
+    driven_.erase(driven_.begin(), driven_.end() - static_cast<std::ptrdiff_t>(history_steps));
   }
   double band_time = band_time_s_;
-  for (const FrenetState& x : states) band_time = in_line_band(x.d_m, tp.line_band_m, road_) ? band_time + dt : 0.0;
+  for (const FrenetState& x : states) {
+    band_time = in_line_band(frame_.original_d(x.s_m, x.d_m), tp.line_band_m, road_) ? band_time + dt : 0.0;
+  }
   // Keep s within one loop at the car (the plan may run past the end).
   const double shift = line_.wrap_s(car.s_m) - car.s_m;
   car.s_m += shift;
@@ -86,7 +97,8 @@ std::vector<core::Vec2> ReferencePolicy::plan(const core::Telemetry& t) {
   const double elapsed = synced_ ? static_cast<double>(consumed) * dt : 0.0;
 
   // Prediction, behaviour, trajectory.
-  predictions_ = predict_cars(t, frame_, car.s_m, elapsed, tracks_, p_.prediction, road_);
+  predictions_ = predict_cars(t, frame_, car.s_m, elapsed, tracks_, p_.prediction, road_,
+                              p_.car_length_m);
   const RoadPoint at_car = road_point(frame_, car.s_m, car.d_m);
   EgoSnapshot ego;
   ego.s_m = car.s_m;
@@ -97,6 +109,21 @@ std::vector<core::Vec2> ReferencePolicy::plan(const core::Telemetry& t) {
 
   TrajectoryRequest req;
   req.start = start;
+  {
+    // The path up to the start (driven, then kept), every check step back from the start.
+    std::vector<FrenetState> past(driven_);
+    past.insert(past.end(), states.begin(), states.end());
+    if (past.empty() || !synced_) past.clear();
+    const auto stride = static_cast<std::size_t>(std::lround(tp.check_step_s / dt));
+    for (std::size_t j = 1; j <= 3 && stride > 0 && !past.empty(); ++j) {
+      // The newest state is the start: the last kept point, or the car (the last driven).
+      const std::size_t newest = past.size() - 1;
+      if (newest < j * stride) break;
+      FrenetState x = past[newest - j * stride];
+      x.s_m = start.s_m + line_.s_ahead(start.s_m, x.s_m);
+      req.history.push_back(x);
+    }
+  }
   req.start_delay_s = start_delay;
   req.target_lane = decision_.target_lane;
   req.wanted_speed_mps = decision_.speed_mps;

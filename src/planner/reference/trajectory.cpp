@@ -191,17 +191,21 @@ CollisionReport collide(const Track1d& lon, const Track1d& lat, bool ego_changin
   return r;
 }
 
-/// The Cartesian check over samples.
+/// The Cartesian check over samples; before t = 0, the positions driven (`history`, newest
+/// first) where given.
 KinematicReport kinematics(const Track1d& lon, const Track1d& lat, const Grid& g,
                            const LaneFrame& line, const ReferenceTrajectoryParams& p,
-                           bool stop_at_first) {
+                           bool stop_at_first, const std::vector<FrenetState>& history = {}) {
   KinematicReport r;
   const double h2 = g.h * g.h;
   const double h3 = h2 * g.h;
   core::Vec2 back[4];  // positions k, k-1, k-2, k-3
   for (int k = -kBack; k <= g.n; ++k) {
     const auto e = static_cast<std::size_t>(k + kBack);
-    const RoadPoint at = road_point(line, lon.x[e], lat.x[e]);
+    const auto past = static_cast<std::size_t>(-k - 1);
+    const bool driven = k < 0 && past < history.size();
+    const RoadPoint at = driven ? road_point(line, history[past].s_m, history[past].d_m)
+                                : road_point(line, lon.x[e], lat.x[e]);
     back[3] = back[2];
     back[2] = back[1];
     back[1] = back[0];
@@ -282,13 +286,16 @@ LaneCost lane_cost(const Track1d& lon, const Grid& g, const std::vector<const Ca
 }
 
 /// The longest time without a break that a lateral motion spends in a lane-line band over
-/// the grid, the first stretch extended by `already_s`.
+/// the grid, the first stretch extended by `already_s`; d read as the original reads it, at
+/// s along a steady motion from `x0`.
 double longest_band_time(const Track1d& lat, const Grid& g, double already_s, double half_width,
+                         const LaneFrame& frame, const FrenetState& x0,
                          const core::RoadParams& road) {
   double longest = 0.0;
   double run = already_s;
   for (int k = 0; k <= g.n; ++k) {
-    if (in_line_band(lat.x[static_cast<std::size_t>(k + kBack)], half_width, road)) {
+    const double s = x0.s_m + x0.s_dot * g.t(k);
+    if (in_line_band(frame.original_d(s, lat.x[static_cast<std::size_t>(k + kBack)]), half_width, road)) {
       run += k == 0 ? 0.0 : g.h;
       longest = std::max(longest, run);
     } else {
@@ -421,7 +428,7 @@ TrajectoryPlan plan_trajectory(const LaneFrame& line, const TrajectoryRequest& r
       c.samples = sample(g, at);
       c.cost = tp.lat_jerk_weight * c.poly.jerk_cost() + (hold ? 0.0 : tp.lat_time_weight * c.poly.duration_s) +
                tp.lane_weight * std::abs(l - req.target_lane);
-      const double band = longest_band_time(c.samples, g, req.band_time_s, tp.line_band_m, road);
+      const double band = longest_band_time(c.samples, g, req.band_time_s, tp.line_band_m, line, x0, road);
       if (band > tp.max_band_time_s) c.cost += kLingerCost * (1.0 + band);
       lats.push_back(std::move(c));
       if (hold) break;
@@ -530,7 +537,7 @@ TrajectoryPlan plan_trajectory(const LaneFrame& line, const TrajectoryRequest& r
     }
     if (plan.kinematic_checks >= tp.max_kinematic_checks) continue;
     ++plan.kinematic_checks;
-    if (kinematics(lon.samples, lat.samples, g, line, tp, true).ok) {
+    if (kinematics(lon.samples, lat.samples, g, line, tp, true, req.history).ok) {
       plan.trajectory = make(c);
       plan.status = PlanStatus::feasible;
       plan.cost = c.cost;
@@ -543,11 +550,32 @@ TrajectoryPlan plan_trajectory(const LaneFrame& line, const TrajectoryRequest& r
   Trajectory fallback;
   fallback.longitudinal = braking;
   if (!lats.empty()) {
-    // The cheapest lateral motion (it keeps off the lane lines).
-    const auto best = std::min_element(lats.begin(), lats.end(),
-                                       [](const LatCandidate& a, const LatCandidate& b) { return a.cost < b.cost; });
-    fallback.lateral = best->poly;
-    fallback.end_lane = best->end_lane;
+    // With each lateral motion in turn: the braking must stay within the limits on the road
+    // (a lateral motion adds its own jerk to the braking's), then collide as late as it can,
+    // then be as gentle as it can.
+    const Track1d brake_samples = sample(g, [&](double t) { return braking.at(t); });
+    const LatCandidate* pick = nullptr;
+    KinematicReport pick_kin;
+    double pick_collision = -kInf;
+    for (const LatCandidate& c : lats) {
+      const bool changing = c.end_lane != start_lane;
+      const CollisionReport col = collide(brake_samples, c.samples, changing, changing || off_centre, g,
+                                          car_samples, mps, params);
+      const KinematicReport kin = kinematics(brake_samples, c.samples, g, line, tp, false, req.history);
+      const auto better = [&] {
+        if (!pick) return true;
+        if (kin.ok != pick_kin.ok) return kin.ok;
+        if (col.first_collision_s != pick_collision) return col.first_collision_s > pick_collision;
+        return kin.peak_jerk_mps3 < pick_kin.peak_jerk_mps3;
+      };
+      if (better()) {
+        pick = &c;
+        pick_kin = kin;
+        pick_collision = col.first_collision_s;
+      }
+    }
+    fallback.lateral = pick->poly;
+    fallback.end_lane = pick->end_lane;
   } else {
     fallback.end_lane = start_lane;
     const double back_to = core::lane_center_d(start_lane, road);
@@ -563,7 +591,7 @@ TrajectoryPlan plan_trajectory(const LaneFrame& line, const TrajectoryRequest& r
     ++tried;
     const Combo& c = combos[n];
     ++plan.kinematic_checks;
-    if (kinematics(lons[c.lon].samples, lats[c.lat].samples, g, line, tp, true).ok) {
+    if (kinematics(lons[c.lon].samples, lats[c.lat].samples, g, line, tp, true, req.history).ok) {
       plan.trajectory = make(c);
       plan.status = PlanStatus::least_bad;
       plan.cost = c.cost;

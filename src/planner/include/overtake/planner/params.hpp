@@ -91,6 +91,15 @@ struct ReferencePredictionParams {
   double max_plausible_accel_mps2 = 15.0;
   /// Cars farther than this beyond the road's edges are parked off it.
   double off_road_margin_m = 3.0;
+  /// A car behind the ego may speed up at this (or as fast as it does now) ...
+  double follower_speed_up_mps2 = 1.5;
+  /// ... up to this: the fastest traffic settles at (about 0.81 of a 60 mph cap).
+  double follower_top_speed_mps = 22.0;
+  /// Stop-and-go waves (anticipate_waves): traffic settles at this share of its speed cap ...
+  double free_speed_share = 0.81;
+  double max_cap_mph = 60.0;           ///< ... a cap is at most this ...
+  double reaction_gain_m = 0.5;        ///< ... it reacts within this * (cap - leader's m/s) ...
+  double wave_brake_mps2 = 7.0;        ///< ... and then brakes about this hard.
   friend bool operator==(const ReferencePredictionParams&, const ReferencePredictionParams&) = default;
 };
 
@@ -258,6 +267,12 @@ void describe(V& v, ReferencePredictionParams& p) {
   v("max_plausible_speed_mps", p.max_plausible_speed_mps);
   v("max_plausible_accel_mps2", p.max_plausible_accel_mps2);
   v("off_road_margin_m", p.off_road_margin_m);
+  v("follower_speed_up_mps2", p.follower_speed_up_mps2);
+  v("follower_top_speed_mps", p.follower_top_speed_mps);
+  v("free_speed_share", p.free_speed_share);
+  v("max_cap_mph", p.max_cap_mph);
+  v("reaction_gain_m", p.reaction_gain_m);
+  v("wave_brake_mps2", p.wave_brake_mps2);
 }
 
 template <class V>

@@ -3,10 +3,12 @@
 // smooth reference line (core::ReferenceLine), and the line's local geometry at a lateral
 // offset, which turns Frenet rates into metres per second on the road.
 
+#include <optional>
 #include <vector>
 
 #include "overtake/core/geometry.hpp"
 #include "overtake/core/reference_line.hpp"
+#include "overtake/core/spline.hpp"
 
 namespace overtake::planner::reference {
 
@@ -28,8 +30,9 @@ struct FrenetState {
 /// the chords). On a bend a chord runs inside the curve: a car on a lane's true centre reads
 /// up to L^2 / 8R outside it (L the waypoint spacing, R the radius), and the original's
 /// referee and traffic go by that reading. The offset is the chord reading's average over
-/// the local waypoint spacing, so a car on the frame's lane centre stays within a fraction of
-/// that bulge of the original's lane centre.
+/// the local waypoint spacing (so a car on the frame's lane centre stays within a fraction of
+/// that bulge of the original's lane centre), rounded off further and drawn as a periodic
+/// cubic spline, so that following it adds little lateral acceleration and jerk.
 class LaneFrame {
  public:
   /// The line's own d (no offset). Implicit: any function taking a frame takes a line.
@@ -42,11 +45,13 @@ class LaneFrame {
   [[nodiscard]] double offset(double s_m) const;
   /// d(offset)/ds at s.
   [[nodiscard]] double slope(double s_m) const;
+  /// The original's reading of a frame d at s (the chords' d itself, before averaging).
+  [[nodiscard]] double original_d(double s_m, double d_m) const;
 
  private:
-  [[nodiscard]] double bin(double s_m) const;
   const core::ReferenceLine* line_;
-  std::vector<double> offset_;  // per metre of s from the line's start; empty: no offset
+  std::optional<core::PiecewiseCubic> offset_;  // of s; none: no offset
+  std::vector<double> reading_;  // the chords' d minus the line's, per metre of s
 };
 
 /// The reference line's geometry at one (s, d).

@@ -22,6 +22,7 @@ struct CarTrack {
   double s_m = 0.0;    ///< wrapped, as observed
   double s_dot = 0.0;  ///< along the road
   double s_ddot = 0.0; ///< estimated acceleration along the road
+  double top_speed_mps = 0.0;  ///< the fastest it has been seen going
 };
 
 /// One car's predicted motion, from the time it was observed.
@@ -69,11 +70,19 @@ struct CarPrediction {
                                                       double ego_s_m, double elapsed_s,
                                                       std::vector<CarTrack>& tracks,
                                                       const ReferencePredictionParams& params,
-                                                      const core::RoadParams& road);
+                                                      const core::RoadParams& road,
+                                                      double car_length_m);
+
+/// The traffic's stop-and-go waves: a car ahead of the ego that has come within the reaction
+/// distance of the car ahead of it (0.5 m * (its cap in mph - the leader's speed in m/s); the
+/// cap estimated from its fastest speed seen) brakes hard towards the leader's speed in m/s
+/// read as mph. Such cars are predicted to brake at wave_brake_mps2 down to that speed.
+void anticipate_waves(std::vector<CarPrediction>& cars, const std::vector<CarTrack>& tracks,
+                      double ego_s_m, double car_length_m, const ReferencePredictionParams& params);
 
 /// Predicts one car from its Frenet state now (s unwrapped) and an acceleration estimate;
-/// braking is continued for braking_horizon_s, and so is speeding up when `speeding_up`
-/// (used for cars behind the ego).
+/// braking is continued for braking_horizon_s; with `speeding_up` (cars behind the ego) the
+/// car is taken to speed up towards follower_top_speed_mps.
 [[nodiscard]] CarPrediction predict_car(int id, double s_m, double s_dot, double s_ddot,
                                         double speed_mps, double d_m, double d_dot_mps,
                                         const ReferencePredictionParams& params,

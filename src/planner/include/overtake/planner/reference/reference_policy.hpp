@@ -46,6 +46,7 @@ class ReferencePolicy final : public Policy {
   core::RoadParams road_;
   ReferenceParams p_;
   std::vector<FrenetState> states_;  // state at each point sent last cycle
+  std::vector<FrenetState> driven_;  // the last states the car went through, oldest first
   std::vector<core::Vec2> sent_;     // those points as the simulator read them
   FrenetState origin_;               // the car's state when they were sent
   bool have_plan_ = false;

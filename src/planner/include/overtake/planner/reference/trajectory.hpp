@@ -44,6 +44,10 @@ struct TrajectoryRequest {
   /// Time the ego has already spent in a lane-line band, without a break, up to `start`.
   double band_time_s = 0.0;
   const std::vector<CarPrediction>* cars = nullptr;
+  /// Where the ego was (or will have been, along the kept path) 1, 2 and 3 check steps
+  /// before `start`, newest first: the acceleration and jerk checks across the joint with
+  /// the path already driven use them. Fewer (or none): the candidate is extended backwards.
+  std::vector<FrenetState> history;
 };
 
 /// True when `d_m` lies within `half_width_m` of a line between two lanes.
