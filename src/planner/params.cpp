@@ -46,11 +46,13 @@ void validate_reference(const PlannerParams& all, std::vector<std::string>& out)
   positive("prediction.max_plausible_accel_mps2", pr.max_plausible_accel_mps2);
   non_negative("prediction.off_road_margin_m", pr.off_road_margin_m);
   non_negative("prediction.follower_speed_up_mps2", pr.follower_speed_up_mps2);
-  positive("prediction.follower_top_speed_mps", pr.follower_top_speed_mps);
+  non_negative("prediction.follower_speed_margin_mps", pr.follower_speed_margin_mps);
   positive("prediction.free_speed_share", pr.free_speed_share);
+  positive("prediction.min_cap_mph", pr.min_cap_mph);
   positive("prediction.max_cap_mph", pr.max_cap_mph);
   non_negative("prediction.reaction_gain_m", pr.reaction_gain_m);
   positive("prediction.wave_brake_mps2", pr.wave_brake_mps2);
+  non_negative("prediction.wave_recover_mps2", pr.wave_recover_mps2);
   const auto& b = p.behaviour;
   positive("behaviour.cruise_speed_mps", b.cruise_speed_mps);
   positive("behaviour.lookahead_m", b.lookahead_m);
@@ -109,6 +111,15 @@ void validate_reference(const PlannerParams& all, std::vector<std::string>& out)
   non_negative("trajectory.lat_margin_m", t.lat_margin_m);
   positive("trajectory.fallback_brake_mps2", t.fallback_brake_mps2);
   positive("trajectory.fallback_jerk_mps3", t.fallback_jerk_mps3);
+  positive("trajectory.fallback_total_jerk_mps3", t.fallback_total_jerk_mps3);
+  for (const double x : t.brake_levels_mps2) {
+    if (!(x > 0.0) || !std::isfinite(x)) {
+      out.push_back(base + "trajectory.brake_levels_mps2 must hold positive numbers");
+      break;
+    }
+  }
+  positive("trajectory.brake_level_jerk_mps3", t.brake_level_jerk_mps3);
+  non_negative("trajectory.ahead_collision_slack_s", t.ahead_collision_slack_s);
   for (const auto& [key, v] : {std::pair<const char*, double>{"trajectory.progress_weight", t.progress_weight},
                                {"trajectory.lon_jerk_weight", t.lon_jerk_weight},
                                {"trajectory.lat_jerk_weight", t.lat_jerk_weight},

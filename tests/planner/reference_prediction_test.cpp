@@ -112,14 +112,23 @@ TEST_F(PredictionTest, ParkedCarsAreNoTrafficAndTheFirstFramesSlipIsUndone) {
   EXPECT_NEAR(cars[0].speed_mps, 50.0 / core::kMphPerMps, 1e-6);
 }
 
-TEST_F(PredictionTest, ACarBehindIsTakenToSpeedUpTowardsTheFastestTraffic) {
+TEST_F(PredictionTest, ACarBehindIsTakenToSpeedUpALittleAboveItsFastestSeen) {
   std::vector<CarTrack> tracks;
   core::Telemetry t;
+  // Seen at 18 m/s, then at 15: it may speed up to 18 + 2 m/s.
+  t.cars = {test::observed_car(line_, 0, 250.0, 6.0, 18.0)};
+  (void)predict_cars(t, line_, 280.0, 0.0, tracks, params_, road_, 4.7);
   t.cars = {test::observed_car(line_, 0, 250.0, 6.0, 15.0)};
-  const auto cars = predict_cars(t, line_, 280.0, 0.0, tracks, params_, road_, 4.7);
+  auto cars = predict_cars(t, line_, 280.0, 0.0, tracks, params_, road_, 4.7);
   ASSERT_EQ(cars.size(), 1u);
-  EXPECT_GT(cars[0].s_dot_at(2.0), 15.0 + 2.9);                                    // 1.5 m/s^2
-  EXPECT_NEAR(cars[0].s_dot_at(30.0), params_.follower_top_speed_mps, 0.3);  // up to its top
+  EXPECT_GT(cars[0].s_dot_at(1.0), 15.0 + 1.4);  // at 1.5 m/s^2
+  EXPECT_NEAR(cars[0].s_dot_at(30.0), 18.0 + params_.follower_speed_margin_mps, 0.3);
+  // A placed car's first frame (its cap read as m/s) tells its cap: 60 mph.
+  tracks.clear();
+  t.cars = {test::observed_car(line_, 1, 250.0, 6.0, 60.0)};
+  cars = predict_cars(t, line_, 280.0, 0.0, tracks, params_, road_, 4.7);
+  EXPECT_NEAR(cars[0].speed_mps, core::mph_to_mps(60.0), 1e-6);
+  EXPECT_NEAR(cars[0].s_dot_at(30.0), core::mph_to_mps(60.0) + params_.follower_speed_margin_mps, 0.3);
 }
 
 TEST_F(PredictionTest, ACarCloseBehindItsLeaderIsTakenToBrakeInAWave) {
@@ -132,7 +141,9 @@ TEST_F(PredictionTest, ACarCloseBehindItsLeaderIsTakenToBrakeInAWave) {
   const auto cars = predict_cars(t, line_, 200.0, 0.0, tracks, params_, road_, 4.7);
   ASSERT_EQ(cars.size(), 2u);
   EXPECT_LT(cars[0].s_ddot, -5.0);
-  EXPECT_NEAR(cars[0].s_dot_at(10.0), 18.0 / core::kMphPerMps, 0.3);
+  // Down to 18 "mph", then back up to its speed (a surge).
+  EXPECT_NEAR(cars[0].s_dot_at(cars[0].brake_time_s), 18.0 / core::kMphPerMps, 0.3);
+  EXPECT_NEAR(cars[0].s_dot_at(10.0), cap_speed, 0.1);
   EXPECT_EQ(cars[1].s_ddot, 0.0);  // nothing ahead of it
 }
 

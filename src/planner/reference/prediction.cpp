@@ -36,16 +36,22 @@ double min_jerk_progress(double fraction) {
 
 double CarPrediction::s_at(double t) const {
   if (s_ddot == 0.0 || t <= 0.0) return s_m + s_dot * t;
-  // Braking for brake_time_s, then steady; the speed never goes below zero.
+  // Braking (or speeding up) for brake_time_s, then steady, or back up to the speed it had;
+  // the speed never goes below zero.
   const double tb = std::min(t, brake_time_s);
   const double t_stop = s_ddot < 0.0 ? s_dot / -s_ddot : tb + 1.0;
   if (t_stop <= tb) return s_m + 0.5 * s_dot * t_stop;
   const double v = s_dot + s_ddot * tb;
-  return s_m + s_dot * tb + 0.5 * s_ddot * tb * tb + v * (t - tb);
+  const double s_b = s_m + s_dot * tb + 0.5 * s_ddot * tb * tb;
+  if (t <= brake_time_s || recover_s_ddot <= 0.0 || v >= s_dot) return s_b + v * (t - tb);
+  const double tr = std::min(t - brake_time_s, (s_dot - v) / recover_s_ddot);
+  return s_b + v * tr + 0.5 * recover_s_ddot * tr * tr + s_dot * (t - brake_time_s - tr);
 }
 
 double CarPrediction::s_dot_at(double t) const {
-  return std::max(0.0, s_dot + s_ddot * std::clamp(t, 0.0, brake_time_s));
+  const double v = std::max(0.0, s_dot + s_ddot * std::clamp(t, 0.0, brake_time_s));
+  if (t <= brake_time_s || recover_s_ddot <= 0.0 || v >= s_dot) return v;
+  return std::min(s_dot, v + recover_s_ddot * (t - brake_time_s));
 }
 
 double CarPrediction::d_at(double t) const {
@@ -62,7 +68,7 @@ double CarPrediction::d_dot_at(double t) const {
 
 CarPrediction predict_car(int id, double s_m, double s_dot, double s_ddot, double speed_mps,
                           double d_m, double d_dot_mps, const ReferencePredictionParams& params,
-                          const core::RoadParams& road, bool speeding_up) {
+                          const core::RoadParams& road, double speed_up_to_mps) {
   CarPrediction c;
   c.id = id;
   c.s_m = s_m;
@@ -77,14 +83,14 @@ CarPrediction predict_car(int id, double s_m, double s_dot, double s_ddot, doubl
     c.s_ddot = s_ddot;
     c.brake_time_s = params.braking_horizon_s;
   }
-  if (speeding_up && c.speed_mps < params.follower_top_speed_mps) {
-    // A car behind may speed up towards the fastest speed traffic settles at, as fast as it
-    // does now or at least at follower_speed_up_mps2 (traffic in front of it may pull away).
+  if (c.speed_mps < speed_up_to_mps) {
+    // A car behind may speed up (traffic in front of it may pull away), as fast as it does
+    // now or at least at follower_speed_up_mps2.
     const double scale = c.s_dot > 1e-9 && c.speed_mps > 1e-9 ? c.speed_mps / c.s_dot : 1.0;
     const double accel = std::max(s_ddot, params.follower_speed_up_mps2 / scale);
     if (accel > 0.0) {
       c.s_ddot = accel;
-      c.brake_time_s = (params.follower_top_speed_mps / scale - c.s_dot) / accel;
+      c.brake_time_s = (speed_up_to_mps / scale - c.s_dot) / accel;
     }
   }
 
@@ -126,6 +132,12 @@ CarPrediction predict_car(int id, double s_m, double s_dot, double s_ddot, doubl
   return c;
 }
 
+double cap_estimate(double top_speed_mps, const ReferencePredictionParams& p) {
+  // Traffic settles at a share of its speed cap; caps are drawn from 40 mph up.
+  return std::clamp(top_speed_mps / p.free_speed_share, core::mph_to_mps(p.min_cap_mph),
+                    core::mph_to_mps(p.max_cap_mph));
+}
+
 void anticipate_waves(std::vector<CarPrediction>& cars, const std::vector<CarTrack>& tracks,
                       double ego_s_m, double car_length_m, const ReferencePredictionParams& p) {
   const double length = car_length_m;
@@ -140,8 +152,7 @@ void anticipate_waves(std::vector<CarPrediction>& cars, const std::vector<CarTra
     if (!lead) continue;
     const auto track = std::find_if(tracks.begin(), tracks.end(), [&](const CarTrack& t) { return t.id == c.id; });
     const double top = track == tracks.end() ? c.speed_mps : track->top_speed_mps;
-    // Traffic settles at a share of its speed cap: the cap in mph, at most the highest drawn.
-    const double cap_mph = std::min(core::mps_to_mph(top / p.free_speed_share), p.max_cap_mph);
+    const double cap_mph = core::mps_to_mph(cap_estimate(top, p));
     const double scale = c.s_dot > 1e-9 && c.speed_mps > 1e-9 ? c.speed_mps / c.s_dot : 1.0;
     const double gap = (lead->s_m - c.s_m) * scale - length;
     const double reaction = p.reaction_gain_m * (cap_mph - lead->speed_mps);
@@ -149,6 +160,7 @@ void anticipate_waves(std::vector<CarPrediction>& cars, const std::vector<CarTra
     if (gap < reaction && c.speed_mps > target + p.braking_threshold_mps2) {
       c.s_ddot = -p.wave_brake_mps2 / scale;
       c.brake_time_s = (c.speed_mps - target) / p.wave_brake_mps2;
+      c.recover_s_ddot = p.wave_recover_mps2 / scale;
     }
   }
 }
@@ -187,10 +199,14 @@ std::vector<CarPrediction> predict_cars(const core::Telemetry& telemetry,
     }
     next.push_back({car.id, x.s_m, x.s_dot, accel, top_speed});
     const double s_unwrapped = ego_s_m + line.s_ahead(ego_s_m, x.s_m);
-    // Cars behind: a car speeding up is predicted to keep doing so for a while (it may be
-    // closing on the ego); ahead, only braking is extrapolated.
+    // Cars behind may speed up (they may be closing on the ego): towards the fastest it has
+    // been seen going and a margin. (A placed car's first frame shows its cap.) Ahead, only
+    // braking is extrapolated.
+    const double up_to = top_speed + params.follower_speed_margin_mps;
     out.push_back(predict_car(car.id, s_unwrapped, x.s_dot, accel, speed, x.d_m, x.d_dot_mps,
-                              params, road, s_unwrapped < ego_s_m));
+                              params, road, s_unwrapped < ego_s_m ? up_to : 0.0));
+    out.back().cap_mps = cap_estimate(top_speed, params);
+    out.back().observed_accel_mps2 = accel * at.along_scale;
   }
   anticipate_waves(out, next, ego_s_m, car_length_m, params);
   tracks = std::move(next);

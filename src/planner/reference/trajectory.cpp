@@ -5,6 +5,7 @@
 #include <limits>
 #include <numeric>
 
+#include "overtake/core/units.hpp"
 #include "overtake/planner/reference/behaviour.hpp"
 
 namespace overtake::planner::reference {
@@ -31,9 +32,8 @@ constexpr double kScaleSampleM = 10.0;
 constexpr double kRearRoomScaleM = 3.0;
 /// Off its lane's centre by more than this, the ego counts as moving across lanes.
 constexpr double kSidewaysM = 0.5;
-/// Cost of a lateral motion that stays on a lane line too long (an incident, but better than
-/// a collision).
-constexpr double kLingerCost = 1e4;
+/// A car speeding up harder than this is not taken to brake early for the ego.
+constexpr double kSpeedingUpMps2 = 1.0;
 /// A follower's sensor meets the ego once the ego's middle is this close sideways to its own.
 constexpr double kSensorCoverM = 0.8;
 /// Longest a collision-failed candidate list is searched for a least-bad one.
@@ -56,10 +56,13 @@ struct LatCandidate {
   Track1d samples;
   int end_lane = 0;
   double cost = 0.0;
+  double overstay_s = 0.0;  // when it would have lingered on a lane line too long (or infinity)
 };
 
 struct CarSamples {
   int id = 0;
+  double cap_mps = 0.0;  // estimated speed cap
+  bool speeding_up = false;  // accelerating now: not a car that brakes for the ego
   std::vector<double> s, s_dot, d, d_dot;  // k = 0 .. n
 };
 
@@ -109,6 +112,8 @@ std::vector<CarSamples> sample_cars(const std::vector<CarPrediction>& cars, doub
     if (std::abs(c.s_m - s0) > kRelevantM) continue;
     CarSamples cs;
     cs.id = c.id;
+    cs.cap_mps = c.cap_mps;
+    cs.speeding_up = c.observed_accel_mps2 > kSpeedingUpMps2;
     const auto n = static_cast<std::size_t>(g.n + 1);
     cs.s.resize(n);
     cs.s_dot.resize(n);
@@ -160,7 +165,7 @@ CollisionReport collide(const Track1d& lon, const Track1d& lat, bool ego_changin
         if (follower) break;  // the ego has left its path
         continue;
       }
-      const double ahead = (c.s[i] - lon.x[e]) * mps;
+      double ahead = (c.s[i] - lon.x[e]) * mps;
       if (!follower) {
         if (ahead < 0.0 && (k == 0 || (!seen && ego_changing))) {
           // It follows the ego already and sees it (its business), or the ego moves in
@@ -169,7 +174,7 @@ CollisionReport collide(const Track1d& lon, const Track1d& lat, bool ego_changin
           follower = true;
         } else {
           if (std::abs(ahead) < lon_need) {
-            r = {false, t, c.id};
+            r = {false, t, c.id, ahead < 0.0};
             break;
           }
           seen = true;
@@ -177,13 +182,27 @@ CollisionReport collide(const Track1d& lon, const Track1d& lat, bool ego_changin
           continue;
         }
       }
-      const double closing = (c.s_dot[i] - lon.v[e]) * mps;
-      if (side_gap < kSensorCoverM && -ahead <= react_gap) {
-        if (rear_room(-ahead, closing, length, p.behaviour) < 0.0) r = {false, t, c.id};
+      // Against a follower the ego counts on no speed it has not got yet: plans change, and a
+      // change of lanes already begun is hard to undo.
+      const double steady_s = lon.x[kBack] + lon.v[kBack] * t;
+      const double own_s = std::min(lon.x[e], steady_s);
+      const double own_v = std::min(lon.v[e], lon.v[kBack]);
+      ahead = (c.s[i] - own_s) * mps;
+      const double closing = (c.s_dot[i] - own_v) * mps;
+      // Once it sees the ego it reacts within 0.5 m * (its cap in mph - the ego's speed in
+      // m/s), bumper to bumper; never later than the behaviour's follower reaction gap. One
+      // speeding up hard is taken to react only that late.
+      const double sees_at =
+          c.speeding_up ? react_gap
+                        : std::max(react_gap, p.prediction.reaction_gain_m *
+                                                      (core::mps_to_mph(c.cap_mps) - own_v * mps) +
+                                                  length);
+      if (side_gap < kSensorCoverM && -ahead <= sees_at) {
+        if (rear_room(-ahead, closing, length, p.behaviour, sees_at) < 0.0) r = {false, t, c.id, true};
         break;
       }
       if (-ahead < lon_need) {
-        r = {false, t, c.id};
+        r = {false, t, c.id, true};
         break;
       }
     }
@@ -285,24 +304,23 @@ LaneCost lane_cost(const Track1d& lon, const Grid& g, const std::vector<const Ca
   return c;
 }
 
-/// The longest time without a break that a lateral motion spends in a lane-line band over
-/// the grid, the first stretch extended by `already_s`; d read as the original reads it, at
-/// s along a steady motion from `x0`.
-double longest_band_time(const Track1d& lat, const Grid& g, double already_s, double half_width,
-                         const LaneFrame& frame, const FrenetState& x0,
-                         const core::RoadParams& road) {
-  double longest = 0.0;
+/// When a lateral motion has spent longer than `budget_s` without a break in a lane-line
+/// band (the first stretch extended by `already_s`), over the grid; infinity when it never
+/// does. d is read as the original reads it, at s along a steady motion from `x0`.
+double band_overstay_s(const Track1d& lat, const Grid& g, double already_s, double half_width,
+                       double budget_s, const LaneFrame& frame, const FrenetState& x0,
+                       const core::RoadParams& road) {
   double run = already_s;
   for (int k = 0; k <= g.n; ++k) {
     const double s = x0.s_m + x0.s_dot * g.t(k);
     if (in_line_band(frame.original_d(s, lat.x[static_cast<std::size_t>(k + kBack)]), half_width, road)) {
       run += k == 0 ? 0.0 : g.h;
-      longest = std::max(longest, run);
+      if (run > budget_s) return g.t(k);
     } else {
       run = 0.0;
     }
   }
-  return longest;
+  return kInf;
 }
 
 }  // namespace
@@ -428,8 +446,8 @@ TrajectoryPlan plan_trajectory(const LaneFrame& line, const TrajectoryRequest& r
       c.samples = sample(g, at);
       c.cost = tp.lat_jerk_weight * c.poly.jerk_cost() + (hold ? 0.0 : tp.lat_time_weight * c.poly.duration_s) +
                tp.lane_weight * std::abs(l - req.target_lane);
-      const double band = longest_band_time(c.samples, g, req.band_time_s, tp.line_band_m, line, x0, road);
-      if (band > tp.max_band_time_s) c.cost += kLingerCost * (1.0 + band);
+      c.overstay_s = band_overstay_s(c.samples, g, req.band_time_s, tp.line_band_m, tp.max_band_time_s,
+                                     line, x0, road);
       lats.push_back(std::move(c));
       if (hold) break;
     }
@@ -482,6 +500,14 @@ TrajectoryPlan plan_trajectory(const LaneFrame& line, const TrajectoryRequest& r
   gentle.braking = true;
   gentle.brake = BrakingProfile(x0.s_m, x0.s_dot, x0.s_ddot, kGentleStopMps2 / mps, kGentleStopJerkMps3 / mps);
   add_lon(gentle);
+  // Braking between the two, each reached gently enough to leave room for a lateral motion.
+  for (std::size_t i = 0; i < tp.brake_levels_mps2.size(); ++i) {
+    Longitudinal firm;
+    firm.braking = true;
+    firm.brake = BrakingProfile(x0.s_m, x0.s_dot, x0.s_ddot, tp.brake_levels_mps2[i] / mps,
+                                tp.brake_level_jerk_mps3 / mps);
+    add_lon(firm);
+  }
 
   // Soft lane costs per longitudinal candidate.
   const std::size_t lane_n = static_cast<std::size_t>(road.lane_count);
@@ -519,7 +545,13 @@ TrajectoryPlan plan_trajectory(const LaneFrame& line, const TrajectoryRequest& r
     t.end_lane = lats[c.lat].end_lane;
     return t;
   };
-  std::vector<std::pair<double, std::size_t>> failed;  // (collision time, combo index)
+  // How late a predicted collision comes, for choosing the least bad: one with a car ahead
+  // (predicted to brake as hard as it can) counts as later than it is, one with a car from
+  // behind (that does not see the ego) as it is.
+  const auto lateness = [&](const CollisionReport& r) {
+    return r.first_collision_s + (r.from_behind ? 0.0 : tp.ahead_collision_slack_s);
+  };
+  std::vector<std::pair<double, std::size_t>> failed;  // (lateness, combo index)
   for (std::size_t n = 0; n < combos.size(); ++n) {
     const Combo& c = combos[n];
     const LatCandidate& lat = lats[c.lat];
@@ -527,12 +559,14 @@ TrajectoryPlan plan_trajectory(const LaneFrame& line, const TrajectoryRequest& r
     ++plan.collision_checks;
     const bool changing = lat.end_lane != start_lane;
     const CollisionReport col = collide(lon.samples, lat.samples, changing, changing || off_centre, g, car_samples, mps, params);
-    if (!col.ok) {
-      if (plan.collision_failures++ == 0) {
+    if (!col.ok || lat.overstay_s < kInf) {
+      // An incident ahead: a collision, or lingering on a lane line (the original counts it
+      // as one, so it is weighed as one, at the time it would count).
+      if (!col.ok && plan.collision_failures++ == 0) {
         plan.blocking_car = col.car_id;
         plan.blocking_time_s = col.first_collision_s;
       }
-      failed.emplace_back(col.first_collision_s, n);
+      failed.emplace_back(std::min(col.ok ? kInf : lateness(col), lat.overstay_s), n);
       continue;
     }
     if (plan.kinematic_checks >= tp.max_kinematic_checks) continue;
@@ -545,37 +579,50 @@ TrajectoryPlan plan_trajectory(const LaneFrame& line, const TrajectoryRequest& r
     }
   }
 
-  // Nothing passed: the braking fallback in the lane being kept, or the candidate that
-  // collides latest, whichever collides later.
+  // Nothing passed: the braking fallback, or the candidate whose first incident comes
+  // latest, whichever comes later.
   Trajectory fallback;
   fallback.longitudinal = braking;
+  double fallback_incident = kInf;
   if (!lats.empty()) {
-    // With each lateral motion in turn: the braking must stay within the limits on the road
-    // (a lateral motion adds its own jerk to the braking's), then collide as late as it can,
-    // then be as gentle as it can.
-    const Track1d brake_samples = sample(g, [&](double t) { return braking.at(t); });
+    // With each lateral motion in turn, braking as fast as the lateral motion's own jerk
+    // leaves room for: it must stay within the limits on the road, then collide as late as
+    // it can, then be as gentle as it can.
     const LatCandidate* pick = nullptr;
+    Longitudinal pick_brake = braking;
     KinematicReport pick_kin;
     double pick_collision = -kInf;
     for (const LatCandidate& c : lats) {
+      double lat_jerk = 0.0;
+      for (int k = 0; k <= g.n; ++k) lat_jerk = std::max(lat_jerk, std::abs(c.poly.at(g.t(k)).j));
+      const double room = tp.fallback_total_jerk_mps3 * tp.fallback_total_jerk_mps3 - lat_jerk * lat_jerk;
+      const double brake_jerk = std::clamp(std::sqrt(std::max(0.0, room)), kGentleStopJerkMps3, tp.fallback_jerk_mps3);
+      Longitudinal brake;
+      brake.braking = true;
+      brake.brake = BrakingProfile(x0.s_m, x0.s_dot, x0.s_ddot, tp.fallback_brake_mps2 / mps, brake_jerk / mps);
+      const Track1d brake_samples = sample(g, [&](double t) { return brake.at(t); });
       const bool changing = c.end_lane != start_lane;
       const CollisionReport col = collide(brake_samples, c.samples, changing, changing || off_centre, g,
                                           car_samples, mps, params);
       const KinematicReport kin = kinematics(brake_samples, c.samples, g, line, tp, false, req.history);
+      const double incident = std::min(col.ok ? kInf : lateness(col), c.overstay_s);
       const auto better = [&] {
         if (!pick) return true;
         if (kin.ok != pick_kin.ok) return kin.ok;
-        if (col.first_collision_s != pick_collision) return col.first_collision_s > pick_collision;
+        if (incident != pick_collision) return incident > pick_collision;
         return kin.peak_jerk_mps3 < pick_kin.peak_jerk_mps3;
       };
       if (better()) {
         pick = &c;
+        pick_brake = brake;
         pick_kin = kin;
-        pick_collision = col.first_collision_s;
+        pick_collision = incident;
       }
     }
     fallback.lateral = pick->poly;
+    fallback.longitudinal = pick_brake;
     fallback.end_lane = pick->end_lane;
+    fallback_incident = pick_collision;
   } else {
     fallback.end_lane = start_lane;
     const double back_to = core::lane_center_d(start_lane, road);
@@ -583,11 +630,14 @@ TrajectoryPlan plan_trajectory(const LaneFrame& line, const TrajectoryRequest& r
                                std::max(tp.min_lateral_time_s,
                                         std::cbrt(60.0 * std::abs(back_to - x0.d_m) / tp.lateral_jerk_mps3)));
   }
-  const CollisionReport fb = check_collisions(fallback, cars, req.start_delay_s, mps, params, road);
+  if (lats.empty()) {
+    const CollisionReport fb = check_collisions(fallback, cars, req.start_delay_s, mps, params, road);
+    fallback_incident = fb.ok ? kInf : lateness(fb);
+  }
   std::stable_sort(failed.begin(), failed.end(), [](const auto& a, const auto& b) { return a.first > b.first; });
   int tried = 0;
   for (const auto& [when, n] : failed) {
-    if (when <= fb.first_collision_s || tried >= kLeastBadChecks) break;
+    if (when <= fallback_incident || tried >= kLeastBadChecks) break;
     ++tried;
     const Combo& c = combos[n];
     ++plan.kinematic_checks;

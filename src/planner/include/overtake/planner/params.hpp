@@ -93,13 +93,15 @@ struct ReferencePredictionParams {
   double off_road_margin_m = 3.0;
   /// A car behind the ego may speed up at this (or as fast as it does now) ...
   double follower_speed_up_mps2 = 1.5;
-  /// ... up to this: the fastest traffic settles at (about 0.81 of a 60 mph cap).
-  double follower_top_speed_mps = 22.0;
+  /// ... up to the fastest it has been seen going and this margin.
+  double follower_speed_margin_mps = 2.0;
   /// Stop-and-go waves (anticipate_waves): traffic settles at this share of its speed cap ...
   double free_speed_share = 0.81;
-  double max_cap_mph = 60.0;           ///< ... a cap is at most this ...
+  double min_cap_mph = 40.0;           ///< ... a cap is at least this ...
+  double max_cap_mph = 60.0;           ///< ... and at most this ...
   double reaction_gain_m = 0.5;        ///< ... it reacts within this * (cap - leader's m/s) ...
-  double wave_brake_mps2 = 7.0;        ///< ... and then brakes about this hard.
+  double wave_brake_mps2 = 7.0;        ///< ... and then brakes about this hard ...
+  double wave_recover_mps2 = 3.0;      ///< ... and speeds back up at this.
   friend bool operator==(const ReferencePredictionParams&, const ReferencePredictionParams&) = default;
 };
 
@@ -159,7 +161,16 @@ struct ReferenceTrajectoryParams {
   double lon_margin_m = 1.0;         ///< bumper to bumper, hard
   double lat_margin_m = 0.35;        ///< side to side, hard
   double fallback_brake_mps2 = 6.0;  ///< the braking fallback ...
-  double fallback_jerk_mps3 = 7.0;   ///< ... reached at this jerk
+  double fallback_jerk_mps3 = 7.0;   ///< ... reached at this jerk at most ...
+  /// ... or less, so that with the lateral motion's jerk the total stays within this.
+  double fallback_total_jerk_mps3 = 9.0;
+  /// Braking candidates (beside the fallback and a gentle stop): these decelerations ...
+  std::vector<double> brake_levels_mps2 = {};
+  double brake_level_jerk_mps3 = 5.0;  ///< ... reached at this jerk
+  /// When every candidate collides: a collision with a car ahead counts this much later
+  /// than one with a car from behind (a car ahead is predicted braking its hardest, a car
+  /// from behind may not see the ego at all).
+  double ahead_collision_slack_s = 1.0;
   // cost weights
   double progress_weight = 1.0;      ///< per metre short of cruising at the wanted speed
   double lon_jerk_weight = 0.05;     ///< per (m/s^3)^2 s
@@ -268,11 +279,13 @@ void describe(V& v, ReferencePredictionParams& p) {
   v("max_plausible_accel_mps2", p.max_plausible_accel_mps2);
   v("off_road_margin_m", p.off_road_margin_m);
   v("follower_speed_up_mps2", p.follower_speed_up_mps2);
-  v("follower_top_speed_mps", p.follower_top_speed_mps);
+  v("follower_speed_margin_mps", p.follower_speed_margin_mps);
   v("free_speed_share", p.free_speed_share);
+  v("min_cap_mph", p.min_cap_mph);
   v("max_cap_mph", p.max_cap_mph);
   v("reaction_gain_m", p.reaction_gain_m);
   v("wave_brake_mps2", p.wave_brake_mps2);
+  v("wave_recover_mps2", p.wave_recover_mps2);
 }
 
 template <class V>
@@ -325,6 +338,10 @@ void describe(V& v, ReferenceTrajectoryParams& p) {
   v("lat_margin_m", p.lat_margin_m);
   v("fallback_brake_mps2", p.fallback_brake_mps2);
   v("fallback_jerk_mps3", p.fallback_jerk_mps3);
+  v("fallback_total_jerk_mps3", p.fallback_total_jerk_mps3);
+  v("brake_levels_mps2", p.brake_levels_mps2);
+  v("brake_level_jerk_mps3", p.brake_level_jerk_mps3);
+  v("ahead_collision_slack_s", p.ahead_collision_slack_s);
   v("progress_weight", p.progress_weight);
   v("lon_jerk_weight", p.lon_jerk_weight);
   v("lat_jerk_weight", p.lat_jerk_weight);

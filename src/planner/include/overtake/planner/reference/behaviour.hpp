@@ -28,6 +28,9 @@ namespace overtake::planner::reference {
 /// (within follower_reaction_gap_m) and then brakes; negative: it would come too close.
 [[nodiscard]] double rear_room(double centre_gap_m, double closing_mps, double car_length_m,
                                const ReferenceBehaviourParams& p);
+/// The same with the follower's reaction gap (centre to centre) given.
+[[nodiscard]] double rear_room(double centre_gap_m, double closing_mps, double car_length_m,
+                               const ReferenceBehaviourParams& p, double reaction_gap_m);
 
 /// The ego as behaviour sees it.
 struct EgoSnapshot {

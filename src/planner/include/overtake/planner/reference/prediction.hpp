@@ -33,6 +33,11 @@ struct CarPrediction {
   double s_ddot = 0.0;     ///< acceleration continued for a short while (braking; or
                            ///< speeding up, for cars behind the ego); 0 otherwise
   double brake_time_s = 0.0;  ///< how long s_ddot is continued
+  /// After that, it speeds back up at this (units of s per second squared; 0: it does not)
+  /// to its speed now: a car braking in a stop-and-go wave surges again.
+  double recover_s_ddot = 0.0;
+  double cap_mps = 0.0;       ///< estimated speed cap (0: unknown)
+  double observed_accel_mps2 = 0.0;  ///< its acceleration along the road, as estimated now
   double speed_mps = 0.0;  ///< along the road, m/s
   double d_m = 0.0;
   double d_dot_mps = 0.0;
@@ -73,19 +78,24 @@ struct CarPrediction {
                                                       const core::RoadParams& road,
                                                       double car_length_m);
 
+/// A car's speed cap estimated from the fastest it has been seen going (traffic settles at
+/// free_speed_share of its cap), within the caps drawn.
+[[nodiscard]] double cap_estimate(double top_speed_mps, const ReferencePredictionParams& params);
+
 /// The traffic's stop-and-go waves: a car ahead of the ego that has come within the reaction
 /// distance of the car ahead of it (0.5 m * (its cap in mph - the leader's speed in m/s); the
 /// cap estimated from its fastest speed seen) brakes hard towards the leader's speed in m/s
-/// read as mph. Such cars are predicted to brake at wave_brake_mps2 down to that speed.
+/// read as mph. Such cars are predicted to brake at wave_brake_mps2 down to that speed, then
+/// to speed up again at wave_recover_mps2.
 void anticipate_waves(std::vector<CarPrediction>& cars, const std::vector<CarTrack>& tracks,
                       double ego_s_m, double car_length_m, const ReferencePredictionParams& params);
 
 /// Predicts one car from its Frenet state now (s unwrapped) and an acceleration estimate;
-/// braking is continued for braking_horizon_s; with `speeding_up` (cars behind the ego) the
-/// car is taken to speed up towards follower_top_speed_mps.
+/// braking is continued for braking_horizon_s; a car slower than `speed_up_to_mps` (cars
+/// behind the ego) is taken to speed up towards it.
 [[nodiscard]] CarPrediction predict_car(int id, double s_m, double s_dot, double s_ddot,
                                         double speed_mps, double d_m, double d_dot_mps,
                                         const ReferencePredictionParams& params,
-                                        const core::RoadParams& road, bool speeding_up = false);
+                                        const core::RoadParams& road, double speed_up_to_mps = 0.0);
 
 }  // namespace overtake::planner::reference

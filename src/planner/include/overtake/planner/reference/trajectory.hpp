@@ -96,6 +96,7 @@ struct CollisionReport {
   bool ok = true;
   double first_collision_s = 1e9;
   int car_id = -1;
+  bool from_behind = false;  ///< the car comes from behind (it does not see the ego in time)
 };
 
 /// Checks `t` against the predicted cars (observed `start_delay_s` before t = 0) with the
