@@ -99,6 +99,7 @@ void validate_reference(const PlannerParams& all, std::vector<std::string>& out)
   positive("trajectory.lateral_jerk_mps3", t.lateral_jerk_mps3);
   positive("trajectory.min_lateral_time_s", t.min_lateral_time_s);
   times("trajectory.lateral_time_factors", t.lateral_time_factors);
+  non_negative("trajectory.road_edge_margin_m", t.road_edge_margin_m);
   times("trajectory.cruise_times_s", t.cruise_times_s);
   times("trajectory.follow_times_s", t.follow_times_s);
   if (t.speed_offsets_mps.empty()) out.push_back(base + "trajectory.speed_offsets_mps must list at least one value");

@@ -323,6 +323,19 @@ double band_overstay_s(const Track1d& lat, const Grid& g, double already_s, doub
   return kInf;
 }
 
+/// Whether a lateral motion keeps the ego's middle on the road, as the original reads d,
+/// with a margin (a slow lateral motion from a fast start overshoots).
+bool on_road(const Track1d& lat, const Grid& g, const LaneFrame& frame, const FrenetState& x0,
+             const ReferenceTrajectoryParams& tp, const core::RoadParams& road) {
+  const double lo = tp.road_edge_margin_m;
+  const double hi = road.lane_count * road.lane_width_m - tp.road_edge_margin_m;
+  for (int k = 0; k <= g.n; ++k) {
+    const double d = frame.original_d(x0.s_m + x0.s_dot * g.t(k), lat.x[static_cast<std::size_t>(k + kBack)]);
+    if (d < lo || d > hi) return false;
+  }
+  return true;
+}
+
 }  // namespace
 
 bool in_line_band(double d_m, double half_width_m, const core::RoadParams& road) {
@@ -444,6 +457,7 @@ TrajectoryPlan plan_trajectory(const LaneFrame& line, const TrajectoryRequest& r
       const auto at = [&](double t) { return c.poly.at(t); };
       if (!axis_ok(g, at, tp.max_accel_mps2, tp.max_jerk_mps3, false)) continue;
       c.samples = sample(g, at);
+      if (!on_road(c.samples, g, line, x0, tp, road)) continue;
       c.cost = tp.lat_jerk_weight * c.poly.jerk_cost() + (hold ? 0.0 : tp.lat_time_weight * c.poly.duration_s) +
                tp.lane_weight * std::abs(l - req.target_lane);
       c.overstay_s = band_overstay_s(c.samples, g, req.band_time_s, tp.line_band_m, tp.max_band_time_s,
@@ -606,9 +620,13 @@ TrajectoryPlan plan_trajectory(const LaneFrame& line, const TrajectoryRequest& r
                                           car_samples, mps, params);
       const KinematicReport kin = kinematics(brake_samples, c.samples, g, line, tp, false, req.history);
       const double incident = std::min(col.ok ? kInf : lateness(col), c.overstay_s);
+      // Within the checked limits; else within the total jerk allowed to a fallback; else not.
+      const auto tier = [&](const KinematicReport& k) {
+        return k.ok ? 0 : (k.peak_jerk_mps3 <= tp.fallback_total_jerk_mps3 ? 1 : 2);
+      };
       const auto better = [&] {
         if (!pick) return true;
-        if (kin.ok != pick_kin.ok) return kin.ok;
+        if (tier(kin) != tier(pick_kin)) return tier(kin) < tier(pick_kin);
         if (incident != pick_collision) return incident > pick_collision;
         return kin.peak_jerk_mps3 < pick_kin.peak_jerk_mps3;
       };

@@ -152,7 +152,10 @@ struct ReferenceTrajectoryParams {
   double max_jerk_mps3 = 7.5;        ///< checked over 0.1 s windows as the strict figures are
   double lateral_jerk_mps3 = 5.0;    ///< sets the shortest lateral manoeuvre for a distance
   double min_lateral_time_s = 1.2;
-  std::vector<double> lateral_time_factors = {1.0, 1.3, 1.7};
+  std::vector<double> lateral_time_factors = {1.0, 1.3, 1.7, 2.5};
+  /// The ego's middle stays this far inside the road's edges (the original counts d under
+  /// 0.8 m or over 11.2 m as off the road).
+  double road_edge_margin_m = 1.2;
   std::vector<double> cruise_times_s = {1.5, 2.5, 4.0, 6.0};
   std::vector<double> speed_offsets_mps = {0.0, -1.0, -2.5, -5.0, -9.0};
   std::vector<double> follow_times_s = {1.5, 2.5, 3.5, 5.0, 7.0};
@@ -329,6 +332,7 @@ void describe(V& v, ReferenceTrajectoryParams& p) {
   v("lateral_jerk_mps3", p.lateral_jerk_mps3);
   v("min_lateral_time_s", p.min_lateral_time_s);
   v("lateral_time_factors", p.lateral_time_factors);
+  v("road_edge_margin_m", p.road_edge_margin_m);
   v("cruise_times_s", p.cruise_times_s);
   v("speed_offsets_mps", p.speed_offsets_mps);
   v("follow_times_s", p.follow_times_s);
