@@ -108,6 +108,8 @@ void validate_reference(const PlannerParams& all, std::vector<std::string>& out)
   }
   non_negative("trajectory.line_band_m", t.line_band_m);
   positive("trajectory.max_band_time_s", t.max_band_time_s);
+  non_negative("trajectory.linger_weight", t.linger_weight);
+  positive("trajectory.band_incident_s", t.band_incident_s);
   non_negative("trajectory.lon_margin_m", t.lon_margin_m);
   non_negative("trajectory.lat_margin_m", t.lat_margin_m);
   positive("trajectory.fallback_brake_mps2", t.fallback_brake_mps2);

@@ -118,8 +118,8 @@ TEST_F(PredictionTest, ACarBehindIsTakenToSpeedUpALittleAboveItsFastestSeen) {
   // Seen at 18 m/s, then at 15: it may speed up to 18 + 2 m/s.
   t.cars = {test::observed_car(line_, 0, 250.0, 6.0, 18.0)};
   (void)predict_cars(t, line_, 280.0, 0.0, tracks, params_, road_, 4.7);
-  t.cars = {test::observed_car(line_, 0, 250.0, 6.0, 15.0)};
-  auto cars = predict_cars(t, line_, 280.0, 0.0, tracks, params_, road_, 4.7);
+  t.cars = {test::observed_car(line_, 0, 250.7, 6.0, 15.0)};
+  auto cars = predict_cars(t, line_, 280.0, 0.04, tracks, params_, road_, 4.7);
   ASSERT_EQ(cars.size(), 1u);
   EXPECT_GT(cars[0].s_dot_at(1.0), 15.0 + 1.4);  // at 1.5 m/s^2
   EXPECT_NEAR(cars[0].s_dot_at(30.0), 18.0 + params_.follower_speed_margin_mps, 0.3);

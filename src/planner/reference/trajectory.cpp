@@ -32,6 +32,9 @@ constexpr double kScaleSampleM = 10.0;
 constexpr double kRearRoomScaleM = 3.0;
 /// Off its lane's centre by more than this, the ego counts as moving across lanes.
 constexpr double kSidewaysM = 0.5;
+/// Of two lateral motions that overstay on a lane line as soon, the shorter stay counts as
+/// later by this share of its length.
+constexpr double kOverstayTieBreak = 0.01;
 /// A car speeding up harder than this is not taken to brake early for the ego.
 constexpr double kSpeedingUpMps2 = 1.0;
 /// A follower's sensor meets the ego once the ego's middle is this close sideways to its own.
@@ -304,23 +307,29 @@ LaneCost lane_cost(const Track1d& lon, const Grid& g, const std::vector<const Ca
   return c;
 }
 
-/// When a lateral motion has spent longer than `budget_s` without a break in a lane-line
-/// band (the first stretch extended by `already_s`), over the grid; infinity when it never
-/// does. d is read as the original reads it, at s along a steady motion from `x0`.
-double band_overstay_s(const Track1d& lat, const Grid& g, double already_s, double half_width,
-                       double budget_s, const LaneFrame& frame, const FrenetState& x0,
-                       const core::RoadParams& road) {
+/// A lateral motion's time in lane-line bands over the grid (the first stretch extended by
+/// `already_s`), d read as the original reads it, at s along a steady motion from `x0`.
+struct BandTime {
+  double longest_s = 0.0;  ///< the longest stretch without a break
+  double overstay_s = std::numeric_limits<double>::infinity();  ///< when one passes `limit_s`
+};
+
+BandTime band_time(const Track1d& lat, const Grid& g, double already_s, double half_width,
+                   double limit_s, const LaneFrame& frame, const FrenetState& x0,
+                   const core::RoadParams& road) {
+  BandTime b;
   double run = already_s;
   for (int k = 0; k <= g.n; ++k) {
     const double s = x0.s_m + x0.s_dot * g.t(k);
     if (in_line_band(frame.original_d(s, lat.x[static_cast<std::size_t>(k + kBack)]), half_width, road)) {
       run += k == 0 ? 0.0 : g.h;
-      if (run > budget_s) return g.t(k);
+      b.longest_s = std::max(b.longest_s, run);
+      if (run > limit_s && b.overstay_s == kInf) b.overstay_s = g.t(k);
     } else {
       run = 0.0;
     }
   }
-  return kInf;
+  return b;
 }
 
 /// Whether a lateral motion keeps the ego's middle on the road, as the original reads d,
@@ -460,8 +469,13 @@ TrajectoryPlan plan_trajectory(const LaneFrame& line, const TrajectoryRequest& r
       if (!on_road(c.samples, g, line, x0, tp, road)) continue;
       c.cost = tp.lat_jerk_weight * c.poly.jerk_cost() + (hold ? 0.0 : tp.lat_time_weight * c.poly.duration_s) +
                tp.lane_weight * std::abs(l - req.target_lane);
-      c.overstay_s = band_overstay_s(c.samples, g, req.band_time_s, tp.line_band_m, tp.max_band_time_s,
-                                     line, x0, road);
+      // Longer than the budget on a lane line costs; as long as the original counts as an
+      // incident is an incident.
+      const BandTime band =
+          band_time(c.samples, g, req.band_time_s, tp.line_band_m, tp.band_incident_s, line, x0, road);
+      // (Of two that overstay as soon, the one that leaves the line sooner is less bad.)
+      c.overstay_s = band.overstay_s - kOverstayTieBreak * band.longest_s;
+      c.cost += tp.linger_weight * std::max(0.0, band.longest_s - tp.max_band_time_s);
       lats.push_back(std::move(c));
       if (hold) break;
     }

@@ -160,7 +160,9 @@ struct ReferenceTrajectoryParams {
   std::vector<double> speed_offsets_mps = {0.0, -1.0, -2.5, -5.0, -9.0};
   std::vector<double> follow_times_s = {1.5, 2.5, 3.5, 5.0, 7.0};
   double line_band_m = 0.8;          ///< half width of the band about an inner lane line ...
-  double max_band_time_s = 2.4;      ///< ... in which the ego may stay at most this long
+  double max_band_time_s = 2.4;      ///< ... in which the ego may stay this long without cost ...
+  double linger_weight = 1000.0;     ///< ... costs this per second beyond ...
+  double band_incident_s = 2.9;      ///< ... and this long counts as an incident (the original's 3 s)
   double lon_margin_m = 1.0;         ///< bumper to bumper, hard
   double lat_margin_m = 0.35;        ///< side to side, hard
   double fallback_brake_mps2 = 6.0;  ///< the braking fallback ...
@@ -338,6 +340,8 @@ void describe(V& v, ReferenceTrajectoryParams& p) {
   v("follow_times_s", p.follow_times_s);
   v("line_band_m", p.line_band_m);
   v("max_band_time_s", p.max_band_time_s);
+  v("linger_weight", p.linger_weight);
+  v("band_incident_s", p.band_incident_s);
   v("lon_margin_m", p.lon_margin_m);
   v("lat_margin_m", p.lat_margin_m);
   v("fallback_brake_mps2", p.fallback_brake_mps2);
