@@ -165,6 +165,11 @@ Subcommand register_track(CLI::App& app) {
   auto* cmd = app.add_subcommand("track", "Generate a closed highway loop map in the original file format.");
   cmd->add_option("--seed", st->spec.seed, "Seed of the track's shape")->capture_default_str();
   cmd->add_option("--length-m", st->spec.length_m, "Loop length in metres, about")->capture_default_str();
+  cmd->add_option("--straight-spacing-m", st->spec.straight_spacing_m,
+                  "Waypoint spacing on straights (bends get closer ones)")
+      ->capture_default_str();
+  cmd->add_option("--min-spacing-m", st->spec.min_spacing_m, "Smallest waypoint spacing")->capture_default_str();
+  cmd->add_option("--max-spacing-m", st->spec.max_spacing_m, "Largest waypoint spacing")->capture_default_str();
   cmd->add_option("-o,--output", st->out, "Write the map here (default: standard output)");
   cmd->add_flag("--quiet,-q", st->quiet, "No summary line");
   return {cmd, [st] {

@@ -17,7 +17,7 @@ constexpr double kNewtonToleranceM = 1e-10;
 
 }  // namespace
 
-ReferenceLine::ReferenceLine(const Map& map) {
+ReferenceLine::ReferenceLine(const Map& map, double smoothing_m3) : map_(map) {
   const auto& w = map.waypoints;
   std::vector<double> s, x, y;
   s.reserve(w.size());
@@ -30,8 +30,13 @@ ReferenceLine::ReferenceLine(const Map& map) {
   }
   start_s_m_ = w.empty() ? 0.0 : w.front().s_m;
   length_m_ = map.loop_length_m;
-  auto fx = PiecewiseCubic::periodic(s, x, length_m_);
-  auto fy = PiecewiseCubic::periodic(s, y, length_m_);
+  if (!(smoothing_m3 >= 0.0) || !std::isfinite(smoothing_m3)) {
+    throw MapError(map.source + ": the line's smoothing stiffness must be finite and >= 0");
+  }
+  auto fx = smoothing_m3 > 0.0 ? PiecewiseCubic::periodic_smoothing(s, x, length_m_, smoothing_m3)
+                               : PiecewiseCubic::periodic(s, x, length_m_);
+  auto fy = smoothing_m3 > 0.0 ? PiecewiseCubic::periodic_smoothing(s, y, length_m_, smoothing_m3)
+                               : PiecewiseCubic::periodic(s, y, length_m_);
   if (!fx || !fy) {
     throw MapError(map.source + ": the waypoints do not make a closed loop (need 3 or more with " +
                    "increasing s and a positive loop length)");

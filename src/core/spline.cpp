@@ -110,6 +110,66 @@ std::optional<PiecewiseCubic> PiecewiseCubic::periodic(std::span<const double> t
   return from_second_derivatives(tt, yy, m);
 }
 
+std::optional<PiecewiseCubic> PiecewiseCubic::periodic_smoothing(std::span<const double> t,
+                                                                 std::span<const double> y,
+                                                                 double period, double stiffness) {
+  const std::size_t n = t.size();
+  if (n < 3 || y.size() != n || !all_finite(t) || !all_finite(y) || !std::isfinite(period) ||
+      !strictly_increasing(t) || !(t.front() + period > t.back()) || !std::isfinite(stiffness) ||
+      stiffness < 0.0) {
+    return std::nullopt;
+  }
+  std::vector<double> tt(t.begin(), t.end());
+  tt.push_back(t.front() + period);
+  auto h = [&](std::size_t i) { return tt[i + 1] - tt[i]; };  // i in [0, n)
+
+  // Cyclic band matrices: (Q^T y)_j is the difference of the slopes either side of knot j,
+  // R the integrals of products of the hat functions of the second derivative. The spline
+  // with values g and second derivatives m satisfies Q^T g = R m; the smoothing one solves
+  // (R + stiffness Q^T Q) m = Q^T y and g = y - stiffness Q m.
+  const auto ni = static_cast<Eigen::Index>(n);
+  Eigen::SparseMatrix<double> q(ni, ni);
+  Eigen::SparseMatrix<double> r(ni, ni);
+  std::vector<Eigen::Triplet<double>> qe;
+  std::vector<Eigen::Triplet<double>> re;
+  qe.reserve(3 * n);
+  re.reserve(3 * n);
+  for (std::size_t j = 0; j < n; ++j) {
+    const std::size_t prev = (j + n - 1) % n;
+    const std::size_t next = (j + 1) % n;
+    const double h0 = h(prev);
+    const double h1 = h(j);
+    const auto c = static_cast<Eigen::Index>(j);
+    qe.emplace_back(static_cast<Eigen::Index>(prev), c, 1.0 / h0);
+    qe.emplace_back(c, c, -1.0 / h0 - 1.0 / h1);
+    qe.emplace_back(static_cast<Eigen::Index>(next), c, 1.0 / h1);
+    re.emplace_back(c, c, (h0 + h1) / 3.0);
+    re.emplace_back(c, static_cast<Eigen::Index>(next), h1 / 6.0);
+    re.emplace_back(static_cast<Eigen::Index>(next), c, h1 / 6.0);
+  }
+  q.setFromTriplets(qe.begin(), qe.end());
+  r.setFromTriplets(re.begin(), re.end());
+  Eigen::VectorXd yv(ni);
+  for (std::size_t i = 0; i < n; ++i) yv(static_cast<Eigen::Index>(i)) = y[i];
+  const Eigen::SparseMatrix<double> qt = q.transpose();
+  const Eigen::SparseMatrix<double> a = r + stiffness * (qt * q);
+  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> solver;
+  solver.compute(a);
+  if (solver.info() != Eigen::Success) return std::nullopt;
+  const Eigen::VectorXd m = solver.solve(qt * yv);
+  if (solver.info() != Eigen::Success) return std::nullopt;
+  const Eigen::VectorXd g = yv - stiffness * (q * m);
+  std::vector<double> gg(n + 1);
+  std::vector<double> mm(n + 1);
+  for (std::size_t i = 0; i < n; ++i) {
+    gg[i] = g(static_cast<Eigen::Index>(i));
+    mm[i] = m(static_cast<Eigen::Index>(i));
+  }
+  gg[n] = gg[0];
+  mm[n] = mm[0];
+  return from_second_derivatives(tt, gg, mm);
+}
+
 std::size_t PiecewiseCubic::piece(double t) const {
   const auto it = std::upper_bound(knots_.begin(), knots_.end(), t);
   if (it == knots_.begin()) return 0;

@@ -56,11 +56,10 @@ constexpr int kSqueezeLevels = 4;       // steps from the drawn shape to the tig
 constexpr double kDentDeepening = 2.0;  // dent straights grow up to 1 + this times
 constexpr double kBoxMarginM = 1.0;
 
-// Waypoint spacing: kStraightSpacingM on straights, closer in bends (spacing divided by
+// Waypoint spacing: the spec's straight spacing on straights, closer in bends (spacing divided by
 // 1 + kBendSpacingFactor * min_radius_m * |curvature|), the curvature taken as the largest
 // within kSpacingWindowM, nor over kMaxSpacingPerRadius times the radius; each waypoint then
 // moves by up to kSpacingJitter of a step.
-constexpr double kStraightSpacingM = 45.0;
 constexpr double kBendSpacingFactor = 0.9;
 constexpr double kSpacingWindowM = 25.0;
 constexpr double kSpacingJitter = 0.08;
@@ -94,6 +93,7 @@ void validate_check_spec(const TrackSpec& spec) {
   require_finite(spec.shoulder_m, "shoulder_m");
   require_finite(spec.max_abs_coordinate_m, "max_abs_coordinate_m");
   require_finite(spec.start_straight_m, "start_straight_m");
+  require_finite(spec.straight_spacing_m, "straight_spacing_m");
   require_finite(spec.bend_radius_m, "bend_radius_m");
   require_finite(spec.road.lane_width_m, "road.lane_width_m");
   if (!(spec.length_m > 0.0)) bad_field("length_m", "must be positive");
@@ -109,6 +109,7 @@ void validate_check_spec(const TrackSpec& spec) {
     bad_field("max_abs_coordinate_m", "must not be negative (0 picks the default)");
   }
   if (spec.start_straight_m < 0.0) bad_field("start_straight_m", "must not be negative");
+  if (!(spec.straight_spacing_m > 0.0)) bad_field("straight_spacing_m", "must be positive");
   if (!(spec.bend_radius_m > 0.0)) bad_field("bend_radius_m", "must be positive");
   if (spec.road.lane_count < 1) bad_field("road.lane_count", "must be at least 1");
   if (!(spec.road.lane_width_m > 0.0)) bad_field("road.lane_width_m", "must be positive");
@@ -635,7 +636,7 @@ SpacingPlan spacing_plan(const TrackSpec& spec) {
   p.lo_m = kSpacingMargin * spec.min_spacing_m;
   p.hi_m = spec.max_spacing_m / kSpacingMargin;
   if (p.lo_m > p.hi_m) p.lo_m = p.hi_m = std::sqrt(spec.min_spacing_m * spec.max_spacing_m);
-  p.straight_m = std::clamp(kStraightSpacingM, p.lo_m, p.hi_m);
+  p.straight_m = std::clamp(spec.straight_spacing_m, p.lo_m, p.hi_m);
   p.jitter = std::min({kSpacingJitter, 0.45 * (1.0 - spec.min_spacing_m / p.lo_m),
                        0.45 * (spec.max_spacing_m / p.hi_m - 1.0)});
   p.bend_factor_m = kBendSpacingFactor * spec.min_radius_m;

@@ -35,6 +35,7 @@ void validate_reference(const PlannerParams& all, std::vector<std::string>& out)
   };
   positive("car_length_m", p.car_length_m);
   positive("car_width_m", p.car_width_m);
+  non_negative("line_smoothing_m3", p.line_smoothing_m3);
   const auto& pr = p.prediction;
   positive("prediction.lane_change_speed_mps", pr.lane_change_speed_mps);
   positive("prediction.lane_change_offset_m", pr.lane_change_offset_m);

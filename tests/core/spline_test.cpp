@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <vector>
 
@@ -82,6 +83,51 @@ TEST(PeriodicSpline, RejectsAPeriodShorterThanTheKnots) {
   EXPECT_TRUE(PiecewiseCubic::periodic(t, y, 3.0));
 }
 
+TEST(PeriodicSmoothingSpline, StiffnessZeroInterpolates) {
+  const std::vector<double> t{0, 1, 2.5, 4};
+  const std::vector<double> y{0, 2, -1, 1};
+  const auto a = PiecewiseCubic::periodic(t, y, 5.0);
+  const auto b = PiecewiseCubic::periodic_smoothing(t, y, 5.0, 0.0);
+  ASSERT_TRUE(a && b);
+  for (double x = 0.0; x < 5.0; x += 0.37) EXPECT_NEAR((*a)(x), (*b)(x), 1e-9);
+}
+
+TEST(PeriodicSmoothingSpline, DampsRoundingNoiseButKeepsTheShape) {
+  // A sine of wavelength 600 sampled every 25, each sample off by +-0.05 (alternating):
+  // interpolated, the noise puts wiggles into the second derivative nearly half the sine's
+  // own; smoothed, they are gone and the curve stays within centimetres of the sine.
+  constexpr double kWave = 600.0;
+  constexpr double kAmp = 20.0;
+  std::vector<double> t, y;
+  for (int i = 0; i < 24; ++i) {
+    t.push_back(25.0 * i);
+    y.push_back(kAmp * std::sin(2.0 * kPi * t.back() / kWave) + (i % 2 ? 0.05 : -0.05));
+  }
+  const auto rough = PiecewiseCubic::periodic(t, y, kWave);
+  const auto smooth = PiecewiseCubic::periodic_smoothing(t, y, kWave, 5000.0);
+  ASSERT_TRUE(rough && smooth);
+  const double k = 2.0 * kPi / kWave;
+  double rough_err = 0.0, smooth_err = 0.0, smooth_pos = 0.0;
+  for (double x = 0.0; x < kWave; x += 1.0) {
+    const double want_d2 = -kAmp * k * k * std::sin(k * x);
+    rough_err = std::max(rough_err, std::abs(rough->eval(x).d2 - want_d2));
+    smooth_err = std::max(smooth_err, std::abs(smooth->eval(x).d2 - want_d2));
+    smooth_pos = std::max(smooth_pos, std::abs((*smooth)(x) - kAmp * std::sin(k * x)));
+  }
+  EXPECT_GT(rough_err, 0.3 * kAmp * k * k);
+  EXPECT_LT(smooth_err, 0.1 * rough_err);
+  EXPECT_LT(smooth_pos, 0.15);
+}
+
+TEST(PeriodicSmoothingSpline, RejectsABadStiffness) {
+  const std::vector<double> t{0, 1, 2};
+  const std::vector<double> y{0, 1, 0};
+  EXPECT_FALSE(PiecewiseCubic::periodic_smoothing(t, y, 3.0, -1.0));
+  EXPECT_FALSE(PiecewiseCubic::periodic_smoothing(t, y, 3.0, std::nan("")));
+  EXPECT_FALSE(PiecewiseCubic::periodic_smoothing(t, y, 2.0, 1.0));
+  EXPECT_TRUE(PiecewiseCubic::periodic_smoothing(t, y, 3.0, 1.0));
+}
+
 // A counter-clockwise circle of radius r, waypoints every `n`-th of the loop, normals outward.
 Map circle(double r, int n) {
   std::vector<Waypoint> w;
@@ -152,6 +198,18 @@ TEST(ReferenceLine, NormalsPointingInwardAreFollowed) {
   const ReferenceLine line(parse_map(format_map(w), "inward"));
   const Vec2 p = line.to_cartesian({50.0, 6.0});
   EXPECT_NEAR(norm(p), 494.0, 0.05);
+}
+
+TEST(ReferenceLine, ASmoothedLinePassesNearTheWaypointsAndKeepsTheMap) {
+  const Map m = circle(500.0, 120);
+  const ReferenceLine line(m, 5000.0);
+  EXPECT_EQ(line.map().waypoints.size(), m.waypoints.size());
+  EXPECT_EQ(line.map().waypoints[5].x_m, m.waypoints[5].x_m);
+  for (const Waypoint& w : m.waypoints) {
+    // A circle is smooth already: smoothing pulls it in by a little only.
+    EXPECT_NEAR(norm(line.frame(w.s_m).position), 500.0, 0.05);
+  }
+  EXPECT_THROW(ReferenceLine(m, -1.0), MapError);
 }
 
 TEST(ReferenceLine, ANormalFarOffTheRoadIsAnError) {

@@ -228,6 +228,19 @@ TEST(TrackGenerate, OtherSpecFieldsAreHonoured) {
   EXPECT_LE(r.max_spacing_m, 60.0);
 }
 
+TEST(TrackGenerate, WideStraightSpacingMakesASparseMap) {
+  // Waypoints up to 90 m apart on the straights (bends keep closer ones).
+  TrackSpec spec = spec_with(4);
+  spec.straight_spacing_m = 86.0;
+  spec.min_spacing_m = 37.0;
+  spec.max_spacing_m = 97.0;
+  const TrackReport r = check_track(load(generate_track(spec)), spec);
+  EXPECT_TRUE(r.ok()) << joined(r.problems);
+  EXPECT_GT(r.max_spacing_m, 85.0);
+  EXPECT_LE(r.max_spacing_m, 90.0);
+  EXPECT_GT(r.mean_spacing_m, 1.4 * check_track(load(generate_track(spec_with(4))), spec_with(4)).mean_spacing_m);
+}
+
 // ---- The checker finds faults ----
 
 TEST(TrackCheck, FindsAFigureEight) {
@@ -355,6 +368,9 @@ TEST(TrackSpecValidation, ImpossibleSpecsThrowNamingTheField) {
   s = {};
   s.road.lane_count = 0;
   EXPECT_THAT(spec_error(s), HasSubstr("road.lane_count"));
+  s = {};
+  s.straight_spacing_m = 0.0;
+  EXPECT_THAT(spec_error(s), HasSubstr("straight_spacing_m"));
   s = {};
   s.max_abs_coordinate_m = 500.0;  // a 7 km loop does not fit a 1 km box
   EXPECT_THAT(spec_error(s), HasSubstr("max_abs_coordinate_m"));

@@ -5,6 +5,8 @@
 
 #include <cmath>
 
+#include "overtake/core/map.hpp"
+#include "overtake/core/track.hpp"
 #include "overtake/core/units.hpp"
 #include "overtake/planner/policy.hpp"
 #include "overtake/planner/reference/reference_policy.hpp"
@@ -151,6 +153,36 @@ TEST_P(SeededDrives, NoIncidentsAndAMeanSpeedFloor) {
   }
   // The start from rest costs ~0.5 mph over a minute; traffic a few more.
   EXPECT_GT(core::mps_to_mph(metres / seconds), small ? 40.0 : 45.0);
+}
+
+TEST_P(SeededDrives, WaypointsUpTo90MetresApart) {
+  // On a bend a chord between far-apart waypoints runs well inside the curve: the outer
+  // lanes' centres read close to the road's edge there (this once stopped the car for good).
+  core::TrackSpec spec;
+  spec.seed = 4;
+  spec.straight_spacing_m = 86.0;
+  spec.min_spacing_m = 37.0;
+  spec.max_spacing_m = 97.0;
+  const core::Map map = core::parse_map(core::format_map(core::generate_track(spec)), "sparse");
+  const core::ReferenceLine line(map);
+  const PlannerParams params;
+  const bool small = test::sanitized();
+  const int seeds = small ? 1 : 3;
+  const double minutes = small ? 1.0 : 4.0;
+  double metres = 0.0, seconds = 0.0;
+  for (int seed = 1; seed <= seeds; ++seed) {
+    sim::World world(map, line, sim::WorldParams{}, GetParam(), static_cast<std::uint64_t>(seed));
+    auto policy = make_policy("reference", line, params);
+    sim::RunOptions opts;
+    opts.duration_s = minutes * 60.0;
+    opts.seed = static_cast<std::uint64_t>(seed);
+    const auto r = sim::run_drive(world, [&](const core::Telemetry& t) { return policy->plan(t); }, opts);
+    EXPECT_TRUE(r.incidents.empty()) << "seed " << seed << ": " << r.incidents.size() << " incidents";
+    EXPECT_LT(r.peak.strict_jerk_mps3, 10.0) << "seed " << seed;
+    metres += r.distance_m;
+    seconds += r.duration_s;
+  }
+  EXPECT_GT(core::mps_to_mph(metres / seconds), small ? 38.0 : 44.0);
 }
 
 INSTANTIATE_TEST_SUITE_P(BothProfiles, SeededDrives,

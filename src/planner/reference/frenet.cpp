@@ -48,13 +48,8 @@ LaneFrame::LaneFrame(const core::ReferenceLine& line) : line_(&line) {}
 
 LaneFrame LaneFrame::chord_aligned(const core::ReferenceLine& line) {
   LaneFrame f(line);
-  // The waypoints, as the line passes through them.
-  core::Map map;
-  for (const double s : line.waypoint_s()) {
-    const core::RoadFrame r = line.frame(s);
-    map.waypoints.push_back({r.position.x, r.position.y, s, r.normal.x, r.normal.y});
-  }
-  map.loop_length_m = line.length_m();
+  // The chords between the map's waypoints as given (the line may pass beside them).
+  const core::Map& map = line.map();
   if (map.waypoints.size() < 3) return f;
   const core::WaypointFrenet chords(map);
   const auto bins = static_cast<std::size_t>(std::ceil(line.length_m()));

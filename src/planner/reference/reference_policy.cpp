@@ -28,7 +28,11 @@ double wire_speed_error_mps(const core::ReferenceLine& line, double step_s) {
 }  // namespace
 
 ReferencePolicy::ReferencePolicy(const core::ReferenceLine& line, const PlannerParams& params)
-    : line_(line), frame_(LaneFrame::chord_aligned(line)), road_(params.road), p_(params.reference) {
+    : line_(line),
+      smooth_line_(std::make_shared<const core::ReferenceLine>(line.map(), params.reference.line_smoothing_m3)),
+      frame_(LaneFrame::chord_aligned(*smooth_line_)),
+      road_(params.road),
+      p_(params.reference) {
   p_.trajectory.max_speed_mps -= wire_speed_error_mps(line, p_.trajectory.step_s);
 }
 

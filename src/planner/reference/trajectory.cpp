@@ -41,6 +41,9 @@ constexpr double kSpeedingUpMps2 = 1.0;
 constexpr double kSensorCoverM = 0.8;
 /// Longest a collision-failed candidate list is searched for a least-bad one.
 constexpr int kLeastBadChecks = 12;
+/// Beyond an outer lane's centre a lateral motion may overshoot this far where that centre
+/// itself reads closer to the edge than the road margin.
+constexpr double kOvershootM = 0.2;
 
 /// Samples of one motion over the grid k = -kBack .. n (index k + kBack).
 struct Track1d {
@@ -333,13 +336,20 @@ BandTime band_time(const Track1d& lat, const Grid& g, double already_s, double h
 }
 
 /// Whether a lateral motion keeps the ego's middle on the road, as the original reads d,
-/// with a margin (a slow lateral motion from a fast start overshoots).
+/// with a margin (a slow lateral motion from a fast start overshoots). Where the waypoints
+/// are far apart on a bend the outer lanes' centres themselves read close to the edge; there
+/// the bound is the centre's reading less the overshoot allowed, so that keeping a lane is
+/// never ruled out.
 bool on_road(const Track1d& lat, const Grid& g, const LaneFrame& frame, const FrenetState& x0,
              const ReferenceTrajectoryParams& tp, const core::RoadParams& road) {
-  const double lo = tp.road_edge_margin_m;
-  const double hi = road.lane_count * road.lane_width_m - tp.road_edge_margin_m;
+  const double first = core::lane_center_d(0, road);
+  const double last = core::lane_center_d(road.lane_count - 1, road);
   for (int k = 0; k <= g.n; ++k) {
-    const double d = frame.original_d(x0.s_m + x0.s_dot * g.t(k), lat.x[static_cast<std::size_t>(k + kBack)]);
+    const double s = x0.s_m + x0.s_dot * g.t(k);
+    const double d = frame.original_d(s, lat.x[static_cast<std::size_t>(k + kBack)]);
+    const double lo = std::min(tp.road_edge_margin_m, frame.original_d(s, first) - kOvershootM);
+    const double hi = std::max(road.lane_count * road.lane_width_m - tp.road_edge_margin_m,
+                               frame.original_d(s, last) + kOvershootM);
     if (d < lo || d > hi) return false;
   }
   return true;

@@ -25,8 +25,11 @@ struct RoadFrame {
 /// The map's reference line. Immutable after construction; cheap queries.
 class ReferenceLine {
  public:
-  /// Builds the line; throws MapError when the map's points do not make a usable loop.
-  explicit ReferenceLine(const Map& map);
+  /// Builds the line through the map's waypoints; throws MapError when they do not make a
+  /// usable loop. With a smoothing stiffness (m^3, see PiecewiseCubic::periodic_smoothing)
+  /// the line passes near the waypoints instead, damping wiggles that their rounded
+  /// coordinates would put in its curvature.
+  explicit ReferenceLine(const Map& map, double smoothing_m3 = 0.0);
 
   [[nodiscard]] double length_m() const { return length_m_; }
   /// s of the first waypoint; s values wrap into [start_s_m, start_s_m + length_m).
@@ -38,11 +41,15 @@ class ReferenceLine {
   /// positive when `to` is ahead. In (-length/2, length/2].
   [[nodiscard]] double s_ahead(double from_s_m, double to_s_m) const;
 
-  /// s of the map's waypoints, through which the line passes (in the map's order).
+  /// s of the map's waypoints, through (or, smoothed, near) which the line passes (in the
+  /// map's order).
   [[nodiscard]] std::span<const double> waypoint_s() const {
     const std::span<const double> k = x_.knots();
     return k.first(k.size() - 1);
   }
+
+  /// The map the line was built from: its waypoints as given (not the line's points).
+  [[nodiscard]] const Map& map() const { return map_; }
 
   [[nodiscard]] RoadFrame frame(double s_m) const;
   [[nodiscard]] Vec2 to_cartesian(FrenetPoint p) const;
@@ -59,6 +66,7 @@ class ReferenceLine {
 
  private:
   [[nodiscard]] double refine(Vec2 p, double s0) const;
+  Map map_;
   PiecewiseCubic x_;
   PiecewiseCubic y_;
   double start_s_m_ = 0.0;

@@ -33,6 +33,17 @@ class PiecewiseCubic {
                                                               std::span<const double> y,
                                                               double period);
 
+  /// Periodic smoothing spline (Reinsch): the periodic cubic that minimises
+  /// sum (y[i] - f(t[i]))^2 + stiffness * integral f''(t)^2 dt over one period. It passes near
+  /// the points rather than through them, so that noise in their values (a map's rounded
+  /// coordinates) does not become wiggles of its curvature; stiffness 0 interpolates.
+  /// (Units: stiffness is in [t]^3 [y]^0: its fourth root is about the wavelength, over
+  /// 2 pi, below which wiggles are damped.) nullopt as for periodic, or on a negative or
+  /// non-finite stiffness.
+  [[nodiscard]] static std::optional<PiecewiseCubic> periodic_smoothing(std::span<const double> t,
+                                                                        std::span<const double> y,
+                                                                        double period, double stiffness);
+
   /// Index of the piece that holds t (clamped to the first or last piece).
   [[nodiscard]] std::size_t piece(double t) const;
   /// Evaluates piece `i` at t (no wrapping).

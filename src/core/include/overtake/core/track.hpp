@@ -33,6 +33,9 @@ struct TrackSpec {
   double min_spacing_m = 20.0;
   /// Largest straight-line distance between consecutive waypoints.
   double max_spacing_m = 90.0;
+  /// Spacing of the waypoints on straights (generated maps; bends get closer ones), kept
+  /// within the limits above.
+  double straight_spacing_m = 45.0;
   /// Smallest gap, road edge to road edge, between two stretches far apart along the road.
   double min_clearance_m = 40.0;
   /// Width beyond the lanes on either side that counts as road for clearance.

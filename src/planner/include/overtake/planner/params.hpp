@@ -194,6 +194,11 @@ struct ReferenceTrajectoryParams {
 struct ReferenceParams {
   double car_length_m = 4.7;  ///< footprint of every car, the ego's included
   double car_width_m = 1.9;
+  /// The planner's own line through the map: a smoothing spline of this stiffness (m^3), so
+  /// that waypoints rounded to 0.1 m (the original map's) put no wiggles into its curvature
+  /// (at the outer lane they made a steady drive jerk by 25 m/s^3). Its lateral frame is then
+  /// aligned with the original's chords as before. 0: through the waypoints.
+  double line_smoothing_m3 = 5000.0;
   ReferencePredictionParams prediction;
   ReferenceBehaviourParams behaviour;
   ReferenceTrajectoryParams trajectory;
@@ -365,6 +370,7 @@ template <class V>
 void describe(V& v, ReferenceParams& p) {
   v("car_length_m", p.car_length_m);
   v("car_width_m", p.car_width_m);
+  v("line_smoothing_m3", p.line_smoothing_m3);
   v.section("prediction", p.prediction);
   v.section("behaviour", p.behaviour);
   v.section("trajectory", p.trajectory);

@@ -6,6 +6,7 @@
 // velocity, acceleration) where the kept prefix ends, so the joint is C2-continuous whatever
 // the latency.
 
+#include <memory>
 #include <vector>
 
 #include "overtake/core/reference_line.hpp"
@@ -41,8 +42,11 @@ class ReferencePolicy final : public Policy {
  private:
   [[nodiscard]] FrenetState observed_state(const core::Telemetry& t) const;
 
-  const core::ReferenceLine& line_;
-  LaneFrame frame_;  // d as the original measures it
+  const core::ReferenceLine& line_;  // the map's line (the loop's s)
+  // The planner's own line, near the waypoints (shared and immutable: copies of the policy
+  // keep the frame's pointer valid).
+  std::shared_ptr<const core::ReferenceLine> smooth_line_;
+  LaneFrame frame_;                  // on it, d as the original measures it
   core::RoadParams road_;
   ReferenceParams p_;
   std::vector<FrenetState> states_;  // state at each point sent last cycle
