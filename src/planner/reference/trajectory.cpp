@@ -41,6 +41,8 @@ constexpr double kSpeedingUpMps2 = 1.0;
 constexpr double kSensorCoverM = 0.8;
 /// Longest a collision-failed candidate list is searched for a least-bad one.
 constexpr int kLeastBadChecks = 12;
+/// Levelling-off candidates are added from accelerations beyond this.
+constexpr double kLevelOffMps2 = 1.0;
 /// Beyond an outer lane's centre a lateral motion may overshoot this far where that centre
 /// itself reads closer to the edge than the road margin.
 constexpr double kOvershootM = 0.2;
@@ -506,6 +508,12 @@ TrajectoryPlan plan_trajectory(const LaneFrame& line, const TrajectoryRequest& r
     lons.push_back(std::move(c));
   };
   for (const double t : tp.cruise_times_s) {
+    // Level off: the acceleration now back to 0 along a straight ramp, then hold that speed
+    // (after a hard braking, the other candidates to a faster speed keep braking a while).
+    if (std::abs(x0.s_ddot) * mps > kLevelOffMps2) {
+      const double v_level = std::max(0.0, x0.s_dot + 0.5 * x0.s_ddot * t);
+      add_lon({quartic(x0.s_m, x0.s_dot, x0.s_ddot, v_level, 0.0, t), {}, false});
+    }
     double last = -1.0;
     for (const double off : tp.speed_offsets_mps) {
       const double v1 = std::max(0.0, s_dot_cap + off / mps);
