@@ -1,5 +1,5 @@
 #pragma once
-// The planners of the five write-ups in shared/seeds/, one policy each (seed000 ... seed004),
+// The planners of the five seed write-ups, one policy each (seed000 ... seed004),
 // so that all are measured on the same roads and traffic. Each keeps the walkthrough's
 // trajectory (queued path reused, spline through anchors ahead in the target lane, points
 // spaced for the reference speed) and its own decision rules, with its numbers. Where a
@@ -54,7 +54,7 @@ class SeedPolicyBase : public Policy {
   double ref_speed_mps_ = 0.0;
 };
 
-/// seed000 (shared/seeds/000_a8527271d2cfb23d.txt): nearest gap ahead and behind and the
+/// seed000 (write-up 000): nearest gap ahead and behind and the
 /// speed ahead per lane; when too close, a lane change needs gaps that grow with speed ahead
 /// (10 m x speed/49.5 mph) and shrink with speed behind (20 m x 49.5 mph/speed); from the
 /// middle lane a lane with no car ahead is preferred, then the side with more room whose
@@ -70,7 +70,7 @@ class Seed000Policy final : public SeedPolicyBase {
   Seed000Params p_;
 };
 
-/// seed001 (shared/seeds/001_9bd5bf239fa79f3a.txt): counts the cycles spent slowing behind a
+/// seed001 (write-up 001): counts the cycles spent slowing behind a
 /// car; after more than 40 it changes lane, left first, if no car is within 35 m ahead or
 /// behind in that lane. Silent: the counter is never reset except by a lane change.
 class Seed001Policy final : public SeedPolicyBase {
@@ -84,7 +84,7 @@ class Seed001Policy final : public SeedPolicyBase {
   int too_longer_ = 0;
 };
 
-/// seed002 (shared/seeds/002_f4d6acc74643cd1c.txt): a lane is in "proximity" when a car is
+/// seed002 (write-up 002): a lane is in "proximity" when a car is
 /// within 30 m ahead or 5 m behind; when too close it moves to an adjacent lane with no
 /// proximity, else slows and stays; 80-point paths. Silent: left is tried before right, and
 /// the speed is kept (not lowered) in the cycle that changes lane.
@@ -97,7 +97,7 @@ class Seed002Policy final : public SeedPolicyBase {
   Seed002Params p_;
 };
 
-/// seed003 (shared/seeds/003_c67e706199d7e206.txt): prioritised rules: from the middle lane
+/// seed003 (write-up 003): prioritised rules: from the middle lane
 /// with both sides safe, the side whose slowest car is faster; else left, else right; else
 /// slow to the target speed of the car ahead (and try back to the middle); at speed, return
 /// to the middle lane; accelerate by 0.424 mph per cycle after a lane change
@@ -114,7 +114,7 @@ class Seed003Policy final : public SeedPolicyBase {
   bool allow_strong_acc_ = false;
 };
 
-/// seed004 (shared/seeds/004_379881f2dbdd002f.txt): behind a close car the reference speed
+/// seed004 (write-up 004): behind a close car the reference speed
 /// moves toward the car's speed by (ref - other)/30 per cycle — with the write-up's units,
 /// ref in mph and the other car's speed in m/s; a lane is free when no car is within 20 m
 /// ahead or 10 m behind and no faster car is 10-20 m behind (again mph against m/s, as

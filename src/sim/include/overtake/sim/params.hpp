@@ -22,7 +22,10 @@ struct EgoParams {
   double length_m = 4.7;         ///< (ours) its body, for contact: the original's collider size is a scene setting
   double width_m = 1.9;          ///< (ours)
   /// A new path's first point is dropped when the car stands on it: within this distance.
-  double stand_on_tolerance_m = 1e-3;
+  /// 0, as the original (the car stands on a point it drove to, and points cross the wire
+  /// rounded the same way, so "on it" is exact); a millimetre dropped points of a slow
+  /// start or stop, the car skipped ahead in its plan and jerked.
+  double stand_on_tolerance_m = 0.0;
   friend bool operator==(const EgoParams&, const EgoParams&) = default;
 };
 
