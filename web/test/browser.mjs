@@ -229,7 +229,7 @@ async function testPage(context, spec, artifacts) {
     const banner = document.getElementById('error-banner');
     return { state: document.getElementById('viewer').dataset.state, hidden: banner.hidden, text: banner.textContent, frames: Number(document.getElementById('viewer').dataset.frames) };
   }, Buffer.from(cut).toString('base64'));
-  check(partial.state === 'partial' && !partial.hidden && /truncated|ends early/.test(partial.text) && partial.frames > 0,
+  check(partial.state === 'partial' && !partial.hidden && /truncated|ends early|cut short/.test(partial.text) && partial.frames > 0,
     `a truncated replay shows a warning and what it could read (${partial.state}, ${partial.frames} frames: ${partial.text.split('\n')[0]})`);
   // and a file that is not a replay: an error, no exception
   const bad = await page.evaluate(async () => {
