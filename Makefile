@@ -1,7 +1,10 @@
 # overtake: the two commands of the README, and a few more for development.
 #   make demo   install what is missing, build (Release), drive the built-in track, print the scorecard
-#   make check  install what is missing, build, run every test (also under ASan + UBSan)
-.PHONY: all deps build demo check test test-asan bench format clean
+#   make check  install what is missing, build, run every test (also under ASan + UBSan), fuzz every parser briefly
+#   make fuzz   the libFuzzer harnesses (fuzz/) for FUZZ_SECONDS each; findings in build/fuzz/findings
+.PHONY: all deps build demo check test test-asan fuzz-build fuzz-smoke fuzz bench format clean
+
+FUZZ_SECONDS ?= 600
 
 all: build
 
@@ -23,7 +26,18 @@ test-asan: deps
 	@cmake --build --preset asan
 	ctest --preset asan
 
-check: test test-asan
+# The harnesses over their seeds and ~10 s of fuzzing each (about a minute in all).
+fuzz-smoke: fuzz-build
+	@scripts/fuzz.sh smoke
+
+fuzz: fuzz-build
+	@FUZZ_SECONDS=$(FUZZ_SECONDS) scripts/fuzz.sh long
+
+fuzz-build: deps
+	@cmake --preset fuzz >/dev/null
+	@cmake --build --preset fuzz
+
+check: test test-asan fuzz-smoke
 
 bench: build
 	./build/release/overtake_bench

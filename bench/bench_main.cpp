@@ -4,7 +4,9 @@
 
 #include <benchmark/benchmark.h>
 
+#include <fstream>
 #include <memory>
+#include <string>
 
 #include "overtake/app/commands.hpp"
 #include "overtake/core/units.hpp"
@@ -104,6 +106,45 @@ void BM_Drive30Minutes(benchmark::State& state) {
   state.SetLabel(o.traffic);
 }
 BENCHMARK(BM_Drive30Minutes)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->Iterations(1);
+
+// Resident memory of the process now (VmRSS, bytes); 0 where /proc is not there.
+double resident_bytes() {
+  std::ifstream status("/proc/self/status");
+  std::string key;
+  while (status >> key) {
+    if (key == "VmRSS:") {
+      double kb = 0.0;
+      status >> kb;
+      return kb * 1024.0;
+    }
+    status.ignore(1 << 12, '\n');
+  }
+  return 0.0;
+}
+
+// Memory of a long drive (reference policy, faithful traffic): resident memory after the first
+// 10 simulated seconds and at the end. Nothing in a run grows with its length (timing is
+// kept in a fixed-size sketch), so a 4-hour drive ends where a 10-minute one does.
+void BM_DriveMemory(benchmark::State& state) {
+  app::DriveOptions o;
+  o.minutes = static_cast<double>(state.range(0));
+  double first = 0.0;
+  double last = 0.0;
+  for (auto _ : state) {
+    first = 0.0;
+    const auto r = app::drive(o, [&](double, double) {
+      last = resident_bytes();
+      if (first == 0.0) first = last;
+    });
+    benchmark::DoNotOptimize(r.report.duration_s);
+    last = resident_bytes();
+  }
+  state.counters["rss_after_10s_MB"] = first / 1e6;
+  state.counters["rss_at_end_MB"] = last / 1e6;
+  state.counters["growth_kB"] = (last - first) / 1e3;
+  state.SetLabel(std::to_string(state.range(0)) + " min");
+}
+BENCHMARK(BM_DriveMemory)->Arg(10)->Arg(240)->Unit(benchmark::kSecond)->Iterations(1);
 
 }  // namespace
 

@@ -11,6 +11,9 @@ packages=(
   libeigen3-dev nlohmann-json3-dev libcli11-dev libboost-dev zlib1g-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   chromium
+  # The fuzz harnesses (make fuzz-smoke, make fuzz): clang, and libFuzzer with the sanitizer
+  # runtimes of the same version (libclang-rt-14-dev on Debian 12).
+  clang libclang-rt-dev
 )
 
 missing=()

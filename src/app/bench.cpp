@@ -1,6 +1,8 @@
 #include "overtake/app/bench.hpp"
+#include "overtake/app/cli.hpp"
 
 #include <algorithm>
+#include <charconv>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -50,10 +52,17 @@ std::string utc_now() {
 }
 
 std::uint64_t parse_u64(const std::string& s, const std::string& whole) {
-  if (s.empty() || s.find_first_not_of("0123456789") != std::string::npos || s.size() > 19) {
+  std::uint64_t value = 0;
+  const char* end = s.data() + s.size();
+  const auto [ptr, ec] = std::from_chars(s.data(), end, value);
+  if (s.empty() || ptr != end || (ec != std::errc() && ec != std::errc::result_out_of_range)) {
     throw UsageError("--seeds: '" + whole + "' is not a list of seeds like 1-20 or 1,4,9");
   }
-  return std::stoull(s);
+  if (ec == std::errc::result_out_of_range) {
+    throw UsageError("--seeds: '" + s + "' is out of range: a seed is a whole number from 0 to " +
+                     "18446744073709551615");
+  }
+  return value;
 }
 
 // The manifest: what defines a sweep (everything but the shard).
@@ -92,6 +101,36 @@ std::vector<json> read_runs(const std::filesystem::path& file, std::size_t* drop
   }
   if (dropped) *dropped = bad;
   return runs;
+}
+
+/// The rows of an interrupted bench, before it resumes: each is keyed by its run (index) and
+/// must be the run this bench would make under that index (policy, traffic, seed) in this
+/// shard, once; anything else (a duplicated row, a row of another bench) is refused.
+void check_resumed_runs(const std::vector<json>& runs, const std::vector<BenchCombo>& all,
+                        const BenchSpec& spec, const std::filesystem::path& file) {
+  std::set<std::size_t> seen;
+  for (const json& r : runs) {
+    const auto bad = [&](const std::string& why) {
+      throw UsageError("--resume: " + file.string() + ": " + why +
+                       "; the folder cannot be resumed (move it away, or bench into another --out)");
+    };
+    if (!r["index"].is_number_unsigned()) bad("a row's index is not a run number: " + r["index"].dump());
+    const auto idx = r["index"].get<std::size_t>();
+    if (idx >= all.size()) bad("run " + std::to_string(idx) + " is not one of this bench's " + std::to_string(all.size()) + " runs");
+    if (static_cast<int>(idx % static_cast<std::size_t>(spec.shard_count)) != spec.shard_index - 1) {
+      bad("run " + std::to_string(idx) + " belongs to another shard");
+    }
+    const BenchCombo& c = all[idx];
+    const json& cfg = r.contains("config") ? r["config"] : json();
+    const bool same = cfg.is_object() && cfg.value("policy", "") == c.policy &&
+                      cfg.value("traffic", "") == c.traffic && cfg.contains("seed") &&
+                      cfg["seed"].is_number_unsigned() && cfg["seed"].get<std::uint64_t>() == c.seed;
+    if (!same) {
+      bad("the row of run " + std::to_string(idx) + " is not " + c.policy + " / " + c.traffic + " / seed " +
+          std::to_string(c.seed) + " (got " + cfg.dump() + ")");
+    }
+    if (!seen.insert(idx).second) bad("run " + std::to_string(idx) + " appears twice");
+  }
 }
 
 std::string runs_text(std::vector<json> runs) {
@@ -326,6 +365,7 @@ BenchOutcome run_bench(const BenchSpec& spec, const std::atomic<bool>* stop,
     std::size_t dropped = 0;
     kept = read_runs(runs_path, &dropped);
     if (dropped) std::fprintf(stderr, "bench: dropped %zu incomplete line(s) of %s\n", dropped, runs_path.c_str());
+    check_resumed_runs(kept, all, spec, runs_path);
     write_file_atomic(runs_path, runs_text(kept));
   }
   write_file_atomic(manifest_path, manifest.dump(2) + "\n");
@@ -498,6 +538,15 @@ BenchOutcome merge_bench(const std::vector<std::filesystem::path>& dirs, const s
     }
   }
   const auto total = manifest["combinations"].get<std::size_t>();
+  for (const auto& dir : dirs) {
+    if (same_file(dir, out)) {
+      throw UsageError("merge: --out " + out.string() + " is one of the folders being joined (" + dir.string() +
+                       "); its results would be rewritten: merge into a new folder");
+    }
+  }
+  if (std::filesystem::exists(out / kRunsFile) || std::filesystem::exists(out / kManifestFile)) {
+    throw UsageError("merge: --out " + out.string() + " already holds bench results; merge into a new folder");
+  }
   if (runs.size() != total) {
     throw UsageError("merge: the folders hold " + std::to_string(runs.size()) + " of the sweep's " +
                      std::to_string(total) + " runs; a shard is missing or unfinished");

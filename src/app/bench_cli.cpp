@@ -79,7 +79,8 @@ Subcommand register_bench(CLI::App& app) {
   cmd->add_option("--traffic", st->traffic, "Comma-separated traffic profiles (faithful, calm)")->capture_default_str();
   cmd->add_option("--map", st->map, "Map file; default: the built-in track")->check(CLI::ExistingFile);
   cmd->add_option("--config", st->config, "JSON parameter overrides")->check(CLI::ExistingFile);
-  cmd->add_option("--steps-per-call", st->spec.steps_per_call, "Fixed steps per reply; default: drawn 1-3 by seed");
+  cmd->add_option("--steps-per-call", st->spec.steps_per_call, "Fixed steps per reply (1-1000); default: drawn 1-3 by seed")
+      ->check(CLI::Range(1, 1000));
   cmd->add_option("--jobs,-j", st->spec.jobs, "Runs in parallel (default: all cores)")->capture_default_str();
   cmd->add_option("--out,-o", st->out, "Output folder")->capture_default_str();
   cmd->add_option("--shard", st->shard, "Run only slice I of N (e.g. 3/8) of the combinations");

@@ -1,6 +1,10 @@
 #include <CLI/CLI.hpp>
+#include <algorithm>
+#include <charconv>
 #include <chrono>
+#include <cerrno>
 #include <cstdio>
+#include <cstring>
 #include <iostream>
 #include <thread>
 #include <unistd.h>
@@ -29,11 +33,12 @@ int cmd_drive(DriveOptions opts, const std::optional<std::filesystem::path>& jso
               bool quiet) {
   const double total_s = opts.minutes_from_scenario ? 0.0 : opts.minutes * 60.0;  // 0: not known yet
   ProgressLine progress(!quiet, total_s);
-  // A live run goes at real time: Ctrl-C stops it (keeping its report), and afterwards
-  // stops serving the page.
+  // Ctrl-C or SIGTERM stops the run at the next step, keeping everything: the scorecard, the
+  // JSON and the replay, marked ended early (exit 130). A live run goes at real time, and
+  // afterwards a second Ctrl-C stops serving the page.
   std::optional<InterruptScope> interrupt;
+  interrupt.emplace();
   if (opts.live) {
-    interrupt.emplace();
     opts.live->on_listening = [](const std::string& url) {
       std::fprintf(stderr, "live view at %s (the run goes at real time; Ctrl-C stops it)\n", url.c_str());
     };
@@ -56,7 +61,8 @@ int cmd_drive(DriveOptions opts, const std::optional<std::filesystem::path>& jso
   }
   if (opts.record && !quiet) std::cout << "  replay written to " << opts.record->string() << "\n";
   std::cout.flush();
-  if (result.report.ended_early == "stopped" && interrupt) return kExitInterrupted;
+  flush_stdout_or_throw();
+  if (result.report.ended_early == "stopped") return kExitInterrupted;
   if (result.live) {
     std::fprintf(stderr, "the run is over; the live view stays at %s until Ctrl-C\n",
                  result.live->url().c_str());
@@ -65,9 +71,30 @@ int cmd_drive(DriveOptions opts, const std::optional<std::filesystem::path>& jso
   return result.report.ended_early.empty() ? 0 : kExitFailure;
 }
 
+/// A track spec's error in the command line's words: its fields by their flags.
+std::string in_flag_words(std::string message) {
+  const auto replace_all = [&](const std::string& from, const std::string& to) {
+    for (std::size_t at = message.find(from); at != std::string::npos; at = message.find(from, at + to.size())) {
+      message.replace(at, from.size(), to);
+    }
+  };
+  replace_all("TrackSpec.", "");
+  for (const char* field : {"straight_spacing_m", "min_spacing_m", "max_spacing_m", "length_m"}) {
+    std::string flag = std::string("--") + field;
+    std::replace(flag.begin(), flag.end(), '_', '-');
+    replace_all(field, flag);
+  }
+  return message;
+}
+
 int cmd_track(const core::TrackSpec& spec, const std::optional<std::filesystem::path>& out_path,
               bool quiet) {
-  const auto waypoints = core::generate_track(spec);
+  std::vector<core::Waypoint> waypoints;
+  try {
+    waypoints = core::generate_track(spec);
+  } catch (const std::invalid_argument& e) {
+    throw UsageError(in_flag_words(e.what()));
+  }
   const std::string text = core::format_map(waypoints);
   const std::string name = out_path ? out_path->string() : "generated track";
   const core::Map map = core::parse_map(text, name);
@@ -81,6 +108,7 @@ int cmd_track(const core::TrackSpec& spec, const std::optional<std::filesystem::
     write_file_atomic(*out_path, text);
   } else {
     std::cout << text;
+    flush_stdout_or_throw();
   }
   if (!quiet) {
     std::fprintf(stderr,
@@ -97,6 +125,47 @@ int cmd_track(const core::TrackSpec& spec, const std::optional<std::filesystem::
 
 bool stderr_is_terminal() { return ::isatty(STDERR_FILENO) != 0; }
 
+const CLI::Validator& seed_validator() {
+  static const CLI::Validator v(
+      [](std::string& text) -> std::string {
+        std::uint64_t value = 0;
+        const char* end = text.data() + text.size();
+        const auto [ptr, ec] = std::from_chars(text.data(), end, value);
+        if (text.empty() || ec != std::errc() || ptr != end) {
+          return "a seed is a whole number from 0 to 18446744073709551615 (got '" + text + "')";
+        }
+        return {};
+      },
+      "SEED");
+  return v;
+}
+
+void flush_stdout_or_throw() {
+  errno = 0;
+  std::cout.flush();
+  int err = errno;
+  const bool lost = !std::cout || std::fflush(stdout) != 0 || std::ferror(stdout) != 0;
+  if (err == 0) err = errno;
+  if (lost) {
+    std::cout.clear();
+    std::clearerr(stdout);
+    throw std::runtime_error(std::string("standard output: write failed") +
+                             (err ? std::string(" (") + std::strerror(err) + ")" : std::string()) +
+                             "; the output is incomplete");
+  }
+}
+
+bool same_file(const std::filesystem::path& a, const std::filesystem::path& b) {
+  std::error_code ec;
+  if (std::filesystem::exists(a, ec) && std::filesystem::exists(b, ec)) {
+    const bool eq = std::filesystem::equivalent(a, b, ec);
+    if (!ec) return eq;
+  }
+  const auto ca = std::filesystem::weakly_canonical(std::filesystem::absolute(a), ec);
+  const auto cb = std::filesystem::weakly_canonical(std::filesystem::absolute(b), ec);
+  return !ec && ca == cb;
+}
+
 Subcommand register_drive(CLI::App& app) {
   struct State {
     DriveOptions opts;
@@ -112,13 +181,16 @@ Subcommand register_drive(CLI::App& app) {
       ->check(CLI::ExistingFile);
   auto* minutes = cmd->add_option("--minutes", st->opts.minutes,
                                   "Simulated minutes to drive (default 30, or the scenario's duration)");
-  cmd->add_option("--seed", st->opts.seed, "Seed of the traffic and latency draws")->capture_default_str();
+  cmd->add_option("--seed", st->opts.seed, "Seed of the traffic and latency draws (0 to 2^64 - 1)")
+      ->check(seed_validator())
+      ->capture_default_str();
   cmd->add_option("--traffic", st->opts.traffic,
                   "Traffic profile: faithful (the original's rules) or calm (IDM + MOBIL)")
       ->capture_default_str();
   cmd->add_option("--policy", st->opts.policy, policy_help())->capture_default_str();
   cmd->add_option("--steps-per-call", st->opts.steps_per_call,
-                  "World steps per planner reply (1-1000); default: drawn from 1-3 per call by the seed");
+                  "World steps per planner reply (1-1000); default: drawn from 1-3 per call by the seed")
+      ->check(CLI::Range(1, 1000));
   cmd->add_option("--json", st->json, "Also write the report as JSON to this file");
   cmd->add_option("--config", st->config,
                   "JSON file overriding any of the default parameters (see `overtake config`)")
@@ -151,6 +223,10 @@ Subcommand register_drive(CLI::App& app) {
             if (st->live_on) st->opts.live = st->live;
             std::optional<std::filesystem::path> json_out;
             if (!st->json.empty()) json_out = st->json;
+            if (json_out && st->opts.record && same_file(*json_out, *st->opts.record)) {
+              throw UsageError("--json and --record name the same file (" + st->json +
+                               "): one would overwrite the other");
+            }
             return cmd_drive(st->opts, json_out, st->quiet);
           }};
 }
@@ -163,7 +239,9 @@ Subcommand register_track(CLI::App& app) {
   };
   auto st = std::make_shared<State>();
   auto* cmd = app.add_subcommand("track", "Generate a closed highway loop map in the original file format.");
-  cmd->add_option("--seed", st->spec.seed, "Seed of the track's shape")->capture_default_str();
+  cmd->add_option("--seed", st->spec.seed, "Seed of the track's shape (0 to 2^64 - 1)")
+      ->check(seed_validator())
+      ->capture_default_str();
   cmd->add_option("--length-m", st->spec.length_m, "Loop length in metres, about")->capture_default_str();
   cmd->add_option("--straight-spacing-m", st->spec.straight_spacing_m,
                   "Waypoint spacing on straights (bends get closer ones)")
@@ -198,7 +276,7 @@ Subcommand register_config(CLI::App& app) {
             if (!st->file.empty()) path = st->file;
             const Config c = st->defaults ? Config{} : load_config(path);
             std::cout << config_to_json(c).dump(2) << "\n";
-            std::cout.flush();
+            flush_stdout_or_throw();
             return kExitOk;
           }};
 }

@@ -141,10 +141,60 @@ Config apply_config_json(Config base, const json& j, std::string_view source) {
   return base;
 }
 
+Config apply_config_text(Config base, std::string_view text, std::string_view source) {
+  return apply_config_json(std::move(base), parse_json_text(text, source), source);
+}
+
 Config default_config() {
   const auto text = resources::embedded_file("config/overtake.json");
   if (!text) throw ConfigError("built-in config/overtake.json is missing from this build");
   return apply_config_json(Config{}, json::parse(*text), "built-in config/overtake.json");
+}
+
+json parse_json_text(std::string_view text, std::string_view source) {
+  // A key given twice in one object is refused (the JSON library would keep the last one,
+  // silently): the callback sees every key with the objects around it.
+  struct Level {
+    bool object = false;
+    std::set<std::string> keys;
+    std::string key;  // the last key read at this level
+  };
+  std::vector<Level> levels;
+  std::string duplicate;
+  const auto watch = [&](int, json::parse_event_t event, json& parsed) {
+    switch (event) {
+      case json::parse_event_t::object_start:
+      case json::parse_event_t::array_start:
+        levels.push_back({event == json::parse_event_t::object_start, {}, {}});
+        break;
+      case json::parse_event_t::object_end:
+      case json::parse_event_t::array_end:
+        if (!levels.empty()) levels.pop_back();
+        break;
+      case json::parse_event_t::key:
+        if (!levels.empty() && parsed.is_string()) {
+          Level& here = levels.back();
+          here.key = parsed.get<std::string>();
+          if (!here.keys.insert(here.key).second && duplicate.empty()) {
+            for (const Level& l : levels) duplicate += l.object ? (duplicate.empty() ? "" : ".") + l.key : "[]";
+          }
+        }
+        break;
+      default:
+        break;
+    }
+    return true;
+  };
+  json j;
+  try {
+    j = json::parse(text, watch);
+  } catch (const json::exception& e) {  // parse_error; out_of_range for a number like 1e999
+    throw ConfigError(std::string(source) + ": not valid JSON: " + e.what());
+  }
+  if (!duplicate.empty()) {
+    throw ConfigError(std::string(source) + ": the key '" + duplicate + "' is given twice");
+  }
+  return j;
 }
 
 json read_json_file(const std::filesystem::path& path) {
@@ -154,11 +204,7 @@ json read_json_file(const std::filesystem::path& path) {
   } catch (const std::exception& e) {
     throw ConfigError(e.what());
   }
-  try {
-    return json::parse(text);
-  } catch (const json::parse_error& e) {
-    throw ConfigError(path.string() + ": not valid JSON: " + e.what());
-  }
+  return parse_json_text(text, path.string());
 }
 
 Config load_config(const std::optional<std::filesystem::path>& user_file) {

@@ -176,7 +176,8 @@ int cmd_sim(const SimArgs& a) {
 
   RunProvenance p;
   p.seed = a.seed;
-  p.policy = a.name.empty() ? protocol::to_string(url.value()) : a.name;
+  p.planner_url = protocol::to_string(url.value());
+  p.policy = a.name.empty() ? p.planner_url : a.name;
   p.traffic = std::string(sim::to_string(*profile));
   p.map_path = track->map.source;
   p.map_hash = core::hex64(track->map.content_hash);
@@ -188,11 +189,16 @@ int cmd_sim(const SimArgs& a) {
 
   protocol::PlannerConnection connection(url.value(), client);
   if (!a.quiet) std::fprintf(stderr, "connected to %s\n", protocol::to_string(url.value()).c_str());
+  // From here on Ctrl-C or SIGTERM stop the run at the next step (or a wait for the planner
+  // at once), and the report so far is printed and written as for any early end. (While
+  // connecting there is nothing to keep: the signal ends the process.)
+  const InterruptScope interrupt;
+  run.stop = &InterruptScope::flag();
+  client.stop = &InterruptScope::flag();
   // Recording and the live view (which holds a lock-step run to real time), once the
   // planner is there.
   std::unique_ptr<sim::ReplayWriter> writer;
   std::shared_ptr<view::LiveView> live;
-  std::optional<InterruptScope> interrupt;
   if (!a.record.empty() || a.live) {
     const sim::ReplayHeader header = replay_header_for(*track, config, p, run.duration_s);
     if (a.live) {
@@ -202,8 +208,6 @@ int cmd_sim(const SimArgs& a) {
                      url_text.c_str());
       };
       live = start_live_view(header, lo, !a.realtime);
-      interrupt.emplace();
-      run.stop = &InterruptScope::flag();
     }
     // Last: a failure above (a port in use) leaves no replay file behind.
     if (!a.record.empty()) writer = std::make_unique<sim::ReplayWriter>(a.record, header);
@@ -216,10 +220,7 @@ int cmd_sim(const SimArgs& a) {
   if (a.realtime) {
     report = protocol::run_realtime(world, connection, client, run);
   } else {
-    protocol::RemotePlanner remote(connection, client);
-    run.remote_planner = true;
-    report = sim::run_drive(
-        world, [&remote](const core::Telemetry& t) { return remote(t); }, run);
+    report = protocol::run_lock_step(world, connection, client, run);
   }
   connection.close();
   const double wall_s =
@@ -244,7 +245,7 @@ int cmd_sim(const SimArgs& a) {
   }
   if (writer && !a.quiet) std::cout << "  replay written to " << a.record << "\n";
   std::cout.flush();
-  if (report.ended_early == "stopped" && interrupt) return kExitInterrupted;
+  if (report.ended_early == "stopped") return kExitInterrupted;
   if (live) {
     std::fprintf(stderr, "the run is over; the live view stays at %s until Ctrl-C\n",
                  live->url().c_str());
@@ -294,7 +295,8 @@ Subcommand register_sim(CLI::App& app) {
       ->required();
   cmd->add_option("--name", a->name, "Name of the planner in the report (default: its address)");
   cmd->add_option("--minutes", a->minutes, "Simulated minutes to drive")->capture_default_str();
-  cmd->add_option("--seed", a->seed, "Seed of the traffic and latency draws")
+  cmd->add_option("--seed", a->seed, "Seed of the traffic and latency draws (0 to 2^64 - 1)")
+      ->check(seed_validator())
       ->capture_default_str();
   cmd->add_option("--traffic", a->traffic,
                   "Traffic profile: faithful (the original's rules) or calm")
@@ -305,7 +307,8 @@ Subcommand register_sim(CLI::App& app) {
       ->check(CLI::ExistingFile);
   cmd->add_option(
       "--steps-per-call", a->steps_per_call,
-      "Lock-step: world steps per reply (1-1000); default: drawn from 1-3 per reply by the seed");
+      "Lock-step: world steps per reply (1-1000); default: drawn from 1-3 per reply by the seed")
+      ->check(CLI::Range(1, 1000));
   cmd->add_flag(
       "--realtime", a->realtime,
       "Step at 50 Hz of wall time and keep driving while the planner thinks, as the original");

@@ -88,8 +88,13 @@ json report_to_json(const sim::RunReport& r, const RunProvenance& p) {
 
 std::string format_scorecard(const sim::RunReport& r, const RunProvenance& p) {
   std::ostringstream os;
-  os << "overtake drive: policy " << p.policy << ", " << p.traffic << " traffic, seed " << p.seed
-     << ", map " << p.map_path << "\n";
+  if (p.planner_url.empty()) {
+    os << "overtake drive: policy " << p.policy;
+  } else {
+    os << "overtake sim: planner " << (p.policy == p.planner_url ? "" : p.policy + " ") << "at "
+       << p.planner_url;
+  }
+  os << ", " << p.traffic << " traffic, seed " << p.seed << ", map " << p.map_path << "\n";
   if (!r.ended_early.empty()) os << "  ENDED EARLY: " << r.ended_early << "\n";
   os << printf_string("  simulated         %8.1f min   distance %8.2f mi   mean speed %6.2f mph\n",
                       r.duration_s / 60.0, core::metres_to_miles(r.distance_m),

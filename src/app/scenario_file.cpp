@@ -2,7 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <set>
+#include <sstream>
 
 #include "overtake/app/config.hpp"
 
@@ -10,6 +12,16 @@ namespace overtake::app {
 namespace {
 
 using nlohmann::json;
+
+std::string fmt(double v);
+
+// What a scenario's numbers may be: a week at most (the longest run), speeds up to 100 m/s
+// (224 mph), accelerations up to 50 m/s^2, positions within 100 km.
+constexpr double kMaxDurationS = 7.0 * 24.0 * 3600.0;
+constexpr double kMaxSpeedMps = 100.0;
+constexpr double kMaxAccelMps2 = 50.0;
+constexpr double kMaxDistanceM = 100000.0;
+constexpr int kMaxCars = 64;
 
 // Reads fields of one JSON object, collecting errors that name the key's path.
 class Fields {
@@ -22,7 +34,8 @@ class Fields {
     seen_.insert(key);
     return j_.is_object() && j_.contains(key);
   }
-  double number(const char* key, double fallback, bool required = false) {
+  /// A finite number within [lo, hi] (what makes physical sense for the key).
+  double number(const char* key, double fallback, bool required, double lo, double hi) {
     if (!has(key)) {
       if (required) errors_.push_back(at(key) + ": missing");
       return fallback;
@@ -32,9 +45,15 @@ class Fields {
       errors_.push_back(at(key) + ": expected a finite number, got " + v.dump());
       return fallback;
     }
-    return v.get<double>();
+    const double x = v.get<double>();
+    if (!(x >= lo && x <= hi)) {
+      errors_.push_back(at(key) + ": " + v.dump() + " is out of range (" + fmt(lo) + " to " + fmt(hi) + ")");
+      return fallback;
+    }
+    return x;
   }
-  int integer(const char* key, int fallback, bool required = false) {
+  /// An integer within [lo, hi]; never wrapped (2^32 + 1 is not 1).
+  int integer(const char* key, int fallback, bool required, int lo, int hi) {
     if (!has(key)) {
       if (required) errors_.push_back(at(key) + ": missing");
       return fallback;
@@ -42,6 +61,13 @@ class Fields {
     const json& v = j_.at(key);
     if (!v.is_number_integer()) {
       errors_.push_back(at(key) + ": expected an integer, got " + v.dump());
+      return fallback;
+    }
+    const bool in_range = v.is_number_unsigned() ? v.get<std::uint64_t>() <= static_cast<std::uint64_t>(hi)
+                                                 : v.get<std::int64_t>() >= lo && v.get<std::int64_t>() <= hi;
+    if (!in_range) {
+      errors_.push_back(at(key) + ": " + v.dump() + " is out of range (" + std::to_string(lo) + " to " +
+                        std::to_string(hi) + ")");
       return fallback;
     }
     return v.get<int>();
@@ -62,6 +88,12 @@ class Fields {
   std::set<std::string> seen_;
 };
 
+std::string fmt(double v) {
+  std::ostringstream os;
+  os << v;
+  return os.str();
+}
+
 }  // namespace
 
 sim::Scenario parse_scenario(const json& j, std::string_view source, const core::RoadParams& road) {
@@ -74,22 +106,20 @@ sim::Scenario parse_scenario(const json& j, std::string_view source, const core:
   }
   top.has("description");
   if (top.has("duration_s")) {
-    const double d = top.number("duration_s", 0.0);
+    const double d = top.number("duration_s", 1.0, false, 0.0, kMaxDurationS);
     if (!(d > 0.0)) errors.push_back("scenario.duration_s: must be more than 0");
     sc.duration_s = d;
   }
-  auto lane_ok = [&](int lane) { return lane >= 0 && lane < road.lane_count; };
+  const double road_width = road.lane_count * road.lane_width_m;
   if (top.has("ego")) {
     Fields ego(j["ego"], "scenario.ego", errors);
-    sc.ego_s_m = ego.number("s_m", sc.ego_s_m);
+    sc.ego_s_m = ego.number("s_m", sc.ego_s_m, false, -kMaxDistanceM, kMaxDistanceM);
     if (ego.has("lane")) {
-      const int lane = ego.integer("lane", 1);
-      if (!lane_ok(lane)) ego.error("lane " + std::to_string(lane) + " is not a lane of the road");
+      const int lane = ego.integer("lane", 1, false, 0, road.lane_count - 1);
       sc.ego_d_m = core::lane_center_d(lane, road);
     }
-    if (ego.has("d_m")) sc.ego_d_m = ego.number("d_m", sc.ego_d_m);
-    sc.ego_speed_mps = ego.number("speed_mps", 0.0);
-    if (sc.ego_speed_mps < 0.0) ego.error("speed_mps must be zero or more");
+    if (ego.has("d_m")) sc.ego_d_m = ego.number("d_m", sc.ego_d_m, false, 0.0, road_width);
+    sc.ego_speed_mps = ego.number("speed_mps", 0.0, false, 0.0, kMaxSpeedMps);
     ego.check_unknown();
   }
   if (top.has("cars")) {
@@ -102,11 +132,10 @@ sim::Scenario parse_scenario(const json& j, std::string_view source, const core:
         const bool has_gap = car.has("gap_m");
         const bool has_s = car.has("s_m");
         if (has_gap == has_s) car.error("give exactly one of gap_m (from the ego) or s_m (absolute)");
-        c.s_m = has_gap ? sc.ego_s_m + car.number("gap_m", 0.0) : car.number("s_m", 0.0);
-        c.lane = car.integer("lane", 1, true);
-        if (!lane_ok(c.lane)) car.error("lane " + std::to_string(c.lane) + " is not a lane of the road");
-        c.speed_mps = car.number("speed_mps", 0.0, true);
-        if (c.speed_mps < 0.0) car.error("speed_mps must be zero or more");
+        c.s_m = has_gap ? sc.ego_s_m + car.number("gap_m", 0.0, false, -kMaxDistanceM, kMaxDistanceM)
+                        : car.number("s_m", 0.0, false, -kMaxDistanceM, kMaxDistanceM);
+        c.lane = car.integer("lane", 1, true, 0, road.lane_count - 1);
+        c.speed_mps = car.number("speed_mps", 0.0, true, 0.0, kMaxSpeedMps);
         car.check_unknown();
         sc.cars.push_back(c);
       }
@@ -119,9 +148,8 @@ sim::Scenario parse_scenario(const json& j, std::string_view source, const core:
       for (std::size_t i = 0; i < j["events"].size(); ++i) {
         Fields ev(j["events"][i], "scenario.events[" + std::to_string(i) + "]", errors);
         sim::ScenarioEvent e;
-        e.t_s = ev.number("t_s", 0.0, true);
-        if (e.t_s < 0.0) ev.error("t_s must be zero or more");
-        e.car = ev.integer("car", 0, true);
+        e.t_s = ev.number("t_s", 0.0, true, 0.0, kMaxDurationS);
+        e.car = ev.integer("car", 0, true, 0, kMaxCars - 1);
         if (e.car < 0 || e.car >= static_cast<int>(sc.cars.size())) {
           ev.error("car " + std::to_string(e.car) + " is not one of the scenario's " +
                    std::to_string(sc.cars.size()) + " cars");
@@ -132,19 +160,17 @@ sim::Scenario parse_scenario(const json& j, std::string_view source, const core:
           ev.error("give exactly one of change_lane, brake_mps2 (with duration_s) or speed_mps (with accel_mps2)");
         } else if (ev.has("change_lane")) {
           e.action = sim::ScenarioAction::change_lane;
-          e.lane = ev.integer("change_lane", 0);
-          if (!lane_ok(e.lane)) ev.error("change_lane " + std::to_string(e.lane) + " is not a lane of the road");
+          e.lane = ev.integer("change_lane", 0, false, 0, road.lane_count - 1);
         } else if (ev.has("brake_mps2")) {
           e.action = sim::ScenarioAction::brake;
-          e.rate_mps2 = ev.number("brake_mps2", 0.0);
-          e.duration_s = ev.number("duration_s", 0.0, true);
+          e.rate_mps2 = ev.number("brake_mps2", 0.0, false, 0.0, kMaxAccelMps2);
+          e.duration_s = ev.number("duration_s", 0.0, true, 0.0, kMaxDurationS);
           if (!(e.rate_mps2 > 0.0)) ev.error("brake_mps2 must be more than 0");
           if (!(e.duration_s > 0.0)) ev.error("duration_s must be more than 0");
         } else {
           e.action = sim::ScenarioAction::set_speed;
-          e.speed_mps = ev.number("speed_mps", 0.0);
-          e.rate_mps2 = ev.number("accel_mps2", 0.0, true);
-          if (e.speed_mps < 0.0) ev.error("speed_mps must be zero or more");
+          e.speed_mps = ev.number("speed_mps", 0.0, false, 0.0, kMaxSpeedMps);
+          e.rate_mps2 = ev.number("accel_mps2", 0.0, true, 0.0, kMaxAccelMps2);
           if (!(e.rate_mps2 > 0.0)) ev.error("accel_mps2 must be more than 0");
         }
         ev.check_unknown();
@@ -161,6 +187,11 @@ sim::Scenario parse_scenario(const json& j, std::string_view source, const core:
   std::stable_sort(sc.events.begin(), sc.events.end(),
                    [](const sim::ScenarioEvent& a, const sim::ScenarioEvent& b) { return a.t_s < b.t_s; });
   return sc;
+}
+
+sim::Scenario parse_scenario_text(std::string_view text, std::string_view source,
+                                  const core::RoadParams& road) {
+  return parse_scenario(parse_json_text(text, source), source, road);
 }
 
 sim::Scenario load_scenario(const std::filesystem::path& path, const core::RoadParams& road) {

@@ -168,15 +168,20 @@ int run_view(const ViewOptions& opts, const std::atomic<bool>& stop,
   if (opts.port < 0 || opts.port > 65535) {
     throw UsageError("--port must be between 0 and 65535 (got " + std::to_string(opts.port) + ")");
   }
+  if (opts.html && same_file(*opts.html, opts.replay)) {
+    throw UsageError("--html " + opts.html->string() + " is the replay itself; it would be overwritten by the page");
+  }
   std::string warning;
   std::string bytes = load_replay_for_view(opts.replay, opts.partial, &warning);
   if (!warning.empty()) std::fprintf(stderr, "warning: %s\n", warning.c_str());
   const std::string_view page = embedded_page(kViewerPageName);
   if (opts.html) {
-    write_viewer_html(bytes, *opts.html, page);
+    const std::string html = view::viewer_page(page, view::ViewerSource::embedded, bytes);
+    write_file_atomic(*opts.html, html);
     if (!opts.quiet) {
+      // The page's own size: the target may be a device (/dev/null) with none.
       std::printf("written: %s (%.1f MB, opens from disk)\n", opts.html->c_str(),
-                  static_cast<double>(fs::file_size(*opts.html)) / 1e6);
+                  static_cast<double>(html.size()) / 1e6);
     }
     return kExitOk;
   }

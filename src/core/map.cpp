@@ -7,6 +7,8 @@
 #include <cmath>
 #include <fstream>
 #include <numeric>
+#include <optional>
+#include <utility>
 #include <sstream>
 
 #include "overtake/core/hash.hpp"
@@ -61,6 +63,48 @@ double parse_field(std::string_view field, std::string_view source, std::size_t 
   return value;
 }
 
+bool segments_intersect(const Waypoint& a, const Waypoint& b, const Waypoint& c, const Waypoint& d) {
+  const auto orient = [](const Waypoint& p, const Waypoint& q, const Waypoint& r) {
+    const double v = (q.x_m - p.x_m) * (r.y_m - p.y_m) - (q.y_m - p.y_m) * (r.x_m - p.x_m);
+    return (v > 0.0) - (v < 0.0);
+  };
+  const int o1 = orient(a, b, c);
+  const int o2 = orient(a, b, d);
+  const int o3 = orient(c, d, a);
+  const int o4 = orient(c, d, b);
+  if (o1 != o2 && o3 != o4) return true;
+  // Collinear and overlapping (duplicate points are refused before, so this is a fold back).
+  const auto on = [](const Waypoint& p, const Waypoint& q, const Waypoint& r) {
+    return std::min(p.x_m, q.x_m) <= r.x_m && r.x_m <= std::max(p.x_m, q.x_m) &&
+           std::min(p.y_m, q.y_m) <= r.y_m && r.y_m <= std::max(p.y_m, q.y_m);
+  };
+  return (o1 == 0 && on(a, b, c)) || (o2 == 0 && on(a, b, d)) || (o3 == 0 && on(c, d, a)) ||
+         (o4 == 0 && on(c, d, b));
+}
+
+/// Two segments of the closed divider line (i to i+1, j to j+1, i < j) that cross, other than
+/// neighbours meeting at their shared waypoint. A sweep along x: each segment is compared
+/// only with the segments whose x ranges overlap its own.
+std::optional<std::pair<std::size_t, std::size_t>> find_crossing(const std::vector<Waypoint>& w) {
+  const std::size_t n = w.size();
+  std::vector<std::size_t> order(n);
+  std::iota(order.begin(), order.end(), 0);
+  const auto lo = [&](std::size_t i) { return std::min(w[i].x_m, w[(i + 1) % n].x_m); };
+  const auto hi = [&](std::size_t i) { return std::max(w[i].x_m, w[(i + 1) % n].x_m); };
+  std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return lo(a) < lo(b); });
+  for (std::size_t k = 0; k < n; ++k) {
+    const std::size_t i = order[k];
+    for (std::size_t m = k + 1; m < n && lo(order[m]) <= hi(i); ++m) {
+      const std::size_t j = order[m];
+      const std::size_t a = std::min(i, j);
+      const std::size_t b = std::max(i, j);
+      if (b == a + 1 || (a == 0 && b == n - 1)) continue;  // neighbours share a waypoint
+      if (segments_intersect(w[a], w[a + 1], w[b], w[(b + 1) % n])) return std::make_pair(a, b);
+    }
+  }
+  return std::nullopt;
+}
+
 }  // namespace
 
 Map parse_map(std::string_view text, std::string_view source, const MapRules& rules) {
@@ -94,10 +138,32 @@ Map parse_map(std::string_view text, std::string_view source, const MapRules& ru
                fmt(normal_len) + "; it must be a unit vector (within " +
                fmt(rules.normal_tolerance * 100.0) + "%)");
     }
+    for (int c : {0, 1, 2}) {
+      if (std::abs(v[c]) > rules.max_abs_coordinate_m) {
+        fail(source, line_no,
+             std::string(kColumnNames[c]) + " = " + fmt(v[c]) + " is out of range: a map's x, y and s must be within +-" +
+                 fmt(rules.max_abs_coordinate_m) + " m");
+      }
+    }
+    if (map.waypoints.size() >= rules.max_waypoints) {
+      fail(source, line_no, "too many waypoints: a map may have at most " + std::to_string(rules.max_waypoints));
+    }
     if (!map.waypoints.empty() && !(wp.s_m > map.waypoints.back().s_m)) {
       fail(source, line_no,
            "s = " + fmt(wp.s_m) + " does not increase (line " + std::to_string(line_of.back()) +
                " has s = " + fmt(map.waypoints.back().s_m) + ")");
+    }
+    if (!map.waypoints.empty()) {
+      const Waypoint& prev = map.waypoints.back();
+      const double chord = std::hypot(wp.x_m - prev.x_m, wp.y_m - prev.y_m);
+      const double step = wp.s_m - prev.s_m;
+      if (step > rules.max_s_step_ratio * chord + rules.s_step_slack_m ||
+          step < chord / rules.max_s_step_ratio - rules.s_step_slack_m) {
+        fail(source, line_no,
+             "s grows by " + fmt(step) + " m from line " + std::to_string(line_of.back()) +
+                 ", but the waypoints are " + fmt(chord) +
+                 " m apart; s is the distance along the road");
+      }
     }
     map.waypoints.push_back(wp);
     line_of.push_back(line_no);
@@ -137,6 +203,19 @@ Map parse_map(std::string_view text, std::string_view source, const MapRules& ru
   const Waypoint& first = map.waypoints.front();
   const Waypoint& last = map.waypoints.back();
   map.loop_length_m = last.s_m - first.s_m + std::hypot(first.x_m - last.x_m, first.y_m - last.y_m);
+  if (!(map.loop_length_m >= rules.min_loop_length_m) || !(map.loop_length_m <= rules.max_loop_length_m)) {
+    throw MapError(std::string(source) + ": the loop is " + fmt(map.loop_length_m) +
+                   " m long; a map's loop must be " + fmt(rules.min_loop_length_m) + " to " +
+                   fmt(rules.max_loop_length_m) + " m");
+  }
+  if (const auto crossing = find_crossing(map.waypoints)) {
+    const std::size_t n = map.waypoints.size();
+    const auto seg = [&](std::size_t i) {
+      return "lines " + std::to_string(line_of[i]) + "-" + std::to_string(line_of[(i + 1) % n]);
+    };
+    throw MapError(std::string(source) + ": the road crosses itself: the divider between " +
+                   seg(crossing->first) + " crosses it between " + seg(crossing->second));
+  }
   return map;
 }
 

@@ -8,6 +8,7 @@ namespace overtake::core {
 namespace {
 
 constexpr double kSampleSpacingM = 2.0;        // dense samples for the global search
+constexpr double kMaxSamples = 1e6;
 constexpr double kHintMaxOffsetM = 30.0;       // a hinted projection farther off is re-searched
 constexpr double kHintMaxJumpM = 200.0;        // ... and so is one far from the hint
 constexpr double kMinNormalAgreement = 0.5;    // cos 60 degrees
@@ -63,7 +64,15 @@ ReferenceLine::ReferenceLine(const Map& map, double smoothing_m3) : map_(map) {
     }
   }
 
-  const auto count = static_cast<std::size_t>(std::ceil(length_m_ / kSampleSpacingM));
+  // The dense samples for the global search: a loop parse_map accepts needs at most 100,000;
+  // a Map built by hand with an absurd length is refused rather than sampled.
+  const double wanted = std::ceil(length_m_ / kSampleSpacingM);
+  if (!(wanted >= 2.0) || wanted > kMaxSamples) {
+    throw MapError(map.source + ": a loop of " + std::to_string(length_m_) +
+                   " m cannot be sampled for the reference line (2 m apart, at most " +
+                   std::to_string(static_cast<long>(kMaxSamples)) + " samples)");
+  }
+  const auto count = static_cast<std::size_t>(wanted);
   sample_s_.reserve(count);
   sample_xy_.reserve(count);
   for (std::size_t i = 0; i < count; ++i) {

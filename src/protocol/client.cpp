@@ -11,6 +11,10 @@
 #include <deque>
 #include <thread>
 
+#include <netinet/in.h>
+#include <netinet/tcp.h>
+#include <sys/socket.h>
+
 // GCC 12 may report a false maybe-uninitialized inside Beast's HTTP parser (boost::optional)
 // depending on inlining (seen with the sanitizers).
 #pragma GCC diagnostic push
@@ -35,6 +39,11 @@ constexpr auto kRetryDelay = std::chrono::milliseconds(100);
 constexpr auto kAttemptTimeout = std::chrono::seconds(2);
 constexpr auto kCloseTimeout = std::chrono::milliseconds(500);
 constexpr double kProgressEveryS = 10.0;
+// How often a wait for the planner looks at the stop flag (Ctrl-C).
+constexpr auto kStopPoll = std::chrono::milliseconds(50);
+// The least time finish() waits for a late reply after the run.
+constexpr auto kLateReplyWait = std::chrono::milliseconds(100);
+constexpr const char* kOutOfStep = "out of step: the planner replied twice to one telemetry";
 
 std::string seconds_text(std::chrono::milliseconds ms) {
   char buf[32];
@@ -100,10 +109,38 @@ struct PlannerConnection::Impl {
   beast::flat_buffer rd;
   std::deque<ReceivedFrame> frames;
   std::string out;
+  websocket::ping_data ping_payload;
   error_code read_error;
+  // The planner's close frame, once one came. Tearing the connection down after it may then
+  // fail (the planner may be gone before our close frame reaches it) and that error, not
+  // `closed`, ends the read: this is what says that the planner closed.
+  std::optional<websocket::close_reason> peer_close;
   bool reading = false;
   bool writing = false;
   bool open = false;
+
+  // Runs one write (a frame or a ping) started by `start(handler)` to its end, or throws
+  // ConnectionError when it fails or is not done by the deadline.
+  template <class Start>
+  void write(const Start& start, Clock::time_point deadline) {
+    if (!open) throw ConnectionError(lost_reason());
+    writing = true;
+    error_code ec;
+    start([this, &ec](const error_code& e, auto&&...) {
+      ec = e;
+      writing = false;
+    });
+    if (!run_until([&] { return !writing; }, deadline)) {
+      drop();
+      run_until([&] { return !writing; }, Clock::now() + kCloseTimeout);
+      throw ConnectionError("the planner does not read: a frame could not be sent in time");
+    }
+    if (ec) {
+      if (!read_error) read_error = ec;
+      drop();
+      throw ConnectionError(lost_reason());
+    }
+  }
 
   // Runs handlers until `done()` or the deadline; returns done().
   template <class Done>
@@ -117,10 +154,25 @@ struct PlannerConnection::Impl {
     return true;
   }
 
+  // Acknowledges what has arrived at once instead of up to 40 ms later. Each lock-step cycle
+  // now brings two frames from the planner (its reply, then the pong of our ping); a planner
+  // with Nagle's algorithm on (no TCP_NODELAY) holds the second of two small writes until the
+  // first is acknowledged, and with nothing to send while it waits for a reply, the kernel
+  // would delay that acknowledgement: 20-40 ms a cycle instead of microseconds. Linux leaves
+  // quick-ack mode by itself, so this is set again after every read.
+  void quickack() {
+#ifdef TCP_QUICKACK
+    const int one = 1;
+    (void)::setsockopt(ws->next_layer().native_handle(), IPPROTO_TCP, TCP_QUICKACK, &one,
+                       sizeof one);
+#endif
+  }
+
   void start_read() {
     reading = true;
     ws->async_read(rd, [this](const error_code& ec, std::size_t) {
       reading = false;
+      quickack();
       if (ec) {
         read_error = ec;
         open = false;
@@ -142,6 +194,20 @@ struct PlannerConnection::Impl {
 
   [[nodiscard]] std::string lost_reason() const {
     const error_code& ec = read_error;
+    if (peer_close) {
+      const auto code = static_cast<unsigned>(peer_close->code);
+      if (peer_close->code == websocket::close_code::none)
+        return "the planner closed the connection (a close frame without a code)";
+      std::string why =
+          peer_close->code == websocket::close_code::normal
+              ? "the planner closed the connection normally (close code 1000"
+              : "the planner closed the connection (close code " + std::to_string(code);
+      if (!peer_close->reason.empty()) {
+        why +=
+            ": " + excerpt(std::string_view(peer_close->reason.data(), peer_close->reason.size()));
+      }
+      return why + ")";
+    }
     if (ec == websocket::error::closed) return "the planner closed the connection";
     if (ec == websocket::error::message_too_big) {
       return "the planner sent a frame larger than " + std::to_string(opts.max_frame_bytes) +
@@ -182,6 +248,16 @@ struct PlannerConnection::Impl {
         [](websocket::request_type& req) { req.erase(beast::http::field::user_agent); }));
     ws->read_message_max(opts.max_frame_bytes);
     ws->auto_fragment(false);
+    // Pongs join the frames in the order they came (the lock-step client counts replies
+    // against them, see RemotePlanner); a close frame is noted for lost_reason().
+    ws->control_callback([this](websocket::frame_type kind, beast::string_view payload) {
+      if (kind == websocket::frame_type::pong) {
+        quickack();
+        frames.push_back({std::string(payload.data(), payload.size()), false, true});
+      } else if (kind == websocket::frame_type::close) {
+        peer_close = ws->reason();
+      }
+    });
     done = false;
     const std::string host =
         (url.host.find(':') != std::string::npos ? "[" + url.host + "]" : url.host) + ":" +
@@ -227,25 +303,23 @@ PlannerConnection::~PlannerConnection() {
 
 void PlannerConnection::send(std::string_view payload, Clock::time_point deadline, bool binary) {
   Impl& m = *impl_;
-  if (!m.open) throw ConnectionError(m.lost_reason());
-  m.out.assign(payload);
-  m.writing = true;
-  error_code ec;
-  m.ws->binary(binary);
-  m.ws->async_write(net::buffer(m.out), [&m, &ec](const error_code& e, std::size_t) {
-    ec = e;
-    m.writing = false;
-  });
-  if (!m.run_until([&] { return !m.writing; }, deadline)) {
-    m.drop();
-    m.run_until([&] { return !m.writing; }, Clock::now() + kCloseTimeout);
-    throw ConnectionError("the planner does not read: a frame could not be sent in time");
-  }
-  if (ec) {
-    if (!m.read_error) m.read_error = ec;
-    m.drop();
-    throw ConnectionError(m.lost_reason());
-  }
+  m.write(
+      [&](auto handler) {
+        m.out.assign(payload);
+        m.ws->binary(binary);
+        m.ws->async_write(net::buffer(m.out), std::move(handler));
+      },
+      deadline);
+}
+
+void PlannerConnection::ping(std::string_view payload, Clock::time_point deadline) {
+  Impl& m = *impl_;
+  m.write(
+      [&](auto handler) {
+        m.ping_payload.assign(payload.data(), std::min(payload.size(), m.ping_payload.max_size()));
+        m.ws->async_ping(m.ping_payload, std::move(handler));
+      },
+      deadline);
 }
 
 std::optional<ReceivedFrame> PlannerConnection::receive(Clock::time_point deadline) {
@@ -293,11 +367,13 @@ namespace {
 
 // A frame from the planner, sorted.
 struct Sorted {
-  enum Kind { reply, ping, ignore, fatal } kind = ignore;
-  std::string text;  // reply: the frame; ping: the pong to send; ignore: a note; fatal: why
+  enum Kind { reply, ping, pong, ignore, fatal } kind = ignore;
+  std::string text;  // reply: the frame; ping: the pong to send; pong: its payload;
+                     // ignore: a note; fatal: why
 };
 
 Sorted sort_planner_frame(const ReceivedFrame& f) {
+  if (f.pong) return {Sorted::pong, f.text};
   if (f.binary) {
     return {Sorted::fatal,
             "malformed reply: a binary frame of " + std::to_string(f.text.size()) + " bytes"};
@@ -337,38 +413,90 @@ const LogFn& log_of(const ClientOptions& o) {
 RemotePlanner::RemotePlanner(PlannerConnection& connection, const ClientOptions& options)
     : connection_(connection), options_(options) {}
 
+// The next frame by `deadline`, looking at the stop flag now and then (a signal does not
+// interrupt the wait itself).
+std::optional<ReceivedFrame> RemotePlanner::receive(Clock::time_point deadline) {
+  for (;;) {
+    if (options_.stop && options_.stop->load(std::memory_order_relaxed)) {
+      stopped_ = true;
+      throw sim::PlannerFailure("stopped");
+    }
+    auto frame = connection_.receive(std::min(deadline, Clock::now() + kStopPoll));
+    if (frame || Clock::now() >= deadline) return frame;
+  }
+}
+
+// The bounds on the number of replies (see RemotePlanner in the header).
+void RemotePlanner::count_reply(const ReceivedFrame& f) {
+  ++replies_;
+  if (replies_ > sent_) {
+    throw sim::PlannerFailure(std::string(kOutOfStep) + " (" + std::to_string(replies_) +
+                              " replies to " + std::to_string(sent_) +
+                              " telemetries; the last: " + excerpt(f.text, 40) + ")");
+  }
+}
+
+void RemotePlanner::count_pong(const std::string& payload) {
+  long j = 0;
+  const auto r = std::from_chars(payload.data(), payload.data() + payload.size(), j);
+  if (r.ec != std::errc{} || r.ptr != payload.data() + payload.size() || j < 1 || j > sent_)
+    return;  // not one of ours: an unasked pong (a heartbeat) is allowed
+  last_pong_ = std::max(last_pong_, j);
+  if (replies_ > j) {
+    throw sim::PlannerFailure(std::string(kOutOfStep) + " (" + std::to_string(replies_) +
+                              " replies came before its pong to the ping that followed telemetry " +
+                              std::to_string(j) + ")");
+  }
+}
+
+// A frame that came while no telemetry was waiting for its reply.
+void RemotePlanner::take_unasked(const ReceivedFrame& f, bool after_run) {
+  const Sorted s = sort_planner_frame(f);
+  switch (s.kind) {
+    case Sorted::reply:
+      count_reply(f);
+      return;
+    case Sorted::pong:
+      count_pong(s.text);
+      return;
+    case Sorted::ping:
+      if (!after_run) connection_.send(s.text, Clock::now() + options_.reply_timeout);
+      return;
+    case Sorted::ignore:
+      log_of(options_)(LogLevel::info, s.text);
+      return;
+    case Sorted::fatal:
+      if (!after_run) throw sim::PlannerFailure(s.text);
+      log_of(options_)(LogLevel::info, "after the run: " + s.text);
+      return;
+  }
+}
+
 std::vector<core::Vec2> RemotePlanner::operator()(const core::Telemetry& telemetry) {
   const LogFn& log = log_of(options_);
   try {
     // Anything that came in since the last reply was not asked for.
-    for (const ReceivedFrame& f : connection_.take_arrived()) {
-      const Sorted s = sort_planner_frame(f);
-      if (s.kind == Sorted::reply) {
-        ++extra_replies_;
-        log(LogLevel::warning,
-            "the planner replied twice to one telemetry; the extra reply is ignored: " +
-                excerpt(f.text, 40));
-      } else if (s.kind == Sorted::ping) {
-        connection_.send(s.text, Clock::now() + options_.reply_timeout);
-      } else if (s.kind == Sorted::ignore) {
-        log(LogLevel::info, s.text);
-      } else {
-        throw sim::PlannerFailure(s.text);
-      }
-    }
+    for (const ReceivedFrame& f : connection_.take_arrived()) take_unasked(f, false);
 
     buffer_.clear();
     append_telemetry(buffer_, telemetry);
-    const auto deadline = Clock::now() + options_.reply_timeout;
+    const auto sent_at = Clock::now();
+    const auto deadline = sent_at + options_.reply_timeout;
     connection_.send(buffer_, deadline);
+    ++sent_;
+    connection_.ping(std::to_string(sent_), deadline);
     for (;;) {
-      const auto frame = connection_.receive(deadline);
+      const auto frame = receive(deadline);
       if (!frame) {
         throw sim::PlannerFailure("the planner stalled: no reply within " +
                                   seconds_text(options_.reply_timeout));
       }
       const Sorted s = sort_planner_frame(*frame);
       if (s.kind == Sorted::fatal) throw sim::PlannerFailure(s.text);
+      if (s.kind == Sorted::pong) {
+        count_pong(s.text);
+        continue;
+      }
       if (s.kind == Sorted::ignore) {
         log(LogLevel::info, s.text);
         continue;
@@ -377,6 +505,8 @@ std::vector<core::Vec2> RemotePlanner::operator()(const core::Telemetry& telemet
         connection_.send(s.text, deadline);
         continue;
       }
+      count_reply(*frame);
+      longest_round_trip_ = std::max(longest_round_trip_, Clock::now() - sent_at);
       auto reply = parse_reply(frame->text, options_.limits);
       if (!reply) throw sim::PlannerFailure("malformed reply: " + reply.error());
       if (reply.value().manual) {
@@ -394,6 +524,52 @@ std::vector<core::Vec2> RemotePlanner::operator()(const core::Telemetry& telemet
   }
 }
 
+std::string RemotePlanner::finish() {
+  if (sent_ == 0) return {};
+  try {
+    for (const ReceivedFrame& f : connection_.take_arrived()) take_unasked(f, true);
+    // The last pong says what the planner had sent when it read the last telemetry.
+    const auto deadline = Clock::now() + options_.reply_timeout;
+    while (last_pong_ < sent_) {
+      const auto frame = receive(deadline);
+      if (!frame) {
+        log_of(options_)(LogLevel::warning,
+                         "the planner did not answer our last websocket ping (RFC 6455 requires "
+                         "a pong): a second reply to one telemetry may have gone unnoticed");
+        break;
+      }
+      take_unasked(*frame, true);
+    }
+    // A copy sent from a timer or another thread may come after the last pong.
+    const auto wait = std::min<Clock::duration>(
+        options_.reply_timeout, std::max<Clock::duration>(kLateReplyWait, 2 * longest_round_trip_));
+    const auto until = Clock::now() + wait;
+    while (const auto frame = receive(until)) take_unasked(*frame, true);
+  } catch (const sim::PlannerFailure& e) {
+    return stopped_ ? std::string() : std::string(e.what());
+  } catch (const ConnectionError&) {  // gone after the run: nothing more can come
+  }
+  return {};
+}
+
+sim::RunReport run_lock_step(sim::World& world, PlannerConnection& connection,
+                             const ClientOptions& options, sim::RunOptions run) {
+  RemotePlanner remote(connection, options);
+  run.remote_planner = true;
+  sim::RunReport report = sim::run_drive(
+      world, [&remote](const core::Telemetry& t) { return remote(t); }, run);
+  if (remote.stopped()) {
+    report.ended_early = "stopped";  // the user's stop, not the planner's failure
+  } else if (report.ended_early.empty()) {
+    const std::string why = remote.finish();
+    if (!why.empty()) {
+      // As run_drive words a planner failure.
+      report.ended_early = "planner failed at t = " + std::to_string(world.time_s()) + " s: " + why;
+    }
+  }
+  return report;
+}
+
 // ---- real time --------------------------------------------------------------------------
 
 sim::RunReport run_realtime(sim::World& world, PlannerConnection& connection,
@@ -404,7 +580,7 @@ sim::RunReport run_realtime(sim::World& world, PlannerConnection& connection,
   const auto period =
       std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(p.step_s));
   sim::LaneTracker lanes(p.road);
-  std::vector<double> cycle_us;
+  core::QuantileSketch cycle_us;  // fixed memory, however long the run
   std::string ended_early;
 
   std::string buffer;
@@ -464,6 +640,7 @@ sim::RunReport run_realtime(sim::World& world, PlannerConnection& connection,
         if (!frame) continue;
         const Sorted s = sort_planner_frame(*frame);
         if (s.kind == Sorted::fatal) throw sim::PlannerFailure(s.text);
+        if (s.kind == Sorted::pong) continue;  // unasked: a heartbeat, allowed by RFC 6455
         if (s.kind == Sorted::ignore) {
           log(LogLevel::info, s.text);
           continue;
@@ -482,7 +659,7 @@ sim::RunReport run_realtime(sim::World& world, PlannerConnection& connection,
         if (!reply) throw sim::PlannerFailure("malformed reply: " + reply.error());
         awaiting = false;
         if (awaiting_full) {
-          cycle_us.push_back(
+          cycle_us.add(
               std::chrono::duration<double, std::micro>(Clock::now() - sent_at).count());
         }
         if (!reply.value().manual) {
@@ -504,7 +681,7 @@ sim::RunReport run_realtime(sim::World& world, PlannerConnection& connection,
     ended_early =
         std::string("planner failed at t = ") + std::to_string(world.time_s()) + " s: " + e.what();
   }
-  return sim::summarize(world, lanes, std::move(cycle_us), std::move(ended_early));
+  return sim::summarize(world, lanes, cycle_us, std::move(ended_early));
 }
 
 }  // namespace overtake::protocol

@@ -22,6 +22,7 @@
 #include <boost/asio/this_coro.hpp>
 #include <boost/asio/use_awaitable.hpp>
 #include <boost/beast/core.hpp>
+#include <boost/beast/http.hpp>
 #include <boost/beast/websocket.hpp>
 #pragma GCC diagnostic pop
 
@@ -33,6 +34,7 @@ namespace {
 
 namespace net = boost::asio;
 namespace beast = boost::beast;
+namespace http = beast::http;
 namespace websocket = beast::websocket;
 using tcp = net::ip::tcp;
 using beast::error_code;
@@ -80,8 +82,18 @@ std::string cycles_text(long n) {
 }
 
 // The log line for a connection that ended with `ec` (empty when the server is stopping).
-std::optional<std::pair<LogLevel, std::string>> end_line(const error_code& ec) {
+// `peer_close`: the peer's close frame, when one came (code `none` otherwise).
+std::optional<std::pair<LogLevel, std::string>> end_line(
+    const error_code& ec, const websocket::close_reason& peer_close) {
   if (ec == net::error::operation_aborted) return std::nullopt;
+  // After the peer's close frame, tearing the connection down may fail (a peer that goes
+  // without waiting for our close frame: "Transport endpoint is not connected"); the peer
+  // closed all the same.
+  if (peer_close.code != websocket::close_code::none) {
+    return std::pair{LogLevel::info, "closed by the peer (close code " +
+                                         std::to_string(static_cast<unsigned>(peer_close.code)) +
+                                         ")"};
+  }
   if (ec == websocket::error::closed)
     return std::pair{LogLevel::info, std::string("closed by the peer")};
   if (ec == net::error::eof || ec == net::error::connection_reset ||
@@ -113,7 +125,40 @@ net::awaitable<void> serve_connection(tcp::socket socket, std::shared_ptr<Server
         [](websocket::response_type& res) { res.set(beast::http::field::server, "overtake"); }));
     ws.read_message_max(0);  // sizes are limited below, without failing the connection
 
-    co_await ws.async_accept(net::redirect_error(net::use_awaitable, ec));  // any path
+    // The upgrade request is read here, not by the accept, to look at its Origin first. (A
+    // client speaks only after the 101, so nothing after the request is left in the buffer.)
+    beast::flat_buffer request_buffer;
+    http::request<http::empty_body> request;
+    beast::get_lowest_layer(ws).expires_after(st->opts.handshake_timeout);
+    co_await http::async_read(ws.next_layer(), request_buffer, request,
+                              net::redirect_error(net::use_awaitable, ec));
+    beast::get_lowest_layer(ws).expires_never();  // the websocket's own timeouts from here on
+    if (!ec) {
+      if (const auto origin = request.find(http::field::origin); origin != request.end()) {
+        // Browsers send an Origin with every websocket upgrade, the simulator and planner
+        // programs none. `serve` serves no page, so any page that opens a websocket here is
+        // another site's (or a DNS-rebinding one's): it would drive a planner of this machine.
+        const std::string_view value(origin->value().data(), origin->value().size());
+        st->log(LogLevel::warning,
+                who + ": websocket upgrade refused: it comes from a browser page (Origin: " +
+                    excerpt(value) + "), closed");
+        http::response<http::string_body> res{http::status::forbidden, request.version()};
+        res.set(http::field::server, "overtake");
+        res.set(http::field::content_type, "text/plain; charset=utf-8");
+        res.keep_alive(false);
+        res.body() =
+            "websocket refused: the request has an Origin header, so it comes from a web page; "
+            "this planner server answers the simulator and planner programs only, which send "
+            "none\n";
+        res.prepare_payload();
+        beast::get_lowest_layer(ws).expires_after(st->opts.handshake_timeout);
+        co_await http::async_write(ws.next_layer(), res,
+                                   net::redirect_error(net::use_awaitable, ec));
+        beast::get_lowest_layer(ws).socket().shutdown(tcp::socket::shutdown_both, ec);
+        co_return;
+      }
+      co_await ws.async_accept(request, net::redirect_error(net::use_awaitable, ec));  // any path
+    }
     if (ec) {
       if (ec != net::error::operation_aborted) {
         st->log(LogLevel::warning, who + ": no websocket upgrade (" + ec.message() + "), closed");
@@ -136,7 +181,7 @@ net::awaitable<void> serve_connection(tcp::socket socket, std::shared_ptr<Server
         const std::size_t n = co_await ws.async_read_some(
             buffer, kReadChunk, net::redirect_error(net::use_awaitable, ec));
         if (ec) {
-          if (const auto line = end_line(ec)) {
+          if (const auto line = end_line(ec, ws.reason())) {
             st->log(line->first, who + " " + line->second + " after " + cycles_text(cycles));
           }
           co_return;
@@ -172,7 +217,7 @@ net::awaitable<void> serve_connection(tcp::socket socket, std::shared_ptr<Server
       ws.text(true);
       co_await ws.async_write(net::buffer(*out.reply), net::redirect_error(net::use_awaitable, ec));
       if (ec) {
-        if (const auto line = end_line(ec)) {
+        if (const auto line = end_line(ec, ws.reason())) {
           st->log(line->first, who + " " + line->second + " after " + cycles_text(cycles));
         }
         co_return;

@@ -46,25 +46,28 @@ class Checker {
 std::vector<std::string> validate(const WorldParams& p) {
   std::vector<std::string> out;
   Checker c(out);
-  c.positive("world.step_s", p.step_s);
+  // Bounds of what makes physical sense: a step of a millisecond to half a second (the
+  // original's 0.02 s; 1e-9 would never end, 1e308 would run no step), bodies and lanes up to
+  // 20 m, speeds up to 100 m/s.
+  c.in_range("world.step_s", p.step_s, 0.001, 0.5);
   c.in_range("world.min_steps_per_call", p.min_steps_per_call, 1, 1000);
   c.in_range("world.max_steps_per_call", p.max_steps_per_call, 1, 1000);
   c.ordered("world.min_steps_per_call", p.min_steps_per_call, "world.max_steps_per_call",
             p.max_steps_per_call);
   c.in_range("road.lane_count", p.road.lane_count, 1, 8);
-  c.positive("road.lane_width_m", p.road.lane_width_m);
+  c.in_range("road.lane_width_m", p.road.lane_width_m, 1.0, 20.0);
 
   const auto& e = p.ego;
-  c.positive("world.ego.length_m", e.length_m);
-  c.positive("world.ego.width_m", e.width_m);
+  c.in_range("world.ego.length_m", e.length_m, 0.5, 20.0);
+  c.in_range("world.ego.width_m", e.width_m, 0.5, 20.0);
   c.non_negative("world.ego.stand_on_tolerance_m", e.stand_on_tolerance_m);
   c.in_range("world.ego.start_d_m", e.start_d_m, 0.0, p.road.lane_count * p.road.lane_width_m);
-  if (!std::isfinite(e.start_s_m)) out.push_back("world.ego.start_s_m must be finite");
+  c.in_range("world.ego.start_s_m", e.start_s_m, -100000.0, 100000.0);
 
   const auto& t = p.traffic;
   c.in_range("world.traffic.car_count", t.car_count, 0, 64);
-  c.positive("world.traffic.car_length_m", t.car_length_m);
-  c.positive("world.traffic.car_width_m", t.car_width_m);
+  c.in_range("world.traffic.car_length_m", t.car_length_m, 0.5, 20.0);
+  c.in_range("world.traffic.car_width_m", t.car_width_m, 0.5, 20.0);
 
   const auto& pl = t.placement;
   const std::string pk = "world.traffic.placement.";
@@ -78,10 +81,12 @@ std::vector<std::string> validate(const WorldParams& p) {
   c.in_range(pk + "ahead_max_waypoints", pl.ahead_max_waypoints, 1, 100);
   c.ordered(pk + "ahead_min_waypoints", pl.ahead_min_waypoints, pk + "ahead_max_waypoints",
             pl.ahead_max_waypoints);
-  c.non_negative(pk + "behind_min_speed_mps", pl.behind_min_speed_mps);
+  c.in_range(pk + "behind_min_speed_mps", pl.behind_min_speed_mps, 0.0, 100.0);
+  c.in_range(pk + "behind_max_speed_mps", pl.behind_max_speed_mps, 0.0, 100.0);
   c.ordered(pk + "behind_min_speed_mps", pl.behind_min_speed_mps, pk + "behind_max_speed_mps",
             pl.behind_max_speed_mps);
-  c.non_negative(pk + "ahead_min_speed_mps", pl.ahead_min_speed_mps);
+  c.in_range(pk + "ahead_min_speed_mps", pl.ahead_min_speed_mps, 0.0, 100.0);
+  c.in_range(pk + "ahead_max_speed_mps", pl.ahead_max_speed_mps, 0.0, 100.0);
   c.ordered(pk + "ahead_min_speed_mps", pl.ahead_min_speed_mps, pk + "ahead_max_speed_mps",
             pl.ahead_max_speed_mps);
   c.non_negative(pk + "min_spawn_distance_m", pl.min_spawn_distance_m);

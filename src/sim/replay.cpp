@@ -15,6 +15,7 @@
 #include <limits>
 #include <optional>
 #include <system_error>
+#include <utility>
 
 #include <nlohmann/json.hpp>
 
@@ -22,6 +23,9 @@
 
 namespace overtake::sim {
 namespace {
+
+/// How many FILE[.n].partial names a recording tries before giving up.
+constexpr int kMaxPartialNames = 1000;
 
 using nlohmann::json;
 
@@ -453,8 +457,20 @@ ReplayWriter::ReplayWriter(const std::filesystem::path& path, const ReplayHeader
   const auto status = std::filesystem::status(path, status_ec);
   m.in_place =
       !status_ec && std::filesystem::exists(status) && !std::filesystem::is_regular_file(status);
-  if (!m.in_place) m.partial_path += ".partial";
-  m.file = std::fopen(m.partial_path.c_str(), "wb");
+  if (m.in_place) {
+    m.file = std::fopen(m.partial_path.c_str(), "wb");
+  } else {
+    // FILE.partial, created exclusively: a second recording to the same file at the same time,
+    // or an earlier killed run's FILE.partial (kept for `view --partial`), takes the next free
+    // name FILE.1.partial, FILE.2.partial, ...; each run renames its own file to FILE when done,
+    // so FILE always holds a whole replay.
+    for (int n = 0; n < kMaxPartialNames && !m.file; ++n) {
+      m.partial_path = path;
+      m.partial_path += n == 0 ? std::string(".partial") : "." + std::to_string(n) + ".partial";
+      m.file = std::fopen(m.partial_path.c_str(), "wbx");
+      if (!m.file && errno != EEXIST) break;
+    }
+  }
   if (!m.file) {
     throw ReplayError(m.partial_path.string() + ": cannot create the replay file (" +
                       std::strerror(errno) + ")");
@@ -536,6 +552,21 @@ T header_value(const json& j, const char* key, const char* where) {
   }
 }
 
+// An integer key of the header: a JSON integer that fits T. get<T>() alone would truncate a
+// fraction, wrap a negative seed, and convert a number beyond T (lanes: 1e300) with undefined
+// behaviour.
+template <class T>
+T header_integer(const json& j, const char* key, const char* where) {
+  const auto v = header_value<json>(j, key, where);
+  const std::string name = std::string("'") + where + key + "'";
+  if (!v.is_number()) throw std::invalid_argument(name + " is not an integer");
+  const bool fits = v.is_number_unsigned()  ? std::in_range<T>(v.get<std::uint64_t>())
+                    : v.is_number_integer() ? std::in_range<T>(v.get<std::int64_t>())
+                                            : false;
+  if (!fits) throw std::invalid_argument(name + " is " + v.dump() + ", not an integer within range");
+  return v.get<T>();
+}
+
 ReplayHeader parse_header(const json& j) {
   ReplayHeader h;
   if (!j.is_object()) throw std::invalid_argument("not a JSON object");
@@ -545,7 +576,7 @@ ReplayHeader parse_header(const json& j) {
   h.step_s = header_value<double>(j, "step_s", "");
   if (!(h.step_s > 0.0)) throw std::invalid_argument("'step_s' must be positive");
   const json& road = j.at("road");
-  h.lanes = header_value<int>(road, "lanes", "road.");
+  h.lanes = header_integer<int>(road, "lanes", "road.");
   h.lane_width_m = header_value<double>(road, "lane_width_m", "road.");
   const json& car = j.at("car");
   h.car_length_m = header_value<double>(car, "length_m", "car.");
@@ -560,7 +591,7 @@ ReplayHeader parse_header(const json& j) {
   const json& p = j.at("provenance");
   h.provenance.policy = header_value<std::string>(p, "policy", "provenance.");
   h.provenance.traffic = header_value<std::string>(p, "traffic", "provenance.");
-  h.provenance.seed = header_value<std::uint64_t>(p, "seed", "provenance.");
+  h.provenance.seed = header_integer<std::uint64_t>(p, "seed", "provenance.");
   h.provenance.track = header_value<std::string>(p, "track", "provenance.");
   h.provenance.duration_s = header_value<double>(p, "duration_s", "provenance.");
   h.provenance.overtake_version = header_value<std::string>(p, "overtake_version", "provenance.");

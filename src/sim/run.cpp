@@ -13,12 +13,6 @@ namespace {
 constexpr std::uint64_t kLatencyStream = 20;
 constexpr double kProgressEveryS = 10.0;
 
-double percentile(const std::vector<double>& sorted, double q) {
-  if (sorted.empty()) return 0.0;
-  const auto i = static_cast<std::size_t>(std::ceil(q * static_cast<double>(sorted.size()))) - 1;
-  return sorted[std::min(i, sorted.size() - 1)];
-}
-
 }  // namespace
 
 LaneTracker::LaneTracker(const core::RoadParams& road, double settle_m)
@@ -56,12 +50,9 @@ RunReport run_drive(World& world, const PlannerFn& planner, const RunOptions& op
   const long total_steps = std::lround(opts.duration_s / p.step_s);
   core::Rng latency(core::derive_seed(opts.seed, kLatencyStream));
   LaneTracker lanes(p.road);
-  std::vector<double> cycle_us;  // thread CPU time
-  std::vector<double> wall_us;
-  const auto expected_cycles =
-      static_cast<std::size_t>(total_steps / std::max(1, p.min_steps_per_call)) + 1;
-  cycle_us.reserve(expected_cycles);
-  wall_us.reserve(expected_cycles);
+  // Timing in fixed memory: a 7-day run has 15 million cycles.
+  core::QuantileSketch cycle_us;  // thread CPU time (or the round trip of a remote planner)
+  core::QuantileSketch wall_us;
 
   std::string ended_early;
   double next_progress_s = kProgressEveryS;
@@ -85,8 +76,8 @@ RunReport run_drive(World& world, const PlannerFn& planner, const RunOptions& op
     }
     const auto t1 = std::chrono::steady_clock::now();
     const double wall = std::chrono::duration<double, std::micro>(t1 - t0).count();
-    cycle_us.push_back(opts.remote_planner ? wall : core::thread_cpu_us() - c0);
-    wall_us.push_back(wall);
+    cycle_us.add(opts.remote_planner ? wall : core::thread_cpu_us() - c0);
+    wall_us.add(wall);
     if (observer) observer->on_path(world, path);
     world.apply_path(std::move(path));
 
@@ -104,15 +95,14 @@ RunReport run_drive(World& world, const PlannerFn& planner, const RunOptions& op
     }
   }
 
-  RunReport report = summarize(world, lanes, std::move(cycle_us), std::move(ended_early),
+  RunReport report = summarize(world, lanes, cycle_us, std::move(ended_early),
                                opts.remote_planner ? "round_trip" : "thread_cpu");
-  std::sort(wall_us.begin(), wall_us.end());
-  report.timing.wall_p99_us = percentile(wall_us, 0.99);
-  report.timing.wall_max_us = wall_us.empty() ? 0.0 : wall_us.back();
+  report.timing.wall_p99_us = wall_us.quantile(0.99);
+  report.timing.wall_max_us = wall_us.max();
   return report;
 }
 
-RunReport summarize(const World& world, const LaneTracker& lanes, std::vector<double> cycle_us,
+RunReport summarize(const World& world, const LaneTracker& lanes, const core::QuantileSketch& cycle_us,
                     std::string ended_early, std::string clock) {
   RunReport report;
   report.ended_early = std::move(ended_early);
@@ -127,12 +117,11 @@ RunReport summarize(const World& world, const LaneTracker& lanes, std::vector<do
   report.peak = ref.peaks();
   report.lane_changes = lanes.lane_changes();
   report.time_in_lane_s = lanes.time_in_lane_s();
-  report.planner_cycles = static_cast<long>(cycle_us.size());
-  std::sort(cycle_us.begin(), cycle_us.end());
-  report.timing.p50_us = percentile(cycle_us, 0.5);
-  report.timing.p99_us = percentile(cycle_us, 0.99);
-  report.timing.max_us = cycle_us.empty() ? 0.0 : cycle_us.back();
-  report.timing.cycles = static_cast<long>(cycle_us.size());
+  report.planner_cycles = static_cast<long>(cycle_us.count());
+  report.timing.p50_us = cycle_us.quantile(0.5);
+  report.timing.p99_us = cycle_us.quantile(0.99);
+  report.timing.max_us = cycle_us.max();
+  report.timing.cycles = static_cast<long>(cycle_us.count());
   report.timing.clock = std::move(clock);
   report.timing.wall_p99_us = report.timing.p99_us;
   report.timing.wall_max_us = report.timing.max_us;

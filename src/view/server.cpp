@@ -2,6 +2,11 @@
 
 #include "overtake/view/server.hpp"
 
+#include <algorithm>
+#include <cctype>
+#include <charconv>
+#include <iterator>
+#include <optional>
 #include <thread>
 #include <utility>
 
@@ -44,16 +49,138 @@ std::string host_for_url(const std::string& host) {
   return host.find(':') != std::string::npos ? "[" + host + "]" : host;
 }
 
-// The path of a request target, without its query.
-std::string_view target_path(beast::string_view beast_target) {
-  const std::string_view target(beast_target.data(), beast_target.size());
-  const std::size_t q = target.find('?');
-  return q == std::string_view::npos ? target : target.substr(0, q);
+std::string_view target_of(const http::request<http::string_body>& req) {
+  return {req.target().data(), req.target().size()};
 }
 
 struct Shared {
   ViewContent content;
+  std::string bound_host;  // as given to listen on, for host_allowed()
 };
+
+// ---- who may ask ----------------------------------------------------------------------------
+
+constexpr std::string_view kLoopbackNames[] = {"localhost", "127.0.0.1", "[::1]"};
+
+bool same_text(std::string_view a, std::string_view b) {  // ASCII, without case
+  return a.size() == b.size() &&
+         std::equal(a.begin(), a.end(), b.begin(), [](char x, char y) {
+           return std::tolower(static_cast<unsigned char>(x)) ==
+                  std::tolower(static_cast<unsigned char>(y));
+         });
+}
+
+// A Host header (or the part of an Origin after the scheme) as a name and a port: `name`,
+// `name:port`, `[v6]` or `[v6]:port`, the name made only of characters that a host name or an
+// address may hold, the port of digits, from 1 to 65535. Nullopt when it is anything else.
+struct HostPort {
+  std::string_view name;  // brackets kept for IPv6
+  std::optional<unsigned> port;
+};
+std::optional<HostPort> split_host(std::string_view host) {
+  HostPort out;
+  std::string_view rest;
+  if (!host.empty() && host[0] == '[') {
+    const std::size_t close = host.find(']');
+    if (close == std::string_view::npos || close < 2) return std::nullopt;
+    out.name = host.substr(0, close + 1);
+    rest = host.substr(close + 1);
+    for (const char c : out.name.substr(1, out.name.size() - 2)) {
+      if (!std::isxdigit(static_cast<unsigned char>(c)) && c != ':' && c != '.')
+        return std::nullopt;
+    }
+  } else {
+    const std::size_t colon = host.find(':');
+    out.name = host.substr(0, colon);
+    rest = colon == std::string_view::npos ? std::string_view{} : host.substr(colon);
+    if (out.name.empty()) return std::nullopt;
+    for (const char c : out.name) {
+      if (!std::isalnum(static_cast<unsigned char>(c)) && c != '.' && c != '-' && c != '_')
+        return std::nullopt;
+    }
+  }
+  if (!rest.empty()) {
+    const std::string_view digits = rest.substr(1);
+    unsigned port = 0;
+    const auto r = std::from_chars(digits.data(), digits.data() + digits.size(), port);
+    if (rest[0] != ':' || digits.empty() || digits.size() > 5 || r.ec != std::errc{} ||
+        r.ptr != digits.data() + digits.size() || port == 0 || port > 65535) {
+      return std::nullopt;
+    }
+    out.port = port;
+  }
+  return out;
+}
+
+// An IPv4 address in dotted form, or an IPv6 one in brackets.
+bool is_address_literal(std::string_view name) {
+  error_code ec;
+  if (name.size() > 2 && name.front() == '[') {
+    (void)net::ip::make_address_v6(std::string(name.substr(1, name.size() - 2)), ec);
+  } else {
+    (void)net::ip::make_address_v4(std::string(name), ec);
+  }
+  return !ec;
+}
+
+// At most 80 printable characters of a header value, for an error page.
+std::string shown(std::string_view value) {
+  std::string out;
+  for (const char c : value.substr(0, 80)) {
+    out += std::isprint(static_cast<unsigned char>(c)) ? c : '?';
+  }
+  return value.size() > 80 ? out + "..." : out;
+}
+
+// The answer to a request this server does not serve to whoever sent it, or nullopt:
+// - a Host that does not name this machine (421): a page that reaches the server through
+//   DNS rebinding sends its own name, and must read nothing;
+// - no Host in HTTP/1.1, or more than one (400);
+// - a websocket upgrade whose Origin is not the page served here (403): any site the user
+//   visits may open a websocket anywhere; programs (and our tests) send no Origin.
+std::optional<http::response<http::string_body>> refusal(
+    const http::request<http::string_body>& req, const Shared& sh) {
+  const auto refuse = [&req](http::status status, std::string body) {
+    http::response<http::string_body> res{status, req.version()};
+    res.set(http::field::server, "overtake");
+    res.set(http::field::content_type, "text/plain; charset=utf-8");
+    res.set(http::field::cache_control, "no-store");
+    res.keep_alive(false);
+    res.body() = std::move(body);
+    res.prepare_payload();
+    return res;
+  };
+  const std::size_t hosts = req.count(http::field::host);
+  const std::string_view host(req[http::field::host].data(), req[http::field::host].size());
+  if (hosts > 1) return refuse(http::status::bad_request, "more than one Host header\n");
+  if (hosts == 0 && req.version() >= 11) {
+    return refuse(http::status::bad_request, "the request has no Host header\n");
+  }
+  if (hosts == 1 && !host_allowed(host, sh.bound_host)) {
+    std::string names = "localhost, 127.0.0.1, [::1]";
+    const std::string bound = host_for_url(sh.bound_host);
+    if (std::none_of(std::begin(kLoopbackNames), std::end(kLoopbackNames),
+                     [&](std::string_view n) { return same_text(n, bound); })) {
+      names += " and " + bound;
+    }
+    return refuse(http::status::misdirected_request,
+                  "this server answers only to " + names + " (any port); the request is for '" +
+                      shown(host) + "'\n");
+  }
+  if (websocket::is_upgrade(req)) {
+    const auto origin = req.find(http::field::origin);
+    if (origin != req.end()) {
+      const std::string_view value(origin->value().data(), origin->value().size());
+      if (!same_origin(value, host)) {
+        return refuse(http::status::forbidden,
+                      "websocket refused: its Origin '" + shown(value) +
+                          "' is not the page served here (http://" + shown(host) +
+                          "); only that page may open it\n");
+      }
+    }
+  }
+  return std::nullopt;
+}
 
 http::response<http::string_body> respond(const http::request<http::string_body>& req,
                                           const Shared& sh) {
@@ -72,19 +199,19 @@ http::response<http::string_body> respond(const http::request<http::string_body>
     res.prepare_payload();
     return res;
   }
-  const std::string_view path = target_path(req.target());
+  const ViewRoute route = route_target(target_of(req), sh.content);
   const std::string* body = nullptr;
-  if (path == "/" || path == "/index.html") {
+  if (route.resource == ViewResource::page) {
     res.set(http::field::content_type, "text/html; charset=utf-8");
     body = &sh.content.page;
-  } else if (path == kReplayUrlPath && sh.content.replay) {
+  } else if (route.resource == ViewResource::replay) {
     res.set(http::field::content_type, "application/octet-stream");
     body = sh.content.replay.get();
   }
   if (!body) {
     res.result(http::status::not_found);
     res.set(http::field::content_type, "text/plain; charset=utf-8");
-    res.body() = "not found: " + std::string(path) + "\n";
+    res.body() = "not found: " + std::string(route.path) + "\n";
     res.prepare_payload();
     return res;
   }
@@ -172,8 +299,12 @@ net::awaitable<void> http_session(tcp::socket socket, std::shared_ptr<const Shar
                                 net::redirect_error(net::use_awaitable, ec));
       if (ec) break;
       http::request<http::string_body> req = parser.release();
-      if (websocket::is_upgrade(req) && target_path(req.target()) == kLiveUrlPath &&
-          sh->content.live) {
+      if (auto refused = refusal(req, *sh)) {
+        co_await http::async_write(stream, *refused, net::redirect_error(net::use_awaitable, ec));
+        break;
+      }
+      if (websocket::is_upgrade(req) &&
+          route_target(target_of(req), sh->content).resource == ViewResource::live) {
         stream.expires_never();
         auto ws = std::make_shared<WsStream>(std::move(stream));
         co_await live_session(ws, std::move(req), sh->content.live);
@@ -207,6 +338,43 @@ net::awaitable<void> accept_loop(tcp::acceptor& acceptor, std::shared_ptr<const 
 }
 
 }  // namespace
+
+ViewRoute route_target(std::string_view target, const ViewContent& content) {
+  const std::string_view path = target.substr(0, target.find('?'));
+  ViewResource resource = ViewResource::none;
+  if (path == "/" || path == "/index.html") {
+    resource = ViewResource::page;
+  } else if (path == kReplayUrlPath && content.replay) {
+    resource = ViewResource::replay;
+  } else if (path == kLiveUrlPath && content.live) {
+    resource = ViewResource::live;
+  }
+  return {resource, path};
+}
+
+bool host_allowed(std::string_view host, std::string_view bound_host) {
+  const auto hp = split_host(host);
+  if (!hp) return false;
+  for (const std::string_view name : kLoopbackNames) {
+    if (same_text(hp->name, name)) return true;
+  }
+  if (bound_host.empty()) return false;
+  if (same_text(hp->name, host_for_url(std::string(bound_host)))) return true;
+  // Bound to every address: any of this machine's addresses may be in the URL, and only a
+  // name (not an address) can be rebound to another machine.
+  return (bound_host == "0.0.0.0" || bound_host == "::") && is_address_literal(hp->name);
+}
+
+bool same_origin(std::string_view origin, std::string_view host) {
+  constexpr std::string_view kScheme = "http://";
+  if (origin.size() <= kScheme.size() || !same_text(origin.substr(0, kScheme.size()), kScheme))
+    return false;
+  const auto o = split_host(origin.substr(kScheme.size()));
+  const auto h = split_host(host);
+  constexpr unsigned kHttpPort = 80;
+  return o && h && same_text(o->name, h->name) &&
+         o->port.value_or(kHttpPort) == h->port.value_or(kHttpPort);
+}
 
 // ---- live feed ----------------------------------------------------------------------------
 
@@ -318,7 +486,7 @@ ViewServer::ViewServer(ViewContent content, const ViewServerOptions& options)
   if (ec) throw ViewError("cannot listen on " + where + ": " + ec.message());
   m.port = m.acceptor.local_endpoint().port();
 
-  auto shared = std::make_shared<const Shared>(Shared{std::move(content)});
+  auto shared = std::make_shared<const Shared>(Shared{std::move(content), options.host});
   net::co_spawn(m.ioc, accept_loop(m.acceptor, std::move(shared)), net::detached);
   m.thread = std::thread([&m] {
     for (;;) {

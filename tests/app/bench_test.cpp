@@ -165,6 +165,66 @@ TEST_F(BenchTest, ResumeSkipsFinishedRunsAndDropsACutOffLine) {
   EXPECT_EQ(stable_runs(s.out), full);
 }
 
+TEST_F(BenchTest, ResumeRefusesDuplicatedAndForeignRows) {
+  BenchSpec s = spec("dup");
+  s.policies = {"walkthrough"};
+  (void)run_bench(s, nullptr, {});
+  std::ifstream in(s.out / "runs.jsonl");
+  std::string first, second;
+  std::getline(in, first);
+  std::getline(in, second);
+  in.close();
+  s.resume = true;
+  // A row twice (the summary once said 25 runs for 20 seeds).
+  write_file_atomic(s.out / "runs.jsonl", first + "\n" + first + "\n");
+  try {
+    (void)run_bench(s, nullptr, {});
+    FAIL() << "a duplicated row was resumed";
+  } catch (const UsageError& e) {
+    EXPECT_THAT(std::string(e.what()), HasSubstr("run 0 appears twice"));
+  }
+  // A row of another run under this index.
+  json other = json::parse(second);
+  other["index"] = 0;
+  write_file_atomic(s.out / "runs.jsonl", other.dump() + "\n");
+  try {
+    (void)run_bench(s, nullptr, {});
+    FAIL() << "a foreign row was resumed";
+  } catch (const UsageError& e) {
+    EXPECT_THAT(std::string(e.what()), HasSubstr("the row of run 0 is not walkthrough / faithful / seed 1"));
+  }
+  // An index beyond the bench.
+  other["index"] = 7;
+  write_file_atomic(s.out / "runs.jsonl", other.dump() + "\n");
+  EXPECT_THROW((void)run_bench(s, nullptr, {}), UsageError);
+}
+
+TEST_F(BenchTest, MergeNeverOverwritesResults) {
+  BenchSpec s1 = spec("s1");
+  s1.shard_index = 1;
+  s1.shard_count = 2;
+  BenchSpec s2 = spec("s2");
+  s2.shard_index = 2;
+  s2.shard_count = 2;
+  (void)run_bench(s1, nullptr, {});
+  (void)run_bench(s2, nullptr, {});
+  const std::string before = stable_runs(s1.out);
+  try {
+    (void)merge_bench({s1.out, s2.out}, s1.out);
+    FAIL() << "merged into an input shard";
+  } catch (const UsageError& e) {
+    EXPECT_THAT(std::string(e.what()), HasSubstr("is one of the folders being joined"));
+  }
+  EXPECT_EQ(stable_runs(s1.out), before);
+  (void)merge_bench({s1.out, s2.out}, root_ / "m");
+  try {
+    (void)merge_bench({s1.out, s2.out}, root_ / "m");
+    FAIL() << "merged into a folder that holds results";
+  } catch (const UsageError& e) {
+    EXPECT_THAT(std::string(e.what()), HasSubstr("already holds bench results"));
+  }
+}
+
 TEST_F(BenchTest, AStopKeepsFinishedRunsOnly) {
   BenchSpec s = spec("stop");
   std::atomic<bool> stop{true};

@@ -82,6 +82,33 @@ TEST(ConfigErrors, InvalidValuesAreNamedWithTheValue) {
               HasSubstr("planner.walkthrough.anchor_distances_m must be positive and increasing"));
 }
 
+TEST(ConfigErrors, AbsurdValuesAreRefusedWithTheirBounds) {
+  // A step of 1e308 s ran no step; 1e-9 s never ended.
+  EXPECT_THAT(error_of(json::parse(R"({"world": {"step_s": 1e308}})")),
+              HasSubstr("world.step_s must be between 0.001 and 0.5 (got 1e+308)"));
+  EXPECT_THAT(error_of(json::parse(R"({"world": {"step_s": 1e-9}})")),
+              HasSubstr("world.step_s must be between 0.001 and 0.5 (got 1e-09)"));
+  EXPECT_THAT(error_of(json::parse(R"({"road": {"lane_width_m": 1e9}})")),
+              HasSubstr("road.lane_width_m must be between 1 and 20"));
+}
+
+TEST(ConfigErrors, AKeyGivenTwiceIsRefused) {
+  try {
+    (void)apply_config_text(Config{}, R"({"world": {"step_s": 0.02, "traffic": {}, "step_s": 0.05}})", "twice.json");
+    FAIL() << "a duplicated key was accepted";
+  } catch (const ConfigError& e) {
+    EXPECT_THAT(std::string(e.what()), HasSubstr("twice.json: the key 'world.step_s' is given twice"));
+  }
+  try {
+    (void)apply_config_text(Config{}, R"({"road": {}, "road": {}})", "twice.json");
+    FAIL() << "a duplicated key was accepted";
+  } catch (const ConfigError& e) {
+    EXPECT_THAT(std::string(e.what()), HasSubstr("the key 'road' is given twice"));
+  }
+  // The same key in different objects is fine.
+  EXPECT_NO_THROW((void)apply_config_text(Config{}, R"({"world": {"traffic": {"car_count": 3}}, "planner": {}})", "ok.json"));
+}
+
 TEST(ConfigErrors, MissingAndMalformedFilesAreNamed) {
   try {
     (void)load_config(std::filesystem::path("/nonexistent/cfg.json"));
@@ -101,6 +128,23 @@ TEST(ConfigErrors, MissingAndMalformedFilesAreNamed) {
     EXPECT_THAT(std::string(e.what()), HasSubstr("not valid JSON"));
   }
   std::filesystem::remove(path);
+}
+
+// Found by fuzz/config_fuzz.cpp: the JSON library reports a number beyond a double as
+// out_of_range, not as a parse error, and it escaped as a bare library exception that named
+// neither the file nor the fault's place.
+TEST(ConfigErrors, ANumberBeyondADoubleIsBadJsonNamingTheFile) {
+  for (const char* text : {R"({"road": {"lane_width_m": 1e999}})", R"({"world": {"step_s": -1e400}})"}) {
+    try {
+      (void)apply_config_text(Config{}, text, "huge.json");
+      ADD_FAILURE() << "accepted " << text;
+    } catch (const ConfigError& e) {
+      EXPECT_THAT(std::string(e.what()), HasSubstr("huge.json: not valid JSON"));
+      EXPECT_THAT(std::string(e.what()), HasSubstr("number overflow"));
+    } catch (const std::exception& e) {
+      ADD_FAILURE() << "not a ConfigError: " << e.what();
+    }
+  }
 }
 
 TEST(ConfigHash, ChangesWithAnyValue) {

@@ -3,6 +3,10 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+
 #include "overtake/app/commands.hpp"
 #include "overtake/app/config.hpp"
 #include "overtake/app/scenario_file.hpp"
@@ -49,7 +53,7 @@ TEST(ScenarioFile, ErrorsNameTheKey) {
   EXPECT_THAT(error_of(R"({"cars": [{"lane": 0, "speed_mps": 15}]})"),
               HasSubstr("scenario.cars[0]: give exactly one of gap_m"));
   EXPECT_THAT(error_of(R"({"cars": [{"gap_m": 5, "lane": 7, "speed_mps": 15}]})"),
-              HasSubstr("scenario.cars[0]: lane 7 is not a lane of the road"));
+              HasSubstr("scenario.cars[0].lane: 7 is out of range (0 to 2)"));
   EXPECT_THAT(error_of(R"({"cars": [{"gap_m": 5, "lane": 0}]})"), HasSubstr("scenario.cars[0].speed_mps: missing"));
   EXPECT_THAT(error_of(R"({"ego": {"speed_mps": "fast"}})"),
               HasSubstr("scenario.ego.speed_mps: expected a finite number"));
@@ -62,8 +66,66 @@ TEST(ScenarioFile, ErrorsNameTheKey) {
                            "events": [{"t_s": 1, "car": 0}]})"),
               HasSubstr("give exactly one of change_lane"));
   EXPECT_THAT(error_of(R"({"speed": 3})"), HasSubstr("scenario.speed: unknown key"));
-  EXPECT_THAT(error_of(R"({"duration_s": -1})"), HasSubstr("scenario.duration_s: must be more than 0"));
+  EXPECT_THAT(error_of(R"({"duration_s": -1})"), HasSubstr("scenario.duration_s: -1 is out of range (0 to 604800)"));
+  EXPECT_THAT(error_of(R"({"duration_s": 0})"), HasSubstr("scenario.duration_s: must be more than 0"));
   EXPECT_THAT(error_of(R"([])"), HasSubstr("scenario: expected an object"));
+}
+
+TEST(ScenarioFile, NumbersAreBoundedNotWrappedOrSaturated) {
+  // 2^32 + 1 once became lane 1; 1e300 m/s gave a report with a NaN distance.
+  EXPECT_THAT(error_of(R"({"cars": [{"gap_m": 5, "lane": 4294967297, "speed_mps": 15}]})"),
+              HasSubstr("scenario.cars[0].lane: 4294967297 is out of range (0 to 2)"));
+  EXPECT_THAT(error_of(R"({"cars": [{"gap_m": 5, "lane": -4294967295, "speed_mps": 15}]})"),
+              HasSubstr("scenario.cars[0].lane: -4294967295 is out of range (0 to 2)"));
+  EXPECT_THAT(error_of(R"({"cars": [{"gap_m": 5, "lane": 1, "speed_mps": 1e300}]})"),
+              HasSubstr("scenario.cars[0].speed_mps: 1e+300 is out of range (0 to 100)"));
+  EXPECT_THAT(error_of(R"({"ego": {"speed_mps": 1000000}})"),
+              HasSubstr("scenario.ego.speed_mps: 1000000 is out of range (0 to 100)"));
+  EXPECT_THAT(error_of(R"({"ego": {"s_m": 1e12}})"), HasSubstr("scenario.ego.s_m: 1000000000000.0 is out of range"));
+  EXPECT_THAT(error_of(R"({"cars": [{"gap_m": 5, "lane": 1, "speed_mps": 1}],
+                           "events": [{"t_s": 1, "car": 18446744073709551617, "change_lane": 0}]})"),
+              HasSubstr("scenario.events[0].car"));
+  // A scenario longer than a week is the scenario's fault, not --minutes'.
+  EXPECT_THAT(error_of(R"({"duration_s": 1e9})"), HasSubstr("scenario.duration_s: 1000000000.0 is out of range (0 to 604800)"));
+}
+
+// The largest values a scenario may hold still give a report of finite numbers (1e300 m/s
+// once gave a NaN distance, written as null in the JSON).
+TEST(ScenarioFile, TheLargestAcceptedValuesGiveAFiniteReport) {
+  const auto path = std::filesystem::temp_directory_path() / "overtake_scenario_bounds.json";
+  {
+    std::ofstream f(path);
+    f << R"({"duration_s": 20, "ego": {"s_m": 100000, "lane": 2, "speed_mps": 100},
+             "cars": [{"gap_m": 100000, "lane": 0, "speed_mps": 100},
+                      {"gap_m": -100000, "lane": 2, "speed_mps": 100}],
+             "events": [{"t_s": 1, "car": 0, "speed_mps": 100, "accel_mps2": 50}]})";
+  }
+  DriveOptions o;
+  o.scenario = path;
+  o.minutes_from_scenario = true;
+  o.policy = "walkthrough";
+  const DriveResult r = drive(o);
+  std::filesystem::remove(path);
+  json report = report_to_json(r.report, r.provenance);
+  EXPECT_TRUE(report["ended_early"].is_null());  // the one null of a whole run
+  report.erase("ended_early");
+  const std::string text = report.dump();
+  EXPECT_EQ(text.find("null"), std::string::npos) << text;  // a NaN is written as null
+  EXPECT_TRUE(std::isfinite(r.report.distance_m));
+  EXPECT_GT(r.report.distance_m, 0.0);
+}
+
+// Found by fuzz/scenario_fuzz.cpp: a number beyond a double escaped the file's reader as a
+// bare JSON library exception instead of an error naming the file.
+TEST(ScenarioFile, ANumberBeyondADoubleIsBadJsonNamingTheFile) {
+  try {
+    (void)parse_scenario_text(R"({"ego": {"s_m": 1e999}})", "huge.json", core::RoadParams{});
+    FAIL() << "accepted";
+  } catch (const ConfigError& e) {
+    EXPECT_THAT(std::string(e.what()), HasSubstr("huge.json: not valid JSON"));
+  } catch (const std::exception& e) {
+    FAIL() << "not a ConfigError: " << e.what();
+  }
 }
 
 TEST(ScenarioFile, TheShippedExampleDrives) {

@@ -328,6 +328,22 @@ Got http_get(std::uint16_t port, const std::string& target, http::verb verb = ht
           std::string(res[http::field::content_length])};
 }
 
+TEST_F(ViewerTest, ViewHtmlNeverOverwritesTheReplayAndWritesToADevice) {
+  const fs::path replay = recorded("r.otr");
+  const std::string bytes = bytes_of(replay);
+  testing::internal::CaptureStderr();
+  EXPECT_EQ(cli({"view", replay.string(), "--html", replay.string()}), 2);
+  EXPECT_THAT(testing::internal::GetCapturedStderr(), HasSubstr("is the replay itself"));
+  EXPECT_EQ(bytes_of(replay), bytes);
+  if (!has_embedded_pages()) GTEST_SKIP() << "this build has no embedded web pages";
+  // /dev/null once failed with "cannot get file size".
+  testing::internal::CaptureStdout();
+  testing::internal::CaptureStderr();
+  EXPECT_EQ(cli({"view", replay.string(), "--html", "/dev/null"}), 0);
+  EXPECT_THAT(testing::internal::GetCapturedStdout(), HasSubstr("written: /dev/null"));
+  EXPECT_EQ(testing::internal::GetCapturedStderr(), "");
+}
+
 TEST_F(ViewerTest, ServerAnswersThePageTheReplayAnd404) {
   const std::string replay = bytes_of(recorded("r.otr"));
   view::ViewContent content;
@@ -351,12 +367,39 @@ TEST_F(ViewerTest, ServerAnswersThePageTheReplayAnd404) {
   EXPECT_EQ(otr.body, replay);
 
   EXPECT_EQ(http_get(server.port(), "/other").status, 404u);
+  // Nothing but the page and the replay is served: no path reaches a file.
+  for (const char* target : {"/../../../../etc/passwd", "/%2e%2e/%2e%2e/etc/passwd", "/replay.otr/../../x",
+                             "//etc/passwd"}) {
+    EXPECT_EQ(http_get(server.port(), target).status, 404u) << target;
+  }
   EXPECT_EQ(http_get(server.port(), "/live").status, 404u);  // no live feed here
   EXPECT_EQ(http_get(server.port(), "/", http::verb::post).status, 405u);
   const Got head = http_get(server.port(), "/replay.otr", http::verb::head);
   EXPECT_EQ(head.status, 200u);
   EXPECT_EQ(head.length, std::to_string(replay.size()));
   EXPECT_EQ(head.body, "");
+}
+
+// The routing the server does (and fuzz/view_request_fuzz.cpp calls): the query is dropped,
+// and the replay and the live feed exist only when the content has them.
+TEST(ViewRoute, NamesThePageTheReplayAndTheLiveFeed) {
+  view::ViewContent none;
+  view::ViewContent all;
+  all.replay = std::make_shared<const std::string>("x");
+  all.live = std::make_shared<const view::LiveFeed>("{}");
+  using view::ViewResource;
+  for (const view::ViewContent* c : {&none, &all}) {
+    EXPECT_EQ(view::route_target("/", *c).resource, ViewResource::page);
+    EXPECT_EQ(view::route_target("/index.html?x=1", *c).resource, ViewResource::page);
+    EXPECT_EQ(view::route_target("/missing?q", *c).resource, ViewResource::none);
+    EXPECT_EQ(view::route_target("/missing?q", *c).path, "/missing");
+    EXPECT_EQ(view::route_target("", *c).resource, ViewResource::none);
+  }
+  EXPECT_EQ(view::route_target("/replay.otr", none).resource, ViewResource::none);
+  EXPECT_EQ(view::route_target("/replay.otr?t=3", all).resource, ViewResource::replay);
+  EXPECT_EQ(view::route_target("/live", none).resource, ViewResource::none);
+  EXPECT_EQ(view::route_target("/live", all).resource, ViewResource::live);
+  EXPECT_EQ(view::route_target("/live/", all).resource, ViewResource::none);
 }
 
 TEST_F(ViewerTest, APortInUseIsReportedClearly) {
@@ -589,11 +632,13 @@ TEST_F(ViewerTest, BenchMergeJoinsTheShardsReplaysAndWritesTheReport) {
   };
   check_report(html, "merged");
 
-  // Merging into one of the shards: its own replay stays, the other's is copied beside it.
+  // Merging into one of the shards is refused: the shard stays as it was.
   const fs::path into = dir_ / "into";
   fs::copy(shards[0], into, fs::copy_options::recursive);
-  EXPECT_EQ(merge_bench({into, shards[1]}, into).replays.size(), 2u);
-  EXPECT_EQ(std::distance(fs::directory_iterator(into / "replays"), fs::directory_iterator{}), 2);
+  const std::string runs_before = read_file(into / "runs.jsonl");
+  EXPECT_THROW((void)merge_bench({into, shards[1]}, into), UsageError);
+  EXPECT_EQ(read_file(into / "runs.jsonl"), runs_before);
+  EXPECT_EQ(std::distance(fs::directory_iterator(into / "replays"), fs::directory_iterator{}), 1);
 
   // At the command line, with the shipped pages: `bench merge ... --html`.
   if (!has_embedded_pages()) GTEST_SKIP() << "this build has no embedded web pages";

@@ -1,6 +1,7 @@
 // `overtake sim --planner`: our simulator facing planners that misbehave (small fake servers
-// in this file), the original's upgrade request, connection retries, and a planner written
-// the old way (cut from '[' to '}', "null" means empty), in lock-step and in real time.
+// in this file: stalls, closes, malformed replies, second replies that put a lock-step run out
+// of step), the original's upgrade request, connection retries, the scorecard, and a planner
+// written the old way (cut from '[' to '}', "null" means empty), in lock-step and in real time.
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
@@ -44,28 +45,21 @@ FakeBehaviour walkthrough_planner(
 }
 
 // Drives `world` for `seconds` in lock-step against the planner at `url`.
-struct LockStepRun {
-  sim::RunReport report;
-  long extra_replies = 0;
-};
-LockStepRun lock_step(const std::string& url, double seconds, LogCapture& log,
-                      std::chrono::milliseconds reply_timeout = 3s) {
+sim::RunReport lock_step(const std::string& url, double seconds, LogCapture& log,
+                         std::chrono::milliseconds reply_timeout = 3s, int steps_per_call = 0) {
   const auto track = default_track();
   sim::World world(track->map, track->line, app::default_config().world,
                    sim::TrafficProfile::faithful, 3);
   ClientOptions o = quick_client(&log);
   o.reply_timeout = reply_timeout;
   PlannerConnection c(parse_planner_url(url).value(), o);
-  RemotePlanner remote(c, o);
   sim::RunOptions run;
   run.duration_s = seconds;
   run.seed = 3;
-  LockStepRun out;
-  out.report = sim::run_drive(
-      world, [&remote](const core::Telemetry& t) { return remote(t); }, run);
-  out.extra_replies = remote.extra_replies();
+  if (steps_per_call > 0) run.steps_per_call = steps_per_call;
+  sim::RunReport report = run_lock_step(world, c, o, run);
   c.close();
-  return out;
+  return report;
 }
 
 std::filesystem::path temp_file(const std::string& name) {
@@ -114,12 +108,13 @@ TEST(ProtocolClient, CloseAndDropEndTheRunWithAMessage) {
           return a;
         }));
     LogCapture log;
-    const auto run = lock_step(planner.url(), 60.0, log);
-    EXPECT_THAT(run.report.ended_early, StartsWith("planner failed at t = "));
-    EXPECT_THAT(run.report.ended_early, HasSubstr(graceful ? "the planner closed the connection"
-                                                           : "the planner dropped the connection"));
-    EXPECT_EQ(run.report.planner_cycles, 61);  // the reply that came with the close counts
-    EXPECT_GT(run.report.duration_s, 0.0);
+    const auto report = lock_step(planner.url(), 60.0, log);
+    EXPECT_THAT(report.ended_early, StartsWith("planner failed at t = "));
+    EXPECT_THAT(report.ended_early,
+                HasSubstr(graceful ? "the planner closed the connection normally (close code 1000)"
+                                   : "the planner dropped the connection"));
+    EXPECT_EQ(report.planner_cycles, 61);  // the reply that came with the close counts
+    EXPECT_GT(report.duration_s, 0.0);
   }
 }
 
@@ -146,10 +141,10 @@ TEST(ProtocolClient, MalformedRepliesEndTheRunSayingWhat) {
           return std::nullopt;
         }));
     LogCapture log;
-    const auto run = lock_step(planner.url(), 60.0, log);
-    EXPECT_THAT(run.report.ended_early, StartsWith("planner failed at t = "));
-    EXPECT_THAT(run.report.ended_early, HasSubstr(message));
-    EXPECT_EQ(run.report.planner_cycles, 25);
+    const auto report = lock_step(planner.url(), 60.0, log);
+    EXPECT_THAT(report.ended_early, StartsWith("planner failed at t = "));
+    EXPECT_THAT(report.ended_early, HasSubstr(message));
+    EXPECT_EQ(report.planner_cycles, 25);
   }
 }
 
@@ -160,28 +155,150 @@ TEST(ProtocolClient, BinaryReplyIsMalformed) {
     return a;
   });
   LogCapture log;
-  const auto run = lock_step(planner.url(), 10.0, log);
-  EXPECT_THAT(run.report.ended_early, HasSubstr("malformed reply"));
+  const auto report = lock_step(planner.url(), 10.0, log);
+  EXPECT_THAT(report.ended_early, HasSubstr("malformed reply"));
 }
 
-// A planner that answers one telemetry twice: the extra reply is ignored with one warning and
-// the run goes on in step.
-TEST(ProtocolClient, ReplyingTwiceIsIgnoredWithALogLine) {
-  FakePlanner planner(
-      walkthrough_planner([](int index, const std::string& good) -> std::optional<FakeAction> {
-        if (index != 40) return std::nullopt;
-        FakeAction a{{good, good}};
-        a.one_write = true;  // both frames together, as a planner writing twice in a row does
-        return a;
-      }));
-  LogCapture log;
-  const auto run = lock_step(planner.url(), 20.0, log);
-  EXPECT_EQ(run.report.ended_early, "");
-  EXPECT_EQ(run.extra_replies, 1);
-  const auto warnings = log.lines(LogLevel::warning);
-  ASSERT_EQ(warnings.size(), 1u) << log.dump();
-  EXPECT_THAT(warnings[0], HasSubstr("replied twice to one telemetry; the extra reply is ignored"));
-  EXPECT_DOUBLE_EQ(run.report.duration_s, 20.0);
+// A planner that closes normally (a close frame, code 1000) and exits without waiting for
+// our close frame: the run ends saying that it closed, not with the socket error that tearing
+// the connection down then meets ("Transport endpoint is not connected", "Connection reset").
+TEST(ProtocolClient, ANormalCloseIsReportedAsSuchEvenWhenThePlannerIsGoneAtOnce) {
+  for (const auto exit_after : {0ms, 30ms}) {
+    for (int attempt = 0; attempt < 3; ++attempt) {
+      SCOPED_TRACE("exits " + std::to_string(exit_after.count()) + " ms after its close frame");
+      FakePlanner planner(walkthrough_planner(
+          [exit_after](int index, const std::string& good) -> std::optional<FakeAction> {
+            if (index != 30) return std::nullopt;
+            FakeAction a{{good}};
+            a.close_then_exit = true;
+            a.exit_after = exit_after;
+            return a;
+          }));
+      LogCapture log;
+      const auto report = lock_step(planner.url(), 60.0, log);
+      EXPECT_THAT(report.ended_early,
+                  HasSubstr("the planner closed the connection normally (close code 1000)"));
+    }
+  }
+}
+
+// How a planner answers one telemetry twice, the second copy a little late. Each must put the
+// run out of step, every time, wherever the copy lands among our next telemetries.
+struct TwiceCase {
+  std::string name;
+  std::function<FakeAction(const std::string& good)> twice;   // the answer to the telemetry
+  std::function<FakeAction(const std::string& good)> normal;  // to every other one
+  bool in_handler = true;  // the copy is sent before the planner reads on: found at once
+};
+
+std::vector<TwiceCase> twice_cases() {
+  const auto plain = [](const std::string& good) { return FakeAction{{good}}; };
+  // Answers from a timer while the planner reads on, so that it answers our pings first.
+  const auto pong_first = [](const std::string& good) {
+    FakeAction a;
+    a.later = {{1ms, good}};
+    return a;
+  };
+  return {
+      {"the copy right behind the reply, in one write",
+       [](const std::string& good) {
+         FakeAction a{{good, good}};
+         a.one_write = true;
+         return a;
+       },
+       plain},
+      {"the handler sleeps 5 ms, then sends the copy",
+       [](const std::string& good) {
+         FakeAction a{{good}};
+         a.pause = 5ms;
+         a.after_pause = {good};
+         return a;
+       },
+       plain},
+      {"a timer sends the copy 5 ms later while the planner reads on",
+       [](const std::string& good) {
+         FakeAction a{{good}};
+         a.later = {{5ms, good}};
+         return a;
+       },
+       plain, false},
+      {"the copy 3 ms after the reply, each answer taking 2 ms",
+       [](const std::string& good) {
+         FakeAction a;
+         a.pause = 2ms;
+         a.after_pause = {good};
+         a.later = {{3ms, good}};
+         return a;
+       },
+       [](const std::string& good) {
+         FakeAction a;
+         a.pause = 2ms;  // each answer takes a little while; pings wait for it
+         a.after_pause = {good};
+         return a;
+       },
+       false},
+      {"a planner that answers pings before telemetry, copy 5 ms late",
+       [](const std::string& good) {
+         FakeAction a;
+         a.later = {{1ms, good}, {6ms, good}};
+         return a;
+       },
+       pong_first, false},
+  };
+}
+
+TEST(ProtocolClient, ALateSecondReplyPutsTheRunOutOfStepEveryTime) {
+  constexpr int kCycles = 150;  // one step per reply: message i answers cycle i
+  for (const TwiceCase& c : twice_cases()) {
+    for (const int twice_at : {20, 41, 77, kCycles - 1}) {
+      SCOPED_TRACE(c.name + ", twice at message " + std::to_string(twice_at));
+      FakePlanner planner(walkthrough_planner(
+          [&c, twice_at](int index, const std::string& good) -> std::optional<FakeAction> {
+            return index == twice_at ? c.twice(good) : c.normal(good);
+          }));
+      LogCapture log;
+      const auto report = lock_step(planner.url(), 0.02 * kCycles, log, 3s, 1);
+      EXPECT_THAT(report.ended_early, StartsWith("planner failed at t = ")) << log.dump();
+      EXPECT_THAT(report.ended_early, HasSubstr("out of step: the planner replied twice"));
+      if (c.in_handler) {
+        EXPECT_LE(report.planner_cycles, twice_at + 2) << "found at once";
+      }
+    }
+  }
+}
+
+// The checks that find a second reply do not trip on planners that behave, however they
+// time their answers, nor on a planner whose answers are all the same.
+TEST(ProtocolClient, PlannersThatAnswerOnceAreNeverOutOfStep) {
+  const std::vector<std::pair<std::string, FakeBehaviour>> planners = {
+      {"answers at once", walkthrough_planner()},
+      {"answers pings before telemetry",
+       walkthrough_planner([](int, const std::string& good) -> std::optional<FakeAction> {
+         FakeAction a;
+         a.later = {{2ms, good}};
+         return a;
+       })},
+      {"always the same empty path",
+       [](std::string_view, int) {
+         return FakeAction{{R"(42["control",{"next_x":[],"next_y":[]}])"}};
+       }},
+      {"always manual", [](std::string_view, int) { return FakeAction{{std::string(kManual)}}; }},
+  };
+  for (const auto& [name, behaviour] : planners) {
+    SCOPED_TRACE(name);
+    FakePlanner planner(behaviour);
+    LogCapture log;
+    const auto t0 = std::chrono::steady_clock::now();
+    const auto report = lock_step(planner.url(), 3.0, log);
+    EXPECT_EQ(report.ended_early, "") << log.dump();
+    EXPECT_EQ(log.warnings(), 0u) << log.dump();
+    EXPECT_DOUBLE_EQ(report.duration_s, 3.0);
+    // These planners write without TCP_NODELAY, so Nagle's algorithm holds the second of
+    // their two frames a cycle (reply, pong) until the first is acknowledged: the client
+    // acknowledges at once, else each of the ~75 cycles would wait for a delayed ACK
+    // (about 40 ms: 3 s in all).
+    EXPECT_LT(std::chrono::steady_clock::now() - t0, 1500ms);
+  }
 }
 
 // Engine.IO chatter from a planner (a ping, a Socket.IO connect) is answered or ignored; a
@@ -194,12 +311,31 @@ TEST(ProtocolClient, PlannerChatterAndManualRepliesDoNotEndTheRun) {
         return std::nullopt;
       }));
   LogCapture log;
-  const auto run = lock_step(planner.url(), 20.0, log);
-  EXPECT_EQ(run.report.ended_early, "");
+  const auto report = lock_step(planner.url(), 20.0, log);
+  EXPECT_EQ(report.ended_early, "");
   const auto got = planner.received();
   EXPECT_NE(std::find(got.begin(), got.end(), "3probe"), got.end()) << "the ping is answered";
   EXPECT_EQ(log.warnings(), 0u) << log.dump();
-  EXPECT_GT(run.report.distance_m, 100.0);
+  EXPECT_GT(report.distance_m, 100.0);
+}
+
+// The scorecard of `sim` says so and names the planner's address (with --name, the name too).
+TEST(ProtocolClient, TheScorecardNamesSimAndThePlannersAddress) {
+  ServerFixture server;
+  const std::string address = server.url() + "/socket.io/?EIO=4&transport=websocket";
+  ::testing::internal::CaptureStdout();
+  EXPECT_EQ(run_cli({"sim", "--planner", server.url(), "--minutes", "0.05", "--quiet"}),
+            app::kExitOk);
+  EXPECT_THAT(::testing::internal::GetCapturedStdout(),
+              StartsWith("overtake sim: planner at " + address +
+                         ", faithful traffic, seed 1, map builtin:default\n"));
+  ::testing::internal::CaptureStdout();
+  EXPECT_EQ(run_cli({"sim", "--planner", server.url(), "--name", "mine", "--minutes", "0.05",
+                     "--seed", "4", "--quiet"}),
+            app::kExitOk);
+  EXPECT_THAT(
+      ::testing::internal::GetCapturedStdout(),
+      StartsWith("overtake sim: planner mine at " + address + ", faithful traffic, seed 4"));
 }
 
 TEST(ProtocolClient, SendsTheOriginalsUpgradeRequestAndSpeaksFirst) {
@@ -278,16 +414,16 @@ TEST(ProtocolClient, RejectsBadPlannerUrls) {
 // client sends, in lock-step, and recognises the null ones of a real-time run.
 TEST(ProtocolOriginalConvention, OldStylePlannerReadsOurClientInLockStep) {
   OriginalPlannerStats stats;
-  LockStepRun run;
+  sim::RunReport report;
   {
     FakePlanner planner([&stats](std::string_view m, int) {
       return FakeAction{{original_planner_answer(m, stats)}};
     });
     LogCapture log;
-    run = lock_step(planner.url(), 30.0, log);
+    report = lock_step(planner.url(), 30.0, log);
   }
-  EXPECT_EQ(run.report.ended_early, "");
-  EXPECT_EQ(stats.full, run.report.planner_cycles);
+  EXPECT_EQ(report.ended_early, "");
+  EXPECT_EQ(stats.full, report.planner_cycles);
   EXPECT_EQ(stats.unreadable, 0);
 }
 

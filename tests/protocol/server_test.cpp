@@ -363,6 +363,59 @@ TEST(ProtocolServer, UpgradeResponseCarriesNoSubprotocolOrExtension) {
   EXPECT_THAT(*reply, StartsWith(kControlStart));
 }
 
+// `serve` serves no page, so an upgrade that carries an Origin header comes from a browser
+// page (any site the user visits could open one: DNS rebinding needs not even that) and is
+// refused, whatever the origin; the simulator and planner programs send no Origin.
+TEST(ProtocolServer, RefusesWebsocketUpgradesFromBrowserPages) {
+  ServerFixture server;
+  const std::string self = "http://127.0.0.1:" + std::to_string(server.port());
+  for (const std::string& origin :
+       {std::string("http://evil.example"), self, std::string("null")}) {
+    SCOPED_TRACE(origin);
+    RawClient raw(server.port());
+    const std::string who = "(127.0.0.1:" + std::to_string(raw.local_port()) + ")";
+    const std::string head = raw.upgrade("Origin: " + origin + "\r\n");
+    EXPECT_THAT(head, StartsWith("HTTP/1.1 403"));
+    std::string body;
+    EXPECT_TRUE(raw.closed_by_peer(3s, &body)) << "the server must close this connection";
+    EXPECT_THAT(body, HasSubstr("Origin"));
+    EXPECT_TRUE(log_has(server, who, "websocket upgrade refused: it comes from a browser page"))
+        << server.log().dump();
+    EXPECT_TRUE(log_has(server, who, origin));
+  }
+  // Without an Origin, as the original simulator and our client connect: accepted.
+  RawClient raw(server.port());
+  EXPECT_THAT(raw.upgrade(), StartsWith("HTTP/1.1 101"));
+  raw.write(RawClient::frame(0x81, start_telemetry()));
+  const auto reply = raw.read_frame(5s);
+  ASSERT_TRUE(reply);
+  EXPECT_THAT(*reply, StartsWith(kControlStart));
+  EXPECT_EQ(server.log().lines(LogLevel::warning).size(), 3u) << server.log().dump();
+}
+
+// A simulator that closes normally (a close frame) and goes at once, without waiting for the
+// server's close frame: logged as closed by the peer, not as a protocol error ("Transport
+// endpoint is not connected", met while tearing the connection down).
+TEST(ProtocolServer, APeerThatClosesNormallyAndGoesIsLoggedAsClosed) {
+  ServerFixture server;
+  for (int attempt = 0; attempt < 5; ++attempt) {
+    SCOPED_TRACE(attempt);
+    std::string who;
+    {
+      RawClient raw(server.port());
+      who = "(127.0.0.1:" + std::to_string(raw.local_port()) + ")";
+      raw.upgrade();
+      raw.write(RawClient::frame(0x88, std::string("\x03\xe8", 2)));  // close, code 1000
+      raw.close_gracefully();
+    }
+    EXPECT_TRUE(log_has(server, who, "closed by the peer (close code 1000)"))
+        << server.log().dump();
+    for (const auto& line : server.log().lines(LogLevel::warning)) {
+      EXPECT_EQ(line.find(who), std::string::npos) << line;
+    }
+  }
+}
+
 TEST(ProtocolServer, AcceptsTheUpgradeOnAnyPath) {
   ServerFixture server;
   for (const char* path : {"/", "/socket.io/?EIO=4&transport=websocket", "/anything/at/all?x=1"}) {

@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <functional>
 #include <future>
+#include <memory>
 #include <mutex>
 #include <optional>
 #include <string>
@@ -29,6 +30,8 @@
 #include <boost/asio/read.hpp>
 #include <boost/asio/read_until.hpp>
 #include <boost/asio/redirect_error.hpp>
+#include <boost/asio/steady_timer.hpp>
+#include <boost/asio/this_coro.hpp>
 #include <boost/asio/use_awaitable.hpp>
 #include <boost/asio/write.hpp>
 #include <boost/beast/core.hpp>
@@ -142,6 +145,12 @@ inline ClientOptions quick_client(LogCapture* log = nullptr) {
   return o;
 }
 
+/// A frame a fake planner sends some time after the message it answers.
+struct TimedFrame {
+  std::chrono::milliseconds after{0};  ///< from the moment the message was read
+  std::string frame;
+};
+
 /// What a fake planner does with one message it received (`index` counts from 0).
 struct FakeAction {
   std::vector<std::string> frames;  ///< sent in order
@@ -149,6 +158,18 @@ struct FakeAction {
   bool binary = false;              ///< send the frames as binary frames
   bool close = false;               ///< close the websocket afterwards
   bool drop = false;                ///< close the TCP socket abruptly afterwards
+  /// After `frames`: wait this long, reading nothing (so a ping that came after the message
+  /// is answered only afterwards, as by a planner that sleeps in its message handler), then
+  /// send `after_pause`.
+  std::chrono::milliseconds pause{0};
+  std::vector<std::string> after_pause{};
+  /// Sent on timers while the session goes on reading and answering pings (as by a planner
+  /// whose answers come from another task or thread).
+  std::vector<TimedFrame> later{};
+  /// A close frame (code 1000), then, `exit_after` later, the socket closed without waiting
+  /// for the client's close frame: a planner that closes normally and exits.
+  bool close_then_exit = false;
+  std::chrono::milliseconds exit_after{0};
 };
 using FakeBehaviour = std::function<FakeAction(std::string_view message, int index)>;
 
@@ -206,9 +227,39 @@ class FakePlanner {
     }
   }
 
+  // One websocket write at a time: the session and its timed frames share the stream.
+  struct Writer {
+    websocket::stream<tcp::socket> ws;
+    bool busy = false;
+    explicit Writer(tcp::socket s) : ws(std::move(s)) {}
+  };
+
+  static net::awaitable<void> write_frame(std::shared_ptr<Writer> w, std::string text, bool binary,
+                                          beast::error_code& ec) {
+    net::steady_timer wait(co_await net::this_coro::executor);
+    while (w->busy) {
+      wait.expires_after(1ms);
+      co_await wait.async_wait(net::redirect_error(net::use_awaitable, ec));
+    }
+    w->busy = true;
+    w->ws.binary(binary);
+    co_await w->ws.async_write(net::buffer(text), net::redirect_error(net::use_awaitable, ec));
+    w->busy = false;
+  }
+
+  static net::awaitable<void> send_later(std::shared_ptr<Writer> w, TimedFrame f) {
+    net::steady_timer timer(co_await net::this_coro::executor);
+    beast::error_code ec;
+    timer.expires_after(f.after);
+    co_await timer.async_wait(net::redirect_error(net::use_awaitable, ec));
+    if (!w->ws.is_open()) co_return;
+    co_await write_frame(w, std::move(f.frame), false, ec);
+  }
+
   net::awaitable<void> session(tcp::socket socket) {
     beast::error_code ec;
-    websocket::stream<tcp::socket> ws(std::move(socket));
+    auto w = std::make_shared<Writer>(std::move(socket));
+    websocket::stream<tcp::socket>& ws = w->ws;
     // The request as it came, for the tests to read; the upgrade is then done from it. (A
     // client speaks only after the 101, so nothing follows the request yet.)
     std::string request;
@@ -232,19 +283,40 @@ class FakePlanner {
         received_.push_back(message);
       }
       const FakeAction action = behaviour_(message, index);
+      for (const TimedFrame& f : action.later) {
+        net::co_spawn(co_await net::this_coro::executor, send_later(w, f), net::detached);
+      }
       if (action.one_write) {
         std::string bytes;
         for (const auto& f : action.frames) bytes += raw_text_frame(f);
         co_await net::async_write(ws.next_layer(), net::buffer(bytes),
                                   net::redirect_error(net::use_awaitable, ec));
       } else {
-        ws.binary(action.binary);
         for (const auto& f : action.frames) {
-          co_await ws.async_write(net::buffer(f), net::redirect_error(net::use_awaitable, ec));
+          co_await write_frame(w, f, action.binary, ec);
           if (ec) co_return;
         }
       }
       if (ec) co_return;
+      if (action.pause > 0ms) {
+        net::steady_timer pause(co_await net::this_coro::executor);
+        pause.expires_after(action.pause);
+        co_await pause.async_wait(net::redirect_error(net::use_awaitable, ec));
+        for (const auto& f : action.after_pause) {
+          co_await write_frame(w, f, false, ec);
+          if (ec) co_return;
+        }
+      }
+      if (action.close_then_exit) {
+        const std::string close_frame("\x88\x02\x03\xe8", 4);  // close, code 1000
+        co_await net::async_write(ws.next_layer(), net::buffer(close_frame),
+                                  net::redirect_error(net::use_awaitable, ec));
+        net::steady_timer pause(co_await net::this_coro::executor);
+        pause.expires_after(action.exit_after);
+        co_await pause.async_wait(net::redirect_error(net::use_awaitable, ec));
+        ws.next_layer().close(ec);
+        co_return;
+      }
       if (action.close) {
         co_await ws.async_close(websocket::close_code::normal,
                                 net::redirect_error(net::use_awaitable, ec));

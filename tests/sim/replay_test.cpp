@@ -278,6 +278,48 @@ TEST_F(ReplayTest, WritesAPartialFileAndRenamesItAtTheEnd) {
   EXPECT_THROW(writer.finish(kReport), ReplayError);
 }
 
+TEST_F(ReplayTest, AnEarlierKilledRunsPartialFileIsKept) {
+  const auto file = dir_ / "run.otr";
+  {
+    std::ofstream stale(dir_ / "run.otr.partial", std::ios::binary);
+    stale << "an earlier run's records";
+  }
+  World world(map_, line_, params_, TrafficProfile::faithful, 1);
+  ReplayWriter writer(file, header());
+  EXPECT_EQ(writer.partial_path(), dir_ / "run.otr.1.partial");
+  RunOptions opts;
+  opts.duration_s = 1.0;
+  opts.observer = &writer;
+  (void)run_drive(world, cruise(), opts);
+  writer.finish(kReport);
+  EXPECT_EQ(read_bytes(dir_ / "run.otr.partial"), "an earlier run's records");
+  EXPECT_FALSE(std::filesystem::exists(dir_ / "run.otr.1.partial"));
+  EXPECT_EQ(read_replay(file).frames.size(), 51u);
+}
+
+TEST_F(ReplayTest, TwoRecordingsToOneFileAtOnceLeaveAWholeReplay) {
+  // Interleaved as two processes would: each writes its own partial file; whichever renames
+  // last, the file holds one whole replay.
+  const auto file = dir_ / "run.otr";
+  World a(map_, line_, params_, TrafficProfile::faithful, 1);
+  World b(map_, line_, params_, TrafficProfile::faithful, 2);
+  ReplayWriter wa(file, header());
+  ReplayWriter wb(file, header());
+  EXPECT_NE(wa.partial_path(), wb.partial_path());
+  RunOptions oa;
+  oa.duration_s = 2.0;
+  oa.observer = &wa;
+  RunOptions ob = oa;
+  ob.observer = &wb;
+  (void)run_drive(a, cruise(), oa);
+  (void)run_drive(b, cruise(), ob);
+  wa.finish(kReport);
+  EXPECT_EQ(read_replay(file).frames.size(), 101u);
+  wb.finish(kReport);
+  EXPECT_EQ(read_replay(file).frames.size(), 101u);
+  EXPECT_EQ(read_bytes(file).size(), wb.bytes_written());
+}
+
 TEST_F(ReplayTest, AnUnfinishedRecordingIsEndedProperly) {
   const auto file = dir_ / "run.otr";
   {
@@ -464,6 +506,46 @@ TEST_F(ReplayTest, UnknownKindsAreSkippedAndBadRecordsNamed) {
   e2.append_state(world, twice);
   write_bytes(file, handmade(header(), twice));
   EXPECT_THAT(error_of(file), HasSubstr("step 0 does not follow step 0"));
+}
+
+// Found by fuzz/replay_fuzz.cpp (UBSan: 1e+300 is outside the range of int): the header's
+// integers must be integers that fit, never truncated, wrapped or converted out of range.
+TEST_F(ReplayTest, HeaderIntegersMustBeIntegersThatFit) {
+  World world(map_, line_, params_, TrafficProfile::faithful, 1);
+  std::string records;
+  ReplayEncoder().append_state(world, records);
+  ReplayEncoder::append_end("{}", records);
+  const std::string good = replay_header_json(header());
+  const auto file = dir_ / "bad.otr";
+  // The error reading the file whose header has `from` replaced by `to`.
+  const auto with = [&](const std::string& from, const std::string& to) {
+    std::string text = good;
+    const std::size_t at = text.find(from);
+    EXPECT_NE(at, std::string::npos) << from;
+    if (at != std::string::npos) text.replace(at, from.size(), to);
+    std::string bytes(kReplayMagic);
+    for (const std::uint32_t v : {kReplayVersion, static_cast<std::uint32_t>(text.size())}) {
+      for (int i = 0; i < 4; ++i) bytes.push_back(static_cast<char>((v >> (8 * i)) & 0xff));
+    }
+    write_bytes(file, bytes + text + test::deflate_all(records));
+    return error_of(file);
+  };
+  EXPECT_EQ(with(R"("lanes":3)", R"("lanes":3)"), "");
+  EXPECT_EQ(with(R"("seed":5)", R"("seed":18446744073709551615)"), "");
+  EXPECT_THAT(with(R"("lanes":3)", R"("lanes":1e300)"),
+              HasSubstr("corrupt header (bytes 16-"));
+  EXPECT_THAT(with(R"("lanes":3)", R"("lanes":1e300)"),
+              HasSubstr("'road.lanes' is 1e+300, not an integer within range"));
+  EXPECT_THAT(with(R"("lanes":3)", R"("lanes":3.5)"),
+              HasSubstr("'road.lanes' is 3.5, not an integer within range"));
+  EXPECT_THAT(with(R"("lanes":3)", R"("lanes":4294967299)"),
+              HasSubstr("'road.lanes' is 4294967299, not an integer within range"));
+  EXPECT_THAT(with(R"("lanes":3)", R"("lanes":"3")"),
+              HasSubstr("'road.lanes' is not an integer"));
+  EXPECT_THAT(with(R"("seed":5)", R"("seed":-1)"),
+              HasSubstr("'provenance.seed' is -1, not an integer within range"));
+  EXPECT_THAT(with(R"("seed":5)", R"("seed":-1.5e300)"),
+              HasSubstr("'provenance.seed' is -1.5e+300, not an integer within range"));
 }
 
 // ---- positions as differences ---------------------------------------------------------------

@@ -3,6 +3,7 @@
 // options on the CLI11 app and returns what to run when that subcommand is chosen.
 
 #include <CLI/CLI.hpp>
+#include <filesystem>
 #include <functional>
 #include <vector>
 
@@ -29,6 +30,18 @@ Subcommand register_serve(CLI::App& app);
 Subcommand register_sim(CLI::App& app);
 Subcommand register_view(CLI::App& app);
 Subcommand register_calibrate(CLI::App& app);
+
+/// A seed: a whole number from 0 to 2^64 - 1, written out; anything else (-1, 2^64, 1e3) is
+/// refused with the range, never wrapped or saturated.
+[[nodiscard]] const CLI::Validator& seed_validator();
+
+/// Flushes standard output and throws std::runtime_error when anything written to it was lost
+/// (a full disk, a closed pipe): a command whose output did not arrive must not exit 0.
+void flush_stdout_or_throw();
+
+/// True when `a` and `b` name the same file (after resolving . and .., symbolic links of
+/// existing parts, and hard links of existing files).
+[[nodiscard]] bool same_file(const std::filesystem::path& a, const std::filesystem::path& b);
 
 /// Whether progress lines may be drawn (stderr is a terminal).
 [[nodiscard]] bool stderr_is_terminal();

@@ -31,6 +31,11 @@ class ConfigError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+/// JSON text (a config or scenario file's contents). Text that is not JSON, including a
+/// number beyond the range of a double such as 1e999, is a ConfigError naming `source` and
+/// where the parser stopped.
+[[nodiscard]] nlohmann::json parse_json_text(std::string_view text, std::string_view source);
+
 /// A JSON file's contents; a file that cannot be read or is not JSON is a ConfigError naming
 /// the path (and, for bad JSON, where the parser stopped).
 [[nodiscard]] nlohmann::json read_json_file(const std::filesystem::path& path);
@@ -39,6 +44,10 @@ class ConfigError : public std::runtime_error {
 /// and invalid values are errors naming `source` and the key. The road is copied into the
 /// world's and planner's params.
 [[nodiscard]] Config apply_config_json(Config base, const nlohmann::json& j, std::string_view source);
+
+/// apply_config_json on the text of a config file (parse_json_text, then the keys); every
+/// fault is a ConfigError naming `source`.
+[[nodiscard]] Config apply_config_text(Config base, std::string_view text, std::string_view source);
 
 /// The shipped defaults (the built-in config/overtake.json).
 [[nodiscard]] Config default_config();

@@ -24,6 +24,9 @@ struct RunProvenance {
   int max_steps_per_call = 3;
   double minutes = 0.0;
   std::string scenario;  ///< the scenario's name (or file) when scripted; empty otherwise
+  /// `sim --planner`: the remote planner's address (`policy` is then its --name, or this
+  /// address); empty for a planner in this process. Shown on the scorecard only.
+  std::string planner_url;
 };
 
 /// The JSON report. Deterministic for a given run apart from the `timing` key.

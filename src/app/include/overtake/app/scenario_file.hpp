@@ -21,6 +21,11 @@ namespace overtake::app {
 [[nodiscard]] sim::Scenario parse_scenario(const nlohmann::json& j, std::string_view source,
                                            const core::RoadParams& road);
 
+/// Reads a scenario from the text of a file (parse_json_text, then parse_scenario); every
+/// fault is a ConfigError naming `source`.
+[[nodiscard]] sim::Scenario parse_scenario_text(std::string_view text, std::string_view source,
+                                                const core::RoadParams& road);
+
 /// Reads a scenario file.
 [[nodiscard]] sim::Scenario load_scenario(const std::filesystem::path& path, const core::RoadParams& road);
 

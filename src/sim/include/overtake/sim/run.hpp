@@ -11,6 +11,8 @@
 #include <string>
 #include <vector>
 
+#include "overtake/core/quantile_sketch.hpp"
+
 #include "overtake/core/telemetry.hpp"
 #include "overtake/sim/referee.hpp"
 #include "overtake/sim/world.hpp"
@@ -71,6 +73,8 @@ struct RunOptions {
 };
 
 /// Planner compute time per cycle (microseconds). Not part of the determinism promise.
+/// p50 and p99 come from a fixed-memory sketch, within 1% of the exact order statistics
+/// (core::QuantileSketch); the maxima are exact.
 /// In-process planners (run_drive) are timed on the thread's CPU clock, so that other
 /// processes on a shared machine do not inflate the figures; the wall-clock p99 and max are
 /// kept beside them. A remote planner's cycle is the wall-clock round trip of a telemetry
@@ -112,10 +116,11 @@ struct RunReport {
 class LaneTracker;
 
 /// The report of a world as it stands (for loops other than run_drive, e.g. real time).
-/// `cycle_us`: planner time of each cycle; `ended_early`: empty, or why the run stopped.
-/// `cycle_us` are measured on `clock` ("thread_cpu" or "round_trip").
+/// `cycle_us`: planner time of each cycle, kept in fixed memory however long the run;
+/// `ended_early`: empty, or why the run stopped. `cycle_us` are measured on `clock`
+/// ("thread_cpu" or "round_trip").
 [[nodiscard]] RunReport summarize(const World& world, const LaneTracker& lanes,
-                                  std::vector<double> cycle_us, std::string ended_early,
+                                  const core::QuantileSketch& cycle_us, std::string ended_early,
                                   std::string clock = "round_trip");
 
 /// Tracks lane changes and time per lane from the ego's d (with hysteresis: the lane counts

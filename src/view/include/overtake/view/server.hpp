@@ -80,6 +80,32 @@ struct ViewContent {
   std::shared_ptr<const LiveFeed> live;       ///< the websocket /live, when set
 };
 
+/// What a request target names.
+enum class ViewResource { none, page, replay, live };
+
+/// How the server routes a request target: its path (the target without its query) and what
+/// that path names in `content` (the page at / and /index.html, the replay at kReplayUrlPath
+/// and the live feed at kLiveUrlPath when `content` has them; the live feed is served to a
+/// websocket upgrade only). Pure, so that tests and the fuzzer reach it without a socket.
+struct ViewRoute {
+  ViewResource resource = ViewResource::none;
+  std::string_view path;  ///< a part of the target
+};
+[[nodiscard]] ViewRoute route_target(std::string_view target, const ViewContent& content);
+
+/// Whether a request's Host header names this server, so that a page from elsewhere that
+/// reaches it through DNS rebinding (its own name made to resolve to this machine) is
+/// refused: `localhost`, `127.0.0.1` or `[::1]`, or `bound_host` (the address or name the
+/// server was told to listen on), each with any port or none, names compared without case.
+/// When bound to every address (`0.0.0.0`, `::`), any address literal is accepted too: only
+/// a name can be rebound. Pure, for tests and the fuzzer.
+[[nodiscard]] bool host_allowed(std::string_view host, std::string_view bound_host);
+
+/// Whether a websocket request's Origin header is the origin of the page this server serves
+/// at `host` (the request's own Host header): `http://` and the same name and port (80 when
+/// absent). Pure, for tests and the fuzzer.
+[[nodiscard]] bool same_origin(std::string_view origin, std::string_view host);
+
 /// Where to listen.
 struct ViewServerOptions {
   std::string host = "127.0.0.1";  ///< loopback by default: the page is for this machine
