@@ -299,7 +299,16 @@ int run_cli(int argc, const char* const* argv) {
   for (const Subcommand& c : commands) {
     if (!c.command->parsed()) continue;
     try {
-      return c.run();
+      const int code = c.run();
+      // Whatever a command printed must have reached its reader (`> /dev/full`, a closed
+      // pipe): a failed write is a failure, even after a run that went well.
+      try {
+        flush_stdout_or_throw();
+      } catch (const std::exception& e) {
+        std::cerr << "overtake: " << e.what() << "\n";
+        return code == kExitOk ? kExitFailure : code;
+      }
+      return code;
     } catch (const UsageError& e) {
       std::cerr << "overtake: " << e.what() << "\n";
       return kExitUsage;

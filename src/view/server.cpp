@@ -43,11 +43,6 @@ constexpr std::size_t kMaxRequestBodyBytes = 64 * 1024;
 constexpr auto kLivePoll = std::chrono::milliseconds(20);
 constexpr std::size_t kMaxLiveMessageBytes = std::size_t{4} << 20;
 constexpr auto kAcceptRetryDelay = std::chrono::milliseconds(100);
-constexpr long kPublishEverySteps = 5;  // 0.1 s at the original's 50 Hz
-
-std::string host_for_url(const std::string& host) {
-  return host.find(':') != std::string::npos ? "[" + host + "]" : host;
-}
 
 std::string_view target_of(const http::request<http::string_body>& req) {
   return {req.target().data(), req.target().size()};
@@ -59,69 +54,6 @@ struct Shared {
 };
 
 // ---- who may ask ----------------------------------------------------------------------------
-
-constexpr std::string_view kLoopbackNames[] = {"localhost", "127.0.0.1", "[::1]"};
-
-bool same_text(std::string_view a, std::string_view b) {  // ASCII, without case
-  return a.size() == b.size() &&
-         std::equal(a.begin(), a.end(), b.begin(), [](char x, char y) {
-           return std::tolower(static_cast<unsigned char>(x)) ==
-                  std::tolower(static_cast<unsigned char>(y));
-         });
-}
-
-// A Host header (or the part of an Origin after the scheme) as a name and a port: `name`,
-// `name:port`, `[v6]` or `[v6]:port`, the name made only of characters that a host name or an
-// address may hold, the port of digits, from 1 to 65535. Nullopt when it is anything else.
-struct HostPort {
-  std::string_view name;  // brackets kept for IPv6
-  std::optional<unsigned> port;
-};
-std::optional<HostPort> split_host(std::string_view host) {
-  HostPort out;
-  std::string_view rest;
-  if (!host.empty() && host[0] == '[') {
-    const std::size_t close = host.find(']');
-    if (close == std::string_view::npos || close < 2) return std::nullopt;
-    out.name = host.substr(0, close + 1);
-    rest = host.substr(close + 1);
-    for (const char c : out.name.substr(1, out.name.size() - 2)) {
-      if (!std::isxdigit(static_cast<unsigned char>(c)) && c != ':' && c != '.')
-        return std::nullopt;
-    }
-  } else {
-    const std::size_t colon = host.find(':');
-    out.name = host.substr(0, colon);
-    rest = colon == std::string_view::npos ? std::string_view{} : host.substr(colon);
-    if (out.name.empty()) return std::nullopt;
-    for (const char c : out.name) {
-      if (!std::isalnum(static_cast<unsigned char>(c)) && c != '.' && c != '-' && c != '_')
-        return std::nullopt;
-    }
-  }
-  if (!rest.empty()) {
-    const std::string_view digits = rest.substr(1);
-    unsigned port = 0;
-    const auto r = std::from_chars(digits.data(), digits.data() + digits.size(), port);
-    if (rest[0] != ':' || digits.empty() || digits.size() > 5 || r.ec != std::errc{} ||
-        r.ptr != digits.data() + digits.size() || port == 0 || port > 65535) {
-      return std::nullopt;
-    }
-    out.port = port;
-  }
-  return out;
-}
-
-// An IPv4 address in dotted form, or an IPv6 one in brackets.
-bool is_address_literal(std::string_view name) {
-  error_code ec;
-  if (name.size() > 2 && name.front() == '[') {
-    (void)net::ip::make_address_v6(std::string(name.substr(1, name.size() - 2)), ec);
-  } else {
-    (void)net::ip::make_address_v4(std::string(name), ec);
-  }
-  return !ec;
-}
 
 // At most 80 printable characters of a header value, for an error page.
 std::string shown(std::string_view value) {
@@ -159,10 +91,7 @@ std::optional<http::response<http::string_body>> refusal(
   if (hosts == 1 && !host_allowed(host, sh.bound_host)) {
     std::string names = "localhost, 127.0.0.1, [::1]";
     const std::string bound = host_for_url(sh.bound_host);
-    if (std::none_of(std::begin(kLoopbackNames), std::end(kLoopbackNames),
-                     [&](std::string_view n) { return same_text(n, bound); })) {
-      names += " and " + bound;
-    }
+    if (!is_loopback_name(bound)) names += " and " + bound;
     return refuse(http::status::misdirected_request,
                   "this server answers only to " + names + " (any port); the request is for '" +
                       shown(host) + "'\n");
@@ -338,106 +267,6 @@ net::awaitable<void> accept_loop(tcp::acceptor& acceptor, std::shared_ptr<const 
 }
 
 }  // namespace
-
-ViewRoute route_target(std::string_view target, const ViewContent& content) {
-  const std::string_view path = target.substr(0, target.find('?'));
-  ViewResource resource = ViewResource::none;
-  if (path == "/" || path == "/index.html") {
-    resource = ViewResource::page;
-  } else if (path == kReplayUrlPath && content.replay) {
-    resource = ViewResource::replay;
-  } else if (path == kLiveUrlPath && content.live) {
-    resource = ViewResource::live;
-  }
-  return {resource, path};
-}
-
-bool host_allowed(std::string_view host, std::string_view bound_host) {
-  const auto hp = split_host(host);
-  if (!hp) return false;
-  for (const std::string_view name : kLoopbackNames) {
-    if (same_text(hp->name, name)) return true;
-  }
-  if (bound_host.empty()) return false;
-  if (same_text(hp->name, host_for_url(std::string(bound_host)))) return true;
-  // Bound to every address: any of this machine's addresses may be in the URL, and only a
-  // name (not an address) can be rebound to another machine.
-  return (bound_host == "0.0.0.0" || bound_host == "::") && is_address_literal(hp->name);
-}
-
-bool same_origin(std::string_view origin, std::string_view host) {
-  constexpr std::string_view kScheme = "http://";
-  if (origin.size() <= kScheme.size() || !same_text(origin.substr(0, kScheme.size()), kScheme))
-    return false;
-  const auto o = split_host(origin.substr(kScheme.size()));
-  const auto h = split_host(host);
-  constexpr unsigned kHttpPort = 80;
-  return o && h && same_text(o->name, h->name) &&
-         o->port.value_or(kHttpPort) == h->port.value_or(kHttpPort);
-}
-
-// ---- live feed ----------------------------------------------------------------------------
-
-LiveFeed::LiveFeed(std::string header_json) : header_json_(std::move(header_json)) {}
-
-void LiveFeed::publish(std::string records) {
-  if (records.empty()) return;
-  auto chunk = std::make_shared<const std::string>(std::move(records));
-  const std::lock_guard lock(mu_);
-  chunks_.push_back(std::move(chunk));
-}
-
-void LiveFeed::close() {
-  const std::lock_guard lock(mu_);
-  closed_ = true;
-}
-
-LiveFeed::Next LiveFeed::next(std::size_t from) const {
-  const std::lock_guard lock(mu_);
-  Next out;
-  if (from < chunks_.size())
-    out.chunks.assign(chunks_.begin() + static_cast<long>(from), chunks_.end());
-  out.closed = closed_;
-  return out;
-}
-
-LiveRecorder::LiveRecorder(LiveFeed& feed, bool pace) : feed_(feed), pace_(pace) {}
-
-void LiveRecorder::on_state(const sim::World& world) {
-  const long step = world.steps();
-  if (!first_step_) {
-    first_step_ = step;
-    last_publish_step_ = step;
-    start_ = std::chrono::steady_clock::now();
-  }
-  encoder_.append_state(world, pending_);
-  if (step == *first_step_ || step - last_publish_step_ >= kPublishEverySteps) {
-    publish();
-    last_publish_step_ = step;
-  }
-  if (pace_) {
-    const auto due =
-        start_ + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
-                     std::chrono::duration<double>(static_cast<double>(step - *first_step_) *
-                                                   world.params().step_s));
-    std::this_thread::sleep_until(due);
-  }
-}
-
-void LiveRecorder::on_path(const sim::World&, std::span<const core::Vec2> path) {
-  encoder_.append_path(path, pending_);
-}
-
-void LiveRecorder::finish(std::string_view report_json) {
-  sim::ReplayEncoder::append_end(report_json, pending_);
-  publish();
-  feed_.close();
-}
-
-void LiveRecorder::publish() {
-  feed_.publish(std::move(pending_));
-  pending_.clear();
-}
 
 // ---- server -------------------------------------------------------------------------------
 

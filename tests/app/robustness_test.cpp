@@ -12,17 +12,13 @@
 #include <optional>
 #include <thread>
 
-#include <fcntl.h>
-#include <spawn.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
 #include "overtake/app/cli.hpp"
 #include "overtake/app/commands.hpp"
 #include "overtake/app/io.hpp"
 #include "overtake/sim/replay.hpp"
-
-extern char** environ;  // NOLINT: POSIX, for posix_spawn
+#include "process_support.hpp"
 
 namespace overtake::app {
 namespace {
@@ -31,7 +27,6 @@ using ::testing::HasSubstr;
 using nlohmann::json;
 namespace fs = std::filesystem;
 
-const fs::path kBinary = fs::path(OVERTAKE_BINARY_DIR) / "overtake";
 
 int cli(std::vector<const char*> args) {
   args.insert(args.begin(), "overtake");
@@ -45,42 +40,6 @@ std::pair<int, std::string> cli_err(std::vector<const char*> args) {
   const int rc = cli(std::move(args));
   (void)testing::internal::GetCapturedStdout();
   return {rc, testing::internal::GetCapturedStderr()};
-}
-
-/// The binary with these arguments, stdout into `out` (a path, e.g. /dev/full), stderr into `err`.
-pid_t start(const std::vector<std::string>& args, const fs::path& out, const fs::path& err) {
-  std::vector<std::string> all = {kBinary.string()};
-  all.insert(all.end(), args.begin(), args.end());
-  std::vector<char*> argv;
-  for (auto& a : all) argv.push_back(a.data());
-  argv.push_back(nullptr);
-  posix_spawn_file_actions_t files;
-  posix_spawn_file_actions_init(&files);
-  posix_spawn_file_actions_addopen(&files, 1, out.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-  posix_spawn_file_actions_addopen(&files, 2, err.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-  pid_t pid = -1;
-  const int rc = posix_spawn(&pid, argv[0], &files, nullptr, argv.data(), environ);
-  posix_spawn_file_actions_destroy(&files);
-  if (rc != 0) throw std::runtime_error("cannot start " + kBinary.string());
-  return pid;
-}
-
-/// The exit status (1000 + signal when killed by one), or nullopt after `timeout` (killed then).
-std::optional<int> wait_for(pid_t pid, std::chrono::seconds timeout) {
-  const auto deadline = std::chrono::steady_clock::now() + timeout;
-  for (;;) {
-    int status = 0;
-    if (::waitpid(pid, &status, WNOHANG) == pid) {
-      if (WIFEXITED(status)) return WEXITSTATUS(status);
-      return 1000 + (WIFSIGNALED(status) ? WTERMSIG(status) : 0);
-    }
-    if (std::chrono::steady_clock::now() > deadline) {
-      ::kill(pid, SIGKILL);
-      ::waitpid(pid, &status, 0);
-      return std::nullopt;
-    }
-    std::this_thread::sleep_for(std::chrono::milliseconds(20));
-  }
 }
 
 class RobustnessTest : public ::testing::Test {
@@ -156,9 +115,13 @@ TEST_F(RobustnessTest, OutputLostOnAFullDiskIsAFailure) {
   if (!fs::exists("/dev/full")) GTEST_SKIP() << "no /dev/full here";
   const fs::path err = dir_ / "err.txt";
   for (const std::vector<std::string>& args :
-       {std::vector<std::string>{"track"}, {"config"}, {"drive", "--minutes", "0.02", "-q"}}) {
-    const pid_t pid = start(args, "/dev/full", err);
-    const auto rc = wait_for(pid, std::chrono::seconds(60));
+       {std::vector<std::string>{"track"},
+        {"config"},
+        {"drive", "--minutes", "0.02", "-q"},
+        {"bench", "--seeds", "1", "--minutes", "0.02", "--policies", "walkthrough", "--jobs", "1",
+         "--out", (dir_ / "bench").string()}}) {
+    const pid_t pid = test::start_overtake(args, "/dev/full", err);
+    const auto rc = test::exit_status(pid, std::chrono::seconds(60));
     ASSERT_TRUE(rc.has_value()) << args[0];
     EXPECT_EQ(*rc, 1) << args[0];
     EXPECT_THAT(read_file(err), HasSubstr("standard output: write failed")) << args[0];
@@ -174,7 +137,7 @@ TEST_F(RobustnessTest, InterruptedDriveKeepsEverything) {
     const fs::path out = dir_ / "out.txt";
     fs::remove(report);
     fs::remove(replay);
-    const pid_t pid = start({"drive", "--minutes", "600", "--policy", "walkthrough", "--json", report.string(),
+    const pid_t pid = test::start_overtake({"drive", "--minutes", "600", "--policy", "walkthrough", "--json", report.string(),
                              "--record", replay.string(), "-q"},
                             out, dir_ / "err.txt");
     // Wait until the recording has begun (its partial file exists), then a little more.
@@ -183,7 +146,7 @@ TEST_F(RobustnessTest, InterruptedDriveKeepsEverything) {
     }
     std::this_thread::sleep_for(std::chrono::milliseconds(300));
     ::kill(pid, sig);
-    const auto rc = wait_for(pid, std::chrono::seconds(60));
+    const auto rc = test::exit_status(pid, std::chrono::seconds(60));
     ASSERT_TRUE(rc.has_value());
     EXPECT_EQ(*rc, 130) << "signal " << sig;
     EXPECT_THAT(read_file(out), HasSubstr("mean speed"));

@@ -10,17 +10,13 @@
 #include <filesystem>
 #include <optional>
 
-#include <fcntl.h>
-#include <spawn.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
 #include "overtake/app/interrupt.hpp"
 #include "overtake/app/io.hpp"
 #include "overtake/sim/replay.hpp"
+#include "process_support.hpp"
 #include "test_support.hpp"
-
-extern char** environ;  // NOLINT: POSIX, for posix_spawn
 
 namespace overtake::protocol {
 namespace {
@@ -29,43 +25,7 @@ using ::testing::HasSubstr;
 using namespace testing;  // NOLINT: the test helpers
 namespace fs = std::filesystem;
 
-const fs::path kBinary = fs::path(OVERTAKE_BINARY_DIR) / "overtake";
-
-// The binary with these arguments, its stdout and stderr into files.
-pid_t start(const std::vector<std::string>& args, const fs::path& out, const fs::path& err) {
-  std::vector<std::string> all = {kBinary.string()};
-  all.insert(all.end(), args.begin(), args.end());
-  std::vector<char*> argv;
-  for (auto& a : all) argv.push_back(a.data());
-  argv.push_back(nullptr);
-  posix_spawn_file_actions_t files;
-  posix_spawn_file_actions_init(&files);
-  posix_spawn_file_actions_addopen(&files, 1, out.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-  posix_spawn_file_actions_addopen(&files, 2, err.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-  pid_t pid = -1;
-  const int rc = posix_spawn(&pid, argv[0], &files, nullptr, argv.data(), environ);
-  posix_spawn_file_actions_destroy(&files);
-  if (rc != 0) throw std::runtime_error("cannot start " + kBinary.string());
-  return pid;
-}
-
-// The child's exit status, or nullopt if it is still running after `timeout` (then killed).
-std::optional<int> exit_status(pid_t pid, std::chrono::milliseconds timeout) {
-  const auto deadline = std::chrono::steady_clock::now() + timeout;
-  for (;;) {
-    int status = 0;
-    if (::waitpid(pid, &status, WNOHANG) == pid) {
-      if (WIFEXITED(status)) return WEXITSTATUS(status);
-      return 1000 + (WIFSIGNALED(status) ? WTERMSIG(status) : 0);  // killed by a signal
-    }
-    if (std::chrono::steady_clock::now() > deadline) {
-      ::kill(pid, SIGKILL);
-      ::waitpid(pid, &status, 0);
-      return std::nullopt;
-    }
-    std::this_thread::sleep_for(10ms);
-  }
-}
+const fs::path kBinary = test::overtake_binary();
 
 class SimSignal : public ::testing::Test {
  protected:
@@ -88,7 +48,7 @@ class SimSignal : public ::testing::Test {
     std::vector<std::string> args = {"sim",    "--planner",   url,        "--minutes", "600",
                                      "--json", json.string(), "--record", otr.string()};
     args.insert(args.end(), extra.begin(), extra.end());
-    const pid_t pid = start(args, dir_ / "out.txt", dir_ / "err.txt");
+    const pid_t pid = test::start_overtake(args, dir_ / "out.txt", dir_ / "err.txt");
     const auto until = std::chrono::steady_clock::now() + 20s;
     while (!running() && std::chrono::steady_clock::now() < until)
       std::this_thread::sleep_for(10ms);
@@ -96,7 +56,7 @@ class SimSignal : public ::testing::Test {
     std::this_thread::sleep_for(200ms);
     const auto sent = std::chrono::steady_clock::now();
     ASSERT_EQ(::kill(pid, sig), 0);
-    const auto status = exit_status(pid, 15s);
+    const auto status = test::exit_status(pid, 15s);
     ASSERT_TRUE(status) << "still running 15 s after the signal";
     EXPECT_LT(std::chrono::steady_clock::now() - sent, 3s) << "stops at the next step";
     EXPECT_EQ(*status, app::kExitInterrupted) << app::read_file(dir_ / "err.txt");

@@ -106,6 +106,13 @@ struct ViewRoute {
 /// absent). Pure, for tests and the fuzzer.
 [[nodiscard]] bool same_origin(std::string_view origin, std::string_view host);
 
+/// Whether `name` is one of the loopback names a Host may always give (`localhost`,
+/// `127.0.0.1`, `[::1]`), compared without case.
+[[nodiscard]] bool is_loopback_name(std::string_view name);
+
+/// A host as it appears in a URL or a Host header: an IPv6 address in brackets.
+[[nodiscard]] std::string host_for_url(const std::string& host);
+
 /// Where to listen.
 struct ViewServerOptions {
   std::string host = "127.0.0.1";  ///< loopback by default: the page is for this machine
