@@ -27,8 +27,9 @@ inline std::filesystem::path overtake_binary() {
 
 /// Starts the binary with these arguments, its stdout into `out` (a path, e.g. /dev/full) and
 /// its stderr into `err`; returns its pid.
+/// With `out_fd` >= 0, stdout is that descriptor instead (e.g. a pipe's write end).
 inline pid_t start_overtake(const std::vector<std::string>& args, const std::filesystem::path& out,
-                            const std::filesystem::path& err) {
+                            const std::filesystem::path& err, int out_fd = -1) {
   std::vector<std::string> all = {overtake_binary().string()};
   all.insert(all.end(), args.begin(), args.end());
   std::vector<char*> argv;
@@ -36,7 +37,11 @@ inline pid_t start_overtake(const std::vector<std::string>& args, const std::fil
   argv.push_back(nullptr);
   posix_spawn_file_actions_t files;
   posix_spawn_file_actions_init(&files);
-  posix_spawn_file_actions_addopen(&files, 1, out.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  if (out_fd >= 0) {
+    posix_spawn_file_actions_adddup2(&files, out_fd, 1);
+  } else {
+    posix_spawn_file_actions_addopen(&files, 1, out.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  }
   posix_spawn_file_actions_addopen(&files, 2, err.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
   pid_t pid = -1;
   const int rc = posix_spawn(&pid, argv[0], &files, nullptr, argv.data(), environ);

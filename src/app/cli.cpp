@@ -7,6 +7,8 @@
 #include <cstring>
 #include <iostream>
 #include <thread>
+#include <poll.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include "overtake/app/cli.hpp"
@@ -60,8 +62,7 @@ int cmd_drive(DriveOptions opts, const std::optional<std::filesystem::path>& jso
     if (!quiet) std::cout << "  report written to " << json_out->string() << "\n";
   }
   if (opts.record && !quiet) std::cout << "  replay written to " << opts.record->string() << "\n";
-  std::cout.flush();
-  flush_stdout_or_throw();
+  flush_stdout_or_throw();  // now: a live view may keep the process up until Ctrl-C
   if (result.report.ended_early == "stopped") return kExitInterrupted;
   if (result.live) {
     std::fprintf(stderr, "the run is over; the live view stays at %s until Ctrl-C\n",
@@ -140,6 +141,19 @@ const CLI::Validator& seed_validator() {
   return v;
 }
 
+namespace {
+
+// Whether `fd` is a pipe whose reading end is closed (the write error itself may have come
+// while stdio flushed earlier, its errno long overwritten).
+bool reader_gone(int fd) {
+  struct stat st {};
+  if (::fstat(fd, &st) != 0 || !S_ISFIFO(st.st_mode)) return false;
+  pollfd p{fd, POLLOUT, 0};
+  return ::poll(&p, 1, 0) == 1 && (p.revents & POLLERR) != 0;
+}
+
+}  // namespace
+
 void flush_stdout_or_throw() {
   errno = 0;
   std::cout.flush();
@@ -149,6 +163,9 @@ void flush_stdout_or_throw() {
   if (lost) {
     std::cout.clear();
     std::clearerr(stdout);
+    if (err == EPIPE || reader_gone(STDOUT_FILENO)) {
+      throw OutputClosed("standard output: the reader has gone");
+    }
     throw std::runtime_error(std::string("standard output: write failed") +
                              (err ? std::string(" (") + std::strerror(err) + ")" : std::string()) +
                              "; the output is incomplete");
@@ -276,8 +293,7 @@ Subcommand register_config(CLI::App& app) {
             if (!st->file.empty()) path = st->file;
             const Config c = st->defaults ? Config{} : load_config(path);
             std::cout << config_to_json(c).dump(2) << "\n";
-            flush_stdout_or_throw();
-            return kExitOk;
+            return kExitOk;  // run_cli checks that it was written
           }};
 }
 
@@ -304,11 +320,15 @@ int run_cli(int argc, const char* const* argv) {
       // pipe): a failed write is a failure, even after a run that went well.
       try {
         flush_stdout_or_throw();
+      } catch (const OutputClosed&) {
+        return code == kExitOk ? kExitFailure : code;
       } catch (const std::exception& e) {
         std::cerr << "overtake: " << e.what() << "\n";
         return code == kExitOk ? kExitFailure : code;
       }
       return code;
+    } catch (const OutputClosed&) {  // `| head`: the reader stopped on purpose
+      return kExitFailure;
     } catch (const UsageError& e) {
       std::cerr << "overtake: " << e.what() << "\n";
       return kExitUsage;

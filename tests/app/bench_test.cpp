@@ -38,6 +38,13 @@ class BenchTest : public ::testing::Test {
     s.out = root_ / out;
     return s;
   }
+  // The same, slice `index` of `count`.
+  BenchSpec shard(const std::string& out, int index, int count) const {
+    BenchSpec s = spec(out);
+    s.shard_index = index;
+    s.shard_count = count;
+    return s;
+  }
   // runs.jsonl without the fields that measure time or place.
   static std::string stable_runs(const fs::path& dir) {
     std::ifstream in(dir / "runs.jsonl");
@@ -102,12 +109,8 @@ TEST_F(BenchTest, EachLineCarriesProvenance) {
 TEST_F(BenchTest, ShardsMergeIntoTheUnshardedResult) {
   const BenchSpec whole = spec("whole");
   (void)run_bench(whole, nullptr, {});
-  BenchSpec s1 = spec("s1");
-  s1.shard_index = 1;
-  s1.shard_count = 2;
-  BenchSpec s2 = spec("s2");
-  s2.shard_index = 2;
-  s2.shard_count = 2;
+  BenchSpec s1 = shard("s1", 1, 2);
+  BenchSpec s2 = shard("s2", 2, 2);
   EXPECT_EQ(run_bench(s1, nullptr, {}).runs_done, 2u);
   EXPECT_EQ(run_bench(s2, nullptr, {}).runs_done, 2u);
   const auto merged = merge_bench({s2.out, s1.out}, root_ / "merged");
@@ -117,12 +120,8 @@ TEST_F(BenchTest, ShardsMergeIntoTheUnshardedResult) {
 }
 
 TEST_F(BenchTest, MergeRefusesDifferentConfigurationsAndMissingShards) {
-  BenchSpec s1 = spec("s1");
-  s1.shard_index = 1;
-  s1.shard_count = 2;
-  BenchSpec other = spec("other");
-  other.shard_index = 2;
-  other.shard_count = 2;
+  BenchSpec s1 = shard("s1", 1, 2);
+  BenchSpec other = shard("other", 2, 2);
   other.minutes = 0.5;
   (void)run_bench(s1, nullptr, {});
   (void)run_bench(other, nullptr, {});
@@ -200,12 +199,8 @@ TEST_F(BenchTest, ResumeRefusesDuplicatedAndForeignRows) {
 }
 
 TEST_F(BenchTest, MergeNeverOverwritesResults) {
-  BenchSpec s1 = spec("s1");
-  s1.shard_index = 1;
-  s1.shard_count = 2;
-  BenchSpec s2 = spec("s2");
-  s2.shard_index = 2;
-  s2.shard_count = 2;
+  BenchSpec s1 = shard("s1", 1, 2);
+  BenchSpec s2 = shard("s2", 2, 2);
   (void)run_bench(s1, nullptr, {});
   (void)run_bench(s2, nullptr, {});
   const std::string before = stable_runs(s1.out);

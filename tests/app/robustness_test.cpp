@@ -129,6 +129,25 @@ TEST_F(RobustnessTest, OutputLostOnAFullDiskIsAFailure) {
   }
 }
 
+TEST_F(RobustnessTest, AReaderThatStopsReadingIsNotAnError) {
+  // `overtake config | head -1`: the output is cut on purpose; no message, exit status 1.
+  // With SIGPIPE at its default the process just ends by it; with SIGPIPE ignored (inherited
+  // from a parent that ignores it, as this test's process does now) the write fails with
+  // EPIPE, which must not be reported as lost output.
+  int fds[2];
+  ASSERT_EQ(::pipe(fds), 0);
+  ::close(fds[0]);  // the reader has gone before anything is written
+  const fs::path err = dir_ / "err.txt";
+  const auto previous = std::signal(SIGPIPE, SIG_IGN);
+  const pid_t pid = test::start_overtake({"config"}, "", err, fds[1]);
+  std::signal(SIGPIPE, previous);
+  ::close(fds[1]);
+  const auto rc = test::exit_status(pid, std::chrono::seconds(60));
+  ASSERT_TRUE(rc.has_value());
+  EXPECT_EQ(*rc, 1);
+  EXPECT_EQ(read_file(err), "");
+}
+
 TEST_F(RobustnessTest, InterruptedDriveKeepsEverything) {
   // Ctrl-C or SIGTERM of a plain drive once left only a .partial replay.
   for (const int sig : {SIGINT, SIGTERM}) {

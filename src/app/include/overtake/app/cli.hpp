@@ -5,6 +5,8 @@
 #include <CLI/CLI.hpp>
 #include <filesystem>
 #include <functional>
+#include <stdexcept>
+#include <string>
 #include <vector>
 
 namespace overtake::app {
@@ -35,8 +37,16 @@ Subcommand register_calibrate(CLI::App& app);
 /// refused with the range, never wrapped or saturated.
 [[nodiscard]] const CLI::Validator& seed_validator();
 
+/// Standard output's reader has gone (EPIPE: `overtake config | head`). Not an error to
+/// report: the reader stopped reading on purpose; run_cli exits without a message.
+class OutputClosed : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
 /// Flushes standard output and throws std::runtime_error when anything written to it was lost
-/// (a full disk, a closed pipe): a command whose output did not arrive must not exit 0.
+/// (a full disk, an error of the device): a command whose output did not arrive must not exit
+/// 0. Throws OutputClosed when the reader of a pipe has gone.
 void flush_stdout_or_throw();
 
 /// True when `a` and `b` name the same file (after resolving . and .., symbolic links of
