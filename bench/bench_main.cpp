@@ -83,7 +83,7 @@ void BM_WalkthroughPlan(benchmark::State& state) {
   sim::World world(track.map, track.line, config.world, sim::TrafficProfile::faithful, 1);
   auto policy = planner::make_policy("walkthrough", track.line, config.planner);
   for (int i = 0; i < 500; ++i) {  // get up to speed so that the path is reused
-    world.apply_path(policy->plan(world.telemetry()));
+    world.apply_path(policy->plan(world.telemetry()).path);
     world.step();
     world.step();
   }

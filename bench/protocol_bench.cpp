@@ -105,7 +105,7 @@ void BM_ProtocolRoundTrip(benchmark::State& state) {
                      1);
     int k = 0;
     for (auto _ : state) {
-      world.apply_path(remote(world.telemetry()));
+      world.apply_path(remote(world.telemetry()).path);
       for (int i = 0; i <= k; ++i) world.step();
       k = (k + 1) % 3;
     }

@@ -53,7 +53,7 @@ const std::vector<core::Telemetry>& recording(sim::TrafficProfile profile) {
   const long steps = std::lround(kRecordedS / config().world.step_s);
   while (world.steps() < steps) {
     rec.push_back(world.telemetry());
-    world.apply_path(policy->plan(rec.back()));
+    world.apply_path(policy->plan(rec.back()).path);
     const int k = latency.uniform_int(config().world.min_steps_per_call, config().world.max_steps_per_call);
     for (int i = 0; i < k; ++i) world.step();
   }

@@ -70,7 +70,7 @@ std::vector<core::Vec2> SeedPolicyBase::path(const core::Telemetry& t,
 Seed000Policy::Seed000Policy(const core::ReferenceLine& line, const PlannerParams& params)
     : SeedPolicyBase(line, params), p_(params.seed000) {}
 
-std::vector<core::Vec2> Seed000Policy::plan(const core::Telemetry& t) {
+core::PlanResult Seed000Policy::plan(const core::Telemetry& t) {
   const auto cars = seen_cars(t, true);
   const auto n = static_cast<std::size_t>(lane_count());
   std::vector<double> gap_ahead(n, p_.no_car_gap_m), gap_behind(n, p_.no_car_gap_m), speed_ahead(n, 0.0);
@@ -121,7 +121,7 @@ std::vector<core::Vec2> Seed000Policy::plan(const core::Telemetry& t) {
   } else {
     speed_up(base_.speed_step_mps);
   }
-  return path(t);
+  return core::normal_plan(path(t));
 }
 
 // ---- seed001 --------------------------------------------------------------------------
@@ -129,7 +129,7 @@ std::vector<core::Vec2> Seed000Policy::plan(const core::Telemetry& t) {
 Seed001Policy::Seed001Policy(const core::ReferenceLine& line, const PlannerParams& params)
     : SeedPolicyBase(line, params), p_(params.seed001) {}
 
-std::vector<core::Vec2> Seed001Policy::plan(const core::Telemetry& t) {
+core::PlanResult Seed001Policy::plan(const core::Telemetry& t) {
   const auto cars = seen_cars(t, true);
   bool change_left = lane_ > 0;
   bool change_right = lane_ < lane_count() - 1;
@@ -153,7 +153,7 @@ std::vector<core::Vec2> Seed001Policy::plan(const core::Telemetry& t) {
   } else {
     speed_up(base_.speed_step_mps);
   }
-  return path(t);
+  return core::normal_plan(path(t));
 }
 
 // ---- seed002 --------------------------------------------------------------------------
@@ -161,7 +161,7 @@ std::vector<core::Vec2> Seed001Policy::plan(const core::Telemetry& t) {
 Seed002Policy::Seed002Policy(const core::ReferenceLine& line, const PlannerParams& params)
     : SeedPolicyBase(line, params), p_(params.seed002) {}
 
-std::vector<core::Vec2> Seed002Policy::plan(const core::Telemetry& t) {
+core::PlanResult Seed002Policy::plan(const core::Telemetry& t) {
   const auto cars = seen_cars(t, true);
   std::vector<bool> proximity(static_cast<std::size_t>(lane_count()), false);
   for (const SeenCar& c : cars) {
@@ -181,7 +181,7 @@ std::vector<core::Vec2> Seed002Policy::plan(const core::Telemetry& t) {
   } else {
     speed_up(base_.speed_step_mps);
   }
-  return path(t, base_.anchor_distances_m, p_.path_points);
+  return core::normal_plan(path(t, base_.anchor_distances_m, p_.path_points));
 }
 
 // ---- seed003 --------------------------------------------------------------------------
@@ -189,7 +189,7 @@ std::vector<core::Vec2> Seed002Policy::plan(const core::Telemetry& t) {
 Seed003Policy::Seed003Policy(const core::ReferenceLine& line, const PlannerParams& params)
     : SeedPolicyBase(line, params), p_(params.seed003) {}
 
-std::vector<core::Vec2> Seed003Policy::plan(const core::Telemetry& t) {
+core::PlanResult Seed003Policy::plan(const core::Telemetry& t) {
   const auto cars = seen_cars(t, true);
   bool safe_left = true;
   bool safe_right = true;
@@ -249,7 +249,7 @@ std::vector<core::Vec2> Seed003Policy::plan(const core::Telemetry& t) {
   } else if (ref_speed_mps_ < base_.target_speed_mps) {
     ref_speed_mps_ += allow_strong_acc_ ? p_.strong_speed_step_mps : base_.speed_step_mps;
   }
-  return path(t);
+  return core::normal_plan(path(t));
 }
 
 // ---- seed004 --------------------------------------------------------------------------
@@ -271,7 +271,7 @@ bool Seed004Policy::lane_free(const core::Telemetry& t, int lane, double my_s_m)
   return true;
 }
 
-std::vector<core::Vec2> Seed004Policy::plan(const core::Telemetry& t) {
+core::PlanResult Seed004Policy::plan(const core::Telemetry& t) {
   const auto cars = seen_cars(t, true);
   bool close = false;
   for (const SeenCar& c : cars) {
@@ -299,7 +299,7 @@ std::vector<core::Vec2> Seed004Policy::plan(const core::Telemetry& t) {
   if (lane_ != ego_lane && !anchors.empty()) {
     anchors.front() = std::max(anchors.front(), p_.change_first_anchor_m);
   }
-  return path(t, anchors, base_.path_points);
+  return core::normal_plan(path(t, anchors, base_.path_points));
 }
 
 }  // namespace overtake::planner

@@ -25,7 +25,7 @@ bool car_too_close(const core::Telemetry& t, const core::ReferenceLine& line, in
 WalkthroughPolicy::WalkthroughPolicy(const core::ReferenceLine& line, const PlannerParams& params)
     : line_(line), road_(params.road), p_(params.walkthrough), lane_(params.walkthrough.start_lane) {}
 
-std::vector<core::Vec2> WalkthroughPolicy::plan(const core::Telemetry& t) {
+core::PlanResult WalkthroughPolicy::plan(const core::Telemetry& t) {
   const std::size_t prev_size = t.previous_path.size();
   const double car_s = prev_size > 0 ? t.end_path.s_m : t.ego.s_m;
   const double ahead_time_s = static_cast<double>(prev_size) * p_.step_s;
@@ -44,7 +44,7 @@ std::vector<core::Vec2> WalkthroughPolicy::plan(const core::Telemetry& t) {
   spec.path_points = p_.path_points;
   spec.horizon_x_m = p_.horizon_x_m;
   spec.step_s = p_.step_s;
-  return spline_path(t, line_, spec);
+  return core::normal_plan(spline_path(t, line_, spec));
 }
 
 }  // namespace overtake::planner

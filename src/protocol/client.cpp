@@ -472,7 +472,7 @@ void RemotePlanner::take_unasked(const ReceivedFrame& f, bool after_run) {
   }
 }
 
-std::vector<core::Vec2> RemotePlanner::operator()(const core::Telemetry& telemetry) {
+core::PlanResult RemotePlanner::operator()(const core::Telemetry& telemetry) {
   const LogFn& log = log_of(options_);
   try {
     // Anything that came in since the last reply was not asked for.
@@ -515,9 +515,9 @@ std::vector<core::Vec2> RemotePlanner::operator()(const core::Telemetry& telemet
               "the planner answered a full telemetry with manual: the queued path is kept");
           manual_noted_ = true;
         }
-        return telemetry.previous_path;
+        return core::normal_plan(telemetry.previous_path);
       }
-      return std::move(reply).value().path;
+      return core::normal_plan(std::move(reply).value().path);
     }
   } catch (const ConnectionError& e) {
     throw sim::PlannerFailure(e.what());

@@ -113,7 +113,7 @@ FrameOutcome PlannerSession::handle_event(std::string_view text) {
   std::vector<core::Vec2> path;
   const auto t0 = std::chrono::steady_clock::now();
   try {
-    path = policy_->plan(telemetry);
+    path = policy_->plan(telemetry).path;
   } catch (const std::exception& e) {
     out.warning =
         std::string("the planner failed on this telemetry (") + e.what() + "); replied manual";

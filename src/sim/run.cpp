@@ -68,7 +68,7 @@ RunReport run_drive(World& world, const PlannerFn& planner, const RunOptions& op
     const double c0 = core::thread_cpu_us();
     const auto t0 = std::chrono::steady_clock::now();
     try {
-      path = planner(telemetry);
+      path = planner(telemetry).path;
     } catch (const std::exception& e) {
       ended_early = std::string("planner failed at t = ") +
                            std::to_string(world.time_s()) + " s: " + e.what();

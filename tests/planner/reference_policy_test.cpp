@@ -44,12 +44,12 @@ class PolicyTest : public ::testing::Test {
 TEST_F(PolicyTest, KeepsAShortPrefixAndKnowsWhereTheCarIs) {
   ReferencePolicy p(line_, params_);
   core::Telemetry t = test::ego_at(line_, 500.0, 6.0, 0.0);
-  std::vector<core::Vec2> path = p.plan(t);
+  std::vector<core::Vec2> path = p.plan(t).path;
   ASSERT_EQ(path.size(), static_cast<std::size_t>(params_.reference.trajectory.path_points));
   for (int cycle = 0; cycle < 200; ++cycle) {
     const std::size_t k = 1 + static_cast<std::size_t>(cycle % 3);
     t = after(t, path, k);
-    const std::vector<core::Vec2> next = p.plan(t);
+    const std::vector<core::Vec2> next = p.plan(t).path;
     ASSERT_TRUE(p.last_synced()) << cycle;
     const auto keep = static_cast<std::size_t>(params_.reference.trajectory.keep_points);
     for (std::size_t i = 0; i < keep; ++i) EXPECT_EQ(next[i], t.previous_path[i]);
@@ -63,14 +63,14 @@ TEST_F(PolicyTest, TheJointWithTheKeptPathIsSmooth) {
   // no spike beyond the limits (the strict figures' 0.1 s windows).
   ReferencePolicy p(line_, params_);
   core::Telemetry t = test::ego_at(line_, 500.0, 6.0, 0.0);
-  std::vector<core::Vec2> path = p.plan(t);
+  std::vector<core::Vec2> path = p.plan(t).path;
   std::vector<core::Vec2> driven;
   for (int cycle = 0; cycle < 600; ++cycle) {
     const std::size_t k = 1 + static_cast<std::size_t>((cycle * 7) % 3);
     const auto sent = core::round_like_wire(path);
     for (std::size_t i = 0; i < k; ++i) driven.push_back(sent[i]);
     t = after(t, path, k);
-    path = p.plan(t);
+    path = p.plan(t).path;
   }
   const int w = 5;
   const double h = 0.1;
@@ -87,19 +87,19 @@ TEST_F(PolicyTest, TheJointWithTheKeptPathIsSmooth) {
 TEST_F(PolicyTest, OddInputNeverThrowsAndAlwaysGivesAPath) {
   ReferencePolicy p(line_, params_);
   core::Telemetry empty;  // all zero: the ego at the map's origin, far off the road
-  EXPECT_NO_THROW({ EXPECT_FALSE(p.plan(empty).empty()); });
+  EXPECT_NO_THROW({ EXPECT_FALSE(p.plan(empty).path.empty()); });
   core::Telemetry off_road = test::ego_at(line_, 300.0, 30.0, 10.0);
-  EXPECT_NO_THROW({ EXPECT_FALSE(p.plan(off_road).empty()); });
+  EXPECT_NO_THROW({ EXPECT_FALSE(p.plan(off_road).path.empty()); });
   core::Telemetry junk = test::ego_at(line_, 300.0, 6.0, 10.0);
   junk.previous_path = {{1.0, 2.0}, {3.0, 4.0}, {5.0, 6.0}};  // not ours: it starts afresh
-  EXPECT_NO_THROW({ EXPECT_FALSE(p.plan(junk).empty()); });
+  EXPECT_NO_THROW({ EXPECT_FALSE(p.plan(junk).path.empty()); });
   EXPECT_FALSE(p.last_synced());
   core::Telemetry one = test::ego_at(line_, 300.0, 6.0, 10.0);
   one.previous_path = {one.ego.position};
-  EXPECT_NO_THROW({ EXPECT_FALSE(p.plan(one).empty()); });
+  EXPECT_NO_THROW({ EXPECT_FALSE(p.plan(one).path.empty()); });
   core::Telemetry crowded = test::ego_at(line_, 300.0, 6.0, 0.0);
   for (int i = 0; i < 12; ++i) crowded.cars.push_back(test::observed_car(line_, i, 300.0 + 5.0 * (i - 6), 2.0 + 4.0 * (i % 3), 0.0));
-  EXPECT_NO_THROW({ EXPECT_FALSE(p.plan(crowded).empty()); });
+  EXPECT_NO_THROW({ EXPECT_FALSE(p.plan(crowded).path.empty()); });
 }
 
 TEST_F(PolicyTest, DrivesAcrossTheLapWrapWithoutAJump) {

@@ -96,7 +96,7 @@ TEST_F(SeedPolicyTest, Seed002UsesProximity30AheadAnd5Behind) {
   t.cars = {car(0, 20.0, 1, 15.0), car(1, 25.0, 0, 20.0), car(2, -6.0, 2, 20.0)};
   (void)p.plan(t);
   EXPECT_EQ(p.lane(), 2);  // left has a car 25 m ahead; right's car is 6 m behind: free
-  const auto path = p.plan(ego(2, core::mph_to_mps(45.0)));
+  const auto path = p.plan(ego(2, core::mph_to_mps(45.0))).path;
   EXPECT_EQ(path.size(), 80u);
 }
 
@@ -151,7 +151,7 @@ TEST_F(SeedPolicyTest, Seed004TriesRightFirstWith20AheadAnd10Behind) {
   (void)p.plan(t);
   EXPECT_EQ(p.lane(), 2);
   // A lane change takes the first anchor 45 m ahead: the path still has 50 points.
-  EXPECT_EQ(p.plan(t).size(), 50u);
+  EXPECT_EQ(p.plan(t).path.size(), 50u);
 }
 
 TEST_F(SeedPolicyTest, Seed004LaneFreeRules) {

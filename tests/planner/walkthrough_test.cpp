@@ -69,12 +69,12 @@ TEST_F(WalkthroughTest, PathReusesTheQueueAndSpacesNewPointsForTheSpeed) {
   core::Telemetry t = at_speed(0.0);
   for (int i = 0; i < 200; ++i) (void)p.plan(t);
   const double v = p.ref_speed_mps();
-  auto path = p.plan(t);
+  auto path = p.plan(t).path;
   ASSERT_EQ(path.size(), 50u);
   // Hand back 40 of them as the queue: they come first, unchanged.
   t.previous_path.assign(path.begin() + 10, path.end());
   t.end_path = line_.to_frenet(t.previous_path.back());
-  const auto next = p.plan(t);
+  const auto next = p.plan(t).path;
   ASSERT_EQ(next.size(), 50u);
   for (std::size_t i = 0; i < 40; ++i) EXPECT_EQ(next[i], t.previous_path[i]);
   for (std::size_t i = 40; i < 50; ++i) {

@@ -36,7 +36,7 @@ FakeBehaviour walkthrough_planner(
     if (!is_event(message)) return FakeAction{};  // e.g. our answer to its ping
     std::string good(kManual);
     const auto t = parse_telemetry(message);
-    if (t.ok() && t.value()) good = format_control(policy->plan(*t.value()));
+    if (t.ok() && t.value()) good = format_control(policy->plan(*t.value()).path);
     if (misbehave) {
       if (auto a = misbehave(index, good)) return *a;
     }

@@ -105,7 +105,7 @@ TEST_F(SimSignal, CtrlCStopsTheWaitForAStalledPlanner) {
     static const auto policy =
         planner::make_policy("walkthrough", track->line, app::default_config().planner);
     return FakeAction{
-        {t.ok() && t.value() ? format_control(policy->plan(*t.value())) : std::string(kManual)}};
+        {t.ok() && t.value() ? format_control(policy->plan(*t.value()).path) : std::string(kManual)}};
   });
   stop_with(SIGINT, planner.url(), [&got] { return got.load() > 50; }, {"--reply-timeout", "600"});
 }

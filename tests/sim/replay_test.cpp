@@ -130,7 +130,7 @@ class ReplayTest : public ::testing::Test {
       for (int i = 1; i <= 50; ++i) {
         path.push_back(line_.to_cartesian({t.ego.s_m + kCruiseMps * params_.step_s * i, kLaneD}));
       }
-      return path;
+      return core::normal_plan(std::move(path));
     };
   }
 

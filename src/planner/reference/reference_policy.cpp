@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <string>
 
 namespace overtake::planner::reference {
 namespace {
@@ -27,6 +29,27 @@ double wire_speed_error_mps(const core::ReferenceLine& line, double step_s) {
 
 }  // namespace
 
+core::PlanStatus to_core(PlanStatus s) {
+  switch (s) {
+    case PlanStatus::feasible: return core::PlanStatus::normal;
+    case PlanStatus::least_bad: return core::PlanStatus::least_bad;
+    case PlanStatus::fallback: return core::PlanStatus::fallback;
+  }
+  return core::PlanStatus::fallback;
+}
+
+std::string status_reason(const TrajectoryPlan& plan) {
+  if (plan.status == PlanStatus::feasible) return {};
+  std::string why = "none of " + std::to_string(plan.candidates) + " candidates passed its checks";
+  if (plan.blocking_car >= 0) {
+    char at[32];
+    std::snprintf(at, sizeof at, "%.1f", plan.blocking_time_s);
+    why += " (the cheapest meets car " + std::to_string(plan.blocking_car) + " at " + at + " s)";
+  }
+  return why + (plan.status == PlanStatus::least_bad ? ": the one that collides latest"
+                                                     : ": braking in the lane");
+}
+
 ReferencePolicy::ReferencePolicy(const core::ReferenceLine& line, const PlannerParams& params)
     : line_(line),
       smooth_line_(std::make_shared<const core::ReferenceLine>(line.map(), params.reference.line_smoothing_m3)),
@@ -41,7 +64,7 @@ FrenetState ReferencePolicy::observed_state(const core::Telemetry& t) const {
   return frenet_from_cartesian(frame_, t.ego.position, v, t.ego.s_m);
 }
 
-std::vector<core::Vec2> ReferencePolicy::plan(const core::Telemetry& t) {
+core::PlanResult ReferencePolicy::plan(const core::Telemetry& t) {
   const auto& tp = p_.trajectory;
   const double dt = tp.step_s;
 
@@ -152,7 +175,7 @@ std::vector<core::Vec2> ReferencePolicy::plan(const core::Telemetry& t) {
   states_ = std::move(states);
   origin_ = car;
   have_plan_ = true;
-  return points;
+  return {std::move(points), to_core(chosen.status), status_reason(chosen)};
 }
 
 }  // namespace overtake::planner::reference

@@ -7,6 +7,7 @@
 #include <string_view>
 #include <vector>
 
+#include "overtake/core/plan.hpp"
 #include "overtake/core/reference_line.hpp"
 #include "overtake/core/telemetry.hpp"
 #include "overtake/planner/params.hpp"
@@ -18,8 +19,8 @@ namespace overtake::planner {
 class Policy {
  public:
   virtual ~Policy() = default;
-  /// The path for this cycle, in map axes, in driving order.
-  [[nodiscard]] virtual std::vector<core::Vec2> plan(const core::Telemetry& telemetry) = 0;
+  /// The path for this cycle (in map axes, in driving order) and how it was found.
+  [[nodiscard]] virtual core::PlanResult plan(const core::Telemetry& telemetry) = 0;
 };
 
 /// A policy's name and one-line description.

@@ -64,7 +64,7 @@ class SeedPolicyBase : public Policy {
 class Seed000Policy final : public SeedPolicyBase {
  public:
   Seed000Policy(const core::ReferenceLine& line, const PlannerParams& params);
-  [[nodiscard]] std::vector<core::Vec2> plan(const core::Telemetry& t) override;
+  [[nodiscard]] core::PlanResult plan(const core::Telemetry& t) override;
 
  private:
   Seed000Params p_;
@@ -76,7 +76,7 @@ class Seed000Policy final : public SeedPolicyBase {
 class Seed001Policy final : public SeedPolicyBase {
  public:
   Seed001Policy(const core::ReferenceLine& line, const PlannerParams& params);
-  [[nodiscard]] std::vector<core::Vec2> plan(const core::Telemetry& t) override;
+  [[nodiscard]] core::PlanResult plan(const core::Telemetry& t) override;
   [[nodiscard]] int patience() const { return too_longer_; }
 
  private:
@@ -91,7 +91,7 @@ class Seed001Policy final : public SeedPolicyBase {
 class Seed002Policy final : public SeedPolicyBase {
  public:
   Seed002Policy(const core::ReferenceLine& line, const PlannerParams& params);
-  [[nodiscard]] std::vector<core::Vec2> plan(const core::Telemetry& t) override;
+  [[nodiscard]] core::PlanResult plan(const core::Telemetry& t) override;
 
  private:
   Seed002Params p_;
@@ -106,7 +106,7 @@ class Seed002Policy final : public SeedPolicyBase {
 class Seed003Policy final : public SeedPolicyBase {
  public:
   Seed003Policy(const core::ReferenceLine& line, const PlannerParams& params);
-  [[nodiscard]] std::vector<core::Vec2> plan(const core::Telemetry& t) override;
+  [[nodiscard]] core::PlanResult plan(const core::Telemetry& t) override;
   [[nodiscard]] bool strong_acceleration() const { return allow_strong_acc_; }
 
  private:
@@ -123,7 +123,7 @@ class Seed003Policy final : public SeedPolicyBase {
 class Seed004Policy final : public SeedPolicyBase {
  public:
   Seed004Policy(const core::ReferenceLine& line, const PlannerParams& params);
-  [[nodiscard]] std::vector<core::Vec2> plan(const core::Telemetry& t) override;
+  [[nodiscard]] core::PlanResult plan(const core::Telemetry& t) override;
   /// The write-up's isLaneFree, on raw (unprojected) sensor s.
   [[nodiscard]] bool lane_free(const core::Telemetry& t, int lane, double my_s_m) const;
 

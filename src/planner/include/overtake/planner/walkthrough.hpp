@@ -20,7 +20,7 @@ namespace overtake::planner {
 class WalkthroughPolicy final : public Policy {
  public:
   WalkthroughPolicy(const core::ReferenceLine& line, const PlannerParams& params);
-  [[nodiscard]] std::vector<core::Vec2> plan(const core::Telemetry& telemetry) override;
+  [[nodiscard]] core::PlanResult plan(const core::Telemetry& telemetry) override;
   [[nodiscard]] double ref_speed_mps() const { return ref_speed_mps_; }
   [[nodiscard]] int lane() const { return lane_; }
 

@@ -121,7 +121,7 @@ class PlannerConnection {
 class RemotePlanner {
  public:
   RemotePlanner(PlannerConnection& connection, const ClientOptions& options);
-  [[nodiscard]] std::vector<core::Vec2> operator()(const core::Telemetry& telemetry);
+  [[nodiscard]] core::PlanResult operator()(const core::Telemetry& telemetry);
   /// After a run that went its full length: waits for the pong of the last telemetry's ping
   /// and then a little longer (twice the longest round trip, at least 0.1 s, at most the
   /// reply timeout) for any reply still on its way. Returns why the run is out of step, or

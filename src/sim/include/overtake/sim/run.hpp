@@ -13,6 +13,7 @@
 
 #include "overtake/core/quantile_sketch.hpp"
 
+#include "overtake/core/plan.hpp"
 #include "overtake/core/telemetry.hpp"
 #include "overtake/sim/referee.hpp"
 #include "overtake/sim/world.hpp"
@@ -22,7 +23,7 @@ namespace overtake::sim {
 /// A planner as the loop sees it: telemetry in, path points out. It may throw
 /// PlannerFailure to end the run (e.g. a remote planner that stalled); the report so far is
 /// kept.
-using PlannerFn = std::function<std::vector<core::Vec2>(const core::Telemetry&)>;
+using PlannerFn = std::function<core::PlanResult(const core::Telemetry&)>;
 
 /// Raised by a PlannerFn that cannot go on.
 struct PlannerFailure : std::runtime_error {

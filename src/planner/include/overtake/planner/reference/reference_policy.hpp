@@ -7,6 +7,7 @@
 // the latency.
 
 #include <memory>
+#include <string>
 #include <vector>
 
 #include "overtake/core/reference_line.hpp"
@@ -20,11 +21,16 @@
 
 namespace overtake::planner::reference {
 
+/// The core status of a trajectory plan's status (feasible is normal).
+[[nodiscard]] core::PlanStatus to_core(PlanStatus status);
+/// Why a plan is not feasible, in a few words (empty when it is).
+[[nodiscard]] std::string status_reason(const TrajectoryPlan& plan);
+
 /// The reference policy ("reference").
 class ReferencePolicy final : public Policy {
  public:
   ReferencePolicy(const core::ReferenceLine& line, const PlannerParams& params);
-  [[nodiscard]] std::vector<core::Vec2> plan(const core::Telemetry& telemetry) override;
+  [[nodiscard]] core::PlanResult plan(const core::Telemetry& telemetry) override;
 
   /// The last cycle's behaviour decision (for tests and tools).
   [[nodiscard]] const BehaviourDecision& last_decision() const { return decision_; }

@@ -1,0 +1,54 @@
+#pragma once
+// What a planner answers for one cycle: the path, and how it was found. A plain struct in
+// core, so that the run loop (sim) counts statuses without knowing any planner.
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <string_view>
+#include <utility>
+#include <vector>
+
+#include "overtake/core/geometry.hpp"
+
+namespace overtake::core {
+
+/// How a planner found this cycle's path.
+enum class PlanStatus : std::uint8_t {
+  normal,     ///< planned as it meant to (every check passed, or the policy has no checks)
+  least_bad,  ///< nothing passed its checks: the least bad candidate
+  fallback,   ///< nothing usable: an emergency manoeuvre (e.g. braking in the lane)
+};
+inline constexpr std::size_t kPlanStatusCount = 3;
+
+/// "normal", "least_bad", "fallback" (the report's keys).
+[[nodiscard]] constexpr std::string_view to_string(PlanStatus s) {
+  switch (s) {
+    case PlanStatus::normal: return "normal";
+    case PlanStatus::least_bad: return "least_bad";
+    case PlanStatus::fallback: return "fallback";
+  }
+  return "unknown";
+}
+
+/// Cycles per status, indexed by PlanStatus.
+using PlanStatusCounts = std::array<long, kPlanStatusCount>;
+
+/// One cycle's answer.
+struct PlanResult {
+  std::vector<Vec2> path;  ///< in map axes, in driving order
+  PlanStatus status = PlanStatus::normal;
+  /// Why the status is not normal (empty when it is): e.g. "every candidate collides; car 7
+  /// at 1.2 s".
+  std::string reason;
+};
+
+/// A path planned as meant (status normal).
+[[nodiscard]] inline PlanResult normal_plan(std::vector<Vec2> path) {
+  PlanResult r;
+  r.path = std::move(path);
+  return r;
+}
+
+}  // namespace overtake::core
