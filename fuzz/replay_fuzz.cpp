@@ -1,20 +1,20 @@
-// Replay files (.otr): sim::check_replay, which `overtake view` runs on the file it is given
-// and which reports every fault in its result, never by throwing; and sim::parse_replay, the
-// reader that keeps the records, which refuses a bad file with sim::ReplayError. Anything else
+// Replay files (.otr): replay::check_replay, which `overtake view` runs on the file it is given
+// and which reports every fault in its result, never by throwing; and replay::parse_replay, the
+// reader that keeps the records, which refuses a bad file with replay::ReplayError. Anything else
 // (another exception, a sanitizer report, a hang) is a finding.
 
 #include <cstddef>
 #include <cstdint>
 #include <string_view>
 
-#include "overtake/sim/replay.hpp"
+#include "overtake/replay/replay.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   const std::string_view bytes(reinterpret_cast<const char*>(data), size);
-  (void)overtake::sim::check_replay(bytes, "fuzz.otr");
+  (void)overtake::replay::check_replay(bytes, "fuzz.otr");
   try {
-    (void)overtake::sim::parse_replay(bytes, "fuzz.otr");
-  } catch (const overtake::sim::ReplayError&) {
+    (void)overtake::replay::parse_replay(bytes, "fuzz.otr");
+  } catch (const overtake::replay::ReplayError&) {
   }
   return 0;
 }

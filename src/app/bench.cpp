@@ -223,7 +223,7 @@ std::vector<std::filesystem::path> record_worst(const BenchSpec& spec, std::vect
       o.record = file;
       try {
         const DriveResult r = drive_on(track, config, o, {}, stop);
-        if (r.report.ended_early == "stopped") {  // interrupted: not the bench's run
+        if (r.report.outcome.end == sim::RunEnd::stopped) {  // interrupted: not the bench's run
           std::filesystem::remove(file, ec);
           continue;
         }
@@ -423,7 +423,7 @@ BenchOutcome run_bench(const BenchSpec& spec, const std::atomic<bool>* stop,
         local_stop = true;
         return;
       }
-      if (r.report.ended_early == "stopped") return;  // interrupted: not a finished run
+      if (r.report.outcome.end == sim::RunEnd::stopped) return;  // interrupted: not a finished run
       json line = report_to_json(r.report, r.provenance);
       line["index"] = c.index;
       line["provenance"] = {{"git_revision", git}, {"host", host}};

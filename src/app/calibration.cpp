@@ -278,7 +278,7 @@ TrafficFigures calibrate(const CalibrateOptions& opts) {
         obs.begin_run();
         const DriveResult r = drive_on(*track, config, o);
         obs.end_run(r.report.distance_m, r.report.duration_s);
-        if (!r.report.ended_early.empty()) throw std::runtime_error(r.report.ended_early);
+        if (r.report.outcome.ended_early()) throw std::runtime_error(sim::ended_early_text(r.report.outcome));
       } catch (const std::exception& e) {
         const std::lock_guard<std::mutex> lock(failure_mutex);
         if (failure.empty()) failure = "seed " + std::to_string(opts.seeds[k]) + ": " + e.what();

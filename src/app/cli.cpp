@@ -38,38 +38,17 @@ int cmd_drive(DriveOptions opts, const std::optional<std::filesystem::path>& jso
   // Ctrl-C or SIGTERM stops the run at the next step, keeping everything: the scorecard, the
   // JSON and the replay, marked ended early (exit 130). A live run goes at real time, and
   // afterwards a second Ctrl-C stops serving the page.
-  std::optional<InterruptScope> interrupt;
-  interrupt.emplace();
-  if (opts.live) {
-    opts.live->on_listening = [](const std::string& url) {
-      std::fprintf(stderr, "live view at %s (the run goes at real time; Ctrl-C stops it)\n", url.c_str());
-    };
-  }
+  const InterruptScope interrupt;
+  if (opts.live) opts.live->on_listening = print_live_address;
   const auto wall0 = std::chrono::steady_clock::now();
   const DriveResult result =
-      drive(opts, [&](double t, double dist) { progress.update(t, dist); },
-            interrupt ? &InterruptScope::flag() : nullptr);
-  const double wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
+      drive(opts, [&](double t, double dist) { progress.update(t, dist); }, &InterruptScope::flag());
+  RunOutputs out;
+  out.json = json_out;
+  out.quiet = quiet;
+  out.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
   progress.clear();
-  std::cout << format_scorecard(result.report, result.provenance);
-  if (!quiet) {
-    std::printf("  wall time          %.2f s (%.0fx real time)\n", wall_s,
-                wall_s > 0 ? result.report.duration_s / wall_s : 0.0);
-  }
-  std::cout.flush();
-  if (json_out) {
-    write_file_atomic(*json_out, report_to_json(result.report, result.provenance).dump(2) + "\n");
-    if (!quiet) std::cout << "  report written to " << json_out->string() << "\n";
-  }
-  if (opts.record && !quiet) std::cout << "  replay written to " << opts.record->string() << "\n";
-  flush_stdout_or_throw();  // now: a live view may keep the process up until Ctrl-C
-  if (result.report.ended_early == "stopped") return kExitInterrupted;
-  if (result.live) {
-    std::fprintf(stderr, "the run is over; the live view stays at %s until Ctrl-C\n",
-                 result.live->url().c_str());
-    while (!InterruptScope::flag().load()) std::this_thread::sleep_for(std::chrono::milliseconds(100));
-  }
-  return result.report.ended_early.empty() ? 0 : kExitFailure;
+  return finish_run(result, opts, out);
 }
 
 /// A track spec's error in the command line's words: its fields by their flags.
@@ -125,6 +104,37 @@ int cmd_track(const core::TrackSpec& spec, const std::optional<std::filesystem::
 }  // namespace
 
 bool stderr_is_terminal() { return ::isatty(STDERR_FILENO) != 0; }
+
+void print_live_address(const std::string& url) {
+  std::fprintf(stderr, "live view at %s (the run goes at real time; Ctrl-C stops it)\n", url.c_str());
+}
+
+int finish_run(const DriveResult& result, const DriveOptions& opts, const RunOutputs& out) {
+  std::cout << format_scorecard(result.report, result.provenance);
+  if (!out.quiet) {
+    std::printf("  wall time          %.2f s (%.1fx real time%s%s)\n", out.wall_s,
+                out.wall_s > 0 ? result.report.duration_s / out.wall_s : 0.0,
+                out.mode.empty() ? "" : ", ", out.mode.c_str());
+  }
+  std::cout.flush();
+  if (out.json) {
+    write_file_atomic(*out.json, report_to_json(result.report, result.provenance).dump(2) + "\n");
+    if (!out.quiet) std::cout << "  report written to " << out.json->string() << "\n";
+  }
+  if (opts.record && !out.quiet) std::cout << "  replay written to " << opts.record->string() << "\n";
+  flush_stdout_or_throw();  // now: a live view may keep the process up until Ctrl-C
+  switch (result.report.outcome.end) {
+    case sim::RunEnd::stopped: return kExitInterrupted;
+    case sim::RunEnd::planner_failed: return kExitFailure;
+    case sim::RunEnd::completed: break;
+  }
+  if (result.live) {
+    std::fprintf(stderr, "the run is over; the live view stays at %s until Ctrl-C\n",
+                 result.live->url().c_str());
+    while (!InterruptScope::flag().load()) std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  }
+  return kExitOk;
+}
 
 const CLI::Validator& seed_validator() {
   static const CLI::Validator v(

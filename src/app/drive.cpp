@@ -40,7 +40,7 @@ void validate_drive_options(const DriveOptions& opts) {
   const auto policies = planner::list_policies();
   const bool known = std::any_of(policies.begin(), policies.end(),
                                  [&](const planner::PolicyInfo& p) { return p.name == opts.policy; });
-  if (!known) {
+  if (!known && !opts.external) {
     throw UsageError("--policy: unknown policy '" + opts.policy + "' (available: " + policy_list() + ")");
   }
   if (opts.live && (opts.live->port < 0 || opts.live->port > 65535)) {
@@ -61,29 +61,19 @@ std::shared_ptr<const Track> load_track(const std::optional<std::filesystem::pat
   return std::make_shared<const Track>(Track{std::move(map), std::move(line)});
 }
 
-DriveResult drive_on(const Track& track, const Config& config, const DriveOptions& opts,
-                     const std::function<void(double, double)>& progress,
-                     const std::atomic<bool>* stop, const sim::Scenario* scenario) {
-  validate_drive_options(opts);
-  const auto profile = sim::parse_traffic_profile(opts.traffic);
-  auto policy = planner::make_policy(opts.policy, track.line, config.planner);
+namespace {
 
-  auto world_ptr = scenario ? std::make_unique<sim::World>(track.map, track.line, config.world, *scenario)
-                            : std::make_unique<sim::World>(track.map, track.line, config.world, *profile,
-                                                           opts.seed);
-  sim::World& world = *world_ptr;
-  sim::RunOptions run;
-  run.duration_s = opts.minutes * 60.0;
-  if (opts.steps_per_call > 0) run.steps_per_call = opts.steps_per_call;
-  run.seed = opts.seed;
-  run.progress = progress;
-  run.stop = stop;
-  planner::Policy& pol = *policy;
-  DriveResult result;
-
-  RunProvenance& p = result.provenance;
+RunProvenance provenance_of(const Track& track, const Config& config, const DriveOptions& opts,
+                            const std::optional<sim::TrafficProfile>& profile,
+                            const sim::Scenario* scenario) {
+  RunProvenance p;
   p.seed = opts.seed;
-  p.policy = opts.policy;
+  if (opts.external) {
+    p.planner_url = opts.external->address;
+    p.policy = opts.external->name.empty() ? opts.external->address : opts.external->name;
+  } else {
+    p.policy = opts.policy;
+  }
   p.traffic = scenario ? "scripted" : std::string(sim::to_string(*profile));
   if (scenario) p.scenario = scenario->name.empty() ? "unnamed scenario" : scenario->name;
   p.map_path = track.map.source;
@@ -93,26 +83,57 @@ DriveResult drive_on(const Track& track, const Config& config, const DriveOption
   p.min_steps_per_call = config.world.min_steps_per_call;
   p.max_steps_per_call = config.world.max_steps_per_call;
   p.minutes = opts.minutes;
+  return p;
+}
+
+}  // namespace
+
+DriveResult drive_on(const Track& track, const Config& config, const DriveOptions& opts,
+                     const std::function<void(double, double)>& progress,
+                     const std::atomic<bool>* stop, const sim::Scenario* scenario) {
+  validate_drive_options(opts);
+  const auto profile = sim::parse_traffic_profile(opts.traffic);
+  auto world_ptr = scenario ? std::make_unique<sim::World>(track.map, track.line, config.world, *scenario)
+                            : std::make_unique<sim::World>(track.map, track.line, config.world, *profile,
+                                                           opts.seed);
+  sim::World& world = *world_ptr;
+  DriveResult result;
+  result.provenance = provenance_of(track, config, opts, profile, scenario);
+  const RunProvenance& p = result.provenance;
+
+  sim::RunOptions run;
+  run.duration_s = opts.minutes * 60.0;
+  if (opts.steps_per_call > 0) run.steps_per_call = opts.steps_per_call;
+  run.seed = opts.seed;
+  run.progress = progress;
+  run.stop = stop;
+  // A live view is watched at real time.
+  if (opts.live) run.pace = sim::Pace::real_time;
 
   // Recording and the live view watch the run; without them it has no observer.
-  std::unique_ptr<sim::ReplayWriter> writer;
+  std::unique_ptr<replay::ReplayWriter> writer;
   if (opts.record || opts.live) {
-    const sim::ReplayHeader header = replay_header_for(track, config, p, run.duration_s);
-    if (opts.live) result.live = start_live_view(header, *opts.live, true);
+    const replay::ReplayHeader header = replay_header_for(track, config, p, run.duration_s);
+    if (opts.live) result.live = start_live_view(header, *opts.live);
     // Last: a failure above (a port in use) leaves no replay file behind.
-    if (opts.record) writer = std::make_unique<sim::ReplayWriter>(*opts.record, header);
+    if (opts.record) writer = std::make_unique<replay::ReplayWriter>(*opts.record, header);
   }
   sim::ObserverList observers({writer.get(), result.live ? &result.live->observer() : nullptr});
   run.observer = observers.get();
 
-  const auto& tap = opts.telemetry_tap;
-  result.report = sim::run_drive(
-      world,
-      [&pol, &tap, &world](const core::Telemetry& t) {
-        if (tap) tap(world.time_s(), t);
-        return pol.plan(t);
-      },
-      run);
+  if (opts.external) {
+    result.report = opts.external->loop(world, run);
+  } else {
+    auto policy = planner::make_policy(opts.policy, track.line, config.planner);
+    const auto& tap = opts.telemetry_tap;
+    result.report = sim::run_drive(
+        world,
+        [&policy, &tap, &world](const core::Telemetry& t) {
+          if (tap) tap(world.time_s(), t);
+          return policy->plan(t);
+        },
+        run);
+  }
 
   if (writer || result.live) {
     const std::string end = replay_report_json(result.report, p);

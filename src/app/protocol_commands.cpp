@@ -30,7 +30,6 @@
 namespace overtake::app {
 namespace {
 
-constexpr double kMaxMinutes = 7.0 * 24.0 * 60.0;
 constexpr std::size_t kMinFrameBytes = 1024;
 
 std::string policy_names() {
@@ -64,7 +63,7 @@ struct ServeArgs {
   std::string host = "127.0.0.1";
   int port = 4567;
   std::string map, config;
-  std::string policy = "walkthrough";
+  std::string policy = "reference";
   std::size_t max_frame_bytes = std::size_t{1} << 20;
   std::size_t max_path_points = protocol::Limits{}.max_path_points;
   bool quiet = false;
@@ -137,22 +136,19 @@ std::chrono::milliseconds checked_timeout(double seconds, const char* flag) {
 int cmd_sim(const SimArgs& a) {
   const auto url = protocol::parse_planner_url(a.planner);
   if (!url) throw UsageError("--planner: " + url.error());
-  if (!(a.minutes > 0.0) || a.minutes > kMaxMinutes || !std::isfinite(a.minutes)) {
-    throw UsageError("--minutes must be more than 0 and at most " + std::to_string(kMaxMinutes));
-  }
-  if (a.steps_per_call < 0 || a.steps_per_call > 1000) {
-    throw UsageError("--steps-per-call must be between 1 and 1000 (got " +
-                     std::to_string(a.steps_per_call) + ")");
-  }
   if (a.realtime && a.steps_per_call > 0) {
     throw UsageError("--steps-per-call applies to lock-step runs only, not with --realtime");
   }
-  if (a.live && (a.live_view.port < 0 || a.live_view.port > 65535)) {
-    throw UsageError("--port must be between 0 and 65535 (got " + std::to_string(a.live_view.port) + ")");
+  DriveOptions opts;
+  opts.minutes = a.minutes;
+  opts.seed = a.seed;
+  opts.traffic = a.traffic;
+  opts.steps_per_call = a.steps_per_call;
+  if (!a.record.empty()) opts.record = a.record;
+  if (a.live) {
+    opts.live = a.live_view;
+    opts.live->on_listening = print_live_address;
   }
-  const auto profile = sim::parse_traffic_profile(a.traffic);
-  if (!profile)
-    throw UsageError("--traffic: unknown profile '" + a.traffic + "' (available: faithful, calm)");
   protocol::ClientOptions client;
   client.connect_timeout = checked_timeout(a.connect_timeout_s, "--connect-timeout");
   client.reply_timeout = checked_timeout(a.reply_timeout_s, "--reply-timeout");
@@ -161,97 +157,43 @@ int cmd_sim(const SimArgs& a) {
   client.limits.max_path_points = a.max_path_points;
   client.log = protocol::stderr_log(!a.quiet);
 
+  // The planner, reached over the protocol: the rest is `drive` (the same world, recording,
+  // live view, report), so that a lock-step run over the wire and an in-process drive with
+  // the same planner give the same report.
+  std::optional<protocol::PlannerConnection> connection;
+  ExternalPlanner remote;
+  remote.address = protocol::to_string(url.value());
+  remote.name = a.name;
+  remote.loop = [&](sim::World& world, const sim::RunOptions& run) {
+    return a.realtime ? protocol::run_realtime(world, *connection, client, run)
+                      : protocol::run_lock_step(world, *connection, client, run);
+  };
+  opts.external = std::move(remote);
+  validate_drive_options(opts);  // before connecting: a bad flag needs no planner
+
   const Config config = load_config(optional_path(a.config));
   const auto track = load_track(optional_path(a.map));
-
-  // The world exactly as drive_on builds it, so that a lock-step run over the wire and an
-  // in-process drive with the same planner give the same report.
-  sim::World world(track->map, track->line, config.world, *profile, a.seed);
-  sim::RunOptions run;
-  run.duration_s = a.minutes * 60.0;
-  if (a.steps_per_call > 0) run.steps_per_call = a.steps_per_call;
-  run.seed = a.seed;
-  ProgressLine progress(!a.quiet, run.duration_s);
-  run.progress = [&progress](double t, double d) { progress.update(t, d); };
-
-  RunProvenance p;
-  p.seed = a.seed;
-  p.planner_url = protocol::to_string(url.value());
-  p.policy = a.name.empty() ? p.planner_url : a.name;
-  p.traffic = std::string(sim::to_string(*profile));
-  p.map_path = track->map.source;
-  p.map_hash = core::hex64(track->map.content_hash);
-  p.params_hash = config_hash(config);
-  p.steps_per_call = a.steps_per_call;
-  p.min_steps_per_call = config.world.min_steps_per_call;
-  p.max_steps_per_call = config.world.max_steps_per_call;
-  p.minutes = a.minutes;
-
-  protocol::PlannerConnection connection(url.value(), client);
-  if (!a.quiet) std::fprintf(stderr, "connected to %s\n", protocol::to_string(url.value()).c_str());
+  connection.emplace(url.value(), client);
+  if (!a.quiet) std::fprintf(stderr, "connected to %s\n", opts.external->address.c_str());
   // From here on Ctrl-C or SIGTERM stop the run at the next step (or a wait for the planner
   // at once), and the report so far is printed and written as for any early end. (While
   // connecting there is nothing to keep: the signal ends the process.)
   const InterruptScope interrupt;
-  run.stop = &InterruptScope::flag();
   client.stop = &InterruptScope::flag();
-  // Recording and the live view (which holds a lock-step run to real time), once the
-  // planner is there.
-  std::unique_ptr<sim::ReplayWriter> writer;
-  std::shared_ptr<view::LiveView> live;
-  if (!a.record.empty() || a.live) {
-    const sim::ReplayHeader header = replay_header_for(*track, config, p, run.duration_s);
-    if (a.live) {
-      LiveOptions lo = a.live_view;
-      lo.on_listening = [](const std::string& url_text) {
-        std::fprintf(stderr, "live view at %s (the run goes at real time; Ctrl-C stops it)\n",
-                     url_text.c_str());
-      };
-      live = start_live_view(header, lo, !a.realtime);
-    }
-    // Last: a failure above (a port in use) leaves no replay file behind.
-    if (!a.record.empty()) writer = std::make_unique<sim::ReplayWriter>(a.record, header);
-  }
-  sim::ObserverList observers({writer.get(), live ? &live->observer() : nullptr});
-  run.observer = observers.get();
 
+  ProgressLine progress(!a.quiet, a.minutes * 60.0);
   const auto wall0 = std::chrono::steady_clock::now();
-  sim::RunReport report;
-  if (a.realtime) {
-    report = protocol::run_realtime(world, connection, client, run);
-  } else {
-    report = protocol::run_lock_step(world, connection, client, run);
-  }
-  connection.close();
-  const double wall_s =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
+  const DriveResult result = drive_on(
+      *track, config, opts, [&progress](double t, double d) { progress.update(t, d); },
+      &InterruptScope::flag());
+  connection->close();
+  RunOutputs out;
+  if (!a.json.empty()) out.json = std::filesystem::path(a.json);
+  out.quiet = a.quiet;
+  out.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
+  out.mode = a.realtime ? "real time over the protocol" : "lock-step over the protocol";
   progress.clear();
-  if (writer || live) {
-    const std::string end = replay_report_json(report, p);
-    if (live) live->finish(end);
-    if (writer) writer->finish(end);
-  }
-
-  std::cout << format_scorecard(report, p);
-  if (!a.quiet) {
-    std::printf("  wall time          %.2f s (%.1fx real time, %s)\n", wall_s,
-                wall_s > 0 ? report.duration_s / wall_s : 0.0,
-                a.realtime ? "real time" : "lock-step");
-  }
-  std::cout.flush();
-  if (!a.json.empty()) {
-    write_file_atomic(a.json, report_to_json(report, p).dump(2) + "\n");
-    if (!a.quiet) std::cout << "  report written to " << a.json << "\n";
-  }
-  if (writer && !a.quiet) std::cout << "  replay written to " << a.record << "\n";
-  std::cout.flush();
-  if (report.ended_early == "stopped") return kExitInterrupted;
-  if (live) {
-    std::fprintf(stderr, "the run is over; the live view stays at %s until Ctrl-C\n",
-                 live->url().c_str());
-    while (!InterruptScope::flag().load()) std::this_thread::sleep_for(std::chrono::milliseconds(100));
-  }
-  return report.ended_early.empty() ? kExitOk : kExitFailure;
+  return finish_run(result, opts, out);
 }
 
 }  // namespace

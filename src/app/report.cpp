@@ -30,6 +30,15 @@ std::string steps_text(const RunProvenance& p) {
   return "random " + std::to_string(p.min_steps_per_call) + "-" + std::to_string(p.max_steps_per_call);
 }
 
+json plan_status_json(const sim::RunReport& r) {
+  json cycles = json::object();
+  for (std::size_t i = 0; i < core::kPlanStatusCount; ++i) {
+    cycles[std::string(core::to_string(static_cast<core::PlanStatus>(i)))] = r.plan_status_cycles[i];
+  }
+  return {{"cycles", cycles},
+          {"first_reason", r.first_plan_reason.empty() ? json(nullptr) : json(r.first_plan_reason)}};
+}
+
 std::string printf_string(const char* format, auto... args) {
   char buf[512];
   std::snprintf(buf, sizeof buf, format, args...);
@@ -68,8 +77,11 @@ json report_to_json(const sim::RunReport& r, const RunProvenance& p) {
   j["lane_changes"] = r.lane_changes;
   j["time_in_lane_s"] = r.time_in_lane_s;
   j["planner_cycles"] = r.planner_cycles;
-  j["ended_early"] = r.ended_early.empty() ? json(nullptr) : json(r.ended_early);
-  j["timing"] = {{"clock", r.timing.clock},
+  j["plan_status"] = plan_status_json(r);
+  j["end"] = sim::to_string(r.outcome.end);
+  const std::string early = sim::ended_early_text(r.outcome);
+  j["ended_early"] = early.empty() ? json(nullptr) : json(early);
+  j["timing"] = {{"clock", sim::to_string(r.timing.clock)},
                  {"p50_us", r.timing.p50_us},
                  {"p99_us", r.timing.p99_us},
                  {"max_us", r.timing.max_us},
@@ -95,7 +107,7 @@ std::string format_scorecard(const sim::RunReport& r, const RunProvenance& p) {
        << p.planner_url;
   }
   os << ", " << p.traffic << " traffic, seed " << p.seed << ", map " << p.map_path << "\n";
-  if (!r.ended_early.empty()) os << "  ENDED EARLY: " << r.ended_early << "\n";
+  if (r.outcome.ended_early()) os << "  ENDED EARLY: " << sim::ended_early_text(r.outcome) << "\n";
   os << printf_string("  simulated         %8.1f min   distance %8.2f mi   mean speed %6.2f mph\n",
                       r.duration_s / 60.0, core::metres_to_miles(r.distance_m),
                       core::mps_to_mph(r.mean_speed_mps));
@@ -124,11 +136,25 @@ std::string format_scorecard(const sim::RunReport& r, const RunProvenance& p) {
   os << "\n";
   os << printf_string("  planner time       p50 %.1f us   p99 %.1f us   max %.1f us   (%ld cycles, %s)\n",
                       r.timing.p50_us, r.timing.p99_us, r.timing.max_us, r.planner_cycles,
-                      r.timing.clock == "thread_cpu" ? "thread CPU time"
-                                                     : "round trip over the protocol, wall clock");
-  if (r.timing.clock == "thread_cpu") {
+                      r.timing.clock == sim::CycleClock::thread_cpu
+                          ? "thread CPU time"
+                          : "round trip over the protocol, wall clock");
+  if (r.timing.clock == sim::CycleClock::thread_cpu) {
     os << printf_string("  planner wall time  p99 %.1f us   max %.1f us\n", r.timing.wall_p99_us,
                         r.timing.wall_max_us);
+  }
+  const long unusual = r.plan_status_cycles[static_cast<std::size_t>(core::PlanStatus::least_bad)] +
+                       r.plan_status_cycles[static_cast<std::size_t>(core::PlanStatus::fallback)];
+  if (unusual > 0) {
+    const auto share = [&](core::PlanStatus s) {
+      const long n = r.plan_status_cycles[static_cast<std::size_t>(s)];
+      return r.planner_cycles > 0 ? 100.0 * static_cast<double>(n) / static_cast<double>(r.planner_cycles)
+                                  : 0.0;
+    };
+    os << printf_string("  plan status        normal %.1f%%   least-bad %.1f%%   fallback %.1f%% of cycles\n",
+                        share(core::PlanStatus::normal), share(core::PlanStatus::least_bad),
+                        share(core::PlanStatus::fallback));
+    os << "    first: " << r.first_plan_reason << "\n";
   }
   constexpr std::size_t kShown = 10;
   if (!r.incidents.empty()) {

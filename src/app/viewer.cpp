@@ -47,9 +47,9 @@ std::string_view embedded_page(std::string_view name) {
   return *page;
 }
 
-sim::ReplayHeader replay_header_for(const Track& track, const Config& config,
+replay::ReplayHeader replay_header_for(const Track& track, const Config& config,
                                     const RunProvenance& p, double duration_s) {
-  sim::ReplayProvenance rp;
+  replay::ReplayProvenance rp;
   rp.policy = p.policy;
   rp.traffic = p.traffic;
   rp.seed = p.seed;
@@ -57,7 +57,7 @@ sim::ReplayHeader replay_header_for(const Track& track, const Config& config,
   rp.duration_s = duration_s;
   rp.overtake_version = overtake_version();
   rp.config_hash = p.params_hash;
-  return sim::make_replay_header(track.line, config.world, std::move(rp));
+  return replay::make_replay_header(track.line, config.world, std::move(rp));
 }
 
 std::string replay_report_json(const sim::RunReport& report, const RunProvenance& provenance) {
@@ -66,20 +66,20 @@ std::string replay_report_json(const sim::RunReport& report, const RunProvenance
   return j.dump();
 }
 
-std::shared_ptr<view::LiveView> start_live_view(const sim::ReplayHeader& header,
-                                                const LiveOptions& live, bool pace) {
+std::shared_ptr<view::LiveView> start_live_view(const replay::ReplayHeader& header,
+                                                const LiveOptions& live) {
   view::ViewServerOptions server;
   server.host = live.host;
   server.port = static_cast<std::uint16_t>(live.port);
   auto out = std::make_shared<view::LiveView>(embedded_page(kViewerPageName),
-                                              sim::replay_header_json(header), server, pace);
+                                              replay::replay_header_json(header), server);
   if (live.on_listening) live.on_listening(out->url());
   return out;
 }
 
 std::string load_replay_for_view(const fs::path& replay, bool allow_partial, std::string* warning) {
   std::string bytes = read_file(replay);
-  const sim::ReplayCheck check = sim::check_replay(bytes, replay.string());
+  const replay::ReplayCheck check = replay::check_replay(bytes, replay.string());
   if (check.error.empty()) return bytes;
   if (!allow_partial || check.frames == 0) {
     throw std::runtime_error(check.error + (check.frames > 0 ? "\n  (--partial shows the " +

@@ -38,7 +38,6 @@ using beast::error_code;
 constexpr auto kRetryDelay = std::chrono::milliseconds(100);
 constexpr auto kAttemptTimeout = std::chrono::seconds(2);
 constexpr auto kCloseTimeout = std::chrono::milliseconds(500);
-constexpr double kProgressEveryS = 10.0;
 // How often a wait for the planner looks at the stop flag (Ctrl-C).
 constexpr auto kStopPoll = std::chrono::milliseconds(50);
 // The least time finish() waits for a late reply after the run.
@@ -555,17 +554,12 @@ std::string RemotePlanner::finish() {
 sim::RunReport run_lock_step(sim::World& world, PlannerConnection& connection,
                              const ClientOptions& options, sim::RunOptions run) {
   RemotePlanner remote(connection, options);
-  run.remote_planner = true;
+  run.clock = sim::CycleClock::round_trip;
   sim::RunReport report = sim::run_drive(
       world, [&remote](const core::Telemetry& t) { return remote(t); }, run);
-  if (remote.stopped()) {
-    report.ended_early = "stopped";  // the user's stop, not the planner's failure
-  } else if (report.ended_early.empty()) {
+  if (report.outcome.end == sim::RunEnd::completed) {
     const std::string why = remote.finish();
-    if (!why.empty()) {
-      // As run_drive words a planner failure.
-      report.ended_early = "planner failed at t = " + std::to_string(world.time_s()) + " s: " + why;
-    }
+    if (!why.empty()) report.outcome = {sim::RunEnd::planner_failed, world.time_s(), why};
   }
   return report;
 }
@@ -573,28 +567,23 @@ sim::RunReport run_lock_step(sim::World& world, PlannerConnection& connection,
 // ---- real time --------------------------------------------------------------------------
 
 sim::RunReport run_realtime(sim::World& world, PlannerConnection& connection,
-                            const ClientOptions& options, const sim::RunOptions& run) {
+                            const ClientOptions& options, sim::RunOptions run_options) {
   const LogFn& log = log_of(options);
-  const sim::WorldParams& p = world.params();
-  const long total_steps = std::lround(run.duration_s / p.step_s);
-  const auto period =
-      std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(p.step_s));
-  sim::LaneTracker lanes(p.road);
-  core::QuantileSketch cycle_us;  // fixed memory, however long the run
-  std::string ended_early;
+  run_options.pace = sim::Pace::real_time;
+  run_options.clock = sim::CycleClock::round_trip;
+  sim::Stepper run(world, run_options);
 
   std::string buffer;
   bool awaiting = false;       // a telemetry is out and unanswered
   bool awaiting_full = false;  // ... and it was a full one
   long last_full_step = -1;
   Clock::time_point sent_at;
-  double next_progress_s = kProgressEveryS;
 
   const auto send_telemetry = [&](bool full) {
     sent_at = Clock::now();
     if (full) {
       buffer.clear();
-      append_telemetry(buffer, world.telemetry());
+      append_telemetry(buffer, run.telemetry());
       last_full_step = world.steps();
     }
     connection.send(full ? std::string_view(buffer) : kNullTelemetry,
@@ -603,85 +592,75 @@ sim::RunReport run_realtime(sim::World& world, PlannerConnection& connection,
     awaiting_full = full;
   };
 
-  sim::RunObserver* const observer = run.observer;
-  if (observer) observer->on_state(world);
-  auto next_tick = Clock::now() + period;
   try {
-    try {
-      send_telemetry(true);
-      while (world.steps() < total_steps) {
-        if (run.stop && run.stop->load(std::memory_order_relaxed)) {
-          ended_early = "stopped";
-          break;
-        }
-        // The physics: every step that is due, whatever the planner is doing.
-        bool stepped = false;
-        while (Clock::now() >= next_tick && world.steps() < total_steps) {
-          world.step();
-          lanes.observe(world.ego().frenet.d_m, p.step_s);
-          if (observer) observer->on_state(world);
-          next_tick += period;
-          stepped = true;
-        }
-        if (stepped && run.progress && world.time_s() >= next_progress_s) {
-          run.progress(world.time_s(), world.referee().distance_m());
-          next_progress_s += kProgressEveryS;
-        }
-        if (world.steps() >= total_steps) break;
-        if (!awaiting && stepped) send_telemetry(true);
-        const auto reply_deadline = sent_at + options.reply_timeout;
-        if (awaiting && Clock::now() >= reply_deadline) {
-          throw sim::PlannerFailure("the planner stalled: no reply within " +
-                                    seconds_text(options.reply_timeout));
-        }
-
-        const auto frame =
-            connection.receive(awaiting ? std::min(next_tick, reply_deadline) : next_tick);
-        if (!frame) continue;
-        const Sorted s = sort_planner_frame(*frame);
-        if (s.kind == Sorted::fatal) throw sim::PlannerFailure(s.text);
-        if (s.kind == Sorted::pong) continue;  // unasked: a heartbeat, allowed by RFC 6455
-        if (s.kind == Sorted::ignore) {
-          log(LogLevel::info, s.text);
-          continue;
-        }
-        if (s.kind == Sorted::ping) {
-          connection.send(s.text, Clock::now() + options.reply_timeout);
-          continue;
-        }
-        if (!awaiting) {
-          log(LogLevel::warning,
-              "the planner replied twice to one telemetry; the extra reply is ignored: " +
-                  excerpt(frame->text, 40));
-          continue;
-        }
-        auto reply = parse_reply(frame->text, options.limits);
-        if (!reply) throw sim::PlannerFailure("malformed reply: " + reply.error());
-        awaiting = false;
-        if (awaiting_full) {
-          cycle_us.add(
-              std::chrono::duration<double, std::micro>(Clock::now() - sent_at).count());
-        }
-        if (!reply.value().manual) {
-          if (observer) observer->on_path(world, reply.value().path);
-          world.apply_path(std::move(reply).value().path);
-        }
-        // Next telemetry: full when anything stepped; null once when nothing did; after the
-        // answer to a null one, the next step sends it.
-        if (world.steps() > last_full_step) {
-          send_telemetry(true);
-        } else if (awaiting_full) {
-          send_telemetry(false);
-        }
+    send_telemetry(true);
+    while (!run.finished()) {
+      if (run.stop_requested()) {
+        run.end(sim::RunEnd::stopped);
+        break;
       }
-    } catch (const ConnectionError& e) {
-      throw sim::PlannerFailure(e.what());
+      // The physics: every step that is due, whatever the planner is doing.
+      bool stepped = false;
+      while (!run.finished() && Clock::now() >= run.next_step_due()) {
+        run.step();
+        stepped = true;
+      }
+      if (run.finished()) break;
+      if (!awaiting && stepped) send_telemetry(true);
+      const auto reply_deadline = sent_at + options.reply_timeout;
+      if (awaiting && Clock::now() >= reply_deadline) {
+        throw sim::PlannerFailure("the planner stalled: no reply within " +
+                                  seconds_text(options.reply_timeout));
+      }
+
+      const auto frame = connection.receive(
+          awaiting ? std::min(run.next_step_due(), reply_deadline) : run.next_step_due());
+      if (!frame) continue;
+      const Sorted s = sort_planner_frame(*frame);
+      if (s.kind == Sorted::fatal) throw sim::PlannerFailure(s.text);
+      if (s.kind == Sorted::pong) continue;  // unasked: a heartbeat, allowed by RFC 6455
+      if (s.kind == Sorted::ignore) {
+        log(LogLevel::info, s.text);
+        continue;
+      }
+      if (s.kind == Sorted::ping) {
+        connection.send(s.text, Clock::now() + options.reply_timeout);
+        continue;
+      }
+      if (!awaiting) {
+        log(LogLevel::warning,
+            "the planner replied twice to one telemetry; the extra reply is ignored: " +
+                excerpt(frame->text, 40));
+        continue;
+      }
+      auto reply = parse_reply(frame->text, options.limits);
+      if (!reply) throw sim::PlannerFailure("malformed reply: " + reply.error());
+      awaiting = false;
+      std::optional<double> round_trip_us;
+      if (awaiting_full) {
+        round_trip_us =
+            std::chrono::duration<double, std::micro>(Clock::now() - sent_at).count();
+      }
+      if (!reply.value().manual) {
+        run.apply(core::normal_plan(std::move(reply).value().path), round_trip_us,
+                  round_trip_us.value_or(0.0));
+      } else if (round_trip_us) {
+        run.count_cycle(core::normal_plan({}), *round_trip_us, *round_trip_us);
+      }
+      // Next telemetry: full when anything stepped; null once when nothing did; after the
+      // answer to a null one, the next step sends it.
+      if (world.steps() > last_full_step) {
+        send_telemetry(true);
+      } else if (awaiting_full) {
+        send_telemetry(false);
+      }
     }
+  } catch (const ConnectionError& e) {
+    run.end(sim::RunEnd::planner_failed, e.what());
   } catch (const sim::PlannerFailure& e) {
-    ended_early =
-        std::string("planner failed at t = ") + std::to_string(world.time_s()) + " s: " + e.what();
+    run.end(sim::RunEnd::planner_failed, e.what());
   }
-  return sim::summarize(world, lanes, cycle_us, std::move(ended_early));
+  return run.report();
 }
 
 }  // namespace overtake::protocol

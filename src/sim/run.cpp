@@ -1,11 +1,9 @@
 #include "overtake/sim/run.hpp"
 
-#include <algorithm>
-#include <chrono>
 #include <cmath>
+#include <thread>
 
 #include "overtake/core/cpu_clock.hpp"
-#include "overtake/core/random.hpp"
 
 namespace overtake::sim {
 namespace {
@@ -15,16 +13,7 @@ constexpr double kProgressEveryS = 10.0;
 
 }  // namespace
 
-LaneTracker::LaneTracker(const core::RoadParams& road, double settle_m)
-    : road_(road), settle_m_(settle_m), time_in_lane_s_(static_cast<std::size_t>(road.lane_count), 0.0) {}
-
-void LaneTracker::observe(double d_m, double dt_s) {
-  const int lane = core::lane_of(d_m, road_);
-  time_in_lane_s_[static_cast<std::size_t>(lane)] += dt_s;
-  if (std::abs(d_m - core::lane_center_d(lane, road_)) > settle_m_) return;
-  if (settled_ >= 0 && settled_ != lane) ++changes_;
-  settled_ = lane;
-}
+// ---- observers ----------------------------------------------------------------------------
 
 ObserverList::ObserverList(std::vector<RunObserver*> observers) {
   for (RunObserver* o : observers) {
@@ -32,12 +21,12 @@ ObserverList::ObserverList(std::vector<RunObserver*> observers) {
   }
 }
 
-void ObserverList::on_state(const World& world) {
-  for (RunObserver* o : observers_) o->on_state(world);
+void ObserverList::on_frame(const Frame& frame, std::span<const Incident> new_incidents) {
+  for (RunObserver* o : observers_) o->on_frame(frame, new_incidents);
 }
 
-void ObserverList::on_path(const World& world, std::span<const core::Vec2> path) {
-  for (RunObserver* o : observers_) o->on_path(world, path);
+void ObserverList::on_path(std::span<const core::Vec2> path) {
+  for (RunObserver* o : observers_) o->on_path(path);
 }
 
 RunObserver* ObserverList::get() {
@@ -45,87 +34,128 @@ RunObserver* ObserverList::get() {
   return observers_.size() == 1 ? observers_.front() : this;
 }
 
-RunReport run_drive(World& world, const PlannerFn& planner, const RunOptions& opts) {
-  const WorldParams& p = world.params();
-  const long total_steps = std::lround(opts.duration_s / p.step_s);
-  core::Rng latency(core::derive_seed(opts.seed, kLatencyStream));
-  LaneTracker lanes(p.road);
-  // Timing in fixed memory: a 7-day run has 15 million cycles.
-  core::QuantileSketch cycle_us;  // thread CPU time (or the round trip of a remote planner)
-  core::QuantileSketch wall_us;
+// ---- pacing -------------------------------------------------------------------------------
 
-  std::string ended_early;
-  double next_progress_s = kProgressEveryS;
-  RunObserver* const observer = opts.observer;
-  if (observer) observer->on_state(world);
-  while (world.steps() < total_steps) {
-    if (opts.stop && opts.stop->load(std::memory_order_relaxed)) {
-      ended_early = "stopped";
+PaceClock::PaceClock(Pace pace, double step_s, Clock::time_point start)
+    : pace_(pace),
+      period_(std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(step_s))),
+      start_(start) {}
+
+PaceClock::Clock::time_point PaceClock::due(long step) const {
+  if (pace_ == Pace::unpaced) return start_;
+  return start_ + step * period_;
+}
+
+void PaceClock::wait_for(long step) const {
+  if (pace_ == Pace::unpaced) return;
+  std::this_thread::sleep_until(due(step));
+}
+
+// ---- the stepper --------------------------------------------------------------------------
+
+Stepper::Stepper(World& world, const RunOptions& options)
+    : world_(world),
+      options_(options),
+      total_steps_(std::lround(options.duration_s / world.params().step_s)),
+      start_step_(world.steps()),
+      scorecard_(world),
+      pace_(options.pace, world.params().step_s),
+      latency_(core::derive_seed(options.seed, kLatencyStream)),
+      next_progress_s_(kProgressEveryS) {
+  emit_frame(0);
+}
+
+bool Stepper::finished() const {
+  return ended_.has_value() || world_.steps() >= total_steps_;
+}
+
+bool Stepper::stop_requested() const {
+  return options_.stop != nullptr && options_.stop->load(std::memory_order_relaxed);
+}
+
+void Stepper::apply(core::PlanResult plan, std::optional<double> cycle_us, double wall_us) {
+  if (cycle_us) scorecard_.count_cycle(plan, *cycle_us, wall_us);
+  if (options_.observer) options_.observer->on_path(plan.path);
+  world_.apply_path(std::move(plan.path));
+}
+
+void Stepper::count_cycle(const core::PlanResult& plan, double cycle_us, double wall_us) {
+  scorecard_.count_cycle(plan, cycle_us, wall_us);
+}
+
+void Stepper::step() {
+  const std::size_t incidents_before = scorecard_.referee().incidents().size();
+  world_.step();
+  scorecard_.observe_step(world_);
+  pace_.wait_for(world_.steps() - start_step_);
+  emit_frame(incidents_before);
+  if (options_.progress && world_.time_s() >= next_progress_s_) {  // every 10 simulated s
+    options_.progress(world_.time_s(), scorecard_.referee().distance_m());
+    next_progress_s_ += kProgressEveryS;
+  }
+}
+
+void Stepper::step_one_call() {
+  const WorldParams& p = world_.params();
+  const int k = options_.steps_per_call
+                    ? *options_.steps_per_call
+                    : latency_.uniform_int(p.min_steps_per_call, p.max_steps_per_call);
+  for (int i = 0; i < k && !finished(); ++i) step();
+}
+
+PaceClock::Clock::time_point Stepper::next_step_due() const {
+  return pace_.due(world_.steps() - start_step_ + 1);
+}
+
+void Stepper::end(RunEnd end, std::string reason) {
+  if (ended_ || end == RunEnd::completed) return;
+  ended_ = RunOutcome{end, world_.time_s(), std::move(reason)};
+}
+
+RunReport Stepper::report() const {
+  return scorecard_.report(world_, ended_.value_or(RunOutcome{RunEnd::completed, world_.time_s(), {}}),
+                           options_.clock);
+}
+
+void Stepper::emit_frame(std::size_t incidents_before) {
+  if (!options_.observer) return;
+  scorecard_.fill_frame(world_, frame_);
+  const std::vector<Incident>& incidents = scorecard_.referee().incidents();
+  options_.observer->on_frame(
+      frame_, std::span<const Incident>(incidents).subspan(incidents_before));
+}
+
+// ---- the lock-step loop -------------------------------------------------------------------
+
+RunReport run_drive(World& world, const PlannerFn& planner, const RunOptions& opts) {
+  Stepper run(world, opts);
+  while (!run.finished()) {
+    if (run.stop_requested()) {
+      run.end(RunEnd::stopped);
       break;
     }
-    const core::Telemetry telemetry = world.telemetry();
-    std::vector<core::Vec2> path;
+    const core::Telemetry telemetry = run.telemetry();
+    core::PlanResult plan;
     const double c0 = core::thread_cpu_us();
     const auto t0 = std::chrono::steady_clock::now();
     try {
-      path = planner(telemetry).path;
+      plan = planner(telemetry);
     } catch (const std::exception& e) {
-      ended_early = std::string("planner failed at t = ") +
-                           std::to_string(world.time_s()) + " s: " + e.what();
+      // A planner that gave up because the user stopped the run has not failed.
+      if (run.stop_requested()) {
+        run.end(RunEnd::stopped);
+      } else {
+        run.end(RunEnd::planner_failed, e.what());
+      }
       break;
     }
-    const auto t1 = std::chrono::steady_clock::now();
-    const double wall = std::chrono::duration<double, std::micro>(t1 - t0).count();
-    cycle_us.add(opts.remote_planner ? wall : core::thread_cpu_us() - c0);
-    wall_us.add(wall);
-    if (observer) observer->on_path(world, path);
-    world.apply_path(std::move(path));
-
-    const int k = opts.steps_per_call
-                      ? *opts.steps_per_call
-                      : latency.uniform_int(p.min_steps_per_call, p.max_steps_per_call);
-    for (int i = 0; i < k && world.steps() < total_steps; ++i) {
-      world.step();
-      lanes.observe(world.ego().frenet.d_m, p.step_s);
-      if (observer) observer->on_state(world);
-    }
-    if (opts.progress && world.time_s() >= next_progress_s) {  // every 10 simulated seconds
-      opts.progress(world.time_s(), world.referee().distance_m());
-      next_progress_s += kProgressEveryS;
-    }
+    const double wall =
+        std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - t0).count();
+    const double cycle = opts.clock == CycleClock::thread_cpu ? core::thread_cpu_us() - c0 : wall;
+    run.apply(std::move(plan), cycle, wall);
+    run.step_one_call();
   }
-
-  RunReport report = summarize(world, lanes, cycle_us, std::move(ended_early),
-                               opts.remote_planner ? "round_trip" : "thread_cpu");
-  report.timing.wall_p99_us = wall_us.quantile(0.99);
-  report.timing.wall_max_us = wall_us.max();
-  return report;
-}
-
-RunReport summarize(const World& world, const LaneTracker& lanes, const core::QuantileSketch& cycle_us,
-                    std::string ended_early, std::string clock) {
-  RunReport report;
-  report.ended_early = std::move(ended_early);
-  const Referee& ref = world.referee();
-  report.duration_s = world.time_s();
-  report.distance_m = ref.distance_m();
-  report.mean_speed_mps = report.duration_s > 0.0 ? report.distance_m / report.duration_s : 0.0;
-  report.best_incident_free_m = ref.best_incident_free_m();
-  report.incidents = ref.incidents();
-  report.incident_counts = ref.counts();
-  report.exact_outside_lane = ref.exact_outside_lane_count();
-  report.peak = ref.peaks();
-  report.lane_changes = lanes.lane_changes();
-  report.time_in_lane_s = lanes.time_in_lane_s();
-  report.planner_cycles = static_cast<long>(cycle_us.count());
-  report.timing.p50_us = cycle_us.quantile(0.5);
-  report.timing.p99_us = cycle_us.quantile(0.99);
-  report.timing.max_us = cycle_us.max();
-  report.timing.cycles = static_cast<long>(cycle_us.count());
-  report.timing.clock = std::move(clock);
-  report.timing.wall_p99_us = report.timing.p99_us;
-  report.timing.wall_max_us = report.timing.max_us;
-  return report;
+  return run.report();
 }
 
 }  // namespace overtake::sim

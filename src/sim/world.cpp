@@ -30,8 +30,7 @@ World::World(const core::Map& map, const core::ReferenceLine& line, const WorldP
       chords_(map),
       params_(params),
       traffic_(map, line, chords_, params.traffic, params.road, profile,
-               core::derive_seed(seed, kTrafficStream)),
-      referee_(params.referee, params.step_s, params.road) {
+               core::derive_seed(seed, kTrafficStream)) {
   place_ego({params.ego.start_s_m, params.ego.start_d_m});
   traffic_.place_initial(ego_view());
 }
@@ -50,7 +49,6 @@ World::World(const core::Map& map, const core::ReferenceLine& line, const WorldP
   events_ = scenario.events;
   if (scenario.ego_speed_mps > 0.0) {
     ego_.speed_mps = scenario.ego_speed_mps;
-    referee_.set_initial_speed(scenario.ego_speed_mps);
     const double ds = scenario.ego_speed_mps * params_.step_s;
     const auto points = static_cast<int>(std::lround(1.0 / params_.step_s));
     std::vector<core::Vec2> path;
@@ -132,9 +130,12 @@ void World::step() {
   }
   ++steps_;
 
-  const std::optional<int> touched = traffic_.resolve_contacts(ego_view());
-  referee_.observe({time_s(), ego_.position, ego_.speed_mps, ego_.map_frenet.s_m,
-                    ego_.map_frenet.d_m, ego_.frenet.d_m, touched});
+  contact_ = traffic_.resolve_contacts(ego_view());
+}
+
+EgoFrame World::ego_frame() const {
+  return {time_s(), ego_.position, ego_.speed_mps, ego_.map_frenet.s_m, ego_.map_frenet.d_m,
+          ego_.frenet.d_m, contact_};
 }
 
 }  // namespace overtake::sim

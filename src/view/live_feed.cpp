@@ -42,35 +42,27 @@ LiveFeed::Next LiveFeed::next(std::size_t from) const {
   return out;
 }
 
-LiveRecorder::LiveRecorder(LiveFeed& feed, bool pace) : feed_(feed), pace_(pace) {}
+LiveRecorder::LiveRecorder(LiveFeed& feed) : feed_(feed) {}
 
-void LiveRecorder::on_state(const sim::World& world) {
-  const long step = world.steps();
+void LiveRecorder::on_frame(const sim::Frame& frame, std::span<const sim::Incident> new_incidents) {
   if (!first_step_) {
-    first_step_ = step;
-    last_publish_step_ = step;
-    start_ = std::chrono::steady_clock::now();
+    first_step_ = frame.step;
+    last_publish_step_ = frame.step;
   }
-  encoder_.append_state(world, pending_);
-  if (step == *first_step_ || step - last_publish_step_ >= kPublishEverySteps) {
+  encoder_.append_frame(frame, pending_);
+  encoder_.append_incidents(new_incidents, pending_);
+  if (frame.step == *first_step_ || frame.step - last_publish_step_ >= kPublishEverySteps) {
     publish();
-    last_publish_step_ = step;
-  }
-  if (pace_) {
-    const auto due =
-        start_ + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
-                     std::chrono::duration<double>(static_cast<double>(step - *first_step_) *
-                                                   world.params().step_s));
-    std::this_thread::sleep_until(due);
+    last_publish_step_ = frame.step;
   }
 }
 
-void LiveRecorder::on_path(const sim::World&, std::span<const core::Vec2> path) {
+void LiveRecorder::on_path(std::span<const core::Vec2> path) {
   encoder_.append_path(path, pending_);
 }
 
 void LiveRecorder::finish(std::string_view report_json) {
-  sim::ReplayEncoder::append_end(report_json, pending_);
+  replay::ReplayEncoder::append_end(report_json, pending_);
   publish();
   feed_.close();
 }

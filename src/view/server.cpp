@@ -353,8 +353,8 @@ void ViewServer::stop() {
 // ---- live view ----------------------------------------------------------------------------
 
 LiveView::LiveView(std::string_view page_template, std::string header_json,
-                   const ViewServerOptions& options, bool pace)
-    : feed_(std::make_shared<LiveFeed>(std::move(header_json))), recorder_(*feed_, pace) {
+                   const ViewServerOptions& options)
+    : feed_(std::make_shared<LiveFeed>(std::move(header_json))), recorder_(*feed_) {
   ViewContent content;
   content.page = viewer_page(page_template, ViewerSource::live);
   content.live = feed_;

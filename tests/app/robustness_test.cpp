@@ -17,7 +17,7 @@
 #include "overtake/app/cli.hpp"
 #include "overtake/app/commands.hpp"
 #include "overtake/app/io.hpp"
-#include "overtake/sim/replay.hpp"
+#include "overtake/replay/replay.hpp"
 #include "process_support.hpp"
 
 namespace overtake::app {
@@ -173,7 +173,7 @@ TEST_F(RobustnessTest, InterruptedDriveKeepsEverything) {
     EXPECT_EQ(j["ended_early"], "stopped");
     EXPECT_GT(j["duration_s"].get<double>(), 0.0);
     EXPECT_LT(j["duration_s"].get<double>(), 36000.0);
-    const sim::Replay r = sim::read_replay(replay);
+    const replay::Replay r = replay::read_replay(replay);
     EXPECT_THAT(r.end_json, HasSubstr("stopped"));
     EXPECT_FALSE(fs::exists(replay.string() + ".partial"));
   }

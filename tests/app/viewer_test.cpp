@@ -32,7 +32,7 @@
 #include "overtake/app/resources.hpp"
 #include "overtake/app/viewer.hpp"
 #include "overtake/planner/policy.hpp"
-#include "overtake/sim/replay.hpp"
+#include "overtake/replay/replay.hpp"
 #include "overtake/sim/world.hpp"
 #include "overtake/view/page.hpp"
 #include "overtake/view/server.hpp"
@@ -132,7 +132,7 @@ TEST_F(ViewerTest, ARecordedScenarioWithACollisionHasItsIncidentRecord) {
   const DriveResult r = drive(o);
   ASSERT_GT(r.report.incident_counts[static_cast<std::size_t>(sim::IncidentType::collision)], 0);
 
-  const sim::Replay replay = sim::read_replay(*o.record);
+  const replay::Replay replay = replay::read_replay(*o.record);
   ASSERT_EQ(replay.incidents.size(), r.report.incidents.size());
   bool collision = false;
   for (std::size_t i = 0; i < replay.incidents.size(); ++i) {
@@ -164,7 +164,7 @@ TEST_F(ViewerTest, SameSeedGivesAByteIdenticalReplay) {
   const std::string c = bytes_of(recorded("c.otr", 0.5, 4));
   EXPECT_EQ(a, b);
   EXPECT_NE(a, c);
-  const sim::Replay r = sim::parse_replay(a, "a.otr");
+  const replay::Replay r = replay::parse_replay(a, "a.otr");
   EXPECT_EQ(r.header.provenance.seed, 3u);
   EXPECT_EQ(r.header.provenance.policy, "reference");
   EXPECT_EQ(r.header.provenance.track, "default");
@@ -178,7 +178,7 @@ TEST_F(ViewerTest, DriveRecordAtTheCommandLine) {
   testing::internal::CaptureStdout();
   EXPECT_EQ(cli({"drive", "--minutes", "0.1", "--record", file.string(), "--quiet"}), 0);
   (void)testing::internal::GetCapturedStdout();
-  EXPECT_EQ(sim::read_replay(file).frames.size(), 301u);
+  EXPECT_EQ(replay::read_replay(file).frames.size(), 301u);
 
   testing::internal::CaptureStdout();
   testing::internal::CaptureStderr();
@@ -215,7 +215,7 @@ TEST_F(ViewerTest, APipeIsWrittenInPlaceNotReplaced) {
     if (round == 0) {
       EXPECT_EQ(got, "through the pipe");
     } else {
-      EXPECT_EQ(sim::parse_replay(got, "pipe").frames.size(), 151u);
+      EXPECT_EQ(replay::parse_replay(got, "pipe").frames.size(), 151u);
     }
   }
   EXPECT_FALSE(fs::exists(dir_ / "pipe.partial"));
@@ -477,10 +477,10 @@ TEST_F(ViewerTest, LiveViewStreamsTheSameRecordsAsTheReplay) {
   p.policy = "reference";
   p.traffic = "faithful";
   p.map_path = "builtin:default";
-  const sim::ReplayHeader header = replay_header_for(*track, config, p, o.minutes * 60.0);
-  auto feed = std::make_shared<view::LiveFeed>(sim::replay_header_json(header));
-  view::LiveRecorder live(*feed, false);
-  sim::ReplayWriter writer(dir_ / "r.otr", header);
+  const replay::ReplayHeader header = replay_header_for(*track, config, p, o.minutes * 60.0);
+  auto feed = std::make_shared<view::LiveFeed>(replay::replay_header_json(header));
+  view::LiveRecorder live(*feed);
+  replay::ReplayWriter writer(dir_ / "r.otr", header);
   sim::ObserverList both({&writer, &live});
   sim::World world(track->map, track->line, config.world, sim::TrafficProfile::faithful, 1);
   auto policy = planner::make_policy("reference", track->line, config.planner);
@@ -504,7 +504,7 @@ TEST_F(ViewerTest, LiveViewStreamsTheSameRecordsAsTheReplay) {
   std::string got_records;
   std::thread viewer([&] {
     const LiveReceived r = watch_live(server.port());
-    EXPECT_EQ(r.header, sim::replay_header_json(header));
+    EXPECT_EQ(r.header, replay::replay_header_json(header));
     EXPECT_TRUE(r.closed_normally);
     got_records = r.records;
   });
@@ -516,14 +516,14 @@ TEST_F(ViewerTest, LiveViewStreamsTheSameRecordsAsTheReplay) {
   EXPECT_EQ(late.records, got_records);
 
   // The live records are the replay file's body, inflated: the same decoding works.
-  const sim::Replay from_file = sim::read_replay(dir_ / "r.otr");
-  const sim::Replay from_live =
-      sim::parse_replay(sim::replay_preamble(header) + test::deflate_all(got_records), "live");
+  const replay::Replay from_file = replay::read_replay(dir_ / "r.otr");
+  const replay::Replay from_live =
+      replay::parse_replay(replay::replay_preamble(header) + test::deflate_all(got_records), "live");
   EXPECT_EQ(from_live.frames.size(), from_file.frames.size());
   EXPECT_EQ(from_live.paths.size(), from_file.paths.size());
   EXPECT_EQ(from_live.end_json, from_file.end_json);
   const std::string file = bytes_of(dir_ / "r.otr");
-  EXPECT_EQ(got_records, inflated(file.substr(sim::replay_preamble(header).size())));
+  EXPECT_EQ(got_records, inflated(file.substr(replay::replay_preamble(header).size())));
 }
 
 // ---- bench --------------------------------------------------------------------------------
@@ -558,7 +558,7 @@ TEST_F(ViewerTest, BenchRecordsItsWorstRunsAndLinksThemFromTheReport) {
                                             run["config"]["traffic"].get<std::string>(),
                                             run["config"]["seed"].get<std::uint64_t>());
     EXPECT_EQ(o.replays[i], want);
-    const sim::Replay r = sim::read_replay(want);
+    const replay::Replay r = replay::read_replay(want);
     json report = run;
     for (const char* k : {"timing", "provenance", "index"}) report.erase(k);
     EXPECT_EQ(json::parse(r.end_json), report) << want;

@@ -46,7 +46,7 @@ TEST_P(Scenarios, NoIncidentsAndWithinTheStrictLimits) {
   for (std::uint64_t seed = 1; seed <= 3; ++seed) {
     const ScenarioRun r = run_scenario(GetParam(), seed);
     const auto& rep = r.report;
-    EXPECT_TRUE(rep.ended_early.empty()) << rep.ended_early;
+    EXPECT_EQ(rep.outcome.end, sim::RunEnd::completed) << sim::ended_early_text(rep.outcome);
     EXPECT_TRUE(rep.incidents.empty()) << r.scenario.name << ", seed " << seed << ": " << rep.incidents.size()
                                        << " incidents, the first at t = "
                                        << (rep.incidents.empty() ? 0.0 : rep.incidents.front().t_s) << " s";

@@ -109,8 +109,8 @@ TEST(ProtocolClient, CloseAndDropEndTheRunWithAMessage) {
         }));
     LogCapture log;
     const auto report = lock_step(planner.url(), 60.0, log);
-    EXPECT_THAT(report.ended_early, StartsWith("planner failed at t = "));
-    EXPECT_THAT(report.ended_early,
+    EXPECT_THAT(sim::ended_early_text(report.outcome), StartsWith("planner failed at t = "));
+    EXPECT_THAT(sim::ended_early_text(report.outcome),
                 HasSubstr(graceful ? "the planner closed the connection normally (close code 1000)"
                                    : "the planner dropped the connection"));
     EXPECT_EQ(report.planner_cycles, 61);  // the reply that came with the close counts
@@ -142,8 +142,8 @@ TEST(ProtocolClient, MalformedRepliesEndTheRunSayingWhat) {
         }));
     LogCapture log;
     const auto report = lock_step(planner.url(), 60.0, log);
-    EXPECT_THAT(report.ended_early, StartsWith("planner failed at t = "));
-    EXPECT_THAT(report.ended_early, HasSubstr(message));
+    EXPECT_THAT(sim::ended_early_text(report.outcome), StartsWith("planner failed at t = "));
+    EXPECT_THAT(sim::ended_early_text(report.outcome), HasSubstr(message));
     EXPECT_EQ(report.planner_cycles, 25);
   }
 }
@@ -156,7 +156,7 @@ TEST(ProtocolClient, BinaryReplyIsMalformed) {
   });
   LogCapture log;
   const auto report = lock_step(planner.url(), 10.0, log);
-  EXPECT_THAT(report.ended_early, HasSubstr("malformed reply"));
+  EXPECT_THAT(sim::ended_early_text(report.outcome), HasSubstr("malformed reply"));
 }
 
 // A planner that closes normally (a close frame, code 1000) and exits without waiting for
@@ -176,7 +176,7 @@ TEST(ProtocolClient, ANormalCloseIsReportedAsSuchEvenWhenThePlannerIsGoneAtOnce)
           }));
       LogCapture log;
       const auto report = lock_step(planner.url(), 60.0, log);
-      EXPECT_THAT(report.ended_early,
+      EXPECT_THAT(sim::ended_early_text(report.outcome),
                   HasSubstr("the planner closed the connection normally (close code 1000)"));
     }
   }
@@ -258,8 +258,8 @@ TEST(ProtocolClient, ALateSecondReplyPutsTheRunOutOfStepEveryTime) {
           }));
       LogCapture log;
       const auto report = lock_step(planner.url(), 0.02 * kCycles, log, 3s, 1);
-      EXPECT_THAT(report.ended_early, StartsWith("planner failed at t = ")) << log.dump();
-      EXPECT_THAT(report.ended_early, HasSubstr("out of step: the planner replied twice"));
+      EXPECT_THAT(sim::ended_early_text(report.outcome), StartsWith("planner failed at t = ")) << log.dump();
+      EXPECT_THAT(sim::ended_early_text(report.outcome), HasSubstr("out of step: the planner replied twice"));
       if (c.in_handler) {
         EXPECT_LE(report.planner_cycles, twice_at + 2) << "found at once";
       }
@@ -290,7 +290,7 @@ TEST(ProtocolClient, PlannersThatAnswerOnceAreNeverOutOfStep) {
     LogCapture log;
     const auto t0 = std::chrono::steady_clock::now();
     const auto report = lock_step(planner.url(), 3.0, log);
-    EXPECT_EQ(report.ended_early, "") << log.dump();
+    EXPECT_EQ(sim::ended_early_text(report.outcome), "") << log.dump();
     EXPECT_EQ(log.warnings(), 0u) << log.dump();
     EXPECT_DOUBLE_EQ(report.duration_s, 3.0);
     // These planners write without TCP_NODELAY, so Nagle's algorithm holds the second of
@@ -312,7 +312,7 @@ TEST(ProtocolClient, PlannerChatterAndManualRepliesDoNotEndTheRun) {
       }));
   LogCapture log;
   const auto report = lock_step(planner.url(), 20.0, log);
-  EXPECT_EQ(report.ended_early, "");
+  EXPECT_EQ(sim::ended_early_text(report.outcome), "");
   const auto got = planner.received();
   EXPECT_NE(std::find(got.begin(), got.end(), "3probe"), got.end()) << "the ping is answered";
   EXPECT_EQ(log.warnings(), 0u) << log.dump();
@@ -422,7 +422,7 @@ TEST(ProtocolOriginalConvention, OldStylePlannerReadsOurClientInLockStep) {
     LogCapture log;
     report = lock_step(planner.url(), 30.0, log);
   }
-  EXPECT_EQ(report.ended_early, "");
+  EXPECT_EQ(sim::ended_early_text(report.outcome), "");
   EXPECT_EQ(stats.full, report.planner_cycles);
   EXPECT_EQ(stats.unreadable, 0);
 }
@@ -451,7 +451,7 @@ TEST(ProtocolOriginalConvention, OldStylePlannerRecognisesNullTelemetryInRealTim
     c.close();
     EXPECT_EQ(log.warnings(), 0u) << log.dump();
   }
-  EXPECT_EQ(report.ended_early, "");
+  EXPECT_EQ(sim::ended_early_text(report.outcome), "");
   EXPECT_GT(stats.full, 20);
   EXPECT_GT(stats.empty, 0) << "a fast planner is sent 42[\"telemetry\",null] when nothing stepped";
   EXPECT_EQ(stats.unreadable, 0);
@@ -475,7 +475,7 @@ TEST(ProtocolClient, RealTimeStallEndsTheRunWhileTheWorldKeepsStepping) {
   sim::RunOptions run;
   run.duration_s = 30.0;
   const sim::RunReport report = run_realtime(world, c, o, run);
-  EXPECT_THAT(report.ended_early, HasSubstr("the planner stalled: no reply within 0.3 s"));
+  EXPECT_THAT(sim::ended_early_text(report.outcome), HasSubstr("the planner stalled: no reply within 0.3 s"));
   EXPECT_GE(report.duration_s, 0.3);  // the world went on for the whole wait
   EXPECT_LT(report.duration_s, 5.0);
 }

@@ -11,7 +11,7 @@
 
 #include "overtake/app/cli.hpp"
 #include "overtake/app/io.hpp"
-#include "overtake/sim/replay.hpp"
+#include "overtake/replay/replay.hpp"
 #include "test_support.hpp"
 
 namespace overtake::protocol {
@@ -118,8 +118,8 @@ TEST(ProtocolLoopback, SimRecordsTheSameRunAsDrive) {
   EXPECT_EQ(run_cli({"sim", "--planner", server.url(), "--name", "walkthrough", "--minutes", "0.5",
                      "--seed", "7", "--record", (dir / "sim.otr").string(), "--quiet"}),
             app::kExitOk);
-  const sim::Replay a = sim::read_replay(dir / "drive.otr");
-  const sim::Replay b = sim::read_replay(dir / "sim.otr");
+  const replay::Replay a = replay::read_replay(dir / "drive.otr");
+  const replay::Replay b = replay::read_replay(dir / "sim.otr");
   // The same world states step by step, the same incidents, the same report.
   ASSERT_EQ(a.frames.size(), b.frames.size());
   for (std::size_t i = 0; i < a.frames.size(); ++i) {
@@ -138,7 +138,7 @@ TEST(ProtocolLoopback, SimRecordsTheSameRunAsDrive) {
   EXPECT_EQ(run_cli({"sim", "--planner", server.url(), "--minutes", "0.02", "--realtime", "--record",
                      (dir / "rt.otr").string(), "--quiet"}),
             app::kExitOk);
-  const sim::Replay rt = sim::read_replay(dir / "rt.otr");
+  const replay::Replay rt = replay::read_replay(dir / "rt.otr");
   EXPECT_EQ(rt.frames.size(), 61u);
   EXPECT_GT(rt.paths.size(), 20u);
   EXPECT_DOUBLE_EQ(json::parse(rt.end_json)["duration_s"].get<double>(), 1.2);

@@ -14,7 +14,7 @@
 
 #include "overtake/app/interrupt.hpp"
 #include "overtake/app/io.hpp"
-#include "overtake/sim/replay.hpp"
+#include "overtake/replay/replay.hpp"
 #include "process_support.hpp"
 #include "test_support.hpp"
 
@@ -72,7 +72,7 @@ class SimSignal : public ::testing::Test {
     EXPECT_GT(j["planner_cycles"].get<long>(), 0);
     // The replay is finished (not left as a .partial), its end record the same report.
     EXPECT_FALSE(fs::exists(otr.string() + ".partial"));
-    const sim::Replay replay = sim::read_replay(otr);
+    const replay::Replay replay = replay::read_replay(otr);
     EXPECT_FALSE(replay.frames.empty());
     const auto end = nlohmann::json::parse(replay.end_json);
     EXPECT_EQ(end["ended_early"], "stopped");

@@ -9,6 +9,7 @@
 #include "overtake/core/units.hpp"
 #include "overtake/core/wire_number.hpp"
 #include "overtake/sim/faithful_traffic.hpp"
+#include "overtake/sim/scorecard.hpp"
 #include "overtake/sim/world.hpp"
 #include "sim/test_maps.hpp"
 
@@ -200,16 +201,18 @@ TEST_F(WorldTest, DrivingIntoAStandingCarIsACollisionAndPushesItAhead) {
   // A car standing (cap 0) 20 m ahead in the ego's lane; the ego drives at 15 m/s into it.
   traffic.put_on_road_for_testing(0, w.ego().map_frenet.s_m + 20.0, 1, 0.0, 0.0);
   w.apply_path(ahead(w, 200, 0.3));
+  Scorecard card(w);
   for (int i = 0; i < 150; ++i) {
     w.step();
+    card.observe_step(w);
     // Never inside each other after a step.
     const core::OrientedBox car = w.traffic().footprint(w.traffic().cars()[0]);
     const auto pen = core::box_penetration(w.ego_footprint(), car);
     EXPECT_TRUE(!pen || pen->depth_m < 1e-9) << "step " << i;
   }
-  const auto counts = w.referee().counts();
+  const auto counts = card.referee().counts();
   EXPECT_GE(counts[static_cast<std::size_t>(IncidentType::collision)], 1);
-  const auto& incidents = w.referee().incidents();
+  const auto& incidents = card.referee().incidents();
   const auto hit = std::find_if(incidents.begin(), incidents.end(), [](const Incident& i) {
     return i.type == IncidentType::collision;
   });
@@ -229,8 +232,10 @@ TEST_F(WorldTest, AStoppedEgoIsTouchedAtMostOncePerContact) {
                                   core::mph_to_mps(60.0));
   int touching_episodes = 0;
   bool was = false;
+  Scorecard card(w);
   for (int i = 0; i < 30 * 50; ++i) {
     w.step();
+    card.observe_step(w);
     const core::OrientedBox car = w.traffic().footprint(w.traffic().cars()[0]);
     const bool now = core::distance(car.center, w.ego().position) < 4.7 + 0.05;
     if (now && !was) ++touching_episodes;
@@ -238,7 +243,7 @@ TEST_F(WorldTest, AStoppedEgoIsTouchedAtMostOncePerContact) {
     EXPECT_LT(w.traffic().cars()[0].map_frenet.s_m, w.ego().map_frenet.s_m) << "step " << i;
   }
   EXPECT_EQ(touching_episodes, 1);
-  EXPECT_EQ(w.referee().counts()[static_cast<std::size_t>(IncidentType::collision)], 1);
+  EXPECT_EQ(card.referee().counts()[static_cast<std::size_t>(IncidentType::collision)], 1);
 }
 
 TEST_F(WorldTest, SameSeedSameWorld) {

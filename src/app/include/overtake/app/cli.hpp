@@ -53,6 +53,9 @@ void flush_stdout_or_throw();
 /// existing parts, and hard links of existing files).
 [[nodiscard]] bool same_file(const std::filesystem::path& a, const std::filesystem::path& b);
 
+/// Says on stderr where a run's live view is served (LiveOptions::on_listening).
+void print_live_address(const std::string& url);
+
 /// Whether progress lines may be drawn (stderr is a terminal).
 [[nodiscard]] bool stderr_is_terminal();
 

@@ -46,7 +46,18 @@ struct LiveOptions {
   std::function<void(const std::string& url)> on_listening;
 };
 
-/// Options of `overtake drive`.
+/// Runs the loop of a run whose planner is not an in-process policy (e.g. a remote planner
+/// over the protocol, lock-step or real time) on the world the drive built.
+using RunLoop = std::function<sim::RunReport(sim::World& world, const sim::RunOptions& run)>;
+
+/// A planner reached through a RunLoop, and how the report names it.
+struct ExternalPlanner {
+  RunLoop loop;
+  std::string name;         ///< the report's `policy` (default: the address)
+  std::string address;  ///< e.g. the remote planner's ws:// URL (shown on the scorecard)
+};
+
+/// Options of `overtake drive` (and, with `external`, of `overtake sim --planner`).
 struct DriveOptions {
   std::optional<std::filesystem::path> map;
   double minutes = 30.0;
@@ -65,8 +76,10 @@ struct DriveOptions {
   /// Serve the live view of the run, which then goes at 1x real time.
   std::optional<LiveOptions> live;
   /// Sees every telemetry the planner receives, with the world time (not a flag: for
-  /// `calibrate` and tests).
+  /// `calibrate` and tests; in-process policies only).
   std::function<void(double t_s, const core::Telemetry& telemetry)> telemetry_tap;
+  /// When set, the planner is this instead of `policy` (`sim --planner`).
+  std::optional<ExternalPlanner> external;
 };
 
 /// Checks flag values and names (UsageError naming the flag).
@@ -96,6 +109,21 @@ struct DriveResult {
                                    const std::function<void(double t_s, double distance_m)>& progress = {},
                                    const std::atomic<bool>* stop = nullptr,
                                    const sim::Scenario* scenario = nullptr);
+
+/// What the command line does with a finished run.
+struct RunOutputs {
+  std::optional<std::filesystem::path> json;  ///< write the JSON report here
+  bool quiet = false;
+  double wall_s = 0.0;  ///< the run's wall time, for the scorecard's last line
+  std::string mode;     ///< how it ran, appended to the wall time line (may be empty)
+};
+
+/// The one post-run path of `drive` and `sim`: prints the scorecard and the wall time, writes
+/// the JSON report, says where the replay went, and returns the exit status (0 completed,
+/// 1 ended early by the planner, 130 stopped by the user). With a live view, waits for
+/// Ctrl-C before returning (the page stays served).
+[[nodiscard]] int finish_run(const DriveResult& result, const DriveOptions& opts,
+                             const RunOutputs& out);
 
 /// The `overtake` command line. Returns the process exit code: 0 success, 1 failure, 2 bad
 /// usage.

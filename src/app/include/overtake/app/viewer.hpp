@@ -16,7 +16,7 @@
 
 #include "overtake/app/commands.hpp"
 #include "overtake/app/report.hpp"
-#include "overtake/sim/replay.hpp"
+#include "overtake/replay/replay.hpp"
 #include "overtake/view/server.hpp"
 
 namespace overtake::app {
@@ -34,7 +34,7 @@ inline constexpr std::string_view kReplaysFolder = "replays";
 [[nodiscard]] std::string_view embedded_page(std::string_view name);
 
 /// The replay header of a run: the track's lane lines, the config's limits, the provenance.
-[[nodiscard]] sim::ReplayHeader replay_header_for(const Track& track, const Config& config,
+[[nodiscard]] replay::ReplayHeader replay_header_for(const Track& track, const Config& config,
                                                   const RunProvenance& provenance,
                                                   double duration_s);
 
@@ -42,10 +42,10 @@ inline constexpr std::string_view kReplaysFolder = "replays";
 [[nodiscard]] std::string replay_report_json(const sim::RunReport& report,
                                              const RunProvenance& provenance);
 
-/// Starts the live view of a run (pace: hold the run to real time) and calls
-/// live.on_listening with its address. Throws view::ViewError (a port in use, ...).
-[[nodiscard]] std::shared_ptr<view::LiveView> start_live_view(const sim::ReplayHeader& header,
-                                                              const LiveOptions& live, bool pace);
+/// Starts the live view of a run and calls live.on_listening with its address. (The run
+/// itself is paced: sim::RunOptions::pace.) Throws view::ViewError (a port in use, ...).
+[[nodiscard]] std::shared_ptr<view::LiveView> start_live_view(const replay::ReplayHeader& header,
+                                                              const LiveOptions& live);
 
 /// Reads and checks a replay file: its bytes, or std::runtime_error naming the file and the
 /// fault. With `allow_partial`, a replay whose body is cut short or damaged after some good

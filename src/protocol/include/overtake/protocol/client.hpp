@@ -148,18 +148,18 @@ class RemotePlanner {
 
 /// Runs `world` against the remote planner in lock-step: sim::run_drive with a
 /// RemotePlanner, then RemotePlanner::finish() when the run went its full length (its
-/// failure ends up in ended_early as any planner failure does). A run stopped through
-/// options.stop or run.stop ends with ended_early "stopped". run.remote_planner is set.
+/// failure ends the run as planner_failed, as any planner failure does). A run stopped
+/// through options.stop or run.stop ends as stopped. Cycles are timed as round trips.
 [[nodiscard]] sim::RunReport run_lock_step(sim::World& world, PlannerConnection& connection,
                                            const ClientOptions& options, sim::RunOptions run);
 
-/// Runs `world` against the remote planner in real time: a step every world step_s of wall
-/// time, the queue consumed while the planner thinks, a full telemetry after each reply when
+/// Runs `world` against the remote planner in real time (the stepper paced at real time): a
+/// step every world step_s of wall time, the queue consumed while the planner thinks, a full telemetry after each reply when
 /// anything stepped since the last one and `42["telemetry",null]` when nothing did (the
 /// planner's `manual` then waits for the next step). Ends early, with the report so far, on a
 /// stall, a disconnect or a malformed reply. Planner time = round trip of full telemetries.
 /// run.observer (when set) sees the start, every step, and each path when it arrives.
 [[nodiscard]] sim::RunReport run_realtime(sim::World& world, PlannerConnection& connection,
-                                          const ClientOptions& options, const sim::RunOptions& run);
+                                          const ClientOptions& options, sim::RunOptions run);
 
 }  // namespace overtake::protocol

@@ -1,8 +1,12 @@
 #pragma once
-// Drives a world with a planner in lock-step and sums up the run.
+// Running a world with a planner. One stepper (Stepper) owns a run's course: the world's
+// steps, the scorecard, the watchers, the pacing clock, the latency draw and how the run
+// ends. Two loops drive it: run_drive here, lock-step (telemetry, plan, K steps; an
+// in-process policy or a remote planner one round trip at a time), and the protocol's real
+// time loop, which steps on the wall clock while the planner thinks.
 
-#include <array>
 #include <atomic>
+#include <chrono>
 #include <cstdint>
 #include <functional>
 #include <optional>
@@ -11,18 +15,18 @@
 #include <string>
 #include <vector>
 
-#include "overtake/core/quantile_sketch.hpp"
-
 #include "overtake/core/plan.hpp"
+#include "overtake/core/random.hpp"
 #include "overtake/core/telemetry.hpp"
-#include "overtake/sim/referee.hpp"
+#include "overtake/sim/frame.hpp"
+#include "overtake/sim/scorecard.hpp"
 #include "overtake/sim/world.hpp"
 
 namespace overtake::sim {
 
-/// A planner as the loop sees it: telemetry in, path points out. It may throw
-/// PlannerFailure to end the run (e.g. a remote planner that stalled); the report so far is
-/// kept.
+/// A planner as the loop sees it: telemetry in, plan out. It may throw PlannerFailure (or
+/// any std::exception) to end the run (e.g. a remote planner that stalled); the report so
+/// far is kept.
 using PlannerFn = std::function<core::PlanResult(const core::Telemetry&)>;
 
 /// Raised by a PlannerFn that cannot go on.
@@ -31,28 +35,52 @@ struct PlannerFailure : std::runtime_error {
 };
 
 /// Watches a run as it goes (a replay recording, a live view). Called on the loop's thread;
-/// a run without an observer pays one pointer test per step.
+/// a run without a watcher builds no frames.
 class RunObserver {
  public:
   virtual ~RunObserver() = default;
-  /// The world's state: once before the first step, then after every step.
-  virtual void on_state(const World& world) = 0;
+  /// The state before the first step (step 0), then after every step, with the incidents
+  /// the referee counted in that step.
+  virtual void on_frame(const Frame& frame, std::span<const Incident> new_incidents) = 0;
   /// A path the planner sent, as sent (before the wire rounding and the trim). Lock-step: it
-  /// was planned from the state last passed to on_state; real time: it arrived then.
-  virtual void on_path(const World& world, std::span<const core::Vec2> path) = 0;
+  /// was planned from the state of the last frame; real time: it arrived then.
+  virtual void on_path(std::span<const core::Vec2> path) = 0;
 };
 
 /// Passes every call on to several observers, in the order given (null ones are skipped).
 class ObserverList final : public RunObserver {
  public:
   explicit ObserverList(std::vector<RunObserver*> observers);
-  void on_state(const World& world) override;
-  void on_path(const World& world, std::span<const core::Vec2> path) override;
+  void on_frame(const Frame& frame, std::span<const Incident> new_incidents) override;
+  void on_path(std::span<const core::Vec2> path) override;
   /// The single observer when there is one, this list when there are more, else null.
   [[nodiscard]] RunObserver* get();
 
  private:
   std::vector<RunObserver*> observers_;
+};
+
+/// How fast simulated time goes.
+enum class Pace : std::uint8_t {
+  unpaced,    ///< as fast as the machine goes
+  real_time,  ///< step k no earlier than k step times of wall time after the start
+};
+
+/// The wall-clock times at which steps fall due under a pace.
+class PaceClock {
+ public:
+  using Clock = std::chrono::steady_clock;
+  PaceClock(Pace pace, double step_s, Clock::time_point start = Clock::now());
+  /// When step `step` (counted from the start) falls due; the start itself when unpaced.
+  [[nodiscard]] Clock::time_point due(long step) const;
+  /// Waits until step `step` is due (returns at once when unpaced).
+  void wait_for(long step) const;
+  [[nodiscard]] Pace pace() const { return pace_; }
+
+ private:
+  Pace pace_;
+  Clock::duration period_;
+  Clock::time_point start_;
 };
 
 /// How long and how to run.
@@ -63,82 +91,72 @@ struct RunOptions {
   std::uint64_t seed = 1;  ///< for the latency draw
   /// Called now and then with the simulated time (for progress displays).
   std::function<void(double t_s, double distance_m)> progress;
-  /// When set (and true), the run stops at the next cycle with ended_early = "stopped".
+  /// When set (and true), the run stops at the next step or cycle, ended as stopped.
   const std::atomic<bool>* stop = nullptr;
-  /// When set, sees every state and every path (see RunObserver); not owned.
+  /// When set, sees every frame and every path (see RunObserver); not owned.
   RunObserver* observer = nullptr;
-  /// The planner runs in another process (over the protocol): its time per cycle is the
-  /// wall-clock round trip from telemetry sent to reply received (clock "round_trip"); the
-  /// loop's own thread CPU time would measure overtake, not the planner.
-  bool remote_planner = false;
+  /// The pacing clock (real time for a live view, and for the protocol's real-time loop).
+  Pace pace = Pace::unpaced;
+  /// What a cycle's planner time measures: an in-process planner's thread CPU time, or the
+  /// round trip to a remote planner.
+  CycleClock clock = CycleClock::thread_cpu;
 };
 
-/// Planner compute time per cycle (microseconds). Not part of the determinism promise.
-/// p50 and p99 come from a fixed-memory sketch, within 1% of the exact order statistics
-/// (core::QuantileSketch); the maxima are exact.
-/// In-process planners (run_drive) are timed on the thread's CPU clock, so that other
-/// processes on a shared machine do not inflate the figures; the wall-clock p99 and max are
-/// kept beside them. A remote planner's cycle is the wall-clock round trip of a telemetry
-/// and its reply (clock "round_trip": the planner's time plus the transport's).
-struct PlannerTiming {
-  double p50_us = 0.0;
-  double p99_us = 0.0;
-  double max_us = 0.0;
-  long cycles = 0;
-  std::string clock = "round_trip";  ///< what p50/p99/max measure: "thread_cpu" or "round_trip"
-  double wall_p99_us = 0.0;    ///< wall-clock figures (equal to the above for "round_trip")
-  double wall_max_us = 0.0;
-};
-
-/// Everything a run reports (SI; conversions at the report's edge).
-struct RunReport {
-  double distance_m = 0.0;
-  double duration_s = 0.0;
-  double mean_speed_mps = 0.0;
-  double best_incident_free_m = 0.0;
-  std::vector<Incident> incidents;
-  std::array<int, kIncidentTypeCount> incident_counts{};
-  /// Outside-of-lane counts under the same rule on the exact d (the rubric uses the
-  /// original's d on the waypoint chords); a figure, not an incident.
-  int exact_outside_lane = 0;
-  Peaks peak;
-  int lane_changes = 0;
-  std::vector<double> time_in_lane_s;  ///< index = lane
-  PlannerTiming timing;
-  long planner_cycles = 0;
-  /// Empty when the run went its full duration; else why it ended early.
-  std::string ended_early;
-};
-
-/// Runs the loop: telemetry -> planner -> path -> K steps, until the duration is reached or
-/// the planner fails. Returns the report (also on failure).
-[[nodiscard]] RunReport run_drive(World& world, const PlannerFn& planner, const RunOptions& opts);
-
-class LaneTracker;
-
-/// The report of a world as it stands (for loops other than run_drive, e.g. real time).
-/// `cycle_us`: planner time of each cycle, kept in fixed memory however long the run;
-/// `ended_early`: empty, or why the run stopped. `cycle_us` are measured on `clock`
-/// ("thread_cpu" or "round_trip").
-[[nodiscard]] RunReport summarize(const World& world, const LaneTracker& lanes,
-                                  const core::QuantileSketch& cycle_us, std::string ended_early,
-                                  std::string clock = "round_trip");
-
-/// Tracks lane changes and time per lane from the ego's d (with hysteresis: the lane counts
-/// as changed once the car is within `settle_m` of another lane's centre).
-class LaneTracker {
+/// The course of one run. Made before the first step (the watcher sees the first frame
+/// then); the loop asks it for telemetry, hands it the planner's plans, steps it, and ends it.
+class Stepper {
  public:
-  explicit LaneTracker(const core::RoadParams& road, double settle_m = 1.0);
-  void observe(double d_m, double dt_s);
-  [[nodiscard]] int lane_changes() const { return changes_; }
-  [[nodiscard]] const std::vector<double>& time_in_lane_s() const { return time_in_lane_s_; }
+  /// The world must outlive the stepper.
+  Stepper(World& world, const RunOptions& options);
+
+  /// True once the run has gone its duration or has been ended.
+  [[nodiscard]] bool finished() const;
+  /// True when the user asked the run to stop (RunOptions::stop).
+  [[nodiscard]] bool stop_requested() const;
+  /// What the planner is told now.
+  [[nodiscard]] core::Telemetry telemetry() const { return world_.telemetry(); }
+  /// A plan for the world to drive: the watcher sees its path, the world takes it, and
+  /// (for a planner cycle: with `cycle_us` and `wall_us`) the scorecard counts its status and
+  /// time.
+  void apply(core::PlanResult plan, std::optional<double> cycle_us = std::nullopt,
+             double wall_us = 0.0);
+  /// Counts a planner cycle that brought no new path (a remote planner's `manual` reply to
+  /// a full telemetry: the world keeps its queue).
+  void count_cycle(const core::PlanResult& plan, double cycle_us, double wall_us);
+  /// One world step now (the scorecard, the watcher, the progress display see it).
+  void step();
+  /// Steps until the next planner call in lock-step: K steps, K drawn from the latency range
+  /// by the seed (or fixed by the options), each when the pace lets it fall due; fewer when
+  /// the run finishes.
+  void step_one_call();
+  /// When the next step falls due on the pacing clock.
+  [[nodiscard]] PaceClock::Clock::time_point next_step_due() const;
+  /// Ends the run early. The first end counts; a run that went its duration has completed.
+  void end(RunEnd end, std::string reason = {});
+  /// The report (the run completed unless it was ended).
+  [[nodiscard]] RunReport report() const;
+
+  [[nodiscard]] World& world() { return world_; }
+  [[nodiscard]] const Scorecard& scorecard() const { return scorecard_; }
 
  private:
-  core::RoadParams road_;
-  double settle_m_;
-  int settled_ = -1;  // -1 until the car first settles in a lane
-  int changes_ = 0;
-  std::vector<double> time_in_lane_s_;
+  void emit_frame(std::size_t incidents_before);
+
+  World& world_;
+  RunOptions options_;
+  long total_steps_;
+  long start_step_;
+  Scorecard scorecard_;
+  PaceClock pace_;
+  core::Rng latency_;
+  std::optional<RunOutcome> ended_;
+  double next_progress_s_;
+  Frame frame_;  // scratch for the watcher
 };
+
+/// The lock-step loop: telemetry -> planner -> path -> K steps, until the duration is
+/// reached, the planner fails (the run ends as planner_failed, or as stopped when the stop
+/// flag was set meanwhile) or the user stops it. Returns the report (also on failure).
+[[nodiscard]] RunReport run_drive(World& world, const PlannerFn& planner, const RunOptions& opts);
 
 }  // namespace overtake::sim

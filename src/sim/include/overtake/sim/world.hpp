@@ -1,9 +1,11 @@
 #pragma once
-// The headless world: fixed steps of the ego (perfect controller on its path queue), the
-// traffic, and the referee, deterministic from a seed.
+// The headless world: fixed steps of the ego (perfect controller on its path queue) and the
+// traffic, deterministic from a seed. It judges nothing: the run's scorecard (scorecard.hpp)
+// watches it step by step.
 
 #include <cstdint>
 #include <deque>
+#include <optional>
 #include <vector>
 
 #include "overtake/core/map.hpp"
@@ -46,9 +48,11 @@ class World {
   /// original's rule (path_queue.hpp) and makes the rest the ego's queue.
   void apply_path(std::vector<core::Vec2> path);
   /// Advances one step: traffic decides and moves, the ego moves onto its next point (with
-  /// one point left it stays and the point is dropped), bodies that touch are pushed apart,
-  /// the referee checks.
+  /// one point left it stays and the point is dropped), bodies that touch are pushed apart.
   void step();
+  /// The ego after the last step, as the referee sees it (with the car that touched it in
+  /// that step, if any).
+  [[nodiscard]] EgoFrame ego_frame() const;
 
   [[nodiscard]] double time_s() const { return static_cast<double>(steps_) * params_.step_s; }
   [[nodiscard]] long steps() const { return steps_; }
@@ -56,7 +60,6 @@ class World {
   [[nodiscard]] const std::deque<core::Vec2>& queue() const { return queue_; }
   [[nodiscard]] const Traffic& traffic() const { return traffic_; }
   [[nodiscard]] Traffic& traffic_for_testing() { return traffic_; }
-  [[nodiscard]] const Referee& referee() const { return referee_; }
   [[nodiscard]] const WorldParams& params() const { return params_; }
   [[nodiscard]] const core::ReferenceLine& line() const { return line_; }
   /// The map's waypoint chords, on which the original measures s and d.
@@ -75,7 +78,7 @@ class World {
   EgoState ego_;
   std::deque<core::Vec2> queue_;
   Traffic traffic_;
-  Referee referee_;
+  std::optional<int> contact_;  // a car that touched the ego in the last step
   long steps_ = 0;
   std::vector<ScenarioEvent> events_;  // pending, in time order
   std::size_t next_event_ = 0;

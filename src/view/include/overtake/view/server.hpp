@@ -18,7 +18,7 @@
 #include <string_view>
 #include <vector>
 
-#include "overtake/sim/replay.hpp"
+#include "overtake/replay/replay.hpp"
 #include "overtake/sim/run.hpp"
 #include "overtake/view/page.hpp"
 
@@ -51,13 +51,13 @@ class LiveFeed {
 };
 
 /// A run observer that encodes the run into a LiveFeed, publishing about every 0.1 s of
-/// simulated time, and (when `pace`) holds the run to real time: the state of step k is
-/// published no earlier than k * step_s of wall time after the first.
+/// simulated time. It does not pace the run: a live run is paced by its own clock
+/// (sim::RunOptions::pace).
 class LiveRecorder final : public sim::RunObserver {
  public:
-  LiveRecorder(LiveFeed& feed, bool pace);
-  void on_state(const sim::World& world) override;
-  void on_path(const sim::World& world, std::span<const core::Vec2> path) override;
+  explicit LiveRecorder(LiveFeed& feed);
+  void on_frame(const sim::Frame& frame, std::span<const sim::Incident> new_incidents) override;
+  void on_path(std::span<const core::Vec2> path) override;
   /// Publishes what is pending and the end record (the run's report, JSON), and closes the
   /// feed.
   void finish(std::string_view report_json);
@@ -65,12 +65,10 @@ class LiveRecorder final : public sim::RunObserver {
  private:
   void publish();
   LiveFeed& feed_;
-  bool pace_;
-  sim::ReplayEncoder encoder_;
+  replay::ReplayEncoder encoder_;
   std::string pending_;
   std::optional<long> first_step_;
   long last_publish_step_ = 0;
-  std::chrono::steady_clock::time_point start_;
 };
 
 /// What the server serves.
@@ -148,7 +146,7 @@ class LiveView {
   /// `page_template`: the viewer page with its placeholders; `header_json`: the replay
   /// header. Throws ViewError when the page or the server cannot be set up.
   LiveView(std::string_view page_template, std::string header_json,
-           const ViewServerOptions& options, bool pace);
+           const ViewServerOptions& options);
   [[nodiscard]] sim::RunObserver& observer() { return recorder_; }
   /// Sends the end record and closes the feed; the page stays served.
   void finish(std::string_view report_json) { recorder_.finish(report_json); }

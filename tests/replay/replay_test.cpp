@@ -2,7 +2,7 @@
 // differences: cars coming and going, far jumps), the writer's temporary file and rename, and
 // clear errors for damaged files (every cut of a record, values out of range).
 
-#include "overtake/sim/replay.hpp"
+#include "overtake/replay/replay.hpp"
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
@@ -19,12 +19,15 @@
 
 #include "overtake/core/units.hpp"
 #include "overtake/sim/run.hpp"
+#include "overtake/sim/scorecard.hpp"
 #include "overtake/sim/world.hpp"
 #include "sim/test_maps.hpp"
 #include "zlib_support.hpp"
 
-namespace overtake::sim {
+namespace overtake::replay {
 namespace {
+
+using namespace sim;
 
 using ::testing::HasSubstr;
 
@@ -32,42 +35,26 @@ constexpr double kCruiseMps = 24.0;  // above the 50 mph limit: speeding inciden
 constexpr double kLaneD = 6.0;
 constexpr const char* kReport = R"({"distance_miles":1.5,"ended_early":null})";
 
-// What the world looked like at each on_state, exactly, to compare with the file.
-struct Seen {
-  long step = 0;
-  EgoState ego;
-  StrictFigures strict;
-  double distance_m = 0.0, incident_free_m = 0.0, best_m = 0.0;
-  std::vector<core::OrientedBox> boxes;
-  std::vector<int> ids;
-  std::vector<double> speeds;
-};
-
+// Every frame and path the run showed its watchers, exactly, to compare with the file.
 class Capture final : public RunObserver {
  public:
-  void on_state(const World& w) override {
-    Seen s;
-    s.step = w.steps();
-    s.ego = w.ego();
-    s.strict = w.referee().current_strict();
-    s.distance_m = w.referee().distance_m();
-    s.incident_free_m = w.referee().incident_free_m();
-    s.best_m = w.referee().best_incident_free_m();
-    for (const TrafficCar& c : w.traffic().cars()) {
-      s.boxes.push_back(w.traffic().footprint(c));
-      s.ids.push_back(c.id);
-      s.speeds.push_back(c.speed_mps);
-    }
-    states.push_back(std::move(s));
-  }
-  void on_path(const World& w, std::span<const core::Vec2> path) override {
+  void on_frame(const Frame& f, std::span<const Incident>) override { states.push_back(f); }
+  void on_path(std::span<const core::Vec2> path) override {
     paths.emplace_back(path.begin(), path.end());
-    path_steps.push_back(w.steps());
+    path_steps.push_back(states.empty() ? -1 : states.back().step);
   }
-  std::vector<Seen> states;
+  std::vector<Frame> states;
   std::vector<std::vector<core::Vec2>> paths;
   std::vector<long> path_steps;
 };
+
+// The frame of a world before its first step, as a run's watchers see it.
+Frame first_frame(const World& world) {
+  const Scorecard card(world);
+  Frame f;
+  card.fill_frame(world, f);
+  return f;
+}
 
 long long cm(double m) {
   return std::llround(m * 100.0);
@@ -185,29 +172,29 @@ TEST_F(ReplayTest, RoundTripKeepsEveryFieldBitForBit) {
   ASSERT_EQ(r.frames.size(), 1001u);
   for (std::size_t i = 0; i < r.frames.size(); ++i) {
     const ReplayFrame& f = r.frames[i];
-    const Seen& s = seen.states[i];
+    const Frame& s = seen.states[i];
     SCOPED_TRACE("frame " + std::to_string(i));
     ASSERT_EQ(f.step, s.step);
-    EXPECT_EQ(cm(f.position.x), cm(s.ego.position.x));
-    EXPECT_EQ(cm(f.position.y), cm(s.ego.position.y));
-    EXPECT_EQ(std::llround(f.yaw_rad * 1e4), yaw_units(s.ego.yaw_rad));
-    EXPECT_EQ(std::llround(f.speed_mps * 100.0), cm(s.ego.speed_mps));
-    EXPECT_EQ(f32(f.s_m), f32(s.ego.frenet.s_m));
-    EXPECT_EQ(f32(f.d_m), f32(s.ego.frenet.d_m));
+    EXPECT_EQ(cm(f.position.x), cm(s.position.x));
+    EXPECT_EQ(cm(f.position.y), cm(s.position.y));
+    EXPECT_EQ(std::llround(f.yaw_rad * 1e4), yaw_units(s.yaw_rad));
+    EXPECT_EQ(std::llround(f.speed_mps * 100.0), cm(s.speed_mps));
+    EXPECT_EQ(f32(f.s_m), f32(s.s_m));
+    EXPECT_EQ(f32(f.d_m), f32(s.d_m));
     EXPECT_EQ(f32(f.strict.tangential_mps2), f32(s.strict.tangential_mps2));
     EXPECT_EQ(f32(f.strict.normal_mps2), f32(s.strict.normal_mps2));
     EXPECT_EQ(f32(f.strict.acceleration_mps2), f32(s.strict.acceleration_mps2));
     EXPECT_EQ(f32(f.strict.jerk_mps3), f32(s.strict.jerk_mps3));
     EXPECT_EQ(f32(f.distance_m), f32(s.distance_m));
     EXPECT_EQ(f32(f.incident_free_m), f32(s.incident_free_m));
-    EXPECT_EQ(f32(f.best_incident_free_m), f32(s.best_m));
-    ASSERT_EQ(f.cars.size(), s.boxes.size());
+    EXPECT_EQ(f32(f.best_incident_free_m), f32(s.best_incident_free_m));
+    ASSERT_EQ(f.cars.size(), s.cars.size());
     for (std::size_t c = 0; c < f.cars.size(); ++c) {
-      EXPECT_EQ(f.cars[c].id, s.ids[c]);
-      EXPECT_EQ(cm(f.cars[c].position.x), cm(s.boxes[c].center.x));
-      EXPECT_EQ(cm(f.cars[c].position.y), cm(s.boxes[c].center.y));
-      EXPECT_EQ(std::llround(f.cars[c].yaw_rad * 1e4), yaw_units(s.boxes[c].heading_rad));
-      EXPECT_EQ(std::llround(f.cars[c].speed_mps * 100.0), cm(s.speeds[c]));
+      EXPECT_EQ(f.cars[c].id, s.cars[c].id);
+      EXPECT_EQ(cm(f.cars[c].position.x), cm(s.cars[c].position.x));
+      EXPECT_EQ(cm(f.cars[c].position.y), cm(s.cars[c].position.y));
+      EXPECT_EQ(std::llround(f.cars[c].yaw_rad * 1e4), yaw_units(s.cars[c].yaw_rad));
+      EXPECT_EQ(std::llround(f.cars[c].speed_mps * 100.0), cm(s.cars[c].speed_mps));
     }
   }
   EXPECT_EQ(r.frames.front().step, 0);
@@ -239,7 +226,7 @@ TEST_F(ReplayTest, RoundTripKeepsEveryFieldBitForBit) {
     EXPECT_EQ(f32(got.s_m), f32(want.s_m));
     EXPECT_EQ(got.lane, want.lane);
     const auto at = static_cast<std::size_t>(got.step);
-    EXPECT_EQ(cm(got.position.x), cm(seen.states[at].ego.position.x));
+    EXPECT_EQ(cm(got.position.x), cm(seen.states[at].position.x));
   }
 }
 
@@ -351,7 +338,7 @@ TEST_F(ReplayTest, AFailedRunKeepsItsRecordsAndReport) {
         return inner(t);
       },
       opts);
-  ASSERT_FALSE(rep.ended_early.empty());
+  ASSERT_EQ(rep.outcome.end, RunEnd::planner_failed);
   writer.finish(R"({"ended_early":"planner failed"})");
   const Replay r = read_replay(file);
   EXPECT_EQ(r.paths.size(), 100u);
@@ -467,7 +454,7 @@ TEST_F(ReplayTest, NoEndRecordIsTruncated) {
   World world(map_, line_, params_, TrafficProfile::faithful, 1);
   ReplayEncoder enc;
   std::string records;
-  enc.append_state(world, records);
+  enc.append_frame(first_frame(world), records);
   const auto bad = dir_ / "bad.otr";
   write_bytes(bad, handmade(header(), records));
   const std::string e = error_of(bad);
@@ -479,7 +466,7 @@ TEST_F(ReplayTest, UnknownKindsAreSkippedAndBadRecordsNamed) {
   World world(map_, line_, params_, TrafficProfile::faithful, 1);
   ReplayEncoder enc;
   std::string records;
-  enc.append_state(world, records);
+  enc.append_frame(first_frame(world), records);
   records += record_of(42, "future");
   ReplayEncoder::append_end("{}", records);
   const auto file = dir_ / "ok.otr";
@@ -491,7 +478,7 @@ TEST_F(ReplayTest, UnknownKindsAreSkippedAndBadRecordsNamed) {
   // A frame too short for its cars; a path before any frame; a second frame with the same step.
   std::string short_frame;
   ReplayEncoder fresh;
-  fresh.append_state(world, short_frame);
+  fresh.append_frame(first_frame(world), short_frame);
   short_frame = record_of(1, short_frame.substr(5, 60));
   write_bytes(file, handmade(header(), short_frame));
   EXPECT_THAT(error_of(file), HasSubstr("record #1 (frame, at inflated byte 0): the ids of its 12 "
@@ -502,8 +489,8 @@ TEST_F(ReplayTest, UnknownKindsAreSkippedAndBadRecordsNamed) {
   EXPECT_THAT(error_of(file), HasSubstr("a path before the first frame"));
   std::string twice;
   ReplayEncoder e1, e2;
-  e1.append_state(world, twice);
-  e2.append_state(world, twice);
+  e1.append_frame(first_frame(world), twice);
+  e2.append_frame(first_frame(world), twice);
   write_bytes(file, handmade(header(), twice));
   EXPECT_THAT(error_of(file), HasSubstr("step 0 does not follow step 0"));
 }
@@ -513,7 +500,7 @@ TEST_F(ReplayTest, UnknownKindsAreSkippedAndBadRecordsNamed) {
 TEST_F(ReplayTest, HeaderIntegersMustBeIntegersThatFit) {
   World world(map_, line_, params_, TrafficProfile::faithful, 1);
   std::string records;
-  ReplayEncoder().append_state(world, records);
+  ReplayEncoder().append_frame(first_frame(world), records);
   ReplayEncoder::append_end("{}", records);
   const std::string good = replay_header_json(header());
   const auto file = dir_ / "bad.otr";
@@ -729,4 +716,4 @@ TEST_F(ReplayTest, BadDifferencesAndIdsAreNamed) {
 }
 
 }  // namespace
-}  // namespace overtake::sim
+}  // namespace overtake::replay

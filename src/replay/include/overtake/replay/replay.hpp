@@ -5,7 +5,8 @@
 // and the run's report at the end. Positions are fixed-point integers stored as differences
 // from the previous frame (version 2), so the records must be read in order from the first.
 // The writer streams (deflating as the run goes), the reader checks everything and says what
-// is wrong and where.
+// is wrong and where. A layer of its own above the simulator: it is fed the run's frames
+// (sim::Frame), not the world.
 
 #include <cstddef>
 #include <cstdint>
@@ -19,12 +20,12 @@
 
 #include "overtake/core/geometry.hpp"
 #include "overtake/core/reference_line.hpp"
+#include "overtake/sim/frame.hpp"
 #include "overtake/sim/params.hpp"
 #include "overtake/sim/referee.hpp"
 #include "overtake/sim/run.hpp"
-#include "overtake/sim/world.hpp"
 
-namespace overtake::sim {
+namespace overtake::replay {
 
 inline constexpr std::string_view kReplayMagic = "OVTKRPLY";
 /// Version 2: positions as zigzag-varint differences (docs/replay.md). Version 1 (absolute
@@ -77,35 +78,17 @@ struct ReplayHeader {
 
 /// The header of a run on `line` with `params`: lane lines sampled every 5 m, rounded to cm.
 [[nodiscard]] ReplayHeader make_replay_header(const core::ReferenceLine& line,
-                                              const WorldParams& params,
+                                              const sim::WorldParams& params,
                                               ReplayProvenance provenance);
 /// The header as the file's JSON text.
 [[nodiscard]] std::string replay_header_json(const ReplayHeader& header);
 /// The file's uncompressed start: magic, version, header length, header JSON.
 [[nodiscard]] std::string replay_preamble(const ReplayHeader& header);
 
-/// One car in a frame.
-struct ReplayCar {
-  int id = 0;
-  core::Vec2 position;     ///< m (stored in cm)
-  double yaw_rad = 0.0;    ///< stored in 1e-4 rad
-  double speed_mps = 0.0;  ///< stored in cm/s
-};
-
-/// One step of the run.
-struct ReplayFrame {
-  long step = 0;  ///< t = step * step_s
-  core::Vec2 position;
-  double yaw_rad = 0.0;
-  double speed_mps = 0.0;
-  double s_m = 0.0;
-  double d_m = 0.0;
-  StrictFigures strict;
-  double distance_m = 0.0;
-  double incident_free_m = 0.0;
-  double best_incident_free_m = 0.0;
-  std::vector<ReplayCar> cars;
-};
+/// One car in a frame (stored: position in cm, yaw in 1e-4 rad, speed in cm/s).
+using ReplayCar = sim::CarPose;
+/// One step of the run (sim::Frame: what the run's watchers see).
+using ReplayFrame = sim::Frame;
 
 /// Turns a run into records (u8 kind, u32 payload length, payload), appended to a buffer.
 /// The live view sends these as they are; the writer deflates them. Positions are coded as
@@ -113,13 +96,12 @@ struct ReplayFrame {
 /// other), so one encoder must see the whole run, and its records be read from the first.
 class ReplayEncoder {
  public:
-  /// The frame of the world's current step, then an incident record for each incident the
-  /// referee counted since the previous call.
-  void append_state(const World& world, std::string& out);
-  /// A frame from plain values, rounded to the stored fixed point (append_state's frame; for
-  /// tests and tools). A car whose id is outside [0, 65535] is clamped into it; a car whose
-  /// id repeats one before it in the frame, and cars beyond the 255th, are left out.
+  /// A frame, rounded to the stored fixed point. A car whose id is outside [0, 65535] is
+  /// clamped into it; a car whose id repeats one before it in the frame, and cars beyond the
+  /// 255th, are left out.
   void append_frame(const ReplayFrame& frame, std::string& out);
+  /// An incident record for each incident, placed at the ego of the last frame appended.
+  void append_incidents(std::span<const sim::Incident> incidents, std::string& out) const;
   /// The path the planner sent at a cycle (at most 65535 points are kept); its first point is
   /// coded against the ego of the last frame appended.
   void append_path(std::span<const core::Vec2> path, std::string& out) const;
@@ -137,13 +119,11 @@ class ReplayEncoder {
   };
 
  private:
-  std::size_t incidents_seen_ = 0;
   Fixed ego_;                   // the last frame's ego (zero before the first frame)
   std::vector<FixedCar> cars_;  // the last frame's cars (ids unique)
   std::vector<FixedCar> next_;  // scratch: the frame being written
   std::vector<Fixed> base_;     // scratch: what each car of next_ is coded against
   std::vector<bool> in_frame_;  // scratch: ids already in next_ (65536 flags)
-  ReplayFrame frame_;           // scratch: append_state's frame
 };
 
 /// Streams a replay to `path` while the run goes: records are deflated in chunks and written
@@ -151,7 +131,7 @@ class ReplayEncoder {
 /// finish() completes the stream and renames the file, so nothing half-written takes the
 /// final name. Use it as the run's observer (RunOptions::observer).
 /// A path that exists and is not a regular file (/dev/null, a pipe) is written in place.
-class ReplayWriter final : public RunObserver {
+class ReplayWriter final : public sim::RunObserver {
  public:
   /// Creates the partial file and writes the preamble. Throws ReplayError naming the file.
   ReplayWriter(const std::filesystem::path& path, const ReplayHeader& header);
@@ -161,8 +141,8 @@ class ReplayWriter final : public RunObserver {
   ReplayWriter(const ReplayWriter&) = delete;
   ReplayWriter& operator=(const ReplayWriter&) = delete;
 
-  void on_state(const World& world) override;
-  void on_path(const World& world, std::span<const core::Vec2> path) override;
+  void on_frame(const sim::Frame& frame, std::span<const sim::Incident> new_incidents) override;
+  void on_path(std::span<const core::Vec2> path) override;
 
   /// Writes the end record (the run's report, JSON), completes the stream and gives the file
   /// its name. Throws ReplayError naming the file when anything could not be written (the
@@ -223,4 +203,4 @@ struct ReplayCheck {
 /// Checks a replay in memory without keeping its records (for `overtake view`).
 [[nodiscard]] ReplayCheck check_replay(std::string_view bytes, std::string_view name);
 
-}  // namespace overtake::sim
+}  // namespace overtake::replay

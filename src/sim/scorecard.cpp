@@ -1,0 +1,115 @@
+#include "overtake/sim/scorecard.hpp"
+
+#include <cmath>
+
+#include "overtake/sim/world.hpp"
+
+namespace overtake::sim {
+
+std::string_view to_string(RunEnd end) {
+  switch (end) {
+    case RunEnd::completed: return "completed";
+    case RunEnd::stopped: return "stopped";
+    case RunEnd::planner_failed: return "planner_failed";
+  }
+  return "unknown";
+}
+
+std::string ended_early_text(const RunOutcome& outcome) {
+  switch (outcome.end) {
+    case RunEnd::completed: return {};
+    case RunEnd::stopped: return "stopped";
+    case RunEnd::planner_failed:
+      return "planner failed at t = " + std::to_string(outcome.t_s) + " s: " + outcome.reason;
+  }
+  return {};
+}
+
+std::string_view to_string(CycleClock clock) {
+  return clock == CycleClock::thread_cpu ? "thread_cpu" : "round_trip";
+}
+
+LaneTracker::LaneTracker(const core::RoadParams& road, double settle_m)
+    : road_(road),
+      settle_m_(settle_m),
+      time_in_lane_s_(static_cast<std::size_t>(road.lane_count), 0.0) {}
+
+void LaneTracker::observe(double d_m, double dt_s) {
+  const int lane = core::lane_of(d_m, road_);
+  time_in_lane_s_[static_cast<std::size_t>(lane)] += dt_s;
+  if (std::abs(d_m - core::lane_center_d(lane, road_)) > settle_m_) return;
+  if (settled_ >= 0 && settled_ != lane) ++changes_;
+  settled_ = lane;
+}
+
+Scorecard::Scorecard(const World& world)
+    : referee_(world.params().referee, world.params().step_s, world.params().road),
+      lanes_(world.params().road),
+      step_s_(world.params().step_s) {
+  // The rubric's first block compares against the speed before the first step (at rest,
+  // unless a scenario starts the ego moving).
+  referee_.set_initial_speed(world.ego().speed_mps);
+}
+
+void Scorecard::observe_step(const World& world) {
+  referee_.observe(world.ego_frame());
+  lanes_.observe(world.ego().frenet.d_m, step_s_);
+}
+
+void Scorecard::count_cycle(const core::PlanResult& plan, double cycle_us, double wall_us) {
+  cycle_us_.add(cycle_us);
+  wall_us_.add(wall_us);
+  ++status_cycles_[static_cast<std::size_t>(plan.status)];
+  if (plan.status != core::PlanStatus::normal && first_reason_.empty()) {
+    first_reason_ = plan.reason.empty() ? std::string(core::to_string(plan.status)) : plan.reason;
+  }
+}
+
+void Scorecard::fill_frame(const World& world, Frame& f) const {
+  const EgoState& ego = world.ego();
+  f.step = world.steps();
+  f.position = ego.position;
+  f.yaw_rad = ego.yaw_rad;
+  f.speed_mps = ego.speed_mps;
+  f.s_m = ego.frenet.s_m;
+  f.d_m = ego.frenet.d_m;
+  f.strict = referee_.current_strict();
+  f.distance_m = referee_.distance_m();
+  f.incident_free_m = referee_.incident_free_m();
+  f.best_incident_free_m = referee_.best_incident_free_m();
+  const Traffic& traffic = world.traffic();
+  f.cars.resize(traffic.cars().size());
+  for (std::size_t i = 0; i < f.cars.size(); ++i) {
+    const TrafficCar& c = traffic.cars()[i];
+    const core::OrientedBox box = traffic.footprint(c);
+    f.cars[i] = {c.id, box.center, box.heading_rad, c.speed_mps};
+  }
+}
+
+RunReport Scorecard::report(const World& world, RunOutcome outcome, CycleClock clock) const {
+  RunReport r;
+  r.outcome = std::move(outcome);
+  r.duration_s = world.time_s();
+  r.distance_m = referee_.distance_m();
+  r.mean_speed_mps = r.duration_s > 0.0 ? r.distance_m / r.duration_s : 0.0;
+  r.best_incident_free_m = referee_.best_incident_free_m();
+  r.incidents = referee_.incidents();
+  r.incident_counts = referee_.counts();
+  r.exact_outside_lane = referee_.exact_outside_lane_count();
+  r.peak = referee_.peaks();
+  r.lane_changes = lanes_.lane_changes();
+  r.time_in_lane_s = lanes_.time_in_lane_s();
+  r.planner_cycles = static_cast<long>(cycle_us_.count());
+  r.plan_status_cycles = status_cycles_;
+  r.first_plan_reason = first_reason_;
+  r.timing.p50_us = cycle_us_.quantile(0.5);
+  r.timing.p99_us = cycle_us_.quantile(0.99);
+  r.timing.max_us = cycle_us_.max();
+  r.timing.cycles = r.planner_cycles;
+  r.timing.clock = clock;
+  r.timing.wall_p99_us = wall_us_.quantile(0.99);
+  r.timing.wall_max_us = wall_us_.max();
+  return r;
+}
+
+}  // namespace overtake::sim
