@@ -155,6 +155,11 @@ std::string fmt(double v, int decimals) {
   return buf;
 }
 
+// A share (0-1) as a percentage with one decimal, e.g. "12.5%".
+std::string percent(double share) {
+  return fmt(100.0 * share, 1) + "%";
+}
+
 const std::vector<std::string>& incident_types() {
   static const std::vector<std::string> types = [] {
     std::vector<std::string> t;
@@ -576,7 +581,20 @@ json summarize_bench(const std::vector<json>& runs, const std::vector<std::strin
              strict_jerk = 0.0, worst_p99 = 0.0, worst_wall_p99 = 0.0;
       std::vector<double> free_miles, p50s;
       std::map<std::string, double> counts;
+      std::map<std::string, double> status_cycles;  // by plan status, over every run
+      double cycles = 0.0;
+      std::size_t ended_early = 0;
       for (const json* r : mine) {
+        // Rows written before plan statuses were kept have none: all their cycles count as
+        // normal.
+        const json none = json::object();
+        const json& statuses = r->contains("plan_status") ? (*r)["plan_status"]["cycles"] : none;
+        for (std::size_t i = 0; i < core::kPlanStatusCount; ++i) {
+          const std::string name(core::to_string(static_cast<core::PlanStatus>(i)));
+          status_cycles[name] += statuses.value(name, 0.0);
+        }
+        cycles += (*r)["planner_cycles"].get<double>();
+        if (!(*r)["ended_early"].is_null()) ++ended_early;
         miles += (*r)["distance_miles"].get<double>();
         seconds += (*r)["duration_s"].get<double>();
         free_miles.push_back((*r)["best_incident_free_miles"].get<double>());
@@ -597,6 +615,15 @@ json summarize_bench(const std::vector<json>& runs, const std::vector<std::strin
         per100[type] = miles > 0 ? 100.0 * counts[type] / miles : 0.0;
         total_incidents += counts[type];
       }
+      json status_share = json::object();
+      for (std::size_t i = 0; i < core::kPlanStatusCount; ++i) {
+        const std::string name(core::to_string(static_cast<core::PlanStatus>(i)));
+        status_share[name] = cycles > 0 ? status_cycles[name] / cycles : 0.0;
+      }
+      // Earlier rows without statuses: their cycles are normal ones.
+      status_share["normal"] = cycles > 0 ? 1.0 - status_share["least_bad"].get<double>() -
+                                                status_share["fallback"].get<double>()
+                                          : 0.0;
       rows.push_back({{"policy", p},
                       {"traffic", t},
                       {"runs", mine.size()},
@@ -611,6 +638,8 @@ json summarize_bench(const std::vector<json>& runs, const std::vector<std::strin
                       {"peak_jerk_mps3", peak_jerk},
                       {"peak_strict_acceleration_mps2", strict_acc},
                       {"peak_strict_jerk_mps3", strict_jerk},
+                      {"plan_status_share", status_share},
+                      {"runs_ended_early", ended_early},
                       {"timing",
                        {{"planner_p50_us_median", median(p50s)},
                         {"planner_p99_us_worst", worst_p99},
@@ -635,7 +664,8 @@ std::string summary_csv(const json& rows) {
   for (const auto& type : incident_types()) header.push_back(type + std::string("_per_100mi"));
   for (const char* h : {"incident_free_miles_median", "incident_free_miles_worst", "peak_acceleration_mps2",
                         "peak_jerk_mps3", "peak_strict_acceleration_mps2", "peak_strict_jerk_mps3",
-                        "planner_p50_us_median", "planner_p99_us_worst", "planner_wall_p99_us_worst"}) {
+                        "planner_p50_us_median", "planner_p99_us_worst", "planner_wall_p99_us_worst",
+                        "least_bad_cycle_share", "fallback_cycle_share", "runs_ended_early"}) {
     header.emplace_back(h);
   }
   std::string out = join(header);
@@ -652,6 +682,9 @@ std::string summary_csv(const json& rows) {
     f.push_back(fmt(r["timing"]["planner_p50_us_median"], 1));
     f.push_back(fmt(r["timing"]["planner_p99_us_worst"], 1));
     f.push_back(fmt(r["timing"]["planner_wall_p99_us_worst"], 1));
+    f.push_back(fmt(r["plan_status_share"]["least_bad"], 5));
+    f.push_back(fmt(r["plan_status_share"]["fallback"], 5));
+    f.push_back(std::to_string(r["runs_ended_early"].get<std::size_t>()));
     out += join(f);
   }
   return out;
@@ -661,8 +694,9 @@ std::string summary_markdown(const json& rows) {
   std::string out =
       "| policy | traffic | runs | miles | mean mph | incidents /100 mi | collision | speeding | max acc | "
       "max jerk | outside lane | incident-free mi (median / worst) | peak acc / jerk (rubric) | "
-      "peak acc / jerk (strict) | planner CPU us (p50 / p99) |\n"
-      "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|---|---|---|\n";
+      "peak acc / jerk (strict) | planner CPU us (p50 / p99) | cycles least-bad / fallback | "
+      "ended early |\n"
+      "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|---|---|---|---|---:|\n";
   for (const json& r : rows) {
     const json& by = r["incidents_per_100mi_by_type"];
     out += "| " + r["policy"].get<std::string>() + " | " + r["traffic"].get<std::string>() + " | " +
@@ -672,7 +706,10 @@ std::string summary_markdown(const json& rows) {
     out += " | " + fmt(r["incident_free_miles_median"], 2) + " / " + fmt(r["incident_free_miles_worst"], 2) +
            " | " + fmt(r["peak_acceleration_mps2"], 1) + " / " + fmt(r["peak_jerk_mps3"], 1) + " | " +
            fmt(r["peak_strict_acceleration_mps2"], 1) + " / " + fmt(r["peak_strict_jerk_mps3"], 1) + " | " +
-           fmt(r["timing"]["planner_p50_us_median"], 0) + " / " + fmt(r["timing"]["planner_p99_us_worst"], 0) + " |\n";
+           fmt(r["timing"]["planner_p50_us_median"], 0) + " / " + fmt(r["timing"]["planner_p99_us_worst"], 0) +
+           " | " + percent(r["plan_status_share"]["least_bad"]) + " / " +
+           percent(r["plan_status_share"]["fallback"]) + " | " +
+           std::to_string(r["runs_ended_early"].get<std::size_t>()) + " |\n";
   }
   return out;
 }

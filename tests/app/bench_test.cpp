@@ -279,5 +279,32 @@ TEST(BenchParse, Shards) {
   EXPECT_THROW((void)parse_shard("2/8x"), UsageError);
 }
 
+// A policy that falls back on a fifth of its cycles must not look like a clean one: the
+// summary gives the share of cycles by plan status, and how many runs ended early. Rows from
+// before statuses were kept count as normal planning.
+TEST(BenchSummary, PlanStatusesAndEarlyEndsAreSummed) {
+  const DriveResult a = drive_on(*load_track(std::nullopt), load_config(std::nullopt), [] {
+    DriveOptions o;
+    o.minutes = 0.1;
+    o.policy = "walkthrough";
+    return o;
+  }());
+  json with = report_to_json(a.report, a.provenance);
+  with["planner_cycles"] = 1000;
+  with["plan_status"]["cycles"] = {{"normal", 800}, {"least_bad", 0}, {"fallback", 200}};
+  json old = with;
+  old.erase("plan_status");
+  old["ended_early"] = "planner failed at t = 1.000000 s: gone";
+  const json rows = summarize_bench({with, old}, {"walkthrough"}, {"faithful"});
+  ASSERT_EQ(rows.size(), 1u);
+  const json& share = rows[0]["plan_status_share"];
+  EXPECT_DOUBLE_EQ(share["fallback"].get<double>(), 0.1);  // 200 of 2000 cycles
+  EXPECT_EQ(share["least_bad"].get<double>(), 0.0);
+  EXPECT_NEAR(share["normal"].get<double>(), 1.0 - share["fallback"].get<double>(), 1e-12);
+  EXPECT_EQ(rows[0]["runs_ended_early"], 1);
+  EXPECT_THAT(summary_markdown(rows), HasSubstr("| 0.0% / 10.0% | 1 |"));
+  EXPECT_THAT(summary_csv(rows), HasSubstr("least_bad_cycle_share,fallback_cycle_share,runs_ended_early"));
+}
+
 }  // namespace
 }  // namespace overtake::app

@@ -61,6 +61,12 @@ TEST(DriveReport, HasTheDocumentedKeys) {
   EXPECT_EQ(j["config"]["map"]["path"], "builtin:default");
   EXPECT_EQ(j["config"]["steps_per_call"], "random 1-3");
   EXPECT_DOUBLE_EQ(j["duration_s"].get<double>(), 120.0);
+  // How it ended, as a value beside the one-line text, and how the planner planned.
+  EXPECT_EQ(j["end"], "completed");
+  EXPECT_TRUE(j["ended_early"].is_null());
+  const json& cycles = j["plan_status"]["cycles"];
+  EXPECT_EQ(cycles["normal"].get<long>() + cycles["least_bad"].get<long>() + cycles["fallback"].get<long>(),
+            j["planner_cycles"].get<long>());
 }
 
 TEST(DriveReport, TimingLivesUnderItsOwnKey) {

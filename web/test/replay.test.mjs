@@ -270,3 +270,14 @@ test('the native inflate path reads the same, and falls back on a fault', async 
   const c = await decodeReplayAsync(bad, 'sum.otr');
   assert.match(c.problem, /checksum/);
 });
+
+test('plan statuses: a run that left normal planning says so, a clean one says nothing', async () => {
+  const { planStatusText } = await import('../src/viewer/format.js');
+  assert.equal(planStatusText(null), '');
+  assert.equal(planStatusText({ planner_cycles: 100 }), '');  // a report from before statuses
+  assert.equal(planStatusText({ planner_cycles: 100, plan_status: { cycles: { normal: 100, least_bad: 0, fallback: 0 } } }), '');
+  assert.equal(
+    planStatusText({ planner_cycles: 200, plan_status: { cycles: { normal: 158, least_bad: 2, fallback: 40 } } }),
+    'planner: least-bad 1.0%, fallback 20.0% of cycles',
+  );
+});

@@ -188,6 +188,14 @@ function renderCharts(rows, runs) {
   return plots;
 }
 
+// The share of a run's cycles in which its planner left normal planning (0 for a report from
+// before plan statuses were kept).
+function unusualShare(r) {
+  const c = (r.plan_status || {}).cycles || {};
+  const total = Number(r.planner_cycles) || 0;
+  return total > 0 ? ((Number(c.least_bad) || 0) + (Number(c.fallback) || 0)) / total : 0;
+}
+
 const COLUMNS = [
   { key: 'policy', label: 'policy', get: (r) => groupOf(r).policy },
   { key: 'traffic', label: 'traffic', get: (r) => groupOf(r).traffic },
@@ -198,6 +206,7 @@ const COLUMNS = [
   { key: 'free', label: 'best incident-free mi', num: true, get: (r) => r.best_incident_free_miles, fmt: (v) => fix(v, 2) },
   { key: 'acc', label: 'peak acc (strict)', num: true, get: (r) => (r.peak || {}).strict_acceleration_mps2, fmt: (v) => fix(v, 1) },
   { key: 'jerk', label: 'peak jerk (strict)', num: true, get: (r) => (r.peak || {}).strict_jerk_mps3, fmt: (v) => fix(v, 1) },
+  { key: 'fallback', label: 'least-bad + fallback cycles', num: true, get: (r) => unusualShare(r), fmt: (v) => `${fix(100 * v, 1)}%` },
   { key: 'ended', label: 'ended early', get: (r) => r.ended_early || '' },
 ];
 

@@ -32,3 +32,17 @@ export function incidentText(type, value) {
     default: return `${head} (${value})`;
   }
 }
+
+/// What the run's report says of how the planner planned: '' when every cycle was planned
+/// normally (or the report says nothing), else e.g. 'planner: least-bad 1.0%, fallback 12.3%
+/// of cycles'. A planner that fell back on a fifth of its cycles must not look clean.
+export function planStatusText(report) {
+  const cycles = report && report.plan_status && report.plan_status.cycles;
+  const total = report ? Number(report.planner_cycles) : 0;
+  if (!cycles || !(total > 0)) return '';
+  const leastBad = Number(cycles.least_bad) || 0;
+  const fallback = Number(cycles.fallback) || 0;
+  if (leastBad + fallback === 0) return '';
+  const pct = (n) => `${((100 * n) / total).toFixed(1)}%`;
+  return `planner: least-bad ${pct(leastBad)}, fallback ${pct(fallback)} of cycles`;
+}

@@ -4,7 +4,7 @@ import './viewer.css';
 
 import { base64ToBytes, decodeReplayAsync, parseHeader, Replay, ReplayError } from '../replay.js';
 import { Charts } from './charts.js';
-import { clock, incidentText, METRES_PER_MILE, MPH_PER_MPS } from './format.js';
+import { clock, incidentText, METRES_PER_MILE, MPH_PER_MPS, planStatusText } from './format.js';
 import { Scene } from './scene.js';
 
 // Spelt in parts (joined at run time, so the minifier cannot fold them) so that the C++
@@ -176,6 +176,7 @@ class Viewer {
       $('btn-live').hidden = true;
       this.liveDirty = true;
       $('status').textContent = replay.ended ? 'live run finished' : 'live stream closed';
+      if (replay.ended) this._planStatus(replay);
       this.root.dataset.state = replay.ended ? 'ready' : 'partial';
       if (!replay.ended && !replay.problem) this.banner('The live stream closed before the run ended.', 'warn');
       this.requestRender();
@@ -194,6 +195,17 @@ class Viewer {
     $('provenance').textContent = parts.join(' · ');
     const end = r.frames ? r.time[r.frames - 1] : 0;
     $('status').textContent = `${r.frames.toLocaleString('en')} steps · ${clock(end)} · ${r.incidents} incident${r.incidents === 1 ? '' : 's'}`;
+    this._planStatus(r);
+  }
+
+  // How the planner planned (the report's plan statuses), when it left normal planning.
+  _planStatus(r) {
+    const text = planStatusText(r.report);
+    if (!text) return;
+    const status = $('status');
+    status.textContent += ` · ${text}`;
+    const first = r.report.plan_status.first_reason;
+    if (first) status.title = `first: ${first}`;
   }
 
   // ---- the timeline -------------------------------------------------------------------------
