@@ -39,6 +39,9 @@ struct PlannerUrl {
 /// `ws://HOST:PORT/PATH`.
 [[nodiscard]] std::string to_string(const PlannerUrl& url);
 
+/// A duration as the client's messages write it, e.g. "0.3 s".
+[[nodiscard]] std::string seconds_text(std::chrono::milliseconds ms);
+
 /// The connection failed or was lost; the message says how.
 class ConnectionError : public std::runtime_error {
  public:
