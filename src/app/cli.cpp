@@ -39,7 +39,6 @@ int cmd_drive(DriveOptions opts, const std::optional<std::filesystem::path>& jso
   // JSON and the replay, marked ended early (exit 130). A live run goes at real time, and
   // afterwards a second Ctrl-C stops serving the page.
   const InterruptScope interrupt;
-  if (opts.live) opts.live->on_listening = print_live_address;
   const auto wall0 = std::chrono::steady_clock::now();
   const DriveResult result =
       drive(opts, [&](double t, double dist) { progress.update(t, dist); }, &InterruptScope::flag());
@@ -193,68 +192,74 @@ bool same_file(const std::filesystem::path& a, const std::filesystem::path& b) {
   return !ec && ca == cb;
 }
 
-Subcommand register_drive(CLI::App& app) {
-  struct State {
-    DriveOptions opts;
-    std::string map, config, json, scenario, record;
-    LiveOptions live;
-    bool live_on = false;
-    bool quiet = false;
-  };
-  auto st = std::make_shared<State>();
-  auto* cmd = app.add_subcommand(
-      "drive", "Drive a car around the highway among traffic and print its scorecard.");
-  cmd->add_option("--map", st->map, "Map file (x y s dx dy per line); default: the built-in track")
+void add_run_flags(CLI::App& cmd, RunFlags& f) {
+  cmd.add_option("--map", f.map, "Map file (x y s dx dy per line); default: the built-in track")
       ->check(CLI::ExistingFile);
-  auto* minutes = cmd->add_option("--minutes", st->opts.minutes,
-                                  "Simulated minutes to drive (default 30, or the scenario's duration)");
-  cmd->add_option("--seed", st->opts.seed, "Seed of the traffic and latency draws (0 to 2^64 - 1)")
+  cmd.add_option("--config", f.config,
+                 "JSON file overriding any of the default parameters (see `overtake config`)")
+      ->check(CLI::ExistingFile);
+  cmd.add_option("--scenario", f.scenario,
+                 "Scripted scenario (JSON: ego start, cars, timed events) instead of random traffic")
+      ->check(CLI::ExistingFile);
+  f.minutes = cmd.add_option("--minutes", f.opts.minutes,
+                             "Simulated minutes to drive (default 30, or the scenario's duration)");
+  cmd.add_option("--seed", f.opts.seed, "Seed of the traffic and latency draws (0 to 2^64 - 1)")
       ->check(seed_validator())
       ->capture_default_str();
-  cmd->add_option("--traffic", st->opts.traffic,
-                  "Traffic profile: faithful (the original's rules) or calm (IDM + MOBIL)")
+  cmd.add_option("--traffic", f.opts.traffic,
+                 "Traffic profile: faithful (the original's rules) or calm (IDM + MOBIL)")
       ->capture_default_str();
-  cmd->add_option("--policy", st->opts.policy, policy_help())->capture_default_str();
-  cmd->add_option("--steps-per-call", st->opts.steps_per_call,
-                  "World steps per planner reply (1-1000); default: drawn from 1-3 per call by the seed")
+  cmd.add_option("--steps-per-call", f.opts.steps_per_call,
+                 "World steps per planner reply (1-1000, lock-step); default: drawn from 1-3 per\n"
+                 "reply by the seed")
       ->check(CLI::Range(1, 1000));
-  cmd->add_option("--json", st->json, "Also write the report as JSON to this file");
-  cmd->add_option("--config", st->config,
-                  "JSON file overriding any of the default parameters (see `overtake config`)")
-      ->check(CLI::ExistingFile);
-  cmd->add_option("--scenario", st->scenario,
-                  "Scripted scenario (JSON: ego start, cars, timed events) instead of random traffic")
-      ->check(CLI::ExistingFile);
-  cmd->add_option("--record", st->record,
-                  "Record a replay of the run to this file (every step's cars, the planned paths,\n"
-                  "the referee's figures and incidents); watch it with `overtake view FILE`");
-  auto* live = cmd->add_flag("--live", st->live_on,
-                             "Serve the run's live view (open the printed address in a browser); the run\n"
-                             "then goes at real time, and the page stays served after it until Ctrl-C");
-  cmd->add_option("--port", st->live.port, "With --live: TCP port of the page (0: any free port)")
+  cmd.add_option("--json", f.json, "Also write the report as JSON to this file");
+  cmd.add_option("--record", f.record,
+                 "Record a replay of the run to this file (every step's cars, the planned paths,\n"
+                 "the referee's figures and incidents); watch it with `overtake view FILE`");
+  auto* live = cmd.add_flag("--live", f.live_on,
+                            "Serve the run's live view (open the printed address in a browser); the run\n"
+                            "then goes at real time, and the page stays served after it until Ctrl-C");
+  cmd.add_option("--port", f.live.port, "With --live: TCP port of the page (0: any free port)")
       ->capture_default_str()
       ->needs(live);
-  cmd->add_option("--host", st->live.host,
-                  "With --live: address to serve on (loopback by default; the page is for this machine)")
+  cmd.add_option("--host", f.live.host,
+                 "With --live: address to serve on (loopback by default; the page is for this machine)")
       ->capture_default_str()
       ->needs(live);
-  cmd->add_flag("--quiet,-q", st->quiet, "No progress line or extra messages");
-  return {cmd, [st, minutes] {
-            if (!st->map.empty()) st->opts.map = st->map;
-            if (!st->scenario.empty()) {
-              st->opts.scenario = st->scenario;
-              st->opts.minutes_from_scenario = minutes->count() == 0;
-            }
-            if (!st->config.empty()) st->opts.config = st->config;
-            if (!st->record.empty()) st->opts.record = st->record;
-            if (st->live_on) st->opts.live = st->live;
-            std::optional<std::filesystem::path> json_out;
-            if (!st->json.empty()) json_out = st->json;
-            if (json_out && st->opts.record && same_file(*json_out, *st->opts.record)) {
-              throw UsageError("--json and --record name the same file (" + st->json +
-                               "): one would overwrite the other");
-            }
-            return cmd_drive(st->opts, json_out, st->quiet);
+  cmd.add_flag("--quiet,-q", f.quiet, "No progress line or extra messages");
+}
+
+std::optional<std::filesystem::path> apply_run_flags(RunFlags& f) {
+  if (!f.map.empty()) f.opts.map = f.map;
+  if (!f.scenario.empty()) {
+    f.opts.scenario = f.scenario;
+    f.opts.minutes_from_scenario = f.minutes != nullptr && f.minutes->count() == 0;
+  }
+  if (!f.config.empty()) f.opts.config = f.config;
+  if (!f.record.empty()) f.opts.record = f.record;
+  if (f.live_on) {
+    f.opts.live = f.live;
+    f.opts.live->on_listening = print_live_address;
+  }
+  std::optional<std::filesystem::path> json_out;
+  if (!f.json.empty()) json_out = f.json;
+  if (json_out && f.opts.record && same_file(*json_out, *f.opts.record)) {
+    throw UsageError("--json and --record name the same file (" + f.json +
+                     "): one would overwrite the other");
+  }
+  return json_out;
+}
+
+Subcommand register_drive(CLI::App& app) {
+  auto f = std::make_shared<RunFlags>();
+  auto* cmd = app.add_subcommand(
+      "drive", "Drive a car around the highway among traffic and print its scorecard.");
+  add_run_flags(*cmd, *f);
+  cmd->add_option("--policy", f->opts.policy, policy_help())->capture_default_str();
+  return {cmd, [f] {
+            const auto json_out = apply_run_flags(*f);
+            return cmd_drive(f->opts, json_out, f->quiet);
           }};
 }
 

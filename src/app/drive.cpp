@@ -143,16 +143,30 @@ DriveResult drive_on(const Track& track, const Config& config, const DriveOption
   return result;
 }
 
+DriveInputs load_drive_inputs(const DriveOptions& opts) {
+  DriveInputs in;
+  in.config = load_config(opts.config);
+  in.track = load_track(opts.map);
+  in.options = opts;
+  if (opts.scenario) {
+    in.scenario = load_scenario(*opts.scenario, in.config.road);
+    if (in.scenario->name.empty()) in.scenario->name = opts.scenario->filename().string();
+    if (opts.minutes_from_scenario && in.scenario->duration_s) {
+      in.options.minutes = *in.scenario->duration_s / 60.0;
+    }
+  }
+  return in;
+}
+
+DriveResult drive_loaded(const DriveInputs& in, const std::function<void(double, double)>& progress,
+                         const std::atomic<bool>* stop) {
+  return drive_on(*in.track, in.config, in.options, progress, stop,
+                  in.scenario ? &*in.scenario : nullptr);
+}
+
 DriveResult drive(const DriveOptions& opts, const std::function<void(double, double)>& progress,
                   const std::atomic<bool>* stop) {
-  const Config config = load_config(opts.config);
-  const auto track = load_track(opts.map);
-  if (!opts.scenario) return drive_on(*track, config, opts, progress, stop);
-  sim::Scenario scenario = load_scenario(*opts.scenario, config.road);
-  if (scenario.name.empty()) scenario.name = opts.scenario->filename().string();
-  DriveOptions o = opts;
-  if (o.minutes_from_scenario && scenario.duration_s) o.minutes = *scenario.duration_s / 60.0;
-  return drive_on(*track, config, o, progress, stop, &scenario);
+  return drive_loaded(load_drive_inputs(opts), progress, stop);
 }
 
 }  // namespace overtake::app

@@ -109,21 +109,14 @@ int cmd_serve(const ServeArgs& a) {
 // ---- sim --------------------------------------------------------------------------------
 
 struct SimArgs {
+  RunFlags run;
   std::string planner;
   std::string name;
-  double minutes = 30.0;
-  std::uint64_t seed = 1;
-  std::string traffic = "faithful";
-  int steps_per_call = 0;
-  std::string map, config, json, record;
-  bool live = false;
-  LiveOptions live_view;
   bool realtime = false;
   double connect_timeout_s = 10.0;
   double reply_timeout_s = 2.0;
   std::size_t max_frame_bytes = std::size_t{1} << 20;
   std::size_t max_path_points = protocol::Limits{}.max_path_points;
-  bool quiet = false;
 };
 
 std::chrono::milliseconds checked_timeout(double seconds, const char* flag) {
@@ -133,29 +126,22 @@ std::chrono::milliseconds checked_timeout(double seconds, const char* flag) {
   return std::chrono::milliseconds(std::max<long long>(1, std::llround(seconds * 1000.0)));
 }
 
-int cmd_sim(const SimArgs& a) {
+int cmd_sim(SimArgs& a) {
   const auto url = protocol::parse_planner_url(a.planner);
   if (!url) throw UsageError("--planner: " + url.error());
-  if (a.realtime && a.steps_per_call > 0) {
+  if (a.realtime && a.run.opts.steps_per_call > 0) {
     throw UsageError("--steps-per-call applies to lock-step runs only, not with --realtime");
   }
-  DriveOptions opts;
-  opts.minutes = a.minutes;
-  opts.seed = a.seed;
-  opts.traffic = a.traffic;
-  opts.steps_per_call = a.steps_per_call;
-  if (!a.record.empty()) opts.record = a.record;
-  if (a.live) {
-    opts.live = a.live_view;
-    opts.live->on_listening = print_live_address;
-  }
+  const auto json_out = apply_run_flags(a.run);
+  DriveOptions& opts = a.run.opts;
+  const bool quiet = a.run.quiet;
   protocol::ClientOptions client;
   client.connect_timeout = checked_timeout(a.connect_timeout_s, "--connect-timeout");
   client.reply_timeout = checked_timeout(a.reply_timeout_s, "--reply-timeout");
   check_limits(a.max_frame_bytes, a.max_path_points);
   client.max_frame_bytes = a.max_frame_bytes;
   client.limits.max_path_points = a.max_path_points;
-  client.log = protocol::stderr_log(!a.quiet);
+  client.log = protocol::stderr_log(!quiet);
 
   // The planner, reached over the protocol: the rest is `drive` (the same world, recording,
   // live view, report), so that a lock-step run over the wire and an in-process drive with
@@ -170,26 +156,24 @@ int cmd_sim(const SimArgs& a) {
   };
   opts.external = std::move(remote);
   validate_drive_options(opts);  // before connecting: a bad flag needs no planner
+  const DriveInputs inputs = load_drive_inputs(opts);
 
-  const Config config = load_config(optional_path(a.config));
-  const auto track = load_track(optional_path(a.map));
   connection.emplace(url.value(), client);
-  if (!a.quiet) std::fprintf(stderr, "connected to %s\n", opts.external->address.c_str());
+  if (!quiet) std::fprintf(stderr, "connected to %s\n", opts.external->address.c_str());
   // From here on Ctrl-C or SIGTERM stop the run at the next step (or a wait for the planner
   // at once), and the report so far is printed and written as for any early end. (While
   // connecting there is nothing to keep: the signal ends the process.)
   const InterruptScope interrupt;
   client.stop = &InterruptScope::flag();
 
-  ProgressLine progress(!a.quiet, a.minutes * 60.0);
+  ProgressLine progress(!quiet, inputs.options.minutes * 60.0);
   const auto wall0 = std::chrono::steady_clock::now();
-  const DriveResult result = drive_on(
-      *track, config, opts, [&progress](double t, double d) { progress.update(t, d); },
-      &InterruptScope::flag());
+  const DriveResult result = drive_loaded(
+      inputs, [&progress](double t, double d) { progress.update(t, d); }, &InterruptScope::flag());
   connection->close();
   RunOutputs out;
-  if (!a.json.empty()) out.json = std::filesystem::path(a.json);
-  out.quiet = a.quiet;
+  out.json = json_out;
+  out.quiet = quiet;
   out.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
   out.mode = a.realtime ? "real time over the protocol" : "lock-step over the protocol";
   progress.clear();
@@ -236,21 +220,7 @@ Subcommand register_sim(CLI::App& app) {
                   "/socket.io/?EIO=4&transport=websocket)")
       ->required();
   cmd->add_option("--name", a->name, "Name of the planner in the report (default: its address)");
-  cmd->add_option("--minutes", a->minutes, "Simulated minutes to drive")->capture_default_str();
-  cmd->add_option("--seed", a->seed, "Seed of the traffic and latency draws (0 to 2^64 - 1)")
-      ->check(seed_validator())
-      ->capture_default_str();
-  cmd->add_option("--traffic", a->traffic,
-                  "Traffic profile: faithful (the original's rules) or calm")
-      ->capture_default_str();
-  cmd->add_option("--map", a->map, "Map file (x y s dx dy per line); default: the built-in track")
-      ->check(CLI::ExistingFile);
-  cmd->add_option("--config", a->config, "JSON file overriding any of the default parameters")
-      ->check(CLI::ExistingFile);
-  cmd->add_option(
-      "--steps-per-call", a->steps_per_call,
-      "Lock-step: world steps per reply (1-1000); default: drawn from 1-3 per reply by the seed")
-      ->check(CLI::Range(1, 1000));
+  add_run_flags(*cmd, a->run);
   cmd->add_flag(
       "--realtime", a->realtime,
       "Step at 50 Hz of wall time and keep driving while the planner thinks, as the original");
@@ -262,21 +232,6 @@ Subcommand register_sim(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--max-path-points", a->max_path_points, "A longer path in a reply ends the run")
       ->capture_default_str();
-  cmd->add_option("--json", a->json, "Also write the report as JSON to this file");
-  cmd->add_option("--record", a->record,
-                  "Record a replay of the run to this file; watch it with `overtake view FILE`");
-  auto* live = cmd->add_flag(
-      "--live", a->live,
-      "Serve the run's live view (open the printed address in a browser); a lock-step run then\n"
-      "goes at real time, and the page stays served after the run until Ctrl-C");
-  cmd->add_option("--port", a->live_view.port, "With --live: TCP port of the page (0: any free port)")
-      ->capture_default_str()
-      ->needs(live);
-  cmd->add_option("--host", a->live_view.host,
-                  "With --live: address to serve the page on (loopback by default)")
-      ->capture_default_str()
-      ->needs(live);
-  cmd->add_flag("--quiet,-q", a->quiet, "No progress line or extra messages");
   return {cmd, [a] { return cmd_sim(*a); }};
 }
 

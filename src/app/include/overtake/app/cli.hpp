@@ -5,9 +5,12 @@
 #include <CLI/CLI.hpp>
 #include <filesystem>
 #include <functional>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
+
+#include "overtake/app/commands.hpp"
 
 namespace overtake::app {
 
@@ -52,6 +55,25 @@ void flush_stdout_or_throw();
 /// True when `a` and `b` name the same file (after resolving . and .., symbolic links of
 /// existing parts, and hard links of existing files).
 [[nodiscard]] bool same_file(const std::filesystem::path& a, const std::filesystem::path& b);
+
+/// The flags of every command that runs a drive (`drive`, `sim`): --map, --config,
+/// --scenario, --minutes, --seed, --traffic, --steps-per-call, --json, --record, --live with
+/// --port and --host, --quiet.
+struct RunFlags {
+  DriveOptions opts;
+  std::string map, config, json, scenario, record;
+  LiveOptions live;
+  bool live_on = false;
+  bool quiet = false;
+  CLI::Option* minutes = nullptr;
+};
+
+/// Registers the run flags on `cmd`.
+void add_run_flags(CLI::App& cmd, RunFlags& flags);
+
+/// The drive options the flags give (with the live view's address printed on stderr), and
+/// where the JSON report goes. UsageError when --json and --record name the same file.
+[[nodiscard]] std::optional<std::filesystem::path> apply_run_flags(RunFlags& flags);
 
 /// Says on stderr where a run's live view is served (LiveOptions::on_listening).
 void print_live_address(const std::string& url);

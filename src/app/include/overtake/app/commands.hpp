@@ -100,6 +100,23 @@ struct DriveResult {
                                 const std::function<void(double t_s, double distance_m)>& progress = {},
                                 const std::atomic<bool>* stop = nullptr);
 
+/// What a drive loads before it runs: the config, the track, the scenario (when one is
+/// given), and the options with the scenario's duration applied.
+struct DriveInputs {
+  Config config;
+  std::shared_ptr<const Track> track;
+  std::optional<sim::Scenario> scenario;
+  DriveOptions options;
+};
+
+/// Loads what `opts` names (ConfigError, core::MapError naming the file).
+[[nodiscard]] DriveInputs load_drive_inputs(const DriveOptions& opts);
+
+/// drive() on inputs already loaded (`sim --planner` loads them before it connects).
+[[nodiscard]] DriveResult drive_loaded(const DriveInputs& inputs,
+                                       const std::function<void(double t_s, double distance_m)>& progress = {},
+                                       const std::atomic<bool>* stop = nullptr);
+
 /// Like drive(), with the map and config already loaded.
 /// `stop` (may be null) ends the run early when set; `scenario` (may be null) replaces the
 /// random traffic (opts.scenario is not read here). With opts.record the replay is written
