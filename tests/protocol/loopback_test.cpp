@@ -91,6 +91,23 @@ TEST(ProtocolLoopback, LockStepOverTheWireEqualsInProcessDrive) {
   }
 }
 
+// `sim` is the drive's wiring with a remote planner: a scripted scenario runs over the wire
+// as it does in process.
+TEST(ProtocolLoopback, AScenarioOverTheWireEqualsInProcessDrive) {
+  const std::string scenario = std::string(OVERTAKE_SOURCE_DIR) + "/tests/scenarios/cut_in_20m.json";
+  ServerFixture server("walkthrough");
+  app::DriveOptions o;
+  o.policy = "walkthrough";
+  o.scenario = scenario;
+  o.minutes_from_scenario = true;
+  const json expected = in_process(o);
+  const json got = over_the_wire(server, "walkthrough", {"--scenario", scenario});
+  EXPECT_EQ(got["config"]["traffic"], "scripted");
+  EXPECT_EQ(got["config"]["scenario"], "cut-in 20 m ahead");
+  EXPECT_GT(got["planner_cycles"].get<long>(), 100);
+  EXPECT_EQ(got.dump(), expected.dump());
+}
+
 TEST(ProtocolLoopback, RealTimeAgainstOurServer) {
   ServerFixture server;
   json timing;
