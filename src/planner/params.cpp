@@ -49,8 +49,8 @@ void validate_reference(const PlannerParams& all, std::vector<std::string>& out)
   non_negative("prediction.follower_speed_up_mps2", pr.follower_speed_up_mps2);
   non_negative("prediction.follower_speed_margin_mps", pr.follower_speed_margin_mps);
   positive("prediction.free_speed_share", pr.free_speed_share);
-  positive("prediction.min_cap_mph", pr.min_cap_mph);
-  positive("prediction.max_cap_mph", pr.max_cap_mph);
+  positive("prediction.min_cap_mps", pr.min_cap_mps);
+  positive("prediction.max_cap_mps", pr.max_cap_mps);
   non_negative("prediction.reaction_gain_m", pr.reaction_gain_m);
   positive("prediction.wave_brake_mps2", pr.wave_brake_mps2);
   non_negative("prediction.wave_recover_mps2", pr.wave_recover_mps2);

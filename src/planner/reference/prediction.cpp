@@ -134,8 +134,7 @@ CarPrediction predict_car(int id, double s_m, double s_dot, double s_ddot, doubl
 
 double cap_estimate(double top_speed_mps, const ReferencePredictionParams& p) {
   // Traffic settles at a share of its speed cap; caps are drawn from 40 mph up.
-  return std::clamp(top_speed_mps / p.free_speed_share, core::mph_to_mps(p.min_cap_mph),
-                    core::mph_to_mps(p.max_cap_mph));
+  return std::clamp(top_speed_mps / p.free_speed_share, p.min_cap_mps, p.max_cap_mps);
 }
 
 void anticipate_waves(std::vector<CarPrediction>& cars, const std::vector<CarTrack>& tracks,
