@@ -1,51 +1,12 @@
 #include "overtake/sim/params.hpp"
 
-#include <cmath>
-#include <sstream>
+#include "overtake/core/param_check.hpp"
 
 namespace overtake::sim {
-namespace {
-
-// Collects problems while walking the field lists: every number must be finite; the
-// range checks below name the key.
-class Checker {
- public:
-  explicit Checker(std::vector<std::string>& out) : out_(out) {}
-
-  void positive(const std::string& key, double v) {
-    if (!(v > 0.0) || !std::isfinite(v)) add(key, v, "must be a positive number");
-  }
-  void non_negative(const std::string& key, double v) {
-    if (!(v >= 0.0) || !std::isfinite(v)) add(key, v, "must be zero or more");
-  }
-  void in_range(const std::string& key, double v, double lo, double hi) {
-    if (!(v >= lo && v <= hi)) {
-      std::ostringstream os;
-      os << "must be between " << lo << " and " << hi;
-      add(key, v, os.str());
-    }
-  }
-  void ordered(const std::string& lo_key, double lo, const std::string& hi_key, double hi) {
-    if (lo > hi) out_.push_back(lo_key + " (" + fmt(lo) + ") must not exceed " + hi_key + " (" + fmt(hi) + ")");
-  }
-
- private:
-  static std::string fmt(double v) {
-    std::ostringstream os;
-    os << v;
-    return os.str();
-  }
-  void add(const std::string& key, double v, const std::string& what) {
-    out_.push_back(key + " " + what + " (got " + fmt(v) + ")");
-  }
-  std::vector<std::string>& out_;
-};
-
-}  // namespace
 
 std::vector<std::string> validate(const WorldParams& p) {
   std::vector<std::string> out;
-  Checker c(out);
+  core::ParamChecker c(out);
   // Bounds of what makes physical sense: a step of a millisecond to half a second (the
   // original's 0.02 s; 1e-9 would never end, 1e308 would run no step), bodies and lanes up to
   // 20 m, speeds up to 100 m/s.
@@ -101,7 +62,7 @@ std::vector<std::string> validate(const WorldParams& p) {
 
   const auto& f = t.faithful;
   const std::string fk = "world.traffic.faithful.";
-  if (!std::isfinite(f.parked_d_m)) out.push_back(fk + "parked_d_m must be finite");
+  c.finite(fk + "parked_d_m", f.parked_d_m);
   c.non_negative(fk + "parked_s_before_end_m", f.parked_s_before_end_m);
   c.non_negative(fk + "accel_sensitivity_per_mph", f.accel_sensitivity_per_mph);
   c.non_negative(fk + "brake_sensitivity_per_mph", f.brake_sensitivity_per_mph);
