@@ -132,8 +132,10 @@ Config apply_config_json(Config base, const json& j, std::string_view source) {
   top.section("planner", base.planner);
   top.check_unknown();
   if (!errors.empty()) fail(source, errors);
+  // Facts the modules share live once in the file and are copied into each module's params.
   base.world.road = base.road;
   base.planner.road = base.road;
+  base.planner.step_s = base.world.step_s;
   auto problems = sim::validate(base.world);
   const auto planner_problems = planner::validate(base.planner);
   problems.insert(problems.end(), planner_problems.begin(), planner_problems.end());

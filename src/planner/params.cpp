@@ -58,7 +58,6 @@ void validate_reference(const PlannerParams& all, std::vector<std::string>& out)
   c.positive("behaviour.rear_threat_range_m", b.rear_threat_range_m);
   c.positive("behaviour.passing_speed_mps", b.passing_speed_mps);
   const auto& t = p.trajectory;
-  c.positive("trajectory.step_s", t.step_s);
   c.in_range("trajectory.keep_points", t.keep_points, 0, 50);
   c.require(t.path_points >= t.keep_points + 10 && t.path_points <= 1000, "trajectory.path_points",
             "must be between keep_points + 10 and 1000", t.path_points);
@@ -120,7 +119,6 @@ std::vector<std::string> validate(const PlannerParams& p) {
   c.positive("walkthrough.speed_step_mps", w.speed_step_mps);
   c.positive("walkthrough.too_close_m", w.too_close_m);
   c.positive("walkthrough.horizon_x_m", w.horizon_x_m);
-  c.positive("walkthrough.step_s", w.step_s);
   c.in_range("walkthrough.path_points", w.path_points, 2, 10000);
   c.require(!w.anchor_distances_m.empty(), "walkthrough.anchor_distances_m",
             "must list at least one distance");
@@ -154,6 +152,8 @@ std::vector<std::string> validate(const PlannerParams& p) {
   c.positive("seed004.faster_behind_m", p.seed004.faster_behind_m);
   c.positive("seed004.speed_match_divisor", p.seed004.speed_match_divisor);
   c.positive("seed004.change_first_anchor_m", p.seed004.change_first_anchor_m);
+  // The step is the world's: a config names it by the world's key.
+  core::ParamChecker(out).positive("world.step_s", p.step_s);
   validate_reference(p, out);
   c.require(w.start_lane >= 0 && w.start_lane < p.road.lane_count, "walkthrough.start_lane",
             "must be a lane of the road, 0 to " + std::to_string(p.road.lane_count - 1), w.start_lane);

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "overtake/core/road.hpp"
+#include "overtake/core/step.hpp"
 #include "overtake/core/units.hpp"
 
 namespace overtake::planner {
@@ -18,7 +19,6 @@ struct WalkthroughParams {
   std::vector<double> anchor_distances_m = {30.0, 60.0, 90.0};
   int path_points = 50;
   double horizon_x_m = 30.0;          ///< points are spaced along this much of the spline
-  double step_s = 0.02;               ///< the simulator's step, for point spacing
   int start_lane = 1;
   friend bool operator==(const WalkthroughParams&, const WalkthroughParams&) = default;
 };
@@ -142,7 +142,6 @@ struct ReferenceBehaviourParams {
 /// reference, trajectory layer: jerk-minimising Frenet candidates (Werling et al. 2010) and
 /// their checks.
 struct ReferenceTrajectoryParams {
-  double step_s = 0.02;              ///< the simulator's step: spacing of path points in time
   int keep_points = 3;               ///< points of the previous path kept for latency
   int path_points = 75;              ///< points sent each cycle (kept ones included)
   double check_step_s = 0.1;         ///< candidates are checked at this spacing
@@ -208,6 +207,9 @@ struct ReferenceParams {
 /// Parameters of every policy.
 struct PlannerParams {
   core::RoadParams road;
+  /// The world's step (world.step_s; no key of its own: the config loader copies it in, as
+  /// it copies the road): every policy spaces its path points this far apart in time.
+  double step_s = core::kDefaultStepS;
   ReferenceParams reference;
   WalkthroughParams walkthrough;  ///< also the shared base of the seed policies
   Seed000Params seed000;
@@ -234,7 +236,6 @@ void describe(V& v, WalkthroughParams& p) {
   v("anchor_distances_m", p.anchor_distances_m);
   v("path_points", p.path_points);
   v("horizon_x_m", p.horizon_x_m);
-  v("step_s", p.step_s);
   v("start_lane", p.start_lane);
 }
 
@@ -328,7 +329,6 @@ void describe(V& v, ReferenceBehaviourParams& p) {
 
 template <class V>
 void describe(V& v, ReferenceTrajectoryParams& p) {
-  v("step_s", p.step_s);
   v("keep_points", p.keep_points);
   v("path_points", p.path_points);
   v("check_step_s", p.check_step_s);

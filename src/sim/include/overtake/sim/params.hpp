@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "overtake/core/road.hpp"
+#include "overtake/core/step.hpp"
 #include "overtake/core/units.hpp"
 
 namespace overtake::sim {
@@ -145,7 +146,8 @@ struct RefereeParams {
 
 /// The whole world.
 struct WorldParams {
-  double step_s = 0.02;
+  /// The fixed step; also the planners' (PlannerParams::step_s), copied by the config loader.
+  double step_s = core::kDefaultStepS;
   core::RoadParams road;
   EgoParams ego;
   TrafficParams traffic;
