@@ -11,8 +11,6 @@ namespace {
 void validate_reference(const PlannerParams& all, std::vector<std::string>& out) {
   const ReferenceParams& p = all.reference;
   core::ParamChecker c(out, "planner.reference.");
-  c.positive("car_length_m", p.car_length_m);
-  c.positive("car_width_m", p.car_width_m);
   c.non_negative("line_smoothing_m3", p.line_smoothing_m3);
   const auto& pr = p.prediction;
   c.positive("prediction.lane_change_speed_mps", pr.lane_change_speed_mps);
@@ -152,8 +150,11 @@ std::vector<std::string> validate(const PlannerParams& p) {
   c.positive("seed004.faster_behind_m", p.seed004.faster_behind_m);
   c.positive("seed004.speed_match_divisor", p.seed004.speed_match_divisor);
   c.positive("seed004.change_first_anchor_m", p.seed004.change_first_anchor_m);
-  // The step is the world's: a config names it by the world's key.
-  core::ParamChecker(out).positive("world.step_s", p.step_s);
+  // The step and the footprint are the world's too: a config names them by their own keys.
+  core::ParamChecker shared(out);
+  shared.positive("world.step_s", p.step_s);
+  shared.positive("car.length_m", p.car.length_m);
+  shared.positive("car.width_m", p.car.width_m);
   validate_reference(p, out);
   c.require(w.start_lane >= 0 && w.start_lane < p.road.lane_count, "walkthrough.start_lane",
             "must be a lane of the road, 0 to " + std::to_string(p.road.lane_count - 1), w.start_lane);

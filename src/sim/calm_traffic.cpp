@@ -128,7 +128,7 @@ struct CalmImpl {
   /// counting in the lane it is leaving; also the target lane of a lane change.
   [[nodiscard]] static unsigned follow_lanes(const CalmTraffic& t, const CalmCar& c) {
     unsigned mask = now_lanes(t, c);
-    const double half = 0.5 * t.params_.car_width_m + kBodyMarginM;
+    const double half = 0.5 * t.car_.width_m + kBodyMarginM;
     const int lo = core::lane_of(c.d_m - half, t.road_);
     const int hi = core::lane_of(c.d_m + half, t.road_);
     for (int k = lo; k <= hi; ++k) mask |= lane_bit(k);
@@ -188,7 +188,7 @@ struct CalmImpl {
                                                      : std::pow(ratio, p.accel_exponent);
     double interaction = 0.0;
     if (gap_m < kInf) {
-      const double s = std::max(gap_m - t.params_.car_length_m, kMinIdmGapM);
+      const double s = std::max(gap_m - t.car_.length_m, kMinIdmGapM);
       const double dynamic =
           v * p.time_headway_s +
           v * (v - leader_speed) / (2.0 * std::sqrt(p.max_accel_mps2 * p.comfort_decel_mps2));
@@ -223,7 +223,7 @@ struct CalmImpl {
     if (lead >= 0) {
       const Vehicle& sv = t.vehicles_[static_cast<std::size_t>(self)];
       const Vehicle& lv = t.vehicles_[static_cast<std::size_t>(lead)];
-      const double s = std::max(gap_m - t.params_.car_length_m, kMinIdmGapM);
+      const double s = std::max(gap_m - t.car_.length_m, kMinIdmGapM);
       const double a_cah = cah(t, sv.speed_mps, lv.speed_mps, lv.accel_mps2, s);
       if (a_idm < a_cah) {
         const double b = p.comfort_decel_mps2;
@@ -255,7 +255,7 @@ struct CalmImpl {
     const CalmTrafficParams& p = t.params_.calm;
     const unsigned target = lane_bit(lane);
     const double s = t.vehicles_[static_cast<std::size_t>(i)].s_m;
-    const double too_close = t.params_.car_length_m + p.min_gap_m;
+    const double too_close = t.car_.length_m + p.min_gap_m;
     // One pass over the target lane: overlap, new leader, new follower.
     Nearest nl;
     Nearest nf;
@@ -309,7 +309,7 @@ struct CalmImpl {
     const CalmTrafficParams& p = t.params_.calm;
     const double gap = ahead(t, t.vehicles_[static_cast<std::size_t>(i)].s_m,
                              t.vehicles_[static_cast<std::size_t>(j)].s_m);
-    if (std::abs(gap) < t.params_.car_length_m + p.min_gap_m) return true;
+    if (std::abs(gap) < t.car_.length_m + p.min_gap_m) return true;
     const int back = gap > 0.0 ? i : j;
     const int front = gap > 0.0 ? j : i;
     return idm_of(t, back, front, std::abs(gap)) < -p.safe_decel_mps2;
@@ -468,7 +468,7 @@ struct CalmImpl {
     const double b = t.params_.calm.spawn_brake_mps2;
     const double closing = gap >= 0.0 ? worst_closing_m(v, other_v, std::max(0.0, -other_accel), b)
                                       : worst_closing_m(other_v, v, 0.0, b);
-    return std::abs(gap) >= t.params_.car_length_m + kSpawnMarginM + closing;
+    return std::abs(gap) >= t.car_.length_m + kSpawnMarginM + closing;
   }
 
   /// The ego as placement sees it.
@@ -616,12 +616,14 @@ struct CalmImpl {
 
 CalmTraffic::CalmTraffic(const core::Map& map, const core::ReferenceLine& line,
                          const core::WaypointFrenet& chords, const TrafficParams& params,
-                         const core::RoadParams& road, std::uint64_t seed)
+                         const core::RoadParams& road, const core::CarFootprint& car,
+                         std::uint64_t seed)
     : map_(map),
       line_(line),
       chords_(chords),
       params_(params),
       road_(road),
+      car_(car),
       spawn_rng_(core::derive_seed(seed, kSpawnStream)) {
   assert(!map.waypoints.empty());
   assert(road.lane_count >= 1 && road.lane_count <= 32);

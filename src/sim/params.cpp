@@ -17,18 +17,16 @@ std::vector<std::string> validate(const WorldParams& p) {
             p.max_steps_per_call);
   c.in_range("road.lane_count", p.road.lane_count, 1, 8);
   c.in_range("road.lane_width_m", p.road.lane_width_m, 1.0, 20.0);
+  c.in_range("car.length_m", p.car.length_m, 0.5, 20.0);
+  c.in_range("car.width_m", p.car.width_m, 0.5, 20.0);
 
   const auto& e = p.ego;
-  c.in_range("world.ego.length_m", e.length_m, 0.5, 20.0);
-  c.in_range("world.ego.width_m", e.width_m, 0.5, 20.0);
   c.non_negative("world.ego.stand_on_tolerance_m", e.stand_on_tolerance_m);
   c.in_range("world.ego.start_d_m", e.start_d_m, 0.0, p.road.lane_count * p.road.lane_width_m);
   c.in_range("world.ego.start_s_m", e.start_s_m, -100000.0, 100000.0);
 
   const auto& t = p.traffic;
   c.in_range("world.traffic.car_count", t.car_count, 0, 64);
-  c.in_range("world.traffic.car_length_m", t.car_length_m, 0.5, 20.0);
-  c.in_range("world.traffic.car_width_m", t.car_width_m, 0.5, 20.0);
 
   const auto& pl = t.placement;
   const std::string pk = "world.traffic.placement.";

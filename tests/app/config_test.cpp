@@ -10,6 +10,7 @@
 #include "overtake/app/commands.hpp"
 #include "overtake/app/config.hpp"
 #include "overtake/planner/policy.hpp"
+#include "overtake/sim/replay.hpp"
 #include "overtake/sim/run.hpp"
 #include "overtake/sim/world.hpp"
 
@@ -94,6 +95,25 @@ TEST(ConfigErrors, ThePlannersStepKeysAreGoneForTheWorlds) {
               HasSubstr("unknown key 'planner.reference.trajectory.step_s'"));
   EXPECT_THAT(error_of(json::parse(R"({"planner": {"step_s": 0.04}})")),
               HasSubstr("unknown key 'planner.step_s'"));
+}
+
+TEST(ConfigOverrides, TheCarFootprintIsOneSectionForEveryBody) {
+  const Config c =
+      apply_config_json(Config{}, json::parse(R"({"car": {"length_m": 5.2, "width_m": 2.1}})"), "u");
+  EXPECT_EQ(c.world.car, c.car);
+  EXPECT_EQ(c.planner.car, c.car);
+  EXPECT_DOUBLE_EQ(c.world.car.length_m, 5.2);
+  EXPECT_DOUBLE_EQ(c.planner.car.width_m, 2.1);
+  const auto track = load_track(std::nullopt);
+  const sim::ReplayHeader h = sim::make_replay_header(track->line, c.world, {});
+  EXPECT_DOUBLE_EQ(h.car_length_m, 5.2);
+  EXPECT_DOUBLE_EQ(h.car_width_m, 2.1);
+  for (const char* old : {R"({"world": {"ego": {"length_m": 5}}})", R"({"world": {"traffic": {"car_width_m": 2}}})",
+                          R"({"planner": {"reference": {"car_length_m": 5}}})"}) {
+    EXPECT_THAT(error_of(json::parse(old)), HasSubstr("unknown key")) << old;
+  }
+  EXPECT_THAT(error_of(json::parse(R"({"car": {"width_m": 0.1}})")),
+              HasSubstr("car.width_m must be between 0.5 and 20 (got 0.1)"));
 }
 
 TEST(ConfigErrors, UnknownKeyIsNamedWithItsPath) {

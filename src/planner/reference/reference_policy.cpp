@@ -46,6 +46,7 @@ ReferencePolicy::ReferencePolicy(const core::ReferenceLine& line, const PlannerP
       frame_(LaneFrame::chord_aligned(*smooth_line_)),
       road_(params.road),
       step_s_(params.step_s),
+      car_(params.car),
       p_(params.reference) {
   p_.trajectory.max_speed_mps -= wire_speed_error_mps(line, step_s_);
 }
@@ -116,14 +117,14 @@ std::vector<core::Vec2> ReferencePolicy::plan(const core::Telemetry& t) {
 
   // Prediction, behaviour, trajectory.
   predictions_ = predict_cars(t, frame_, car.s_m, elapsed, tracks_, p_.prediction, road_,
-                              p_.car_length_m);
+                              car_.length_m);
   const RoadPoint at_car = road_point(frame_, car.s_m, car.d_m);
   EgoSnapshot ego;
   ego.s_m = car.s_m;
   ego.d_m = car.d_m;
   ego.speed_mps = car.s_dot * at_car.along_scale;
   ego.metres_per_s = at_car.along_scale;
-  decision_ = decide(predictions_, ego, behaviour_, elapsed, p_.car_length_m, p_.behaviour, road_);
+  decision_ = decide(predictions_, ego, behaviour_, elapsed, car_.length_m, p_.behaviour, road_);
 
   TrajectoryRequest req;
   req.start = start;
@@ -152,7 +153,7 @@ std::vector<core::Vec2> ReferencePolicy::plan(const core::Telemetry& t) {
   req.wanted_speed_mps = decision_.speed_mps;
   req.band_time_s = band_time;
   req.cars = &predictions_;
-  plan_ = plan_trajectory(frame_, req, p_, road_);
+  plan_ = plan_trajectory(frame_, req, p_, road_, car_);
   const TrajectoryPlan& chosen = plan_;
   status_ = chosen.status;
   if (chosen.trajectory.end_lane != behaviour_.target_lane) {

@@ -191,8 +191,6 @@ struct ReferenceTrajectoryParams {
 
 /// The reference planner: prediction, behaviour and trajectory layers.
 struct ReferenceParams {
-  double car_length_m = 4.7;  ///< footprint of every car, the ego's included
-  double car_width_m = 1.9;
   /// The planner's own line through the map: a smoothing spline of this stiffness (m^3), so
   /// that waypoints rounded to 0.1 m (the original map's) put no wiggles into its curvature
   /// (at the outer lane they made a steady drive jerk by 25 m/s^3). Its lateral frame is then
@@ -210,6 +208,8 @@ struct PlannerParams {
   /// The world's step (world.step_s; no key of its own: the config loader copies it in, as
   /// it copies the road): every policy spaces its path points this far apart in time.
   double step_s = core::kDefaultStepS;
+  /// Every car's footprint, the ego's included (the config's `car`, copied in likewise).
+  core::CarFootprint car;
   ReferenceParams reference;
   WalkthroughParams walkthrough;  ///< also the shared base of the seed policies
   Seed000Params seed000;
@@ -368,8 +368,6 @@ void describe(V& v, ReferenceTrajectoryParams& p) {
 
 template <class V>
 void describe(V& v, ReferenceParams& p) {
-  v("car_length_m", p.car_length_m);
-  v("car_width_m", p.car_width_m);
   v("line_smoothing_m3", p.line_smoothing_m3);
   v.section("prediction", p.prediction);
   v.section("behaviour", p.behaviour);

@@ -20,8 +20,6 @@ struct EgoParams {
   /// original's start (x 909.48, y 1128.67, yaw 0).
   double start_s_m = 124.8336;
   double start_d_m = 6.164833;
-  double length_m = 4.7;         ///< (ours) its body, for contact: the original's collider size is a scene setting
-  double width_m = 1.9;          ///< (ours)
   /// A new path's first point is dropped when the car stands on it: within this distance.
   /// 0, as the original (the car stands on a point it drove to, and points cross the wire
   /// rounded the same way, so "on it" is exact); a millimetre dropped points of a slow
@@ -120,8 +118,6 @@ struct CalmTrafficParams {
 /// The twelve other cars.
 struct TrafficParams {
   int car_count = 12;
-  double car_length_m = 4.7;             ///< (ours) their bodies
-  double car_width_m = 1.9;
   PlacementParams placement;
   FaithfulTrafficParams faithful;
   CalmTrafficParams calm;
@@ -148,7 +144,8 @@ struct RefereeParams {
 struct WorldParams {
   /// The fixed step; also the planners' (PlannerParams::step_s), copied by the config loader.
   double step_s = core::kDefaultStepS;
-  core::RoadParams road;
+  core::RoadParams road;      ///< the config's `road`, copied in by the config loader
+  core::CarFootprint car;     ///< the config's `car` (every body, the ego's too), likewise
   EgoParams ego;
   TrafficParams traffic;
   RefereeParams referee;
@@ -177,11 +174,15 @@ void describe(V& v, core::RoadParams& p) {
 }
 
 template <class V>
+void describe(V& v, core::CarFootprint& p) {
+  v("length_m", p.length_m);
+  v("width_m", p.width_m);
+}
+
+template <class V>
 void describe(V& v, EgoParams& p) {
   v("start_s_m", p.start_s_m);
   v("start_d_m", p.start_d_m);
-  v("length_m", p.length_m);
-  v("width_m", p.width_m);
   v("stand_on_tolerance_m", p.stand_on_tolerance_m);
 }
 
@@ -260,8 +261,6 @@ void describe(V& v, CalmTrafficParams& p) {
 template <class V>
 void describe(V& v, TrafficParams& p) {
   v("car_count", p.car_count);
-  v("car_length_m", p.car_length_m);
-  v("car_width_m", p.car_width_m);
   v.section("placement", p.placement);
   v.section("faithful", p.faithful);
   v.section("calm", p.calm);

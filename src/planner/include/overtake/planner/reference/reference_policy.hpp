@@ -49,6 +49,7 @@ class ReferencePolicy final : public Policy {
   LaneFrame frame_;                  // on it, d as the original measures it
   core::RoadParams road_;
   double step_s_;                    // the world's step: spacing of path points in time
+  core::CarFootprint car_;           // every car's, the ego's included
   ReferenceParams p_;
   std::vector<FrenetState> states_;  // state at each point sent last cycle
   std::vector<FrenetState> driven_;  // the last states the car went through, oldest first
