@@ -108,7 +108,7 @@ void FaithfulTraffic::build_open_road_table() {
     }
     prev_k = k;
   }
-  const double road_width = road_.lane_count * road_.lane_width_m;
+  const double road_width = core::road_width_m(road_);
   const auto lanes = static_cast<std::size_t>(road_.lane_count);
   open_road_.assign(lanes * open_road_bins_, 1);
   for (std::size_t lane = 0; lane < lanes; ++lane) {

@@ -22,7 +22,7 @@ std::vector<std::string> validate(const WorldParams& p) {
 
   const auto& e = p.ego;
   c.non_negative("world.ego.stand_on_tolerance_m", e.stand_on_tolerance_m);
-  c.in_range("world.ego.start_d_m", e.start_d_m, 0.0, p.road.lane_count * p.road.lane_width_m);
+  c.in_range("world.ego.start_d_m", e.start_d_m, 0.0, core::road_width_m(p.road));
   c.in_range("world.ego.start_s_m", e.start_s_m, -100000.0, 100000.0);
 
   const auto& t = p.traffic;
@@ -115,7 +115,7 @@ std::vector<std::string> validate(const WorldParams& p) {
   c.positive("world.referee.max_jerk_mps3", r.max_jerk_mps3);
   c.in_range("world.referee.accel_block_steps", r.accel_block_steps, 1, 10000);
   c.in_range("world.referee.jerk_group_blocks", r.jerk_group_blocks, 1, 10000);
-  c.ordered("world.referee.min_d_m", r.min_d_m, "world.referee.max_d_m", r.max_d_m);
+  c.in_range("world.referee.edge_margin_m", r.edge_margin_m, 0.0, 0.5 * core::road_width_m(p.road));
   c.non_negative("world.referee.line_band_half_width_m", r.line_band_half_width_m);
   c.in_range("world.referee.straddle_max_steps", r.straddle_max_steps, 1, 1000000);
   c.in_range("world.referee.latch_steps", r.latch_steps, 1, 1000000);

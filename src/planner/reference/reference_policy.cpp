@@ -43,7 +43,7 @@ FrenetState carried(const FrenetState& x, double dt_s) {
 ReferencePolicy::ReferencePolicy(const core::ReferenceLine& line, const PlannerParams& params)
     : line_(line),
       smooth_line_(std::make_shared<const core::ReferenceLine>(line.map(), params.reference.line_smoothing_m3)),
-      frame_(LaneFrame::chord_aligned(*smooth_line_)),
+      frame_(LaneFrame::chord_aligned(*smooth_line_, params.road)),
       road_(params.road),
       step_s_(params.step_s),
       car_(params.car),

@@ -351,7 +351,7 @@ bool on_road(const Track1d& lat, const Grid& g, const LaneFrame& frame, const Fr
     const double s = x0.s_m + x0.s_dot * g.t(k);
     const double d = frame.original_d(s, lat.x[static_cast<std::size_t>(k + kBack)]);
     const double lo = std::min(tp.road_edge_margin_m, frame.original_d(s, first) - kOvershootM);
-    const double hi = std::max(road.lane_count * road.lane_width_m - tp.road_edge_margin_m,
+    const double hi = std::max(core::road_width_m(road) - tp.road_edge_margin_m,
                                frame.original_d(s, last) + kOvershootM);
     if (d < lo || d > hi) return false;
   }

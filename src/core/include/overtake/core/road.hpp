@@ -22,6 +22,11 @@ struct CarFootprint {
   friend bool operator==(const CarFootprint&, const CarFootprint&) = default;
 };
 
+/// The road's width: d of its outer edge (the divider is at d = 0).
+[[nodiscard]] constexpr double road_width_m(const RoadParams& road = {}) {
+  return road.lane_count * road.lane_width_m;
+}
+
 /// Centre of lane `lane` (d, metres).
 [[nodiscard]] constexpr double lane_center_d(int lane, const RoadParams& road = {}) {
   return road.lane_width_m * (lane + 0.5);

@@ -152,8 +152,9 @@ struct ReferenceTrajectoryParams {
   double lateral_jerk_mps3 = 5.0;    ///< sets the shortest lateral manoeuvre for a distance
   double min_lateral_time_s = 1.2;
   std::vector<double> lateral_time_factors = {1.0, 1.3, 1.7, 2.5};
-  /// The ego's middle stays this far inside the road's edges (the original counts d under
-  /// 0.8 m or over 11.2 m as off the road).
+  /// The ego's middle stays this far inside the road's edges (the divider and
+  /// core::road_width_m; the world counts d within world.referee.edge_margin_m of them as
+  /// off the road).
   double road_edge_margin_m = 1.2;
   std::vector<double> cruise_times_s = {1.5, 2.5, 4.0, 6.0};
   std::vector<double> speed_offsets_mps = {0.0, -1.0, -2.5, -5.0, -9.0};

@@ -131,8 +131,9 @@ struct RefereeParams {
   double max_jerk_mps3 = 10.0;
   int accel_block_steps = 10;            ///< speed averaged over blocks of 10 steps (0.2 s)
   int jerk_group_blocks = 5;             ///< block totals averaged over groups of 5 (1 s)
-  double min_d_m = 0.8;                  ///< outside the road below this ...
-  double max_d_m = 11.2;                 ///< ... or above this
+  /// Outside the road within this of its edges, or beyond them: d under this, or over the
+  /// road's width (lane_count * lane_width_m) less this (0.8 and 11.2 on three 4 m lanes).
+  double edge_margin_m = 0.8;
   double line_band_half_width_m = 0.8;   ///< around each lane line between lanes
   int straddle_max_steps = 150;          ///< in a band for more than this: outside of lane
   int latch_steps = 50;                  ///< a persisting incident counts again after this
@@ -273,8 +274,7 @@ void describe(V& v, RefereeParams& p) {
   v("max_jerk_mps3", p.max_jerk_mps3);
   v("accel_block_steps", p.accel_block_steps);
   v("jerk_group_blocks", p.jerk_group_blocks);
-  v("min_d_m", p.min_d_m);
-  v("max_d_m", p.max_d_m);
+  v("edge_margin_m", p.edge_margin_m);
   v("line_band_half_width_m", p.line_band_half_width_m);
   v("straddle_max_steps", p.straddle_max_steps);
   v("latch_steps", p.latch_steps);
