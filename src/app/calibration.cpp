@@ -56,7 +56,7 @@ TrafficObserver::TrafficObserver(double loop_length_m, const core::RoadParams& r
     : road_(road), sample_every_s_(sample_every_s), loop_length_m_(loop_length_m) {}
 
 bool TrafficObserver::on_road(double d_m) const {
-  return d_m > -kOffRoadMarginM && d_m < road_.lane_count * road_.lane_width_m + kOffRoadMarginM;
+  return d_m > -kOffRoadMarginM && d_m < core::road_width_m(road_) + kOffRoadMarginM;
 }
 
 void TrafficObserver::begin_run() {

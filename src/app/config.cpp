@@ -128,12 +128,17 @@ Config apply_config_json(Config base, const json& j, std::string_view source) {
   std::vector<std::string> errors;
   Reader top(j, "", errors);
   top.section("road", base.road);
+  top.section("car", base.car);
   top.section("world", base.world);
   top.section("planner", base.planner);
   top.check_unknown();
   if (!errors.empty()) fail(source, errors);
+  // Facts the modules share live once in the file and are copied into each module's params.
   base.world.road = base.road;
   base.planner.road = base.road;
+  base.world.car = base.car;
+  base.planner.car = base.car;
+  base.planner.step_s = base.world.step_s;
   auto problems = sim::validate(base.world);
   const auto planner_problems = planner::validate(base.planner);
   problems.insert(problems.end(), planner_problems.begin(), planner_problems.end());
@@ -218,6 +223,7 @@ json config_to_json(const Config& c) {
   json out = json::object();
   Writer w(out);
   w.section("road", copy.road);
+  w.section("car", copy.car);
   w.section("world", copy.world);
   w.section("planner", copy.planner);
   return out;

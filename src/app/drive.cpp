@@ -3,6 +3,7 @@
 #include <sstream>
 
 #include "overtake/app/commands.hpp"
+#include "overtake/app/map_file.hpp"
 #include "overtake/app/resources.hpp"
 #include "overtake/app/scenario_file.hpp"
 #include "overtake/app/viewer.hpp"
@@ -51,7 +52,7 @@ void validate_drive_options(const DriveOptions& opts) {
 std::shared_ptr<const Track> load_track(const std::optional<std::filesystem::path>& path) {
   core::Map map;
   if (path) {
-    map = core::load_map_file(*path);
+    map = load_map_file(*path);
   } else {
     const auto text = resources::embedded_file(kDefaultTrackName);
     if (!text) throw core::MapError("the built-in default track is missing from this build");

@@ -110,7 +110,7 @@ sim::Scenario parse_scenario(const json& j, std::string_view source, const core:
     if (!(d > 0.0)) errors.push_back("scenario.duration_s: must be more than 0");
     sc.duration_s = d;
   }
-  const double road_width = road.lane_count * road.lane_width_m;
+  const double road_width = core::road_width_m(road);
   if (top.has("ego")) {
     Fields ego(j["ego"], "scenario.ego", errors);
     sc.ego_s_m = ego.number("s_m", sc.ego_s_m, false, -kMaxDistanceM, kMaxDistanceM);

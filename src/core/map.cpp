@@ -5,7 +5,6 @@
 #include <cstdio>
 #include <charconv>
 #include <cmath>
-#include <fstream>
 #include <numeric>
 #include <optional>
 #include <utility>
@@ -217,15 +216,6 @@ Map parse_map(std::string_view text, std::string_view source, const MapRules& ru
                    seg(crossing->first) + " crosses it between " + seg(crossing->second));
   }
   return map;
-}
-
-Map load_map_file(const std::filesystem::path& path, const MapRules& rules) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw MapError(path.string() + ": cannot open map file");
-  std::ostringstream buf;
-  buf << in.rdbuf();
-  if (in.bad()) throw MapError(path.string() + ": error while reading map file");
-  return parse_map(buf.str(), path.string(), rules);
 }
 
 std::string format_map(const std::vector<Waypoint>& waypoints) {

@@ -13,7 +13,11 @@ namespace overtake::planner {
 // ---- shared ---------------------------------------------------------------------------
 
 SeedPolicyBase::SeedPolicyBase(const core::ReferenceLine& line, const PlannerParams& params)
-    : line_(line), road_(params.road), base_(params.walkthrough), lane_(params.walkthrough.start_lane) {}
+    : line_(line),
+      road_(params.road),
+      step_s_(params.step_s),
+      base_(params.walkthrough),
+      lane_(params.walkthrough.start_lane) {}
 
 double SeedPolicyBase::planning_s(const core::Telemetry& t) {
   return t.previous_path.empty() ? t.ego.s_m : t.end_path.s_m;
@@ -21,7 +25,7 @@ double SeedPolicyBase::planning_s(const core::Telemetry& t) {
 
 std::vector<SeenCar> SeedPolicyBase::seen_cars(const core::Telemetry& t, bool project) const {
   const double from_s = planning_s(t);
-  const double ahead_time_s = project ? static_cast<double>(t.previous_path.size()) * base_.step_s : 0.0;
+  const double ahead_time_s = project ? static_cast<double>(t.previous_path.size()) * step_s_ : 0.0;
   std::vector<SeenCar> out;
   out.reserve(t.cars.size());
   for (const core::CarObservation& c : t.cars) {
@@ -61,7 +65,7 @@ std::vector<core::Vec2> SeedPolicyBase::path(const core::Telemetry& t,
   spec.anchor_distances_m = anchors_m;
   spec.path_points = points;
   spec.horizon_x_m = base_.horizon_x_m;
-  spec.step_s = base_.step_s;
+  spec.step_s = step_s_;
   return spline_path(t, line_, spec);
 }
 

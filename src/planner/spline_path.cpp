@@ -13,7 +13,7 @@ std::vector<core::Vec2> spline_path(const core::Telemetry& t, const core::Refere
   const std::size_t prev_size = prev.size();
   std::vector<core::Vec2> out(prev.begin(), prev.end());
   const auto wanted = static_cast<std::size_t>(std::max(spec.path_points, 0));
-  if (prev_size >= wanted || !(spec.ref_speed_mps > 0.0)) return out;
+  if (prev_size >= wanted || !(spec.ref_speed_mps > 0.0) || !(spec.step_s > 0.0)) return out;
 
   // Two points that continue the current heading, then the anchors.
   core::Vec2 ref;

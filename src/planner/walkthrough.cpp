@@ -23,12 +23,16 @@ bool car_too_close(const core::Telemetry& t, const core::ReferenceLine& line, in
 }
 
 WalkthroughPolicy::WalkthroughPolicy(const core::ReferenceLine& line, const PlannerParams& params)
-    : line_(line), road_(params.road), p_(params.walkthrough), lane_(params.walkthrough.start_lane) {}
+    : line_(line),
+      road_(params.road),
+      step_s_(params.step_s),
+      p_(params.walkthrough),
+      lane_(params.walkthrough.start_lane) {}
 
 core::PlanResult WalkthroughPolicy::plan(const core::Telemetry& t) {
   const std::size_t prev_size = t.previous_path.size();
   const double car_s = prev_size > 0 ? t.end_path.s_m : t.ego.s_m;
-  const double ahead_time_s = static_cast<double>(prev_size) * p_.step_s;
+  const double ahead_time_s = static_cast<double>(prev_size) * step_s_;
   const bool too_close =
       car_too_close(t, line_, lane_, car_s, ahead_time_s, p_.too_close_m, road_);
   if (too_close) {
@@ -43,7 +47,7 @@ core::PlanResult WalkthroughPolicy::plan(const core::Telemetry& t) {
   spec.anchor_distances_m = p_.anchor_distances_m;
   spec.path_points = p_.path_points;
   spec.horizon_x_m = p_.horizon_x_m;
-  spec.step_s = p_.step_s;
+  spec.step_s = step_s_;
   return core::normal_plan(spline_path(t, line_, spec));
 }
 

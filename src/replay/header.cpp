@@ -15,8 +15,8 @@ ReplayHeader make_replay_header(const core::ReferenceLine& line, const sim::Worl
   h.step_s = params.step_s;
   h.lanes = params.road.lane_count;
   h.lane_width_m = params.road.lane_width_m;
-  h.car_length_m = params.ego.length_m;
-  h.car_width_m = params.ego.width_m;
+  h.car_length_m = params.car.length_m;
+  h.car_width_m = params.car.width_m;
   h.speed_limit_mps = params.referee.speed_limit_mps;
   h.max_acceleration_mps2 = params.referee.max_accel_mps2;
   h.max_jerk_mps3 = params.referee.max_jerk_mps3;

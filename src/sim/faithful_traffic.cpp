@@ -61,12 +61,14 @@ double SmoothNoise::at(double x) {
 
 FaithfulTraffic::FaithfulTraffic(const core::WaypointFrenet& chords,
                                  const core::ReferenceLine& line, const TrafficParams& params,
-                                 const core::RoadParams& road, std::uint64_t seed)
+                                 const core::RoadParams& road, const core::CarFootprint& car,
+                                 std::uint64_t seed)
     : chords_(chords),
       line_(line),
       params_(params),
       f_(params.faithful),
       road_(road),
+      car_(car),
       spawn_rng_(core::derive_seed(seed, kSpawnStream)) {
   const auto n = static_cast<std::size_t>(std::max(0, params.car_count));
   cars_.resize(n);
@@ -106,7 +108,7 @@ void FaithfulTraffic::build_open_road_table() {
     }
     prev_k = k;
   }
-  const double road_width = road_.lane_count * road_.lane_width_m;
+  const double road_width = core::road_width_m(road_);
   const auto lanes = static_cast<std::size_t>(road_.lane_count);
   open_road_.assign(lanes * open_road_bins_, 1);
   for (std::size_t lane = 0; lane < lanes; ++lane) {
@@ -268,7 +270,7 @@ void FaithfulTraffic::refresh_frenet(std::size_t i) {
 
 core::OrientedBox FaithfulTraffic::body(std::size_t i) const {
   const TrafficCar& c = cars_[i];
-  return {c.position, c.heading_rad, params_.car_length_m, params_.car_width_m};
+  return {c.position, c.heading_rad, car_.length_m, car_.width_m};
 }
 
 bool FaithfulTraffic::road_open_ahead(std::size_t i) const {
@@ -285,7 +287,7 @@ bool FaithfulTraffic::road_open_ahead(std::size_t i) const {
 FaithfulTraffic::Sight FaithfulTraffic::look(std::size_t i, const EgoView& ego) const {
   const TrafficCar& self = cars_[i];
   const core::Vec2 dir = unit(self.heading_rad);
-  const core::Vec2 origin = self.position + (0.5 * params_.car_length_m) * dir;
+  const core::Vec2 origin = self.position + (0.5 * car_.length_m) * dir;
   Sight best;
   double best_t = std::numeric_limits<double>::infinity();
   const auto consider = [&](const core::OrientedBox& box, double speed, SightKind kind, int car) {

@@ -1,51 +1,12 @@
 #include "overtake/sim/params.hpp"
 
-#include <cmath>
-#include <sstream>
+#include "overtake/core/param_check.hpp"
 
 namespace overtake::sim {
-namespace {
-
-// Collects problems while walking the field lists: every number must be finite; the
-// range checks below name the key.
-class Checker {
- public:
-  explicit Checker(std::vector<std::string>& out) : out_(out) {}
-
-  void positive(const std::string& key, double v) {
-    if (!(v > 0.0) || !std::isfinite(v)) add(key, v, "must be a positive number");
-  }
-  void non_negative(const std::string& key, double v) {
-    if (!(v >= 0.0) || !std::isfinite(v)) add(key, v, "must be zero or more");
-  }
-  void in_range(const std::string& key, double v, double lo, double hi) {
-    if (!(v >= lo && v <= hi)) {
-      std::ostringstream os;
-      os << "must be between " << lo << " and " << hi;
-      add(key, v, os.str());
-    }
-  }
-  void ordered(const std::string& lo_key, double lo, const std::string& hi_key, double hi) {
-    if (lo > hi) out_.push_back(lo_key + " (" + fmt(lo) + ") must not exceed " + hi_key + " (" + fmt(hi) + ")");
-  }
-
- private:
-  static std::string fmt(double v) {
-    std::ostringstream os;
-    os << v;
-    return os.str();
-  }
-  void add(const std::string& key, double v, const std::string& what) {
-    out_.push_back(key + " " + what + " (got " + fmt(v) + ")");
-  }
-  std::vector<std::string>& out_;
-};
-
-}  // namespace
 
 std::vector<std::string> validate(const WorldParams& p) {
   std::vector<std::string> out;
-  Checker c(out);
+  core::ParamChecker c(out);
   // Bounds of what makes physical sense: a step of a millisecond to half a second (the
   // original's 0.02 s; 1e-9 would never end, 1e308 would run no step), bodies and lanes up to
   // 20 m, speeds up to 100 m/s.
@@ -56,18 +17,16 @@ std::vector<std::string> validate(const WorldParams& p) {
             p.max_steps_per_call);
   c.in_range("road.lane_count", p.road.lane_count, 1, 8);
   c.in_range("road.lane_width_m", p.road.lane_width_m, 1.0, 20.0);
+  c.in_range("car.length_m", p.car.length_m, 0.5, 20.0);
+  c.in_range("car.width_m", p.car.width_m, 0.5, 20.0);
 
   const auto& e = p.ego;
-  c.in_range("world.ego.length_m", e.length_m, 0.5, 20.0);
-  c.in_range("world.ego.width_m", e.width_m, 0.5, 20.0);
   c.non_negative("world.ego.stand_on_tolerance_m", e.stand_on_tolerance_m);
-  c.in_range("world.ego.start_d_m", e.start_d_m, 0.0, p.road.lane_count * p.road.lane_width_m);
+  c.in_range("world.ego.start_d_m", e.start_d_m, 0.0, core::road_width_m(p.road));
   c.in_range("world.ego.start_s_m", e.start_s_m, -100000.0, 100000.0);
 
   const auto& t = p.traffic;
   c.in_range("world.traffic.car_count", t.car_count, 0, 64);
-  c.in_range("world.traffic.car_length_m", t.car_length_m, 0.5, 20.0);
-  c.in_range("world.traffic.car_width_m", t.car_width_m, 0.5, 20.0);
 
   const auto& pl = t.placement;
   const std::string pk = "world.traffic.placement.";
@@ -101,7 +60,7 @@ std::vector<std::string> validate(const WorldParams& p) {
 
   const auto& f = t.faithful;
   const std::string fk = "world.traffic.faithful.";
-  if (!std::isfinite(f.parked_d_m)) out.push_back(fk + "parked_d_m must be finite");
+  c.finite(fk + "parked_d_m", f.parked_d_m);
   c.non_negative(fk + "parked_s_before_end_m", f.parked_s_before_end_m);
   c.non_negative(fk + "accel_sensitivity_per_mph", f.accel_sensitivity_per_mph);
   c.non_negative(fk + "brake_sensitivity_per_mph", f.brake_sensitivity_per_mph);
@@ -156,7 +115,7 @@ std::vector<std::string> validate(const WorldParams& p) {
   c.positive("world.referee.max_jerk_mps3", r.max_jerk_mps3);
   c.in_range("world.referee.accel_block_steps", r.accel_block_steps, 1, 10000);
   c.in_range("world.referee.jerk_group_blocks", r.jerk_group_blocks, 1, 10000);
-  c.ordered("world.referee.min_d_m", r.min_d_m, "world.referee.max_d_m", r.max_d_m);
+  c.in_range("world.referee.edge_margin_m", r.edge_margin_m, 0.0, 0.5 * core::road_width_m(p.road));
   c.non_negative("world.referee.line_band_half_width_m", r.line_band_half_width_m);
   c.in_range("world.referee.straddle_max_steps", r.straddle_max_steps, 1, 1000000);
   c.in_range("world.referee.latch_steps", r.latch_steps, 1, 1000000);

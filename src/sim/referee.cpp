@@ -130,7 +130,7 @@ void Referee::observe(const EgoFrame& f) {
 bool Referee::outside_lane(double d_m, int& straddle) const {
   // CarAIControl: off the road counts at once (the band timer holds); in a line band the
   // timer runs, elsewhere it resets; more than straddle_max_steps in a band counts.
-  if (d_m < p_.min_d_m || d_m > p_.max_d_m) return true;
+  if (d_m < p_.edge_margin_m || d_m > core::road_width_m(road_) - p_.edge_margin_m) return true;
   straddle = on_inner_line(d_m, road_, p_.line_band_half_width_m) ? straddle + 1 : 0;
   return straddle > p_.straddle_max_steps;
 }

@@ -45,18 +45,20 @@ std::string_view to_string(TrafficProfile p) {
 
 Traffic::Traffic(const core::Map& map, const core::ReferenceLine& line,
                  const core::WaypointFrenet& chords, const TrafficParams& params,
-                 const core::RoadParams& road, TrafficProfile profile, std::uint64_t seed)
+                 const core::RoadParams& road, const core::CarFootprint& car, TrafficProfile profile,
+                 std::uint64_t seed)
     : map_(map),
       line_(line),
       chords_(chords),
       params_(params),
       road_(road),
+      car_(car),
       profile_(profile),
       seed_(seed) {
   if (profile == TrafficProfile::faithful) {
-    model_ = std::make_unique<FaithfulTraffic>(chords, line, params, road, seed);
+    model_ = std::make_unique<FaithfulTraffic>(chords, line, params, road, car, seed);
   } else {
-    model_ = std::make_unique<CalmTraffic>(map, line, chords, params, road, seed);
+    model_ = std::make_unique<CalmTraffic>(map, line, chords, params, road, car, seed);
   }
 }
 
@@ -120,11 +122,11 @@ core::CarObservation Traffic::observe(const TrafficCar& car) const {
 }
 
 core::OrientedBox Traffic::footprint(const TrafficCar& car) const {
-  return {car.position, car.heading_rad, params_.car_length_m, params_.car_width_m};
+  return {car.position, car.heading_rad, car_.length_m, car_.width_m};
 }
 
 void Traffic::set_script(const std::vector<ScriptedCar>& cars) {
-  auto calm = std::make_unique<CalmTraffic>(map_, line_, chords_, params_, road_, seed_);
+  auto calm = std::make_unique<CalmTraffic>(map_, line_, chords_, params_, road_, car_, seed_);
   calm->set_script(cars);
   model_ = std::move(calm);
   scripted_ = true;

@@ -29,7 +29,7 @@ World::World(const core::Map& map, const core::ReferenceLine& line, const WorldP
     : line_(line),
       chords_(map),
       params_(params),
-      traffic_(map, line, chords_, params.traffic, params.road, profile,
+      traffic_(map, line, chords_, params.traffic, params.road, params.car, profile,
                core::derive_seed(seed, kTrafficStream)) {
   place_ego({params.ego.start_s_m, params.ego.start_d_m});
   traffic_.place_initial(ego_view());
@@ -82,7 +82,7 @@ EgoView World::ego_view() const {
 }
 
 core::OrientedBox World::ego_footprint() const {
-  return {ego_.position, ego_.yaw_rad, params_.ego.length_m, params_.ego.width_m};
+  return {ego_.position, ego_.yaw_rad, params_.car.length_m, params_.car.width_m};
 }
 
 core::Telemetry World::telemetry() const {

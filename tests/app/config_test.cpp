@@ -7,7 +7,12 @@
 #include <fstream>
 #include <sstream>
 
+#include "overtake/app/commands.hpp"
 #include "overtake/app/config.hpp"
+#include "overtake/planner/policy.hpp"
+#include "overtake/replay/replay.hpp"
+#include "overtake/sim/run.hpp"
+#include "overtake/sim/world.hpp"
 
 namespace overtake::app {
 namespace {
@@ -52,6 +57,63 @@ TEST(ConfigOverrides, RoadIsSharedByWorldAndPlanner) {
   const Config c = apply_config_json(Config{}, json::parse(R"({"road": {"lane_width_m": 3.7}})"), "u");
   EXPECT_DOUBLE_EQ(c.world.road.lane_width_m, 3.7);
   EXPECT_DOUBLE_EQ(c.planner.road.lane_width_m, 3.7);
+}
+
+// The step is one key, the world's: every policy spaces its points by it. Each policy drives
+// an empty road for a minute; at its steady speed, the newest points of its last path (the
+// end of the queue the world still holds) are that speed times the step apart.
+TEST(ConfigStep, EveryPolicySpacesItsPointsForTheWorldsStep) {
+  const auto track = load_track(std::nullopt);
+  for (const double step_s : {0.04, 0.02}) {
+    const json j = {{"world", {{"step_s", step_s}, {"traffic", {{"car_count", 0}}}}}};
+    const Config c = apply_config_json(Config{}, j, "step.json");
+    EXPECT_DOUBLE_EQ(c.planner.step_s, step_s);
+    for (const auto& info : planner::list_policies()) {
+      SCOPED_TRACE(info.name + " at a step of " + std::to_string(step_s) + " s");
+      sim::World world(track->map, track->line, c.world, sim::TrafficProfile::faithful, 1);
+      auto policy = planner::make_policy(info.name, track->line, c.planner);
+      ASSERT_TRUE(policy);
+      sim::RunOptions opts;
+      opts.duration_s = 60.0;
+      (void)sim::run_drive(world, [&](const core::Telemetry& t) { return policy->plan(t); }, opts);
+      const double speed_mps = world.ego().speed_mps;
+      ASSERT_GT(speed_mps, 20.0);  // cruising
+      const std::vector<core::Vec2> queue = world.telemetry().previous_path;
+      ASSERT_GE(queue.size(), 11u);
+      for (std::size_t i = queue.size() - 10; i < queue.size(); ++i) {
+        const double gap_s = core::distance(queue[i], queue[i - 1]) / speed_mps;
+        EXPECT_NEAR(gap_s, step_s, 0.1 * step_s) << "point " << i;
+      }
+    }
+  }
+}
+
+TEST(ConfigErrors, ThePlannersStepKeysAreGoneForTheWorlds) {
+  EXPECT_THAT(error_of(json::parse(R"({"planner": {"walkthrough": {"step_s": 0.04}}})")),
+              HasSubstr("unknown key 'planner.walkthrough.step_s'"));
+  EXPECT_THAT(error_of(json::parse(R"({"planner": {"reference": {"trajectory": {"step_s": 0.04}}}})")),
+              HasSubstr("unknown key 'planner.reference.trajectory.step_s'"));
+  EXPECT_THAT(error_of(json::parse(R"({"planner": {"step_s": 0.04}})")),
+              HasSubstr("unknown key 'planner.step_s'"));
+}
+
+TEST(ConfigOverrides, TheCarFootprintIsOneSectionForEveryBody) {
+  const Config c =
+      apply_config_json(Config{}, json::parse(R"({"car": {"length_m": 5.2, "width_m": 2.1}})"), "u");
+  EXPECT_EQ(c.world.car, c.car);
+  EXPECT_EQ(c.planner.car, c.car);
+  EXPECT_DOUBLE_EQ(c.world.car.length_m, 5.2);
+  EXPECT_DOUBLE_EQ(c.planner.car.width_m, 2.1);
+  const auto track = load_track(std::nullopt);
+  const replay::ReplayHeader h = replay::make_replay_header(track->line, c.world, {});
+  EXPECT_DOUBLE_EQ(h.car_length_m, 5.2);
+  EXPECT_DOUBLE_EQ(h.car_width_m, 2.1);
+  for (const char* old : {R"({"world": {"ego": {"length_m": 5}}})", R"({"world": {"traffic": {"car_width_m": 2}}})",
+                          R"({"planner": {"reference": {"car_length_m": 5}}})"}) {
+    EXPECT_THAT(error_of(json::parse(old)), HasSubstr("unknown key")) << old;
+  }
+  EXPECT_THAT(error_of(json::parse(R"({"car": {"width_m": 0.1}})")),
+              HasSubstr("car.width_m must be between 0.5 and 20 (got 0.1)"));
 }
 
 TEST(ConfigErrors, UnknownKeyIsNamedWithItsPath) {

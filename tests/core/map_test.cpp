@@ -6,8 +6,6 @@
 
 #include <cmath>
 #include <cstdio>
-#include <filesystem>
-#include <fstream>
 #include <string>
 
 #include "overtake/core/map.hpp"
@@ -117,15 +115,6 @@ TEST(MapErrors, EmptyFile) {
   EXPECT_THAT(error_of("\n  \n# only a comment\n"), HasSubstr("empty map file"));
 }
 
-TEST(MapErrors, MissingFileNamesThePath) {
-  try {
-    (void)load_map_file("/nonexistent/dir/map.csv");
-    FAIL() << "expected MapError";
-  } catch (const MapError& e) {
-    EXPECT_THAT(std::string(e.what()), HasSubstr("/nonexistent/dir/map.csv: cannot open"));
-  }
-}
-
 /// kGood with every x, y and s multiplied by `k`.
 std::string scaled(double k) {
   std::string out;
@@ -184,19 +173,6 @@ TEST(MapLimits, AReferenceLineRefusesALoopItCannotSample) {
   EXPECT_THROW(ReferenceLine line(m), MapError);
   m.loop_length_m = std::nan("");
   EXPECT_THROW(ReferenceLine line(m), MapError);
-}
-
-TEST(MapFile, LoadsFromDiskWithTheSameResultAsText) {
-  const auto path = std::filesystem::temp_directory_path() / "overtake_map_test.csv";
-  {
-    std::ofstream out(path);
-    out << kGood;
-  }
-  const Map a = load_map_file(path);
-  const Map b = parse_map(kGood, path.string());
-  EXPECT_EQ(a.waypoints, b.waypoints);
-  EXPECT_EQ(a.content_hash, b.content_hash);
-  std::filesystem::remove(path);
 }
 
 TEST(MapFile, FormatThenParseKeepsTheWaypoints) {

@@ -37,6 +37,7 @@ class TrajectoryTest : public ::testing::Test {
   core::ReferenceLine line_;
   ReferenceParams params_;
   core::RoadParams road_;
+  core::CarFootprint car_;
 };
 
 TEST_F(TrajectoryTest, AGentlePathPassesTheCartesianCheck) {
@@ -74,7 +75,7 @@ TEST_F(TrajectoryTest, TheCurvatureCountsInTheTotalAcceleration) {
 
 TEST_F(TrajectoryTest, DrivingIntoASlowerCarIsACollision) {
   const std::vector<CarPrediction> cars = {test::lane_car(0, 1030.0, 6.0, 10.0)};
-  const CollisionReport r = check_collisions(straight(6.0, 20.0, 20.0, 1.0), cars, 0.0, 1.0, params_, road_);
+  const CollisionReport r = check_collisions(straight(6.0, 20.0, 20.0, 1.0), cars, 0.0, 1.0, params_, road_, car_);
   EXPECT_FALSE(r.ok);
   EXPECT_EQ(r.car_id, 0);
   // It closes 10 m/s on a 30 m gap; the margins make it a bit earlier than 2.5 s.
@@ -86,23 +87,23 @@ TEST_F(TrajectoryTest, CarsInOtherLanesAndFollowersAreNoCollision) {
   const std::vector<CarPrediction> cars = {test::lane_car(0, 1010.0, 2.3, 10.0),   // lane 0, wandering
                                            test::lane_car(1, 990.0, 10.0, 25.0),   // lane 2, passing
                                            test::lane_car(2, 985.0, 6.0, 24.0)};   // follows the ego
-  EXPECT_TRUE(check_collisions(straight(6.0, 20.0, 20.0, 1.0), cars, 0.0, 1.0, params_, road_).ok);
+  EXPECT_TRUE(check_collisions(straight(6.0, 20.0, 20.0, 1.0), cars, 0.0, 1.0, params_, road_, car_).ok);
 }
 
 TEST_F(TrajectoryTest, ACutInAheadIsACollisionForTheLaneKeeper) {
   // 20 m ahead in lane 0, drifting into lane 1 at 17.9 m/s; the ego keeps 21.9 m/s.
   const std::vector<CarPrediction> cars = {test::lane_car(0, 1020.0, 2.5, 17.9, 1.0)};
-  const CollisionReport r = check_collisions(straight(6.0, 21.9, 21.9, 1.0), cars, 0.0, 1.0, params_, road_);
+  const CollisionReport r = check_collisions(straight(6.0, 21.9, 21.9, 1.0), cars, 0.0, 1.0, params_, road_, car_);
   EXPECT_FALSE(r.ok);
 }
 
 TEST_F(TrajectoryTest, ChangingLanesInFrontOfAFastCarFailsItsRoomToBrake) {
   // Lane 0 has a car 25 m behind at 30 m/s; the ego at 20 m/s moves over in 4 s.
   const std::vector<CarPrediction> fast = {test::lane_car(0, 975.0, 2.0, 30.0)};
-  EXPECT_FALSE(check_collisions(change(1, 0, 20.0, 4.0), fast, 0.0, 1.0, params_, road_).ok);
+  EXPECT_FALSE(check_collisions(change(1, 0, 20.0, 4.0), fast, 0.0, 1.0, params_, road_, car_).ok);
   // The same car at 21 m/s leaves room.
   const std::vector<CarPrediction> slow = {test::lane_car(0, 975.0, 2.0, 21.0)};
-  EXPECT_TRUE(check_collisions(change(1, 0, 20.0, 4.0), slow, 0.0, 1.0, params_, road_).ok);
+  EXPECT_TRUE(check_collisions(change(1, 0, 20.0, 4.0), slow, 0.0, 1.0, params_, road_, car_).ok);
 }
 
 TEST_F(TrajectoryTest, TheBandAroundALaneLineIsKnown) {
@@ -122,7 +123,7 @@ class PlanTest : public TrajectoryTest {
     req.wanted_speed_mps = params_.behaviour.cruise_speed_mps;
     req.band_time_s = band_s;
     req.cars = &cars;
-    return plan_trajectory(line_, req, params_, road_);
+    return plan_trajectory(line_, req, params_, road_, car_);
   }
 };
 
@@ -165,7 +166,7 @@ TEST_F(PlanTest, ItSlowsBehindAStoppedCarAndStopsShortOfIt) {
   EXPECT_NE(p.status, PlanStatus::least_bad);
   double min_gap = 1e9;
   for (double t = 0.0; t <= 12.0; t += 0.1) min_gap = std::min(min_gap, 1080.0 - p.trajectory.at(t).s_m);
-  EXPECT_GT(min_gap, params_.car_length_m);
+  EXPECT_GT(min_gap, car_.length_m);
   EXPECT_LT(p.trajectory.at(0.5).s_ddot, -0.5);
 }
 

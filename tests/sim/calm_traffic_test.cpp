@@ -66,7 +66,7 @@ class TrafficTest : public ::testing::Test {
 
   [[nodiscard]] CalmTraffic traffic(std::uint64_t seed, const TrafficParams& params,
                                     const core::RoadParams& road) const {
-    return CalmTraffic(map_, line_, chords_, params, road, seed);
+    return CalmTraffic(map_, line_, chords_, params, road, car_, seed);
   }
 
   /// s of waypoint `i`, any integer, around the loop.
@@ -98,7 +98,7 @@ class TrafficTest : public ::testing::Test {
   }
 
   [[nodiscard]] core::OrientedBox box(const TrafficCar& c) const {
-    return {c.position, c.heading_rad, params_.car_length_m, params_.car_width_m};
+    return {c.position, c.heading_rad, car_.length_m, car_.width_m};
   }
 
   core::Map map_;
@@ -106,6 +106,7 @@ class TrafficTest : public ::testing::Test {
   core::WaypointFrenet chords_;
   TrafficParams params_;
   core::RoadParams road_;
+  core::CarFootprint car_;
 };
 
 TEST(TrafficProfileNames, RoundTrip) {

@@ -44,7 +44,7 @@ class FaithfulTest : public ::testing::Test {
                                      const TrafficParams& p = TrafficParams{}) const {
     TrafficParams q = p;
     q.car_count = cars;
-    FaithfulTraffic t(chords_, line_, q, road_, seed);
+    FaithfulTraffic t(chords_, line_, q, road_, car_, seed);
     t.start(ego_far(0.0));
     t.hold_batches_for_testing();
     return t;
@@ -59,6 +59,7 @@ class FaithfulTest : public ::testing::Test {
   core::ReferenceLine line_;
   core::WaypointFrenet chords_;
   core::RoadParams road_;
+  core::CarFootprint car_;
   FaithfulTrafficParams f_;
 };
 
@@ -95,7 +96,7 @@ TEST(SmoothNoise, StaysInTheUnitRangeAndMovesSmoothly) {
 TEST_F(FaithfulTest, EveryCarStartsParkedOffTheRoadAndTheFirstFramePlacesOneToThree) {
   std::set<int> first_batches;
   for (std::uint64_t seed = 1; seed <= 20; ++seed) {
-    FaithfulTraffic t(chords_, line_, TrafficParams{}, road_, seed);
+    FaithfulTraffic t(chords_, line_, TrafficParams{}, road_, car_, seed);
     const EgoView ego = ego_at(124.8336, 6.164833);
     t.start(ego);
     for (const TrafficCar& c : t.cars()) {
@@ -120,7 +121,7 @@ TEST_F(FaithfulTest, PlacedExactlyOnAWaypointBehindOrAheadWithItsCapAsTheFirstVe
   int behind = 0;
   int ahead = 0;
   for (std::uint64_t seed = 1; seed <= 40; ++seed) {
-    FaithfulTraffic t(chords_, line_, TrafficParams{}, road_, seed);
+    FaithfulTraffic t(chords_, line_, TrafficParams{}, road_, car_, seed);
     const EgoView ego = ego_at(400.0, 6.0);
     t.start(ego);
     t.step(ego, kDt);
@@ -164,7 +165,7 @@ TEST_F(FaithfulTest, PlacedExactlyOnAWaypointBehindOrAheadWithItsCapAsTheFirstVe
 
 TEST_F(FaithfulTest, NoSpotWithin6MetresOfAnotherCar) {
   for (std::uint64_t seed = 1; seed <= 10; ++seed) {
-    FaithfulTraffic t(chords_, line_, TrafficParams{}, road_, seed);
+    FaithfulTraffic t(chords_, line_, TrafficParams{}, road_, car_, seed);
     EgoView ego = ego_at(400.0, 6.0);
     t.start(ego);
     for (int k = 0; k < 1500; ++k) {  // 30 s: every car placed
@@ -194,7 +195,7 @@ TEST_F(FaithfulTightCircle, ReplacementGoesByStraightLineDistance) {
   // is 196 m in a straight line: not re-placed. 240 m of s is 224 m straight: re-placed at
   // the next batch.
   for (const double along : {204.0, 240.0}) {
-    FaithfulTraffic t(chords_, line_, TrafficParams{}, road_, 3);
+    FaithfulTraffic t(chords_, line_, TrafficParams{}, road_, car_, 3);
     const EgoView ego = ego_at(100.0, 6.0);
     t.start(ego);
     t.step(ego, kDt);  // the first batch
@@ -438,7 +439,7 @@ TEST_F(FaithfulTest, AfterAContactTheCarBehindSlowsAndVeersAway) {
 
 TEST_F(FaithfulTest, SameSeedSameTraffic) {
   const auto run = [&](std::uint64_t seed) {
-    FaithfulTraffic t(chords_, line_, TrafficParams{}, road_, seed);
+    FaithfulTraffic t(chords_, line_, TrafficParams{}, road_, car_, seed);
     double s = 200.0;
     EgoView ego = ego_at(s, 6.0, 20.0);
     t.start(ego);

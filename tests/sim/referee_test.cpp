@@ -5,6 +5,7 @@
 #include <array>
 #include <cmath>
 #include <optional>
+#include <utility>
 #include <stdexcept>
 #include <vector>
 
@@ -186,6 +187,29 @@ TEST(RefereeOutsideLane, OffTheRoadForOneStep) {
     drv.hold(20.0, 1.0);
     EXPECT_EQ(count_of(drv.referee, IncidentType::outside_lane), 0) << "d = " << d;
   }
+}
+
+// The road's outer edge follows the lane layout: on four lanes of 4 m it is at 16 m, and the
+// margin keeps d over 15.2 m outside.
+TEST(RefereeOutsideLane, TheEdgeFollowsTheLanes) {
+  core::RoadParams four_lanes;
+  four_lanes.lane_count = 4;
+  for (const auto& [d, outside] : {std::pair{11.3, false}, std::pair{15.1, false}, std::pair{15.3, true}}) {
+    StraightDriver drv;
+    drv.referee = Referee{RefereeParams{}, kDt, four_lanes};
+    drv.hold(20.0, 1.0);
+    drv.step(20.0, d);
+    drv.hold(20.0, 1.0);
+    EXPECT_EQ(count_of(drv.referee, IncidentType::outside_lane), outside ? 1 : 0) << "d = " << d;
+  }
+  RefereeParams wide_margin;
+  wide_margin.edge_margin_m = 1.5;
+  StraightDriver drv;
+  drv.referee = Referee{wide_margin, kDt};
+  drv.hold(20.0, 1.0);
+  drv.step(20.0, 10.6);
+  drv.hold(20.0, 1.0);
+  EXPECT_EQ(count_of(drv.referee, IncidentType::outside_lane), 1);
 }
 
 // --- acceleration and jerk --------------------------------------------------------------

@@ -9,9 +9,8 @@
 namespace overtake::planner::reference {
 namespace {
 
-/// The chord reading is sampled at this d (the middle of the road) every metre of s ...
-constexpr double kSampleD = 6.0;
-/// ... averaged over the local waypoint spacing, then twice over this to round it off ...
+/// The chord reading is sampled in the middle of the road every metre of s, averaged over
+/// the local waypoint spacing, then twice over this to round it off ...
 constexpr double kRoundOffM = 25.0;
 /// ... and drawn through knots this far apart.
 constexpr double kKnotSpacingM = 5.0;
@@ -46,8 +45,9 @@ std::vector<double> moving_average(const std::vector<double>& v, const std::vect
 
 LaneFrame::LaneFrame(const core::ReferenceLine& line) : line_(&line) {}
 
-LaneFrame LaneFrame::chord_aligned(const core::ReferenceLine& line) {
+LaneFrame LaneFrame::chord_aligned(const core::ReferenceLine& line, const core::RoadParams& road) {
   LaneFrame f(line);
+  const double sample_d = 0.5 * core::road_width_m(road);
   // The chords between the map's waypoints as given (the line may pass beside them).
   const core::Map& map = line.map();
   if (map.waypoints.size() < 3) return f;
@@ -58,9 +58,9 @@ LaneFrame LaneFrame::chord_aligned(const core::ReferenceLine& line) {
   std::size_t hint = 0;
   for (std::size_t b = 0; b < bins; ++b) {
     const double s = line.start_s_m() + static_cast<double>(b);
-    const core::Vec2 p = line.to_cartesian({s, kSampleD});
+    const core::Vec2 p = line.to_cartesian({s, sample_d});
     hint = chords.closest(p, hint);
-    reading[b] = chords.to_frenet(p, hint).d_m - kSampleD;
+    reading[b] = chords.to_frenet(p, hint).d_m - sample_d;
     const std::size_t next = chords.next(p, hint);
     const std::size_t prev = chords.wrap_index(static_cast<long>(next) - 1);
     spacing[b] = core::distance(chords.position(prev), chords.position(next));

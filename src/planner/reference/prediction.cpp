@@ -174,7 +174,7 @@ std::vector<CarPrediction> predict_cars(const core::Telemetry& telemetry,
   std::vector<CarTrack> next;
   next.reserve(telemetry.cars.size());
   const core::ReferenceLine& line = frame.line();
-  const double road_width = road.lane_count * road.lane_width_m;
+  const double road_width = core::road_width_m(road);
   for (const core::CarObservation& car : telemetry.cars) {
     // The original reports a newly placed car's speed cap read as m/s for one frame (2.24
     // times its real speed); no car on its roads goes that fast.

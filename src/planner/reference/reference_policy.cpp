@@ -27,6 +27,19 @@ double wire_speed_error_mps(const core::ReferenceLine& line, double step_s) {
   return 2.0 * resolution / step_s;
 }
 
+/// A check step within this many world steps of a whole number of them is one.
+constexpr double kWholeStepTolerance = 1e-6;
+
+/// `x` carried `dt_s` forward (back when negative) at its speed and acceleration.
+FrenetState carried(const FrenetState& x, double dt_s) {
+  FrenetState y = x;
+  y.s_m += dt_s * (x.s_dot + 0.5 * dt_s * x.s_ddot);
+  y.s_dot += dt_s * x.s_ddot;
+  y.d_m += dt_s * (x.d_dot_mps + 0.5 * dt_s * x.d_ddot_mps2);
+  y.d_dot_mps += dt_s * x.d_ddot_mps2;
+  return y;
+}
+
 }  // namespace
 
 core::PlanStatus to_core(PlanStatus s) {
@@ -53,10 +66,12 @@ std::string status_reason(const TrajectoryPlan& plan) {
 ReferencePolicy::ReferencePolicy(const core::ReferenceLine& line, const PlannerParams& params)
     : line_(line),
       smooth_line_(std::make_shared<const core::ReferenceLine>(line.map(), params.reference.line_smoothing_m3)),
-      frame_(LaneFrame::chord_aligned(*smooth_line_)),
+      frame_(LaneFrame::chord_aligned(*smooth_line_, params.road)),
       road_(params.road),
+      step_s_(params.step_s),
+      car_(params.car),
       p_(params.reference) {
-  p_.trajectory.max_speed_mps -= wire_speed_error_mps(line, p_.trajectory.step_s);
+  p_.trajectory.max_speed_mps -= wire_speed_error_mps(line, step_s_);
 }
 
 FrenetState ReferencePolicy::observed_state(const core::Telemetry& t) const {
@@ -66,7 +81,7 @@ FrenetState ReferencePolicy::observed_state(const core::Telemetry& t) const {
 
 core::PlanResult ReferencePolicy::plan(const core::Telemetry& t) {
   const auto& tp = p_.trajectory;
-  const double dt = tp.step_s;
+  const double dt = step_s_;
 
   // Where the car is on the last plan: the simulator consumed the points not queued.
   const std::size_t remaining = t.previous_path.size();
@@ -125,14 +140,14 @@ core::PlanResult ReferencePolicy::plan(const core::Telemetry& t) {
 
   // Prediction, behaviour, trajectory.
   predictions_ = predict_cars(t, frame_, car.s_m, elapsed, tracks_, p_.prediction, road_,
-                              p_.car_length_m);
+                              car_.length_m);
   const RoadPoint at_car = road_point(frame_, car.s_m, car.d_m);
   EgoSnapshot ego;
   ego.s_m = car.s_m;
   ego.d_m = car.d_m;
   ego.speed_mps = car.s_dot * at_car.along_scale;
   ego.metres_per_s = at_car.along_scale;
-  decision_ = decide(predictions_, ego, behaviour_, elapsed, p_.car_length_m, p_.behaviour, road_);
+  decision_ = decide(predictions_, ego, behaviour_, elapsed, car_.length_m, p_.behaviour, road_);
 
   TrajectoryRequest req;
   req.start = start;
@@ -141,12 +156,17 @@ core::PlanResult ReferencePolicy::plan(const core::Telemetry& t) {
     std::vector<FrenetState> past(driven_);
     past.insert(past.end(), states.begin(), states.end());
     if (past.empty() || !synced_) past.clear();
-    const auto stride = static_cast<std::size_t>(std::lround(tp.check_step_s / dt));
-    for (std::size_t j = 1; j <= 3 && stride > 0 && !past.empty(); ++j) {
+    for (std::size_t j = 1; j <= 3 && !past.empty(); ++j) {
       // The newest state is the start: the last kept point, or the car (the last driven).
       const std::size_t newest = past.size() - 1;
-      if (newest < j * stride) break;
-      FrenetState x = past[newest - j * stride];
+      const double back_steps = static_cast<double>(j) * tp.check_step_s / dt;
+      const long nearest = std::lround(back_steps);
+      if (nearest < 1 || static_cast<std::size_t>(nearest) > newest) break;
+      FrenetState x = past[newest - static_cast<std::size_t>(nearest)];
+      if (std::abs(back_steps - static_cast<double>(nearest)) > kWholeStepTolerance) {
+        // A check step that is no whole number of world steps: carried from the nearest state.
+        x = carried(x, (static_cast<double>(nearest) - back_steps) * dt);
+      }
       x.s_m = start.s_m + line_.s_ahead(start.s_m, x.s_m);
       req.history.push_back(x);
     }
@@ -156,7 +176,7 @@ core::PlanResult ReferencePolicy::plan(const core::Telemetry& t) {
   req.wanted_speed_mps = decision_.speed_mps;
   req.band_time_s = band_time;
   req.cars = &predictions_;
-  plan_ = plan_trajectory(frame_, req, p_, road_);
+  plan_ = plan_trajectory(frame_, req, p_, road_, car_);
   const TrajectoryPlan& chosen = plan_;
   status_ = chosen.status;
   if (chosen.trajectory.end_lane != behaviour_.target_lane) {

@@ -150,10 +150,10 @@ std::vector<CarSamples> sample_cars(const std::vector<CarPrediction>& cars, doub
 /// gap, it must have room to stop closing (rear_room).
 CollisionReport collide(const Track1d& lon, const Track1d& lat, bool ego_changing, bool sideways,
                         const Grid& g, const std::vector<CarSamples>& cars, double mps,
-                        const ReferenceParams& p) {
-  const double length = p.car_length_m;
+                        const ReferenceParams& p, const core::CarFootprint& car) {
+  const double length = car.length_m;
   const double lon_need = length + p.trajectory.lon_margin_m;
-  const double lat_base = p.car_width_m + p.trajectory.lat_margin_m;
+  const double lat_base = car.width_m + p.trajectory.lat_margin_m;
   const double react_gap = p.behaviour.follower_reaction_gap_m;
   CollisionReport r;
   for (const CarSamples& c : cars) {
@@ -281,7 +281,8 @@ struct LaneCost {
 };
 
 LaneCost lane_cost(const Track1d& lon, const Grid& g, const std::vector<const CarSamples*>& ahead,
-                   const CarSamples* behind, double mps, const ReferenceParams& p) {
+                   const CarSamples* behind, double mps, const ReferenceParams& p,
+                   const core::CarFootprint& footprint) {
   const auto& b = p.behaviour;
   const auto& tp = p.trajectory;
   LaneCost c;
@@ -292,7 +293,7 @@ LaneCost lane_cost(const Track1d& lon, const Grid& g, const std::vector<const Ca
     const double ve = lon.v[e] * mps;
     double step = 0.0;
     for (const CarSamples* car : ahead) {
-      const double gap = (car->s[i] - lon.x[e]) * mps - p.car_length_m;
+      const double gap = (car->s[i] - lon.x[e]) * mps - footprint.length_m;
       const double want = rss_front_gap(ve, car->s_dot[i] * mps, b);
       const double short_by = std::max(0.0, want - gap) / want;
       step += tp.proximity_weight * short_by * short_by;
@@ -301,7 +302,7 @@ LaneCost lane_cost(const Track1d& lon, const Grid& g, const std::vector<const Ca
       const double centre_gap = (lon.x[e] - behind->s[i]) * mps;
       if (centre_gap < b.follower_reaction_gap_m + kRearRoomScaleM * 5.0) {
         const double closing = (behind->s_dot[i] - lon.v[e]) * mps;
-        const double room = rear_room(b.follower_reaction_gap_m, closing, p.car_length_m, b);
+        const double room = rear_room(b.follower_reaction_gap_m, closing, footprint.length_m, b);
         const double short_by = std::max(0.0, -room) / kRearRoomScaleM;
         step += tp.rear_weight * short_by * short_by;
       }
@@ -350,7 +351,7 @@ bool on_road(const Track1d& lat, const Grid& g, const LaneFrame& frame, const Fr
     const double s = x0.s_m + x0.s_dot * g.t(k);
     const double d = frame.original_d(s, lat.x[static_cast<std::size_t>(k + kBack)]);
     const double lo = std::min(tp.road_edge_margin_m, frame.original_d(s, first) - kOvershootM);
-    const double hi = std::max(road.lane_count * road.lane_width_m - tp.road_edge_margin_m,
+    const double hi = std::max(core::road_width_m(road) - tp.road_edge_margin_m,
                                frame.original_d(s, last) + kOvershootM);
     if (d < lo || d > hi) return false;
   }
@@ -381,18 +382,19 @@ KinematicReport check_kinematics(const Trajectory& t, const LaneFrame& line,
 
 CollisionReport check_collisions(const Trajectory& t, const std::vector<CarPrediction>& cars,
                                  double start_delay_s, double metres_per_s, const ReferenceParams& p,
-                                 const core::RoadParams& road) {
+                                 const core::RoadParams& road, const core::CarFootprint& car) {
   const Grid g = grid_of(p.trajectory);
   const Track1d lon = sample(g, [&](double x) { return t.longitudinal.at(x); });
   const Track1d lat = sample(g, [&](double x) { return t.lateral.at(x); });
   const double d0 = lat.x[kBack];
   const bool changing = core::lane_of(d0, road) != t.end_lane;
   const bool sideways = changing || std::abs(d0 - core::lane_center_d(core::lane_of(d0, road), road)) > kSidewaysM;
-  return collide(lon, lat, changing, sideways, g, sample_cars(cars, start_delay_s, lon.x[kBack], g), metres_per_s, p);
+  return collide(lon, lat, changing, sideways, g, sample_cars(cars, start_delay_s, lon.x[kBack], g), metres_per_s, p, car);
 }
 
 TrajectoryPlan plan_trajectory(const LaneFrame& line, const TrajectoryRequest& req,
-                               const ReferenceParams& params, const core::RoadParams& road) {
+                               const ReferenceParams& params, const core::RoadParams& road,
+                               const core::CarFootprint& car) {
   const auto& tp = params.trajectory;
   const auto& bp = params.behaviour;
   const Grid g = grid_of(tp);
@@ -532,7 +534,7 @@ TrajectoryPlan plan_trajectory(const LaneFrame& line, const TrajectoryRequest& r
       const double tc = req.start_delay_s + t;
       const double v_lead = lead->s_dot_at(tc);
       const double gap = rss_front_gap(v_lead * mps, v_lead * mps, bp);
-      const double s1 = lead->s_at(tc) - (params.car_length_m + gap) / mps;
+      const double s1 = lead->s_at(tc) - (car.length_m + gap) / mps;
       const double v1 = std::min(v_lead, s_dot_cap);
       add_lon({quintic(x0.s_m, x0.s_dot, x0.s_ddot, s1, v1, 0.0, t), {}, false});
     }
@@ -561,7 +563,7 @@ TrajectoryPlan plan_trajectory(const LaneFrame& line, const TrajectoryRequest& r
   for (std::size_t j = 0; j < lons.size(); ++j) {
     for (const int l : lanes) {
       const LaneCars& lc = lane_cars[static_cast<std::size_t>(l)];
-      soft[j * lane_n + static_cast<std::size_t>(l)] = lane_cost(lons[j].samples, g, lc.ahead, lc.behind, mps, params);
+      soft[j * lane_n + static_cast<std::size_t>(l)] = lane_cost(lons[j].samples, g, lc.ahead, lc.behind, mps, params, car);
     }
   }
 
@@ -604,7 +606,7 @@ TrajectoryPlan plan_trajectory(const LaneFrame& line, const TrajectoryRequest& r
     const LonCandidate& lon = lons[c.lon];
     ++plan.collision_checks;
     const bool changing = lat.end_lane != start_lane;
-    const CollisionReport col = collide(lon.samples, lat.samples, changing, changing || off_centre, g, car_samples, mps, params);
+    const CollisionReport col = collide(lon.samples, lat.samples, changing, changing || off_centre, g, car_samples, mps, params, car);
     if (!col.ok || lat.overstay_s < kInf) {
       // An incident ahead: a collision, or lingering on a lane line (the original counts it
       // as one, so it is weighed as one, at the time it would count).
@@ -649,7 +651,7 @@ TrajectoryPlan plan_trajectory(const LaneFrame& line, const TrajectoryRequest& r
       const Track1d brake_samples = sample(g, [&](double t) { return brake.at(t); });
       const bool changing = c.end_lane != start_lane;
       const CollisionReport col = collide(brake_samples, c.samples, changing, changing || off_centre, g,
-                                          car_samples, mps, params);
+                                          car_samples, mps, params, car);
       const KinematicReport kin = kinematics(brake_samples, c.samples, g, line, tp, false, req.history);
       const double incident = std::min(col.ok ? kInf : lateness(col), c.overstay_s);
       // Within the checked limits; else within the total jerk allowed to a fallback; else not.
@@ -681,7 +683,7 @@ TrajectoryPlan plan_trajectory(const LaneFrame& line, const TrajectoryRequest& r
                                         std::cbrt(60.0 * std::abs(back_to - x0.d_m) / tp.lateral_jerk_mps3)));
   }
   if (lats.empty()) {
-    const CollisionReport fb = check_collisions(fallback, cars, req.start_delay_s, mps, params, road);
+    const CollisionReport fb = check_collisions(fallback, cars, req.start_delay_s, mps, params, road, car);
     fallback_incident = fb.ok ? kInf : lateness(fb);
   }
   std::stable_sort(failed.begin(), failed.end(), [](const auto& a, const auto& b) { return a.first > b.first; });

@@ -17,9 +17,11 @@
 
 namespace overtake::app {
 
-/// All parameters.
+/// All parameters. The facts several modules share are given once, at the top (`road`, `car`)
+/// or in the module that owns them (`world.step_s`), and copied into the others' params.
 struct Config {
   core::RoadParams road;
+  core::CarFootprint car;
   sim::WorldParams world;
   planner::PlannerParams planner;
   friend bool operator==(const Config&, const Config&) = default;
@@ -41,8 +43,8 @@ class ConfigError : public std::runtime_error {
 [[nodiscard]] nlohmann::json read_json_file(const std::filesystem::path& path);
 
 /// Applies the keys present in `j` (any subset) on top of `base`. Unknown keys, wrong types
-/// and invalid values are errors naming `source` and the key. The road is copied into the
-/// world's and planner's params.
+/// and invalid values are errors naming `source` and the key. The road and the car footprint
+/// are copied into the world's and planner's params, and the world's step into the planner's.
 [[nodiscard]] Config apply_config_json(Config base, const nlohmann::json& j, std::string_view source);
 
 /// apply_config_json on the text of a config file (parse_json_text, then the keys); every

@@ -1,9 +1,10 @@
 #pragma once
-// Highway map files in the original format: one waypoint per line, `x y s dx dy`
-// (divider position in metres, distance along the road in metres, unit normal pointing
-// away from the divider). The road is a closed loop.
+// Highway maps in the original file format: one waypoint per line, `x y s dx dy` (divider
+// position in metres, distance along the road in metres, unit normal pointing away from the
+// divider). The road is a closed loop. The core parses and formats the text; files are read
+// and written by the app (overtake/app/map_file.hpp).
 
-#include <filesystem>
+#include <cstdint>
 #include <stdexcept>
 #include <string>
 #include <string_view>
@@ -63,9 +64,6 @@ struct MapRules {
 /// partial map.
 [[nodiscard]] Map parse_map(std::string_view text, std::string_view source,
                             const MapRules& rules = {});
-
-/// Reads and parses a map file. Throws MapError (also when the file cannot be read).
-[[nodiscard]] Map load_map_file(const std::filesystem::path& path, const MapRules& rules = {});
 
 /// Map text in the original format, one waypoint per line.
 [[nodiscard]] std::string format_map(const std::vector<Waypoint>& waypoints);

@@ -1,5 +1,6 @@
 #pragma once
-// The road's lane layout: lanes numbered from the divider outward, each `lane_width_m` wide.
+// The road's lane layout (lanes numbered from the divider outward, each `lane_width_m` wide)
+// and the cars' footprint: facts every module shares, each given once in the config.
 
 #include <algorithm>
 #include <cmath>
@@ -12,6 +13,19 @@ struct RoadParams {
   double lane_width_m = 4.0;
   friend bool operator==(const RoadParams&, const RoadParams&) = default;
 };
+
+/// (ours) The footprint of every car, the ego's included: the original's collider size is a
+/// scene setting.
+struct CarFootprint {
+  double length_m = 4.7;
+  double width_m = 1.9;
+  friend bool operator==(const CarFootprint&, const CarFootprint&) = default;
+};
+
+/// The road's width: d of its outer edge (the divider is at d = 0).
+[[nodiscard]] constexpr double road_width_m(const RoadParams& road = {}) {
+  return road.lane_count * road.lane_width_m;
+}
 
 /// Centre of lane `lane` (d, metres).
 [[nodiscard]] constexpr double lane_center_d(int lane, const RoadParams& road = {}) {

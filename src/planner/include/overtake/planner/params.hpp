@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "overtake/core/road.hpp"
+#include "overtake/core/step.hpp"
 #include "overtake/core/units.hpp"
 
 namespace overtake::planner {
@@ -18,7 +19,6 @@ struct WalkthroughParams {
   std::vector<double> anchor_distances_m = {30.0, 60.0, 90.0};
   int path_points = 50;
   double horizon_x_m = 30.0;          ///< points are spaced along this much of the spline
-  double step_s = 0.02;               ///< the simulator's step, for point spacing
   int start_lane = 1;
   friend bool operator==(const WalkthroughParams&, const WalkthroughParams&) = default;
 };
@@ -142,7 +142,6 @@ struct ReferenceBehaviourParams {
 /// reference, trajectory layer: jerk-minimising Frenet candidates (Werling et al. 2010) and
 /// their checks.
 struct ReferenceTrajectoryParams {
-  double step_s = 0.02;              ///< the simulator's step: spacing of path points in time
   int keep_points = 3;               ///< points of the previous path kept for latency
   int path_points = 75;              ///< points sent each cycle (kept ones included)
   double check_step_s = 0.1;         ///< candidates are checked at this spacing
@@ -153,8 +152,9 @@ struct ReferenceTrajectoryParams {
   double lateral_jerk_mps3 = 5.0;    ///< sets the shortest lateral manoeuvre for a distance
   double min_lateral_time_s = 1.2;
   std::vector<double> lateral_time_factors = {1.0, 1.3, 1.7, 2.5};
-  /// The ego's middle stays this far inside the road's edges (the original counts d under
-  /// 0.8 m or over 11.2 m as off the road).
+  /// The ego's middle stays this far inside the road's edges (the divider and
+  /// core::road_width_m; the world counts d within world.referee.edge_margin_m of them as
+  /// off the road).
   double road_edge_margin_m = 1.2;
   std::vector<double> cruise_times_s = {1.5, 2.5, 4.0, 6.0};
   std::vector<double> speed_offsets_mps = {0.0, -1.0, -2.5, -5.0, -9.0};
@@ -192,8 +192,6 @@ struct ReferenceTrajectoryParams {
 
 /// The reference planner: prediction, behaviour and trajectory layers.
 struct ReferenceParams {
-  double car_length_m = 4.7;  ///< footprint of every car, the ego's included
-  double car_width_m = 1.9;
   /// The planner's own line through the map: a smoothing spline of this stiffness (m^3), so
   /// that waypoints rounded to 0.1 m (the original map's) put no wiggles into its curvature
   /// (at the outer lane they made a steady drive jerk by 25 m/s^3). Its lateral frame is then
@@ -208,6 +206,11 @@ struct ReferenceParams {
 /// Parameters of every policy.
 struct PlannerParams {
   core::RoadParams road;
+  /// The world's step (world.step_s; no key of its own: the config loader copies it in, as
+  /// it copies the road): every policy spaces its path points this far apart in time.
+  double step_s = core::kDefaultStepS;
+  /// Every car's footprint, the ego's included (the config's `car`, copied in likewise).
+  core::CarFootprint car;
   ReferenceParams reference;
   WalkthroughParams walkthrough;  ///< also the shared base of the seed policies
   Seed000Params seed000;
@@ -234,7 +237,6 @@ void describe(V& v, WalkthroughParams& p) {
   v("anchor_distances_m", p.anchor_distances_m);
   v("path_points", p.path_points);
   v("horizon_x_m", p.horizon_x_m);
-  v("step_s", p.step_s);
   v("start_lane", p.start_lane);
 }
 
@@ -328,7 +330,6 @@ void describe(V& v, ReferenceBehaviourParams& p) {
 
 template <class V>
 void describe(V& v, ReferenceTrajectoryParams& p) {
-  v("step_s", p.step_s);
   v("keep_points", p.keep_points);
   v("path_points", p.path_points);
   v("check_step_s", p.check_step_s);
@@ -368,8 +369,6 @@ void describe(V& v, ReferenceTrajectoryParams& p) {
 
 template <class V>
 void describe(V& v, ReferenceParams& p) {
-  v("car_length_m", p.car_length_m);
-  v("car_width_m", p.car_width_m);
   v("line_smoothing_m3", p.line_smoothing_m3);
   v.section("prediction", p.prediction);
   v.section("behaviour", p.behaviour);

@@ -49,6 +49,7 @@ class SeedPolicyBase : public Policy {
 
   const core::ReferenceLine& line_;
   core::RoadParams road_;
+  double step_s_;  // the world's step: new points are this far apart in time
   WalkthroughParams base_;
   int lane_;
   double ref_speed_mps_ = 0.0;

@@ -17,12 +17,13 @@ struct SplinePathSpec {
   std::vector<double> anchor_distances_m;     ///< ahead of the end of the queued path, along s
   int path_points = 50;                       ///< queued + new points
   double horizon_x_m = 30.0;                  ///< points are spaced by this much of the spline
-  double step_s = 0.02;
+  double step_s = 0.0;                        ///< time between points: the world's step (required)
 };
 
 /// The queued path followed by new points on a natural cubic spline through two points
 /// that continue the queued path's heading and the anchors. When the anchors cannot be
-/// fitted (they do not advance in the car's frame), returns the queued path unchanged.
+/// fitted (they do not advance in the car's frame), or the speed or step is not positive, returns
+/// the queued path unchanged.
 [[nodiscard]] std::vector<core::Vec2> spline_path(const core::Telemetry& telemetry,
                                                   const core::ReferenceLine& line,
                                                   const SplinePathSpec& spec);

@@ -27,6 +27,7 @@ class WalkthroughPolicy final : public Policy {
  private:
   const core::ReferenceLine& line_;
   core::RoadParams road_;
+  double step_s_;  // the world's step: new points are this far apart in time
   WalkthroughParams p_;
   int lane_;
   double ref_speed_mps_ = 0.0;

@@ -63,8 +63,8 @@ struct ReplayHeader {
   double step_s = 0.02;
   int lanes = 3;
   double lane_width_m = 4.0;
-  double car_length_m = 4.7;
-  double car_width_m = 1.9;
+  double car_length_m = 0.0;
+  double car_width_m = 0.0;
   double speed_limit_mps = 0.0;
   double max_acceleration_mps2 = 0.0;
   double max_jerk_mps3 = 0.0;

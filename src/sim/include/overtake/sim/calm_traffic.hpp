@@ -55,7 +55,7 @@ class CalmTraffic final : public TrafficModel {
  public:
   CalmTraffic(const core::Map& map, const core::ReferenceLine& line,
               const core::WaypointFrenet& chords, const TrafficParams& params,
-              const core::RoadParams& road, std::uint64_t seed);
+              const core::RoadParams& road, const core::CarFootprint& car, std::uint64_t seed);
 
   /// Places every car before the first step (no car behind the ego in the ego's lane).
   void start(const EgoView& ego) override;
@@ -79,6 +79,7 @@ class CalmTraffic final : public TrafficModel {
   const core::WaypointFrenet& chords_;
   TrafficParams params_;
   core::RoadParams road_;
+  core::CarFootprint car_;
   core::Rng spawn_rng_;
   int frames_to_batch_ = 0;
   bool scripted_ = false;

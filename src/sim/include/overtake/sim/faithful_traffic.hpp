@@ -74,7 +74,8 @@ class FaithfulTraffic final : public TrafficModel {
   };
 
   FaithfulTraffic(const core::WaypointFrenet& chords, const core::ReferenceLine& line,
-                  const TrafficParams& params, const core::RoadParams& road, std::uint64_t seed);
+                  const TrafficParams& params, const core::RoadParams& road,
+                  const core::CarFootprint& car, std::uint64_t seed);
 
   void start(const EgoView& ego) override;
   void step(const EgoView& ego, double dt_s) override;
@@ -125,6 +126,7 @@ class FaithfulTraffic final : public TrafficModel {
   TrafficParams params_;
   FaithfulTrafficParams f_;
   core::RoadParams road_;
+  core::CarFootprint car_;
   core::Rng spawn_rng_;
   std::vector<TrafficCar> cars_;
   std::vector<Driver> drivers_;

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "overtake/core/road.hpp"
+#include "overtake/core/step.hpp"
 #include "overtake/core/units.hpp"
 
 namespace overtake::sim {
@@ -19,8 +20,6 @@ struct EgoParams {
   /// original's start (x 909.48, y 1128.67, yaw 0).
   double start_s_m = 124.8336;
   double start_d_m = 6.164833;
-  double length_m = 4.7;         ///< (ours) its body, for contact: the original's collider size is a scene setting
-  double width_m = 1.9;          ///< (ours)
   /// A new path's first point is dropped when the car stands on it: within this distance.
   /// 0, as the original (the car stands on a point it drove to, and points cross the wire
   /// rounded the same way, so "on it" is exact); a millimetre dropped points of a slow
@@ -119,8 +118,6 @@ struct CalmTrafficParams {
 /// The twelve other cars.
 struct TrafficParams {
   int car_count = 12;
-  double car_length_m = 4.7;             ///< (ours) their bodies
-  double car_width_m = 1.9;
   PlacementParams placement;
   FaithfulTrafficParams faithful;
   CalmTrafficParams calm;
@@ -134,8 +131,9 @@ struct RefereeParams {
   double max_jerk_mps3 = 10.0;
   int accel_block_steps = 10;            ///< speed averaged over blocks of 10 steps (0.2 s)
   int jerk_group_blocks = 5;             ///< block totals averaged over groups of 5 (1 s)
-  double min_d_m = 0.8;                  ///< outside the road below this ...
-  double max_d_m = 11.2;                 ///< ... or above this
+  /// Outside the road within this of its edges, or beyond them: d under this, or over the
+  /// road's width (lane_count * lane_width_m) less this (0.8 and 11.2 on three 4 m lanes).
+  double edge_margin_m = 0.8;
   double line_band_half_width_m = 0.8;   ///< around each lane line between lanes
   int straddle_max_steps = 150;          ///< in a band for more than this: outside of lane
   int latch_steps = 50;                  ///< a persisting incident counts again after this
@@ -145,8 +143,10 @@ struct RefereeParams {
 
 /// The whole world.
 struct WorldParams {
-  double step_s = 0.02;
-  core::RoadParams road;
+  /// The fixed step; also the planners' (PlannerParams::step_s), copied by the config loader.
+  double step_s = core::kDefaultStepS;
+  core::RoadParams road;      ///< the config's `road`, copied in by the config loader
+  core::CarFootprint car;     ///< the config's `car` (every body, the ego's too), likewise
   EgoParams ego;
   TrafficParams traffic;
   RefereeParams referee;
@@ -175,11 +175,15 @@ void describe(V& v, core::RoadParams& p) {
 }
 
 template <class V>
+void describe(V& v, core::CarFootprint& p) {
+  v("length_m", p.length_m);
+  v("width_m", p.width_m);
+}
+
+template <class V>
 void describe(V& v, EgoParams& p) {
   v("start_s_m", p.start_s_m);
   v("start_d_m", p.start_d_m);
-  v("length_m", p.length_m);
-  v("width_m", p.width_m);
   v("stand_on_tolerance_m", p.stand_on_tolerance_m);
 }
 
@@ -258,8 +262,6 @@ void describe(V& v, CalmTrafficParams& p) {
 template <class V>
 void describe(V& v, TrafficParams& p) {
   v("car_count", p.car_count);
-  v("car_length_m", p.car_length_m);
-  v("car_width_m", p.car_width_m);
   v.section("placement", p.placement);
   v.section("faithful", p.faithful);
   v.section("calm", p.calm);
@@ -272,8 +274,7 @@ void describe(V& v, RefereeParams& p) {
   v("max_jerk_mps3", p.max_jerk_mps3);
   v("accel_block_steps", p.accel_block_steps);
   v("jerk_group_blocks", p.jerk_group_blocks);
-  v("min_d_m", p.min_d_m);
-  v("max_d_m", p.max_d_m);
+  v("edge_margin_m", p.edge_margin_m);
   v("line_band_half_width_m", p.line_band_half_width_m);
   v("straddle_max_steps", p.straddle_max_steps);
   v("latch_steps", p.latch_steps);

@@ -74,8 +74,8 @@ class TrafficModel {
 class Traffic {
  public:
   Traffic(const core::Map& map, const core::ReferenceLine& line, const core::WaypointFrenet& chords,
-          const TrafficParams& params, const core::RoadParams& road, TrafficProfile profile,
-          std::uint64_t seed);
+          const TrafficParams& params, const core::RoadParams& road, const core::CarFootprint& car,
+          TrafficProfile profile, std::uint64_t seed);
   ~Traffic();
   Traffic(const Traffic&) = delete;
   Traffic& operator=(const Traffic&) = delete;
@@ -112,6 +112,7 @@ class Traffic {
   const core::WaypointFrenet& chords_;
   TrafficParams params_;
   core::RoadParams road_;
+  core::CarFootprint car_;
   TrafficProfile profile_;
   std::uint64_t seed_;
   bool scripted_ = false;

@@ -8,6 +8,7 @@
 
 #include "overtake/core/geometry.hpp"
 #include "overtake/core/reference_line.hpp"
+#include "overtake/core/road.hpp"
 #include "overtake/core/spline.hpp"
 
 namespace overtake::planner::reference {
@@ -37,8 +38,10 @@ class LaneFrame {
  public:
   /// The line's own d (no offset). Implicit: any function taking a frame takes a line.
   LaneFrame(const core::ReferenceLine& line);  // NOLINT(google-explicit-constructor)
-  /// The frame that matches the original's d on the line's waypoints.
-  [[nodiscard]] static LaneFrame chord_aligned(const core::ReferenceLine& line);
+  /// The frame that matches the original's d on the line's waypoints (read in the middle of
+  /// `road`).
+  [[nodiscard]] static LaneFrame chord_aligned(const core::ReferenceLine& line,
+                                               const core::RoadParams& road);
 
   [[nodiscard]] const core::ReferenceLine& line() const { return *line_; }
   /// Frame d minus the line's d at s.

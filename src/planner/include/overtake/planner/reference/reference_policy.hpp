@@ -54,6 +54,8 @@ class ReferencePolicy final : public Policy {
   std::shared_ptr<const core::ReferenceLine> smooth_line_;
   LaneFrame frame_;                  // on it, d as the original measures it
   core::RoadParams road_;
+  double step_s_;                    // the world's step: spacing of path points in time
+  core::CarFootprint car_;           // every car's, the ego's included
   ReferenceParams p_;
   std::vector<FrenetState> states_;  // state at each point sent last cycle
   std::vector<FrenetState> driven_;  // the last states the car went through, oldest first

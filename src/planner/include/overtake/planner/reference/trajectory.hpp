@@ -75,7 +75,8 @@ struct TrajectoryPlan {
 
 /// Chooses this cycle's trajectory. Never fails: the braking fallback always exists.
 [[nodiscard]] TrajectoryPlan plan_trajectory(const LaneFrame& line, const TrajectoryRequest& request,
-                                             const ReferenceParams& params, const core::RoadParams& road);
+                                             const ReferenceParams& params, const core::RoadParams& road,
+                                             const core::CarFootprint& car);
 
 /// Result of the Cartesian check of one trajectory.
 struct KinematicReport {
@@ -100,11 +101,12 @@ struct CollisionReport {
 };
 
 /// Checks `t` against the predicted cars (observed `start_delay_s` before t = 0) with the
-/// margins; `metres_per_s` converts s to metres along the road. Cars already following the
+/// margins, every car of footprint `car`; `metres_per_s` converts s to metres along the road. Cars already following the
 /// ego in its lane are left to follow; a car the ego moves in front of must have room to stop
 /// closing (rear_room).
 [[nodiscard]] CollisionReport check_collisions(const Trajectory& t, const std::vector<CarPrediction>& cars,
                                                double start_delay_s, double metres_per_s,
-                                               const ReferenceParams& p, const core::RoadParams& road);
+                                               const ReferenceParams& p, const core::RoadParams& road,
+                                               const core::CarFootprint& car);
 
 }  // namespace overtake::planner::reference

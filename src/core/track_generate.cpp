@@ -1,9 +1,12 @@
+// Generating a loop (generate_track): a shape drawn as a curvature profile, laid out as a
+// rounded rectangle, closed at the wanted length inside the box, and sampled into waypoints.
+
 #include "overtake/core/track.hpp"
 
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <cstdio>
+#include <cstdint>
 #include <limits>
 #include <optional>
 #include <stdexcept>
@@ -12,33 +15,21 @@
 #include <vector>
 
 #include "overtake/core/geometry.hpp"
+#include "overtake/core/map.hpp"
 #include "overtake/core/random.hpp"
-#include "overtake/core/reference_line.hpp"
+#include "overtake/core/road.hpp"
 #include "overtake/core/units.hpp"
+#include "track_internal.hpp"
 
 namespace overtake::core {
 namespace {
 
-// ---- Limits and tuning (metres unless named otherwise) ----
+using track_detail::Course;
+using track_detail::Piece;
+using track_detail::Pose;
+using track_detail::required_start_straight_m;
 
-constexpr double kMinLoopLengthM = 1000.0;
-constexpr double kMaxLoopLengthM = 200000.0;
-constexpr double kMinLengthPerMinRadius = 24.0;   // room for four corners and a right bend
-constexpr double kMinSpacingRatio = 1.2;          // max_spacing_m / min_spacing_m, to generate
-constexpr double kMaxMinSpacingPerRadius = 0.25;  // min_spacing_m / min_radius_m, to generate
-constexpr double kLengthTolerance = 0.02;         // fraction of length_m
-constexpr double kSmallLoopLengthM = 7500.0;      // loops up to this fit the default box
-constexpr double kSmallLoopMaxCoordinateM = 1000.0;
-constexpr double kMaxStartStraightFraction = 0.1;  // of the loop
-constexpr double kMaxNormalErrorDeg = 5.0;
-constexpr double kMaxSErrorM = 0.05;
-constexpr double kCurvatureStepM = 1.0;  // curvature samples of the check
-constexpr double kPairStepM = 2.0;       // samples for clearance and crossings
-constexpr std::size_t kMaxPairSamples = 6000;
-// Two samples of a road with every radius above the chord's length apart along it are at
-// least 2/pi of that apart in a straight line; closer than this fraction of it means a
-// different stretch of road.
-constexpr double kDistinctChordFraction = 0.9 * 2.0 / kPi;
+// ---- Tuning (metres unless named otherwise) ----
 
 constexpr int kMaxAttempts = 64;
 constexpr std::uint64_t kShapeStream = 0;
@@ -48,7 +39,6 @@ constexpr double kMaxCornerRadiusPerLength = 1.0 / 20.0;
 constexpr double kMinFreeFraction = 0.04;      // of the loop: straight length left to square it
 constexpr double kBehindStartM = 80.0;         // straight before the first waypoint
 constexpr double kAfterStartStraightM = 60.0;  // straight beyond start_straight_m
-constexpr double kIntegrationStepM = 4.0;
 constexpr double kMinRampM = 60.0;  // shortest clothoid into or out of a bend
 constexpr double kMinRampPerRadius = 0.35;
 constexpr int kAspectSteps = 100;
@@ -66,172 +56,6 @@ constexpr double kSpacingJitter = 0.08;
 constexpr double kMaxSpacingPerRadius = 0.15;  // and never more than this times the radius
 constexpr double kSpacingMargin = 1.2;         // targets stay this far inside the spec's limits
 constexpr double kPlacementStepM = 1.0;
-
-// ---- Messages ----
-
-std::string num(double v, int decimals = 1) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, "%.*f", decimals, v);
-  return buf;
-}
-
-[[noreturn]] void bad_field(const std::string& field, const std::string& why) {
-  throw std::invalid_argument("TrackSpec." + field + ": " + why);
-}
-
-void require_finite(double v, const char* field) {
-  if (!std::isfinite(v)) bad_field(field, "must be finite (got " + std::to_string(v) + ")");
-}
-
-// What checking needs of a spec.
-void validate_check_spec(const TrackSpec& spec) {
-  require_finite(spec.length_m, "length_m");
-  require_finite(spec.min_radius_m, "min_radius_m");
-  require_finite(spec.min_spacing_m, "min_spacing_m");
-  require_finite(spec.max_spacing_m, "max_spacing_m");
-  require_finite(spec.min_clearance_m, "min_clearance_m");
-  require_finite(spec.shoulder_m, "shoulder_m");
-  require_finite(spec.max_abs_coordinate_m, "max_abs_coordinate_m");
-  require_finite(spec.start_straight_m, "start_straight_m");
-  require_finite(spec.straight_spacing_m, "straight_spacing_m");
-  require_finite(spec.bend_radius_m, "bend_radius_m");
-  require_finite(spec.road.lane_width_m, "road.lane_width_m");
-  if (!(spec.length_m > 0.0)) bad_field("length_m", "must be positive");
-  if (!(spec.min_radius_m > 0.0)) bad_field("min_radius_m", "must be positive");
-  if (!(spec.min_spacing_m > 0.0)) bad_field("min_spacing_m", "must be positive");
-  if (!(spec.min_spacing_m < spec.max_spacing_m)) {
-    bad_field("min_spacing_m", "must be below max_spacing_m (" + num(spec.min_spacing_m) +
-                                   " >= " + num(spec.max_spacing_m) + ")");
-  }
-  if (spec.min_clearance_m < 0.0) bad_field("min_clearance_m", "must not be negative");
-  if (spec.shoulder_m < 0.0) bad_field("shoulder_m", "must not be negative");
-  if (spec.max_abs_coordinate_m < 0.0) {
-    bad_field("max_abs_coordinate_m", "must not be negative (0 picks the default)");
-  }
-  if (spec.start_straight_m < 0.0) bad_field("start_straight_m", "must not be negative");
-  if (!(spec.straight_spacing_m > 0.0)) bad_field("straight_spacing_m", "must be positive");
-  if (!(spec.bend_radius_m > 0.0)) bad_field("bend_radius_m", "must be positive");
-  if (spec.road.lane_count < 1) bad_field("road.lane_count", "must be at least 1");
-  if (!(spec.road.lane_width_m > 0.0)) bad_field("road.lane_width_m", "must be positive");
-}
-
-double road_width_m(const TrackSpec& spec) {
-  return spec.road.lane_count * spec.road.lane_width_m;
-}
-
-double required_start_straight_m(const TrackSpec& spec) {
-  return std::min(spec.start_straight_m, kMaxStartStraightFraction * spec.length_m);
-}
-
-// ---- The shape: a curvature profile ----
-
-// A stretch of road whose curvature changes linearly along it: a straight, an arc or a
-// clothoid.
-struct Piece {
-  double length_m = 0.0;
-  double k0_1pm = 0.0;  // curvature at the start, positive to the left
-  double k1_1pm = 0.0;  // at the end
-};
-
-struct Pose {
-  Vec2 position;
-  double heading_rad = 0.0;
-};
-
-double heading_change(const Piece& p, double u) {
-  return p.k0_1pm * u + 0.5 * (p.k1_1pm - p.k0_1pm) * u * u / p.length_m;
-}
-
-// Pose at `u1` metres into the piece, from the pose `at` at `u0` metres: exact heading,
-// position by composite three-point Gauss-Legendre quadrature.
-Pose advance(const Piece& p, const Pose& at, double u0, double u1) {
-  const double span = u1 - u0;
-  if (span <= 0.0) return at;
-  if (p.k0_1pm == 0.0 && p.k1_1pm == 0.0) {
-    return {at.position + span * Vec2{std::cos(at.heading_rad), std::sin(at.heading_rad)},
-            at.heading_rad};
-  }
-  static constexpr double kNode = 0.3872983346207417;  // sqrt(3/5) / 2: nodes at mid +- kNode h
-  static constexpr double kWeightSide = 5.0 / 18.0;
-  static constexpr double kWeightMid = 8.0 / 18.0;
-  const double base = at.heading_rad - heading_change(p, u0);
-  const int n = std::max(1, static_cast<int>(std::ceil(span / kIntegrationStepM)));
-  const double h = span / n;
-  const double offsets[3] = {-kNode * h, 0.0, kNode * h};
-  const double weights[3] = {kWeightSide * h, kWeightMid * h, kWeightSide * h};
-  Vec2 sum;
-  for (int i = 0; i < n; ++i) {
-    const double mid = u0 + (i + 0.5) * h;
-    for (int q = 0; q < 3; ++q) {
-      const double a = base + heading_change(p, mid + offsets[q]);
-      sum = sum + weights[q] * Vec2{std::cos(a), std::sin(a)};
-    }
-  }
-  return {at.position + sum, base + heading_change(p, u1)};
-}
-
-// The closed course: pieces laid end to end from the origin, heading along +x.
-class Course {
- public:
-  explicit Course(std::vector<Piece> pieces) : pieces_(std::move(pieces)) {
-    starts_.reserve(pieces_.size() + 1);
-    poses_.reserve(pieces_.size() + 1);
-    double s = 0.0;
-    Pose pose;
-    for (const Piece& p : pieces_) {
-      starts_.push_back(s);
-      poses_.push_back(pose);
-      pose = advance(p, pose, 0.0, p.length_m);
-      s += p.length_m;
-    }
-    starts_.push_back(s);
-    poses_.push_back(pose);
-  }
-
-  [[nodiscard]] double length_m() const { return starts_.back(); }
-  [[nodiscard]] const Pose& end() const { return poses_.back(); }
-
-  [[nodiscard]] Pose pose_at(double s) const {
-    const std::size_t i = piece_at(s);
-    return advance(pieces_[i], poses_[i], 0.0, s - starts_[i]);
-  }
-
-  [[nodiscard]] double curvature_at(double s) const {
-    const std::size_t i = piece_at(s);
-    const Piece& p = pieces_[i];
-    const double u = std::clamp((s - starts_[i]) / p.length_m, 0.0, 1.0);
-    return p.k0_1pm + (p.k1_1pm - p.k0_1pm) * u;
-  }
-
-  // Smallest box around the divider line: {min corner, max corner}.
-  [[nodiscard]] std::pair<Vec2, Vec2> bounds() const {
-    Vec2 lo{std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity()};
-    Vec2 hi = -1.0 * lo;
-    constexpr double kStepM = 5.0;
-    for (std::size_t i = 0; i < pieces_.size(); ++i) {
-      const Piece& p = pieces_[i];
-      const int n = std::max(1, static_cast<int>(std::ceil(p.length_m / kStepM)));
-      Pose pose = poses_[i];
-      for (int k = 0; k <= n; ++k) {
-        if (k > 0) pose = advance(p, pose, p.length_m * (k - 1) / n, p.length_m * k / n);
-        lo = {std::min(lo.x, pose.position.x), std::min(lo.y, pose.position.y)};
-        hi = {std::max(hi.x, pose.position.x), std::max(hi.y, pose.position.y)};
-      }
-    }
-    return {lo, hi};
-  }
-
- private:
-  [[nodiscard]] std::size_t piece_at(double s) const {
-    const auto it = std::upper_bound(starts_.begin(), starts_.end() - 1, s);
-    const auto i = static_cast<std::size_t>(std::max<std::ptrdiff_t>(0, it - starts_.begin() - 1));
-    return std::min(i, pieces_.size() - 1);
-  }
-
-  std::vector<Piece> pieces_;
-  std::vector<double> starts_;  // s of each piece's start, then the total
-  std::vector<Pose> poses_;     // pose at each piece's start, then at the end
-};
 
 // A piece of the draft: either fixed, or a straight along side `side` (0: +x, 1: +y, 2: -x,
 // 3: -y) that takes a share, in proportion to `weight`, of the length that side has to add
@@ -286,7 +110,7 @@ ShapeRanges ranges_for(const TrackSpec& spec) {
   const double rmin = spec.min_radius_m;
   r.scale = spec.length_m / kReferenceLengthM;
   r.left_lo_m = kRadiusMargin * rmin;
-  r.right_lo_m = kRadiusMargin * rmin + road_width_m(spec);
+  r.right_lo_m = kRadiusMargin * rmin + road_width_m(spec.road);
   r.corner_hi_m =
       std::max(1.25 * r.left_lo_m, std::min(kMaxCornerRadiusPerLength * spec.length_m, 2.5 * rmin));
   r.shoulder_hi_m = std::max(1.25 * r.left_lo_m, 3.0 * rmin);
@@ -613,7 +437,7 @@ std::optional<Closed> close_course(const Draft& d, double arc_length_m, const Tr
     }
   }
   const double limit =
-      max_abs_coordinate_for(spec) - road_width_m(spec) - spec.shoulder_m - kBoxMarginM;
+      max_abs_coordinate_for(spec) - road_width_m(spec.road) - spec.shoulder_m - kBoxMarginM;
   if (best_half > limit) return std::nullopt;
   Course course = build_course(d, split(best_lambda));
   const auto [lo, hi] = course.bounds();
@@ -741,256 +565,7 @@ std::optional<std::vector<Waypoint>> attempt_track(const TrackSpec& spec, std::u
   }
   return std::nullopt;
 }
-
-// ---- Checking ----
-
-bool segments_cross(Vec2 a, Vec2 b, Vec2 c, Vec2 d) {
-  const double o1 = cross(b - a, c - a);
-  const double o2 = cross(b - a, d - a);
-  const double o3 = cross(d - c, a - c);
-  const double o4 = cross(d - c, b - c);
-  if (o1 * o2 > 0.0 || o3 * o4 > 0.0) return false;
-  // Collinear: overlap of the boxes decides.
-  return std::max(std::min(a.x, b.x), std::min(c.x, d.x)) <=
-             std::min(std::max(a.x, b.x), std::max(c.x, d.x)) &&
-         std::max(std::min(a.y, b.y), std::min(c.y, d.y)) <=
-             std::min(std::max(a.y, b.y), std::max(c.y, d.y));
-}
-
-void check_waypoints(const Map& map, const TrackSpec& spec, TrackReport& rep) {
-  const auto& w = map.waypoints;
-  const std::size_t n = w.size();
-  rep.min_spacing_m = std::numeric_limits<double>::infinity();
-  std::size_t min_at = 0;
-  std::size_t max_at = 0;
-  double sum = 0.0;
-  double area2 = 0.0;
-  for (std::size_t i = 0; i < n; ++i) {
-    const Waypoint& a = w[i];
-    const Waypoint& b = w[(i + 1) % n];
-    const double gap = std::hypot(b.x_m - a.x_m, b.y_m - a.y_m);
-    sum += gap;
-    if (gap < rep.min_spacing_m) {
-      rep.min_spacing_m = gap;
-      min_at = i;
-    }
-    if (gap > rep.max_spacing_m) {
-      rep.max_spacing_m = gap;
-      max_at = i;
-    }
-    area2 += a.x_m * b.y_m - b.x_m * a.y_m;
-    rep.max_abs_coordinate_m =
-        std::max({rep.max_abs_coordinate_m, std::abs(a.x_m), std::abs(a.y_m)});
-  }
-  rep.mean_spacing_m = sum / static_cast<double>(n);
-  rep.counter_clockwise = area2 > 0.0;
-
-  double along = 0.0;
-  for (std::size_t i = 1; i < n; ++i) {
-    along += std::hypot(w[i].x_m - w[i - 1].x_m, w[i].y_m - w[i - 1].y_m);
-    rep.max_s_error_m = std::max(rep.max_s_error_m, std::abs(w[i].s_m - w[0].s_m - along));
-  }
-
-  auto pair_name = [n](std::size_t i) {
-    return "waypoints " + std::to_string(i + 1) + " and " + std::to_string((i + 1) % n + 1);
-  };
-  if (std::abs(rep.length_m - spec.length_m) > kLengthTolerance * spec.length_m) {
-    rep.problems.push_back("length_m: the loop is " + num(rep.length_m) + " m long, more than " +
-                           num(100.0 * kLengthTolerance, 0) + "% from " + num(spec.length_m) +
-                           " m");
-  }
-  if (rep.min_spacing_m < spec.min_spacing_m) {
-    rep.problems.push_back("min_spacing_m: " + pair_name(min_at) + " are " +
-                           num(rep.min_spacing_m, 2) + " m apart, under " +
-                           num(spec.min_spacing_m) + " m");
-  }
-  if (rep.max_spacing_m > spec.max_spacing_m) {
-    rep.problems.push_back("max_spacing_m: " + pair_name(max_at) + " are " +
-                           num(rep.max_spacing_m, 2) + " m apart, over " + num(spec.max_spacing_m) +
-                           " m");
-  }
-  const double coordinate_limit = max_abs_coordinate_for(spec);
-  if (rep.max_abs_coordinate_m >= coordinate_limit) {
-    rep.problems.push_back(
-        "max_abs_coordinate_m: a waypoint has |x| or |y| = " + num(rep.max_abs_coordinate_m) +
-        " m, not under " + num(coordinate_limit) + " m");
-  }
-  if (!rep.counter_clockwise) {
-    rep.problems.push_back("direction: the loop runs clockwise; it must run counter-clockwise");
-  }
-  if (rep.max_s_error_m > kMaxSErrorM) {
-    rep.problems.push_back("s: a waypoint's s is " + num(rep.max_s_error_m, 3) +
-                           " m off the straight-line distance from the first waypoint");
-  }
-}
-
-void check_line(const Map& map, const ReferenceLine& line, const TrackSpec& spec,
-                TrackReport& rep) {
-  const double length = line.length_m();
-  const double s0 = line.start_s_m();
-
-  // Normals: to the right of travel, along the line's.
-  bool normals_left = false;
-  for (const Waypoint& w : map.waypoints) {
-    const RoadFrame f = line.frame(w.s_m);
-    const Vec2 n{w.dx, w.dy};
-    const double c = dot(right_of(f.tangent), (1.0 / norm(n)) * n);
-    if (c < 0.0) normals_left = true;
-    rep.max_normal_error_deg = std::max(rep.max_normal_error_deg,
-                                        rad_to_deg(std::acos(std::clamp(std::abs(c), 0.0, 1.0))));
-  }
-  if (normals_left) {
-    rep.problems.push_back(
-        "normals: (dx, dy) point left of the direction of travel; they must point right, away "
-        "from the divider");
-  }
-  if (rep.max_normal_error_deg > kMaxNormalErrorDeg) {
-    rep.problems.push_back("normals: a waypoint's (dx, dy) is " + num(rep.max_normal_error_deg) +
-                           " degrees off the road's normal");
-  }
-
-  // Radii on the divider, every lane centre and the outer edge; bends at the road's centre.
-  std::vector<double> offsets{0.0};
-  for (int k = 0; k < spec.road.lane_count; ++k) offsets.push_back(lane_center_d(k, spec.road));
-  offsets.push_back(road_width_m(spec));
-  const double centre_d = 0.5 * road_width_m(spec);
-  const double bend_k = 1.0 / spec.bend_radius_m;
-  const auto samples = static_cast<std::size_t>(std::ceil(length / kCurvatureStepM));
-  double max_k = 0.0;
-  double max_k_d = 0.0;
-  rep.min_radius_s_m = s0;
-  rep.start_straight_m = length;
-  for (std::size_t i = 0; i < samples; ++i) {
-    const double along = length * static_cast<double>(i) / static_cast<double>(samples);
-    const double s = s0 + along;
-    for (const double d : offsets) {
-      const double k = std::abs(line.curvature_at(s, d));
-      if (k > max_k) {
-        max_k = k;
-        max_k_d = d;
-        rep.min_radius_s_m = s;
-      }
-    }
-    const double kc = line.curvature_at(s, centre_d);
-    if (kc > bend_k) rep.bends_left = true;
-    if (kc < -bend_k) rep.bends_right = true;
-    if (std::abs(kc) > bend_k && along < rep.start_straight_m) rep.start_straight_m = along;
-  }
-  rep.min_radius_m = max_k > 0.0 ? 1.0 / max_k : std::numeric_limits<double>::infinity();
-  if (rep.min_radius_m < spec.min_radius_m) {
-    rep.problems.push_back("min_radius_m: radius " + num(rep.min_radius_m) +
-                           " m at s = " + num(rep.min_radius_s_m) + " m, d = " + num(max_k_d) +
-                           " m, under " + num(spec.min_radius_m) + " m");
-  }
-  if (!rep.bends_left) {
-    rep.problems.push_back("bends: no left bend (radius under " + num(spec.bend_radius_m, 0) +
-                           " m)");
-  }
-  if (!rep.bends_right) {
-    rep.problems.push_back("bends: no right bend (radius under " + num(spec.bend_radius_m, 0) +
-                           " m)");
-  }
-  const double start_needed = required_start_straight_m(spec);
-  if (rep.start_straight_m < start_needed) {
-    rep.problems.push_back("start_straight_m: the road bends " + num(rep.start_straight_m) +
-                           " m after the first waypoint, before " + num(start_needed) + " m");
-  }
-
-  // Clearance between distant stretches (road band around its centre line) and crossings of
-  // the divider line.
-  const std::size_t m = std::clamp<std::size_t>(
-      static_cast<std::size_t>(std::ceil(length / kPairStepM)), 16, kMaxPairSamples);
-  const double step = length / static_cast<double>(m);
-  const double half_width = centre_d + spec.shoulder_m;
-  std::vector<Vec2> divider(m);
-  std::vector<Vec2> centre(m);
-  double max_segment = 0.0;
-  for (std::size_t i = 0; i < m; ++i) {
-    const double s = s0 + step * static_cast<double>(i);
-    divider[i] = line.frame(s).position;
-    centre[i] = line.to_cartesian({s, centre_d});
-  }
-  for (std::size_t i = 0; i < m; ++i) {
-    max_segment = std::max(max_segment, distance(divider[i], divider[(i + 1) % m]));
-  }
-  const double cross_reach_sq = 4.0 * max_segment * max_segment;
-  double min_gap_sq = std::numeric_limits<double>::infinity();
-  std::size_t gap_i = 0;
-  std::size_t gap_j = 0;
-  std::optional<std::pair<std::size_t, std::size_t>> crossing;
-  for (std::size_t i = 0; i < m; ++i) {
-    for (std::size_t j = i + 1; j < m; ++j) {
-      const std::size_t apart = std::min(j - i, m - (j - i));
-      const double along = step * static_cast<double>(apart);
-      const double dc = distance_sq(centre[i], centre[j]);
-      const double distinct = kDistinctChordFraction * along;
-      if (dc < distinct * distinct && dc < min_gap_sq) {
-        min_gap_sq = dc;
-        gap_i = i;
-        gap_j = j;
-      }
-      if (!crossing && apart >= 2 && distance_sq(divider[i], divider[j]) <= cross_reach_sq &&
-          segments_cross(divider[i], divider[(i + 1) % m], divider[j], divider[(j + 1) % m])) {
-        crossing = std::pair{i, j};
-      }
-    }
-  }
-  rep.min_clearance_m = std::isfinite(min_gap_sq) ? std::sqrt(min_gap_sq) - 2.0 * half_width
-                                                  : std::numeric_limits<double>::infinity();
-  if (crossing) {
-    rep.self_intersecting = true;
-    rep.problems.push_back("self-intersecting: the divider line crosses itself near s = " +
-                           num(s0 + step * static_cast<double>(crossing->first)) + " m and s = " +
-                           num(s0 + step * static_cast<double>(crossing->second)) + " m");
-  }
-  if (rep.min_clearance_m < spec.min_clearance_m) {
-    rep.problems.push_back(
-        "min_clearance_m: the road at s = " + num(s0 + step * static_cast<double>(gap_i)) +
-        " m and s = " + num(s0 + step * static_cast<double>(gap_j)) + " m is " +
-        num(rep.min_clearance_m) + " m apart edge to edge, under " + num(spec.min_clearance_m) +
-        " m");
-  }
-}
-
 }  // namespace
-
-void validate_track_spec(const TrackSpec& spec) {
-  validate_check_spec(spec);
-  if (spec.length_m < kMinLoopLengthM) {
-    bad_field("length_m", "must be at least " + num(kMinLoopLengthM, 0) + " m (got " +
-                              num(spec.length_m) + ")");
-  }
-  if (spec.length_m > kMaxLoopLengthM) {
-    bad_field("length_m",
-              "must be at most " + num(kMaxLoopLengthM, 0) + " m (got " + num(spec.length_m) + ")");
-  }
-  if (spec.length_m < kMinLengthPerMinRadius * spec.min_radius_m) {
-    bad_field("length_m", "a loop of " + num(spec.length_m) + " m has no room for bends of " +
-                              "min_radius_m = " + num(spec.min_radius_m) + " m (it needs " +
-                              num(kMinLengthPerMinRadius, 0) + " times that)");
-  }
-  if (spec.min_spacing_m > kMaxMinSpacingPerRadius * spec.min_radius_m) {
-    bad_field("min_spacing_m",
-              "waypoints " + num(spec.min_spacing_m) +
-                  " m apart cannot follow bends of min_radius_m = " + num(spec.min_radius_m) +
-                  " m (at most " + num(kMaxMinSpacingPerRadius * spec.min_radius_m) + " m)");
-  }
-  if (spec.max_spacing_m < kMinSpacingRatio * spec.min_spacing_m) {
-    bad_field("max_spacing_m", "must be at least " + num(kMinSpacingRatio) +
-                                   " times min_spacing_m to place waypoints");
-  }
-  const double box = max_abs_coordinate_for(spec) - road_width_m(spec) - spec.shoulder_m;
-  if (8.0 * box < spec.length_m) {
-    bad_field("max_abs_coordinate_m", "a box of +-" + num(max_abs_coordinate_for(spec)) +
-                                          " m is too small for a loop of " + num(spec.length_m) +
-                                          " m");
-  }
-}
-
-double max_abs_coordinate_for(const TrackSpec& spec) {
-  if (spec.max_abs_coordinate_m > 0.0) return spec.max_abs_coordinate_m;
-  return kSmallLoopMaxCoordinateM * std::max(1.0, spec.length_m / kSmallLoopLengthM);
-}
 
 std::vector<Waypoint> generate_track(const TrackSpec& spec) {
   validate_track_spec(spec);
@@ -1012,27 +587,6 @@ std::vector<Waypoint> generate_track(const TrackSpec& spec) {
   throw std::runtime_error("generate_track: no loop met the spec in " +
                            std::to_string(kMaxAttempts) + " attempts (seed " +
                            std::to_string(spec.seed) + "); last problem: " + last);
-}
-
-TrackReport check_track(const Map& map, const TrackSpec& spec) {
-  validate_check_spec(spec);
-  TrackReport rep;
-  rep.length_m = map.loop_length_m;
-  if (map.waypoints.size() < 3) {
-    rep.problems.push_back("waypoints: a loop needs at least 3, the map has " +
-                           std::to_string(map.waypoints.size()));
-    return rep;
-  }
-  check_waypoints(map, spec, rep);
-  std::optional<ReferenceLine> line;
-  try {
-    line.emplace(map);
-  } catch (const MapError& e) {
-    rep.problems.push_back(std::string("reference line: ") + e.what());
-    return rep;
-  }
-  check_line(map, *line, spec, rep);
-  return rep;
 }
 
 }  // namespace overtake::core
