@@ -14,6 +14,8 @@ packages=(
   # The fuzz harnesses (make fuzz-smoke, make fuzz): clang, and libFuzzer with the sanitizer
   # runtimes of the same version (libclang-rt-14-dev on Debian 12).
   clang libclang-rt-dev
+  # make format-check, make format and make tidy.
+  clang-format clang-tidy
 )
 
 missing=()
