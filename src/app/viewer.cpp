@@ -41,8 +41,11 @@ std::string overtake_version() {
 std::string_view embedded_page(std::string_view name) {
   const auto page = resources::embedded_file(name);
   if (!page) {
+    // The only build without the pages is one configured so (cmake/Web.cmake).
     throw std::runtime_error("this build of overtake has no " + std::string(name) +
-                             " page (the web pages in web/ were not built into it)");
+                             " page: it was made without the web pages (OVERTAKE_WEB=OFF); "
+                             "`view`, `--live` and `bench --html` need a build with "
+                             "OVERTAKE_WEB=ON");
   }
   return *page;
 }

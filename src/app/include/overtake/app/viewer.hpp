@@ -30,7 +30,7 @@ inline constexpr std::string_view kReplaysFolder = "replays";
 [[nodiscard]] std::string overtake_version();
 
 /// An embedded page (kViewerPageName or kReportPageName). Throws std::runtime_error when
-/// this build has none (the web pages were not built into it).
+/// this build has none (configured with OVERTAKE_WEB=OFF), saying so.
 [[nodiscard]] std::string_view embedded_page(std::string_view name);
 
 /// The replay header of a run: the track's lane lines, the config's limits, the provenance.
