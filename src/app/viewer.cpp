@@ -7,14 +7,11 @@
 #include <thread>
 
 #include "overtake/app/bench.hpp"
+#include "overtake/app/build_info.hpp"
 #include "overtake/app/cli.hpp"
 #include "overtake/app/io.hpp"
 #include "overtake/app/resources.hpp"
 #include "overtake/view/page.hpp"
-
-#ifndef OVERTAKE_VERSION
-#define OVERTAKE_VERSION "unknown"
-#endif
 
 namespace overtake::app {
 namespace {
@@ -35,7 +32,7 @@ std::string link_between(const fs::path& from_dir, const fs::path& to) {
 }  // namespace
 
 std::string overtake_version() {
-  return OVERTAKE_VERSION;
+  return std::string(project_version()) + "+" + std::string(build_revision());
 }
 
 std::string_view embedded_page(std::string_view name) {

@@ -26,7 +26,7 @@ inline constexpr std::string_view kReportPageName = "report.html";
 /// Folder of a bench's recorded replays, inside its --out folder.
 inline constexpr std::string_view kReplaysFolder = "replays";
 
-/// This build's version, e.g. "0.1.0+c0733af12345" (the git revision it was configured at).
+/// This build's version, e.g. "0.1.0+c0733af12345" (the git revision it was built from).
 [[nodiscard]] std::string overtake_version();
 
 /// An embedded page (kViewerPageName or kReportPageName). Throws std::runtime_error when
