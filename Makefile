@@ -2,7 +2,10 @@
 #   make demo   install what is missing, build (Release), drive the built-in track, print the scorecard
 #   make check  install what is missing, build, run every test (also under ASan + UBSan), fuzz every parser briefly
 #   make fuzz   the libFuzzer harnesses (fuzz/) for FUZZ_SECONDS each; findings in build/fuzz/findings
-.PHONY: all deps build demo check test test-asan fuzz-build fuzz-smoke fuzz bench format clean
+#   make format-check  the C++ sources against .clang-format (make format fixes them)
+#   make tidy   clang-tidy (.clang-tidy) over src/, with the release build's compile commands
+.PHONY: all deps build demo check test test-asan fuzz-build fuzz-smoke fuzz bench format \
+        format-check tidy clean
 
 FUZZ_SECONDS ?= 600
 
@@ -37,13 +40,21 @@ fuzz-build: deps
 	@cmake --preset fuzz >/dev/null
 	@cmake --build --preset fuzz
 
-check: test test-asan fuzz-smoke
+# The cheap checks first: the format (seconds), clang-tidy (about two minutes on 2 cores).
+check: format-check tidy test test-asan fuzz-smoke
 
 bench: build
 	./build/release/overtake_bench
 
-format:
-	@find src tests bench -name '*.cpp' -o -name '*.hpp' | xargs clang-format -i
+format: deps
+	@scripts/format.sh fix
+
+format-check: deps
+	@scripts/format.sh check
+
+tidy: deps
+	@cmake --preset release >/dev/null
+	@scripts/tidy.sh
 
 clean:
 	rm -rf build

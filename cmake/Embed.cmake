@@ -1,8 +1,9 @@
-# overtake_embed(TARGET <lib> NAMESPACE <ns> FILES <name>=<path> ...)
+# overtake_embed(TARGET <lib> [ALIAS <alias>] NAMESPACE <ns> FILES <name>=<path> ...)
 # Builds a static library that holds the files' bytes, looked up by name at run time
 # through `std::optional<std::string_view> <ns>::embedded_file(std::string_view name)`.
+# ALIAS names the library's alias target (e.g. overtake::resources).
 function(overtake_embed)
-  cmake_parse_arguments(ARG "" "TARGET;NAMESPACE" "FILES" ${ARGN})
+  cmake_parse_arguments(ARG "" "TARGET;ALIAS;NAMESPACE" "FILES" ${ARGN})
   set(out "${CMAKE_CURRENT_BINARY_DIR}/${ARG_TARGET}_embedded.cpp")
   set(paths "")
   set(spec "")
@@ -23,5 +24,8 @@ function(overtake_embed)
     COMMENT "Embedding ${ARG_TARGET} resources"
     VERBATIM)
   add_library(${ARG_TARGET} STATIC "${out}")
+  if(ARG_ALIAS)
+    add_library(${ARG_ALIAS} ALIAS ${ARG_TARGET})
+  endif()
   target_compile_features(${ARG_TARGET} PUBLIC cxx_std_20)
 endfunction()

@@ -2,19 +2,31 @@
 # Installs what overtake needs to build and test, from Debian's packages, by name, and the
 # web pages' Node packages (web/package-lock.json) with npm ci.
 # Installs only what is missing; says what it installs; uses sudo when not root.
+#
+# OVERTAKE_WEB=OFF scripts/install-deps.sh: for builds without the web pages (the CMake option
+# OVERTAKE_WEB=OFF, e.g. the `noweb` and `asan` presets): no Node.js, npm, web/node_modules or
+# Chromium (the browser test's), only what the C++ layers need.
 set -euo pipefail
 
 root="$(cd "$(dirname "$0")/.." && pwd)"
+web_pages=true
+case "${OVERTAKE_WEB:-ON}" in
+  OFF|off|Off|0|NO|no|FALSE|false) web_pages=false ;;
+esac
 
 packages=(
   cmake ninja-build g++ make pkg-config
   libeigen3-dev nlohmann-json3-dev libcli11-dev libboost-dev zlib1g-dev
   libgtest-dev libgmock-dev libbenchmark-dev
-  chromium
   # The fuzz harnesses (make fuzz-smoke, make fuzz): clang, and libFuzzer with the sanitizer
   # runtimes of the same version (libclang-rt-14-dev on Debian 12).
   clang libclang-rt-dev
+  # make format-check, make format and make tidy.
+  clang-format clang-tidy
 )
+if $web_pages; then
+  packages+=(chromium)
+fi
 
 missing=()
 for p in "${packages[@]}"; do
@@ -24,11 +36,15 @@ for p in "${packages[@]}"; do
 done
 # Node.js and npm: any installed node and npm will do (some nodejs packages bundle npm and
 # conflict with Debian's npm package), so these are looked for as commands.
-command -v node >/dev/null 2>&1 || missing+=(nodejs)
-command -v npm >/dev/null 2>&1 || missing+=(npm)
+wanted=${#packages[@]}
+if $web_pages; then
+  wanted=$((wanted + 2))
+  command -v node >/dev/null 2>&1 || missing+=(nodejs)
+  command -v npm >/dev/null 2>&1 || missing+=(npm)
+fi
 
 if [ ${#missing[@]} -eq 0 ]; then
-  echo "install-deps: all $((${#packages[@]} + 2)) packages present"
+  echo "install-deps: all ${wanted} packages present"
 else
   sudo_cmd=()
   if [ "$(id -u)" -ne 0 ]; then
@@ -44,6 +60,11 @@ else
   "${sudo_cmd[@]}" apt-get update -qq
   "${sudo_cmd[@]}" apt-get install -y -qq --no-install-recommends "${missing[@]}"
   echo "install-deps: done"
+fi
+
+if ! $web_pages; then
+  echo "install-deps: OVERTAKE_WEB=OFF: no Node.js, npm ci or Chromium (the web pages are not built)"
+  exit 0
 fi
 
 # The web pages' packages: npm ci when web/node_modules is missing or was installed from

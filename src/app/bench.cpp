@@ -1,4 +1,5 @@
 #include "overtake/app/bench.hpp"
+#include "overtake/app/build_info.hpp"
 #include "overtake/app/cli.hpp"
 
 #include <algorithm>
@@ -21,10 +22,6 @@
 #include "overtake/core/hash.hpp"
 #include "overtake/core/units.hpp"
 #include "overtake/sim/referee.hpp"
-
-#ifndef OVERTAKE_GIT_REVISION
-#define OVERTAKE_GIT_REVISION "unknown"
-#endif
 
 namespace overtake::app {
 namespace {
@@ -365,7 +362,7 @@ BenchOutcome run_bench(const BenchSpec& spec, const std::atomic<bool>* stop,
   std::atomic<std::size_t> next{0};
   std::atomic<bool> failed{false};
   std::string failure;
-  const std::string git = OVERTAKE_GIT_REVISION;
+  const std::string git(build_revision());
   const std::string host = host_name();
   BenchProgress prog{kept.size(), shard_total, 0.0, 0.0, 0.0};
   const auto wall0 = std::chrono::steady_clock::now();

@@ -317,7 +317,7 @@ int run_cli(int argc, const char* const* argv) {
       "overtake: a headless highway simulator with the rules of the Udacity Term 3 simulator,\n"
       "and planners to drive it. Run `overtake <command> --help` for a command's options."};
   app.require_subcommand(1);
-  app.set_version_flag("--version", "overtake 0.1.0");
+  app.set_version_flag("--version", "overtake " + overtake_version());
   const std::vector<Subcommand> commands{register_drive(app), register_track(app),
                                          register_config(app), register_bench(app),
                                          register_serve(app), register_sim(app),

@@ -7,14 +7,11 @@
 #include <thread>
 
 #include "overtake/app/bench.hpp"
+#include "overtake/app/build_info.hpp"
 #include "overtake/app/cli.hpp"
 #include "overtake/app/io.hpp"
 #include "overtake/app/resources.hpp"
 #include "overtake/view/page.hpp"
-
-#ifndef OVERTAKE_VERSION
-#define OVERTAKE_VERSION "unknown"
-#endif
 
 namespace overtake::app {
 namespace {
@@ -35,14 +32,17 @@ std::string link_between(const fs::path& from_dir, const fs::path& to) {
 }  // namespace
 
 std::string overtake_version() {
-  return OVERTAKE_VERSION;
+  return std::string(project_version()) + "+" + std::string(build_revision());
 }
 
 std::string_view embedded_page(std::string_view name) {
   const auto page = resources::embedded_file(name);
   if (!page) {
+    // The only build without the pages is one configured so (cmake/Web.cmake).
     throw std::runtime_error("this build of overtake has no " + std::string(name) +
-                             " page (the web pages in web/ were not built into it)");
+                             " page: it was made without the web pages (OVERTAKE_WEB=OFF); "
+                             "`view`, `--live` and `bench --html` need a build with "
+                             "OVERTAKE_WEB=ON");
   }
   return *page;
 }

@@ -1,7 +1,8 @@
 // Replays at the command line and in the browser: recorded drives, `view --html`, the view
 // server (HTTP and the live websocket), `bench --record-worst` and the bench report page.
 // The pages are fixtures with the real pages' placeholders, so these tests do not depend on
-// the web build; the tests of the shipped pages skip when the binary has none.
+// the web build; the tests of the shipped pages skip in a build made without them
+// (OVERTAKE_WEB=OFF), where the commands that need them are shown to say so.
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
@@ -92,10 +93,12 @@ int cli(std::vector<std::string> args) {
   return run_cli(static_cast<int>(argv.size()), argv.data());
 }
 
-bool has_embedded_pages() {
-  return resources::embedded_file(kViewerPageName).has_value() &&
-         resources::embedded_file(kReportPageName).has_value();
+// Whether this build was configured with the web pages (OVERTAKE_WEB); when it was, they must
+// be there.
+constexpr bool has_embedded_pages() {
+  return OVERTAKE_WEB_PAGES != 0;
 }
+constexpr const char* kNoPages = "this build was made without the web pages (OVERTAKE_WEB=OFF)";
 
 class ViewerTest : public ::testing::Test {
  protected:
@@ -285,7 +288,7 @@ TEST_F(ViewerTest, ViewAtTheCommandLine) {
   EXPECT_EQ(cli({"view", replay.string(), "--port", "70000"}), 2);
   EXPECT_THAT(testing::internal::GetCapturedStderr(), HasSubstr("--port"));
 
-  if (!has_embedded_pages()) GTEST_SKIP() << "this build has no embedded web pages";
+  if (!has_embedded_pages()) GTEST_SKIP() << kNoPages;
   const fs::path out = dir_ / "r.html";
   testing::internal::CaptureStdout();
   EXPECT_EQ(cli({"view", replay.string(), "--html", out.string()}), 0);
@@ -335,13 +338,53 @@ TEST_F(ViewerTest, ViewHtmlNeverOverwritesTheReplayAndWritesToADevice) {
   EXPECT_EQ(cli({"view", replay.string(), "--html", replay.string()}), 2);
   EXPECT_THAT(testing::internal::GetCapturedStderr(), HasSubstr("is the replay itself"));
   EXPECT_EQ(bytes_of(replay), bytes);
-  if (!has_embedded_pages()) GTEST_SKIP() << "this build has no embedded web pages";
+  if (!has_embedded_pages()) GTEST_SKIP() << kNoPages;
   // /dev/null once failed with "cannot get file size".
   testing::internal::CaptureStdout();
   testing::internal::CaptureStderr();
   EXPECT_EQ(cli({"view", replay.string(), "--html", "/dev/null"}), 0);
   EXPECT_THAT(testing::internal::GetCapturedStdout(), HasSubstr("written: /dev/null"));
   EXPECT_EQ(testing::internal::GetCapturedStderr(), "");
+}
+
+// The shipped pages are in the binary with their placeholders; in a build made without them,
+// every command that needs one fails before doing anything, and says why.
+TEST_F(ViewerTest, ThePagesAreEmbeddedOrTheCommandsSayTheBuildHasNone) {
+  if (has_embedded_pages()) {
+    const std::string_view viewer = embedded_page(kViewerPageName);
+    EXPECT_THAT(std::string(viewer), HasSubstr(std::string(view::kConfigPlaceholder)));
+    EXPECT_THAT(std::string(viewer), HasSubstr(std::string(view::kDataPlaceholder)));
+    EXPECT_THAT(std::string(embedded_page(kReportPageName)),
+                HasSubstr(std::string(view::kBenchPlaceholder)));
+    return;
+  }
+  EXPECT_FALSE(resources::embedded_file(kViewerPageName).has_value());
+  EXPECT_FALSE(resources::embedded_file(kReportPageName).has_value());
+  try {
+    (void)embedded_page(kViewerPageName);
+    ADD_FAILURE() << "expected a std::runtime_error";
+  } catch (const std::runtime_error& e) {
+    EXPECT_THAT(e.what(), HasSubstr("no viewer.html page"));
+    EXPECT_THAT(e.what(), HasSubstr("OVERTAKE_WEB=OFF"));
+  }
+  const auto fails_saying_why = [](std::vector<std::string> args) {
+    testing::internal::CaptureStdout();
+    testing::internal::CaptureStderr();
+    const int rc = cli(std::move(args));
+    (void)testing::internal::GetCapturedStdout();
+    const std::string err = testing::internal::GetCapturedStderr();
+    EXPECT_EQ(rc, 1);
+    EXPECT_THAT(err, HasSubstr("made without the web pages (OVERTAKE_WEB=OFF)"));
+  };
+  const fs::path replay = recorded("r.otr");
+  fails_saying_why({"view", replay.string(), "--html", (dir_ / "r.html").string()});
+  EXPECT_FALSE(fs::exists(dir_ / "r.html"));
+  fails_saying_why({"view", replay.string(), "--port", "0"});
+  fails_saying_why({"drive", "--minutes", "0.01", "--live", "--port", "0"});
+  fails_saying_why({"bench", "--policies", "walkthrough", "--seeds", "1", "--minutes", "0.01",
+                    "--out", (dir_ / "bench").string(), "--html", (dir_ / "report.html").string()});
+  EXPECT_FALSE(fs::exists(dir_ / "bench" / "runs.jsonl"));  // refused before any run
+  EXPECT_FALSE(fs::exists(dir_ / "report.html"));
 }
 
 TEST_F(ViewerTest, ServerAnswersThePageTheReplayAnd404) {
@@ -641,7 +684,7 @@ TEST_F(ViewerTest, BenchMergeJoinsTheShardsReplaysAndWritesTheReport) {
   EXPECT_EQ(std::distance(fs::directory_iterator(into / "replays"), fs::directory_iterator{}), 1);
 
   // At the command line, with the shipped pages: `bench merge ... --html`.
-  if (!has_embedded_pages()) GTEST_SKIP() << "this build has no embedded web pages";
+  if (!has_embedded_pages()) GTEST_SKIP() << kNoPages;
   const fs::path html2 = dir_ / "cli-report.html";
   testing::internal::CaptureStdout();
   EXPECT_EQ(cli({"bench", "merge", shards[0].string(), shards[1].string(), "--out",

@@ -26,11 +26,11 @@ inline constexpr std::string_view kReportPageName = "report.html";
 /// Folder of a bench's recorded replays, inside its --out folder.
 inline constexpr std::string_view kReplaysFolder = "replays";
 
-/// This build's version, e.g. "0.1.0+c0733af12345" (the git revision it was configured at).
+/// This build's version, e.g. "0.1.0+c0733af12345" (the git revision it was built from).
 [[nodiscard]] std::string overtake_version();
 
 /// An embedded page (kViewerPageName or kReportPageName). Throws std::runtime_error when
-/// this build has none (the web pages were not built into it).
+/// this build has none (configured with OVERTAKE_WEB=OFF), saying so.
 [[nodiscard]] std::string_view embedded_page(std::string_view name);
 
 /// The replay header of a run: the track's lane lines, the config's limits, the provenance.
