@@ -34,7 +34,8 @@ std::vector<core::Vec2> lane_path(const sim::World& w, int n) {
 void BM_WorldStep(benchmark::State& state) {
   const auto& track = default_track();
   const app::Config config = app::default_config();
-  const auto profile = state.range(0) == 0 ? sim::TrafficProfile::faithful : sim::TrafficProfile::calm;
+  const auto profile =
+      state.range(0) == 0 ? sim::TrafficProfile::faithful : sim::TrafficProfile::calm;
   sim::World world(track.map, track.line, config.world, profile, 1);
   world.apply_path(lane_path(world, 1000));
   for (auto _ : state) {
@@ -53,7 +54,8 @@ BENCHMARK(BM_WorldStep)->Arg(0)->Arg(1);
 // The telemetry snapshot a planner gets each cycle (with wire rounding).
 void BM_Telemetry(benchmark::State& state) {
   const auto& track = default_track();
-  sim::World world(track.map, track.line, app::default_config().world, sim::TrafficProfile::faithful, 1);
+  sim::World world(track.map, track.line, app::default_config().world,
+                   sim::TrafficProfile::faithful, 1);
   world.apply_path(lane_path(world, 1600));
   for (int i = 0; i < 1500; ++i) world.step();  // 30 s: every car placed
   world.apply_path(lane_path(world, 50));

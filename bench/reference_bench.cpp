@@ -54,7 +54,8 @@ const std::vector<core::Telemetry>& recording(sim::TrafficProfile profile) {
   while (world.steps() < steps) {
     rec.push_back(world.telemetry());
     world.apply_path(policy->plan(rec.back()).path);
-    const int k = latency.uniform_int(config().world.min_steps_per_call, config().world.max_steps_per_call);
+    const int k =
+        latency.uniform_int(config().world.min_steps_per_call, config().world.max_steps_per_call);
     for (int i = 0; i < k; ++i) world.step();
   }
   return rec;
@@ -74,12 +75,14 @@ double percentile(std::vector<double> v, double q) {
 // One planning cycle (the recorded cycles in turn).
 void BM_ReferencePlanCycle(benchmark::State& state) {
   const auto& rec = recording(profile_of(state));
-  auto policy = std::make_unique<planner::reference::ReferencePolicy>(track().line, config().planner);
+  auto policy =
+      std::make_unique<planner::reference::ReferencePolicy>(track().line, config().planner);
   std::size_t i = 0;
   for (auto _ : state) {
     if (i == rec.size()) {
       state.PauseTiming();
-      policy = std::make_unique<planner::reference::ReferencePolicy>(track().line, config().planner);
+      policy =
+          std::make_unique<planner::reference::ReferencePolicy>(track().line, config().planner);
       i = 0;
       state.ResumeTiming();
     }
@@ -102,7 +105,8 @@ void BM_ReferenceReplay(benchmark::State& state) {
       const double c0 = core::thread_cpu_us();
       const auto w0 = std::chrono::steady_clock::now();
       benchmark::DoNotOptimize(policy.plan(t));
-      wall.push_back(std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - w0).count());
+      wall.push_back(
+          std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - w0).count());
       cpu.push_back(core::thread_cpu_us() - c0);
     }
   }
@@ -126,7 +130,8 @@ void BM_ReferenceTrajectoryLayer(benchmark::State& state) {
   for (std::size_t i = 0; i < rec.size(); ++i) {
     (void)policy.plan(rec[i]);
     int near = 0;
-    for (const auto& c : policy.last_predictions()) near += std::abs(c.s_m - rec[i].ego.s_m) < 60.0 ? 1 : 0;
+    for (const auto& c : policy.last_predictions())
+      near += std::abs(c.s_m - rec[i].ego.s_m) < 60.0 ? 1 : 0;
     if (near > most) {
       most = near;
       busiest = i;

@@ -2,6 +2,7 @@
 #include "overtake/app/build_info.hpp"
 #include "overtake/app/cli.hpp"
 
+#include <unistd.h>
 #include <algorithm>
 #include <charconv>
 #include <chrono>
@@ -14,7 +15,6 @@
 #include <set>
 #include <sstream>
 #include <thread>
-#include <unistd.h>
 
 #include "overtake/app/commands.hpp"
 #include "overtake/app/io.hpp"
@@ -63,7 +63,8 @@ std::uint64_t parse_u64(const std::string& s, const std::string& whole) {
 }
 
 // The manifest: what defines a sweep (everything but the shard).
-json manifest_of(const BenchSpec& spec, const Track& track, const Config& config, std::size_t total) {
+json manifest_of(const BenchSpec& spec, const Track& track, const Config& config,
+                 std::size_t total) {
   return {{"policies", spec.policies},
           {"traffic", spec.traffic},
           {"seeds", spec.seeds},
@@ -90,8 +91,10 @@ std::vector<json> read_runs(const std::filesystem::path& file, std::size_t* drop
     if (line.empty()) continue;
     try {
       json j = json::parse(line);
-      if (j.contains("index")) runs.push_back(std::move(j));
-      else ++bad;
+      if (j.contains("index"))
+        runs.push_back(std::move(j));
+      else
+        ++bad;
     } catch (const json::parse_error&) {
       ++bad;
     }
@@ -108,23 +111,29 @@ void check_resumed_runs(const std::vector<json>& runs, const std::vector<BenchCo
   std::set<std::size_t> seen;
   for (const json& r : runs) {
     const auto bad = [&](const std::string& why) {
-      throw UsageError("--resume: " + file.string() + ": " + why +
-                       "; the folder cannot be resumed (move it away, or bench into another --out)");
+      throw UsageError(
+          "--resume: " + file.string() + ": " + why +
+          "; the folder cannot be resumed (move it away, or bench into another --out)");
     };
-    if (!r["index"].is_number_unsigned()) bad("a row's index is not a run number: " + r["index"].dump());
+    if (!r["index"].is_number_unsigned())
+      bad("a row's index is not a run number: " + r["index"].dump());
     const auto idx = r["index"].get<std::size_t>();
-    if (idx >= all.size()) bad("run " + std::to_string(idx) + " is not one of this bench's " + std::to_string(all.size()) + " runs");
-    if (static_cast<int>(idx % static_cast<std::size_t>(spec.shard_count)) != spec.shard_index - 1) {
+    if (idx >= all.size())
+      bad("run " + std::to_string(idx) + " is not one of this bench's " +
+          std::to_string(all.size()) + " runs");
+    if (static_cast<int>(idx % static_cast<std::size_t>(spec.shard_count)) !=
+        spec.shard_index - 1) {
       bad("run " + std::to_string(idx) + " belongs to another shard");
     }
     const BenchCombo& c = all[idx];
     const json& cfg = r.contains("config") ? r["config"] : json();
     const bool same = cfg.is_object() && cfg.value("policy", "") == c.policy &&
                       cfg.value("traffic", "") == c.traffic && cfg.contains("seed") &&
-                      cfg["seed"].is_number_unsigned() && cfg["seed"].get<std::uint64_t>() == c.seed;
+                      cfg["seed"].is_number_unsigned() &&
+                      cfg["seed"].get<std::uint64_t>() == c.seed;
     if (!same) {
-      bad("the row of run " + std::to_string(idx) + " is not " + c.policy + " / " + c.traffic + " / seed " +
-          std::to_string(c.seed) + " (got " + cfg.dump() + ")");
+      bad("the row of run " + std::to_string(idx) + " is not " + c.policy + " / " + c.traffic +
+          " / seed " + std::to_string(c.seed) + " (got " + cfg.dump() + ")");
     }
     if (!seen.insert(idx).second) bad("run " + std::to_string(idx) + " appears twice");
   }
@@ -169,7 +178,8 @@ std::vector<std::filesystem::path> record_worst(const BenchSpec& spec, std::vect
   std::stable_sort(runs.begin(), runs.end(), [](const json& a, const json& b) {
     const double ia = incident_total(a), ib = incident_total(b);
     if (ia != ib) return ia > ib;
-    const auto sa = a["config"]["seed"].get<std::uint64_t>(), sb = b["config"]["seed"].get<std::uint64_t>();
+    const auto sa = a["config"]["seed"].get<std::uint64_t>(),
+               sb = b["config"]["seed"].get<std::uint64_t>();
     if (sa != sb) return sa < sb;
     return a["index"].get<std::size_t>() < b["index"].get<std::size_t>();
   });
@@ -177,7 +187,9 @@ std::vector<std::filesystem::path> record_worst(const BenchSpec& spec, std::vect
   const std::filesystem::path dir = spec.out / kReplaysFolder;
   std::error_code ec;
   std::filesystem::create_directories(dir, ec);
-  if (ec) throw std::runtime_error(dir.string() + ": cannot create the replays folder (" + ec.message() + ")");
+  if (ec)
+    throw std::runtime_error(dir.string() + ": cannot create the replays folder (" + ec.message() +
+                             ")");
 
   std::vector<std::filesystem::path> written(runs.size());
   std::vector<std::string> errors(runs.size());
@@ -201,7 +213,8 @@ std::vector<std::filesystem::path> record_worst(const BenchSpec& spec, std::vect
           continue;
         }
         if (stable_report(report_to_json(r.report, r.provenance)) != stable_report(run)) {
-          std::fprintf(stderr, "bench: warning: the recorded re-run of %s differs from its bench run\n",
+          std::fprintf(stderr,
+                       "bench: warning: the recorded re-run of %s differs from its bench run\n",
                        file.c_str());
         }
         written[i] = file;
@@ -246,7 +259,9 @@ std::vector<std::uint64_t> parse_seed_list(const std::string& text) {
     }
     const std::uint64_t lo = parse_u64(part.substr(0, dash), text);
     const std::uint64_t hi = parse_u64(part.substr(dash + 1), text);
-    if (hi < lo) throw UsageError("--seeds: the range '" + part + "' is empty (" + std::to_string(lo) + " > " + std::to_string(hi) + ")");
+    if (hi < lo)
+      throw UsageError("--seeds: the range '" + part + "' is empty (" + std::to_string(lo) + " > " +
+                       std::to_string(hi) + ")");
     if (hi - lo > 1000000) throw UsageError("--seeds: the range '" + part + "' is too large");
     for (std::uint64_t s = lo; s <= hi; ++s) seeds.push_back(s);
   }
@@ -290,10 +305,12 @@ BenchOutcome run_bench(const BenchSpec& spec, const std::atomic<bool>* stop,
   if (spec.traffic.empty()) throw UsageError("--traffic: no traffic profile given");
   if (spec.seeds.empty()) throw UsageError("--seeds: no seeds given");
   if (spec.jobs < 1 || spec.jobs > kMaxJobs) {
-    throw UsageError("--jobs must be between 1 and " + std::to_string(kMaxJobs) + " (got " + std::to_string(spec.jobs) + ")");
+    throw UsageError("--jobs must be between 1 and " + std::to_string(kMaxJobs) + " (got " +
+                     std::to_string(spec.jobs) + ")");
   }
   if (spec.shard_count < 1 || spec.shard_index < 1 || spec.shard_index > spec.shard_count) {
-    throw UsageError("--shard: " + std::to_string(spec.shard_index) + "/" + std::to_string(spec.shard_count) + " is out of range");
+    throw UsageError("--shard: " + std::to_string(spec.shard_index) + "/" +
+                     std::to_string(spec.shard_count) + " is out of range");
   }
   if (spec.record_worst < 0 || spec.record_worst > kMaxRecordWorst) {
     throw UsageError("--record-worst must be between 0 and " + std::to_string(kMaxRecordWorst) +
@@ -318,26 +335,35 @@ BenchOutcome run_bench(const BenchSpec& spec, const std::atomic<bool>* stop,
 
   std::error_code ec;
   std::filesystem::create_directories(spec.out, ec);
-  if (ec) throw std::runtime_error(spec.out.string() + ": cannot create the output folder (" + ec.message() + ")");
+  if (ec)
+    throw std::runtime_error(spec.out.string() + ": cannot create the output folder (" +
+                             ec.message() + ")");
   const auto runs_path = spec.out / kRunsFile;
   const auto manifest_path = spec.out / kManifestFile;
   std::vector<json> kept;
   if (std::filesystem::exists(runs_path) || std::filesystem::exists(manifest_path)) {
     if (!spec.resume) {
-      throw UsageError("--out: " + spec.out.string() + " already holds bench results; use --resume to continue it, or another --out");
+      throw UsageError(
+          "--out: " + spec.out.string() +
+          " already holds bench results; use --resume to continue it, or another --out");
     }
     json old;
     try {
       old = json::parse(read_file(manifest_path));
     } catch (const std::exception& e) {
-      throw UsageError("--resume: " + manifest_path.string() + " is missing or unreadable (" + e.what() + ")");
+      throw UsageError("--resume: " + manifest_path.string() + " is missing or unreadable (" +
+                       e.what() + ")");
     }
     if (old != manifest) {
-      throw UsageError("--resume: " + spec.out.string() + " holds a different bench (policies, traffic, seeds, minutes, map, parameters or shard differ)");
+      throw UsageError("--resume: " + spec.out.string() +
+                       " holds a different bench (policies, traffic, seeds, minutes, map, "
+                       "parameters or shard differ)");
     }
     std::size_t dropped = 0;
     kept = read_runs(runs_path, &dropped);
-    if (dropped) std::fprintf(stderr, "bench: dropped %zu incomplete line(s) of %s\n", dropped, runs_path.c_str());
+    if (dropped)
+      std::fprintf(stderr, "bench: dropped %zu incomplete line(s) of %s\n", dropped,
+                   runs_path.c_str());
     check_resumed_runs(kept, all, spec, runs_path);
     write_file_atomic(runs_path, runs_text(kept));
   }
@@ -347,12 +373,15 @@ BenchOutcome run_bench(const BenchSpec& spec, const std::atomic<bool>* stop,
   for (const json& r : kept) done_indices.insert(r["index"].get<std::size_t>());
   std::vector<BenchCombo> todo;
   for (const auto& c : all) {
-    const bool mine = static_cast<int>(c.index % static_cast<std::size_t>(spec.shard_count)) == spec.shard_index - 1;
+    const bool mine = static_cast<int>(c.index % static_cast<std::size_t>(spec.shard_count)) ==
+                      spec.shard_index - 1;
     if (mine && !done_indices.count(c.index)) todo.push_back(c);
   }
   std::size_t shard_total = 0;
   for (const auto& c : all) {
-    if (static_cast<int>(c.index % static_cast<std::size_t>(spec.shard_count)) == spec.shard_index - 1) ++shard_total;
+    if (static_cast<int>(c.index % static_cast<std::size_t>(spec.shard_count)) ==
+        spec.shard_index - 1)
+      ++shard_total;
   }
 
   std::ofstream append(runs_path, std::ios::app);
@@ -391,7 +420,8 @@ BenchOutcome run_bench(const BenchSpec& spec, const std::atomic<bool>* stop,
         r = drive_on(*track, config, o, {}, stop);
       } catch (const std::exception& e) {
         std::lock_guard lock(mu);
-        failure = "run " + c.policy + "/" + c.traffic + "/seed " + std::to_string(c.seed) + ": " + e.what();
+        failure = "run " + c.policy + "/" + c.traffic + "/seed " + std::to_string(c.seed) + ": " +
+                  e.what();
         failed = true;
         local_stop = true;
         return;
@@ -400,7 +430,8 @@ BenchOutcome run_bench(const BenchSpec& spec, const std::atomic<bool>* stop,
       json line = report_to_json(r.report, r.provenance);
       line["index"] = c.index;
       line["provenance"] = {{"git_revision", git}, {"host", host}};
-      line["timing"]["wall_s"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      line["timing"]["wall_s"] =
+          std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
       line["timing"]["finished_at"] = utc_now();
       std::lock_guard lock(mu);
       append << line.dump() << "\n";
@@ -412,7 +443,8 @@ BenchOutcome run_bench(const BenchSpec& spec, const std::atomic<bool>* stop,
     }
   };
 
-  const int threads = std::min<int>(spec.jobs, static_cast<int>(std::max<std::size_t>(todo.size(), 1)));
+  const int threads =
+      std::min<int>(spec.jobs, static_cast<int>(std::max<std::size_t>(todo.size(), 1)));
   running = threads;
   std::vector<std::thread> pool;
   pool.reserve(static_cast<std::size_t>(threads));
@@ -434,7 +466,8 @@ BenchOutcome run_bench(const BenchSpec& spec, const std::atomic<bool>* stop,
   outcome.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
   outcome.simulated_s = prog.simulated_s;
   std::vector<json> runs = kept;
-  runs.insert(runs.end(), std::make_move_iterator(fresh.begin()), std::make_move_iterator(fresh.end()));
+  runs.insert(runs.end(), std::make_move_iterator(fresh.begin()),
+              std::make_move_iterator(fresh.end()));
   if (progress) {
     prog.wall_s = outcome.wall_s;
     progress(prog);
@@ -464,7 +497,8 @@ std::vector<std::filesystem::path> merge_replays(const std::vector<std::filesyst
     if (!fs::is_directory(from, ec)) continue;
     std::set<fs::path> otrs;  // in name order: the same copies whatever the listing order
     for (const auto& entry : fs::directory_iterator(from)) {
-      if (entry.path().extension() == ".otr" && entry.is_regular_file(ec)) otrs.insert(entry.path());
+      if (entry.path().extension() == ".otr" && entry.is_regular_file(ec))
+        otrs.insert(entry.path());
     }
     for (const fs::path& otr : otrs) {
       const fs::path dest = to / otr.filename();
@@ -472,8 +506,8 @@ std::vector<std::filesystem::path> merge_replays(const std::vector<std::filesyst
       if (fs::equivalent(otr, dest, ec)) continue;  // merging into one of the shards
       fs::create_directories(to, ec);
       if (!fs::copy_file(otr, dest, fs::copy_options::overwrite_existing, ec) || ec) {
-        throw std::runtime_error(dest.string() + ": cannot copy the replay " + otr.string() + " here (" +
-                                 ec.message() + ")");
+        throw std::runtime_error(dest.string() + ": cannot copy the replay " + otr.string() +
+                                 " here (" + ec.message() + ")");
       }
     }
   }
@@ -482,7 +516,8 @@ std::vector<std::filesystem::path> merge_replays(const std::vector<std::filesyst
 
 }  // namespace
 
-BenchOutcome merge_bench(const std::vector<std::filesystem::path>& dirs, const std::filesystem::path& out) {
+BenchOutcome merge_bench(const std::vector<std::filesystem::path>& dirs,
+                         const std::filesystem::path& out) {
   if (dirs.empty()) throw UsageError("merge: name the bench output folders to join");
   std::optional<json> identity;
   json manifest;
@@ -493,19 +528,22 @@ BenchOutcome merge_bench(const std::vector<std::filesystem::path>& dirs, const s
     try {
       m = json::parse(read_file(dir / kManifestFile));
     } catch (const std::exception& e) {
-      throw UsageError("merge: " + (dir / kManifestFile).string() + " is missing or unreadable (" + e.what() + ")");
+      throw UsageError("merge: " + (dir / kManifestFile).string() + " is missing or unreadable (" +
+                       e.what() + ")");
     }
     if (!identity) {
       identity = sweep_identity(m);
       manifest = m;
     } else if (sweep_identity(m) != *identity) {
-      throw UsageError("merge: " + dir.string() + " comes from a different bench configuration than " +
-                       dirs.front().string() + " (policies, traffic, seeds, minutes, map or parameters differ)");
+      throw UsageError("merge: " + dir.string() +
+                       " comes from a different bench configuration than " + dirs.front().string() +
+                       " (policies, traffic, seeds, minutes, map or parameters differ)");
     }
     for (json& r : read_runs(dir / kRunsFile)) {
       const auto idx = r["index"].get<std::size_t>();
       if (!seen.insert(idx).second) {
-        throw UsageError("merge: run " + std::to_string(idx) + " appears twice (in " + dir.string() + " and another folder)");
+        throw UsageError("merge: run " + std::to_string(idx) + " appears twice (in " +
+                         dir.string() + " and another folder)");
       }
       runs.push_back(std::move(r));
     }
@@ -513,12 +551,13 @@ BenchOutcome merge_bench(const std::vector<std::filesystem::path>& dirs, const s
   const auto total = manifest["combinations"].get<std::size_t>();
   for (const auto& dir : dirs) {
     if (same_file(dir, out)) {
-      throw UsageError("merge: --out " + out.string() + " is one of the folders being joined (" + dir.string() +
-                       "); its results would be rewritten: merge into a new folder");
+      throw UsageError("merge: --out " + out.string() + " is one of the folders being joined (" +
+                       dir.string() + "); its results would be rewritten: merge into a new folder");
     }
   }
   if (std::filesystem::exists(out / kRunsFile) || std::filesystem::exists(out / kManifestFile)) {
-    throw UsageError("merge: --out " + out.string() + " already holds bench results; merge into a new folder");
+    throw UsageError("merge: --out " + out.string() +
+                     " already holds bench results; merge into a new folder");
   }
   if (runs.size() != total) {
     throw UsageError("merge: the folders hold " + std::to_string(runs.size()) + " of the sweep's " +
@@ -526,7 +565,9 @@ BenchOutcome merge_bench(const std::vector<std::filesystem::path>& dirs, const s
   }
   std::error_code ec;
   std::filesystem::create_directories(out, ec);
-  if (ec) throw std::runtime_error(out.string() + ": cannot create the output folder (" + ec.message() + ")");
+  if (ec)
+    throw std::runtime_error(out.string() + ": cannot create the output folder (" + ec.message() +
+                             ")");
   manifest["shard"] = "1/1";
   write_file_atomic(out / kManifestFile, manifest.dump(2) + "\n");
   BenchOutcome outcome;

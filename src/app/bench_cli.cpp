@@ -31,9 +31,13 @@ std::vector<std::string> split_list(const std::string& text) {
 
 std::string duration_text(double s) {
   char buf[32];
-  if (s >= 3600) std::snprintf(buf, sizeof buf, "%dh%02dm", static_cast<int>(s / 3600), static_cast<int>(s / 60) % 60);
-  else if (s >= 60) std::snprintf(buf, sizeof buf, "%dm%02ds", static_cast<int>(s / 60), static_cast<int>(s) % 60);
-  else std::snprintf(buf, sizeof buf, "%ds", static_cast<int>(s));
+  if (s >= 3600)
+    std::snprintf(buf, sizeof buf, "%dh%02dm", static_cast<int>(s / 3600),
+                  static_cast<int>(s / 60) % 60);
+  else if (s >= 60)
+    std::snprintf(buf, sizeof buf, "%dm%02ds", static_cast<int>(s / 60), static_cast<int>(s) % 60);
+  else
+    std::snprintf(buf, sizeof buf, "%ds", static_cast<int>(s));
   return buf;
 }
 
@@ -49,8 +53,9 @@ void draw_progress(const BenchProgress& p, double total_sim_s) {
   } else if (p.done >= p.total) {
     eta = "0s";
   }
-  std::fprintf(stderr, "\r  [%s] %zu/%zu runs  %9.1f mi simulated  elapsed %s  ETA %s   ", bar.c_str(), p.done,
-               p.total, core::metres_to_miles(p.simulated_m), duration_text(p.wall_s).c_str(), eta.c_str());
+  std::fprintf(stderr, "\r  [%s] %zu/%zu runs  %9.1f mi simulated  elapsed %s  ETA %s   ",
+               bar.c_str(), p.done, p.total, core::metres_to_miles(p.simulated_m),
+               duration_text(p.wall_s).c_str(), eta.c_str());
   std::fflush(stderr);
 }
 
@@ -71,107 +76,134 @@ Subcommand register_bench(CLI::App& app) {
   st->spec.jobs = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   auto* cmd = app.add_subcommand(
       "bench",
-      "Run every combination of policies x traffic profiles x seeds in parallel and summarise them\n"
+      "Run every combination of policies x traffic profiles x seeds in parallel and summarise "
+      "them\n"
       "(runs.jsonl, summary.csv, summary.md in --out). `overtake bench merge` joins shards.");
   cmd->add_option("--policies", st->policies, "Comma-separated policies")->capture_default_str();
-  cmd->add_option("--seeds", st->seeds, "Seeds: a range and/or list, e.g. 1-20 or 1,5,9-12")->capture_default_str();
-  cmd->add_option("--minutes", st->spec.minutes, "Simulated minutes per run")->capture_default_str();
-  cmd->add_option("--traffic", st->traffic, "Comma-separated traffic profiles (faithful, calm)")->capture_default_str();
-  cmd->add_option("--map", st->map, "Map file; default: the built-in track")->check(CLI::ExistingFile);
+  cmd->add_option("--seeds", st->seeds, "Seeds: a range and/or list, e.g. 1-20 or 1,5,9-12")
+      ->capture_default_str();
+  cmd->add_option("--minutes", st->spec.minutes, "Simulated minutes per run")
+      ->capture_default_str();
+  cmd->add_option("--traffic", st->traffic, "Comma-separated traffic profiles (faithful, calm)")
+      ->capture_default_str();
+  cmd->add_option("--map", st->map, "Map file; default: the built-in track")
+      ->check(CLI::ExistingFile);
   cmd->add_option("--config", st->config, "JSON parameter overrides")->check(CLI::ExistingFile);
-  cmd->add_option("--steps-per-call", st->spec.steps_per_call, "Fixed steps per reply (1-1000); default: drawn 1-3 by seed")
+  cmd->add_option("--steps-per-call", st->spec.steps_per_call,
+                  "Fixed steps per reply (1-1000); default: drawn 1-3 by seed")
       ->check(CLI::Range(1, 1000));
-  cmd->add_option("--jobs,-j", st->spec.jobs, "Runs in parallel (default: all cores)")->capture_default_str();
+  cmd->add_option("--jobs,-j", st->spec.jobs, "Runs in parallel (default: all cores)")
+      ->capture_default_str();
   cmd->add_option("--out,-o", st->out, "Output folder")->capture_default_str();
   cmd->add_option("--shard", st->shard, "Run only slice I of N (e.g. 3/8) of the combinations");
-  cmd->add_flag("--resume", st->spec.resume, "Continue an interrupted bench in --out, skipping finished runs");
-  cmd->add_option("--record-worst", st->spec.record_worst,
-                  "After the bench, run the N runs with most incidents again (ties: lower seed first;\n"
-                  "deterministic, so the same runs) recording replays into --out/replays/\n"
-                  "<policy>-<traffic>-seed<N>.otr, for `overtake view`");
-  cmd->add_option("--html", st->html,
-                  "Also write the bench report page (summary table and charts per policy, each run\n"
-                  "linked to its replay when recorded) to this file, and each recorded replay's\n"
-                  "self-contained page beside it (replays/*.html)");
+  cmd->add_flag("--resume", st->spec.resume,
+                "Continue an interrupted bench in --out, skipping finished runs");
+  cmd->add_option(
+      "--record-worst", st->spec.record_worst,
+      "After the bench, run the N runs with most incidents again (ties: lower seed first;\n"
+      "deterministic, so the same runs) recording replays into --out/replays/\n"
+      "<policy>-<traffic>-seed<N>.otr, for `overtake view`");
+  cmd->add_option(
+      "--html", st->html,
+      "Also write the bench report page (summary table and charts per policy, each run\n"
+      "linked to its replay when recorded) to this file, and each recorded replay's\n"
+      "self-contained page beside it (replays/*.html)");
   cmd->add_flag("--quiet,-q", st->quiet, "No progress bar or summary");
-  auto* merge = cmd->add_subcommand("merge", "Join the output folders of the shards of one bench into --out.");
-  merge->add_option("dirs", st->merge_dirs, "Shard output folders")->required()->check(CLI::ExistingDirectory);
-  merge->add_option("--out,-o", st->merge_out, "Folder for the joined output (the shards' replays are copied\n"
-                                               "into its replays/)")->required();
-  merge->add_option("--html", st->merge_html,
-                    "Also write the bench report page of the joined output to this file, each run\n"
-                    "linked to its replay when a shard recorded it (pages written into --out/replays/)");
+  auto* merge = cmd->add_subcommand(
+      "merge", "Join the output folders of the shards of one bench into --out.");
+  merge->add_option("dirs", st->merge_dirs, "Shard output folders")
+      ->required()
+      ->check(CLI::ExistingDirectory);
+  merge
+      ->add_option("--out,-o", st->merge_out,
+                   "Folder for the joined output (the shards' replays are copied\n"
+                   "into its replays/)")
+      ->required();
+  merge->add_option(
+      "--html", st->merge_html,
+      "Also write the bench report page of the joined output to this file, each run\n"
+      "linked to its replay when a shard recorded it (pages written into --out/replays/)");
 
-  return {cmd, [st, merge] {
-            if (merge->parsed()) {
-              if (!st->merge_html.empty()) {  // the pages come from the binary: check first
-                (void)embedded_page(kReportPageName);
-                (void)embedded_page(kViewerPageName);
-              }
-              const BenchOutcome o = merge_bench(
-                  std::vector<std::filesystem::path>(st->merge_dirs.begin(), st->merge_dirs.end()), st->merge_out);
-              std::cout << "merged " << o.runs_done << " runs into " << st->merge_out << "\n\n" << o.summary_markdown;
-              for (const auto& r : o.replays) std::cout << "replay: " << r.string() << "\n";
-              if (!st->merge_html.empty()) {
-                const auto pages = write_bench_report(st->merge_out, st->merge_html, embedded_page(kReportPageName),
-                                                      embedded_page(kViewerPageName));
-                std::cout << "report: " << st->merge_html << " (" << pages.size() << " replay page"
-                          << (pages.size() == 1 ? "" : "s") << " linked)\n";
-              }
-              return kExitOk;
-            }
-            BenchSpec spec = st->spec;
-            spec.policies = split_list(st->policies);
-            spec.traffic = split_list(st->traffic);
-            spec.seeds = parse_seed_list(st->seeds);
-            if (!st->map.empty()) spec.map = st->map;
-            if (!st->config.empty()) spec.config = st->config;
-            spec.out = st->out;
-            if (!st->shard.empty()) std::tie(spec.shard_index, spec.shard_count) = parse_shard(st->shard);
-            const double total_sim_s = spec.minutes * 60.0 *
-                                        static_cast<double>(bench_combinations(spec).size()) / spec.shard_count;
-            const bool draw = !st->quiet && stderr_is_terminal();
-            // The pages come from the binary: check that they are there before any run.
-            if (!st->html.empty()) {
-              (void)embedded_page(kReportPageName);
-              (void)embedded_page(kViewerPageName);
-            }
-            BenchOutcome o;
-            {
-              const InterruptScope interrupt;
-              try {
-                o = run_bench(spec, &InterruptScope::flag(), [&](const BenchProgress& p) {
-                  if (draw) draw_progress(p, total_sim_s);
-                });
-              } catch (...) {
-                if (draw) std::fprintf(stderr, "\n");
-                throw;
-              }
-              if (draw) std::fprintf(stderr, "\n");
-            }
-            if (o.interrupted) {
-              std::cerr << "bench: interrupted; " << o.runs_done << " finished runs kept in "
-                        << (spec.out / "runs.jsonl").string() << "; rerun with --resume to finish\n";
-              return kExitInterrupted;
-            }
-            if (!st->quiet) {
-              std::cout << o.summary_markdown << "\n";
-              const double hours_per_minute = o.wall_s > 0 ? (o.simulated_s / 3600.0) / (o.wall_s / 60.0) : 0.0;
-              std::printf("%zu runs (%zu new) in %.1f s on %d jobs: %.1f simulated hours per wall-clock minute\n",
-                          o.runs_done, o.runs_new, o.wall_s, spec.jobs, hours_per_minute);
-              std::cout << "written: " << spec.out.string() << "/{runs.jsonl,summary.csv,summary.md,bench.json}\n";
-              for (const auto& r : o.replays) std::cout << "replay: " << r.string() << "\n";
-            }
-            if (!st->html.empty()) {
-              const auto pages = write_bench_report(spec.out, st->html, embedded_page(kReportPageName),
-                                                    embedded_page(kViewerPageName));
-              if (!st->quiet) {
-                std::cout << "report: " << st->html << " (" << pages.size() << " replay page"
-                          << (pages.size() == 1 ? "" : "s") << " linked)\n";
-              }
-            }
-            return kExitOk;
-          }};
+  return {
+      cmd, [st, merge] {
+        if (merge->parsed()) {
+          if (!st->merge_html.empty()) {  // the pages come from the binary: check first
+            (void)embedded_page(kReportPageName);
+            (void)embedded_page(kViewerPageName);
+          }
+          const BenchOutcome o = merge_bench(
+              std::vector<std::filesystem::path>(st->merge_dirs.begin(), st->merge_dirs.end()),
+              st->merge_out);
+          std::cout << "merged " << o.runs_done << " runs into " << st->merge_out << "\n\n"
+                    << o.summary_markdown;
+          for (const auto& r : o.replays) std::cout << "replay: " << r.string() << "\n";
+          if (!st->merge_html.empty()) {
+            const auto pages =
+                write_bench_report(st->merge_out, st->merge_html, embedded_page(kReportPageName),
+                                   embedded_page(kViewerPageName));
+            std::cout << "report: " << st->merge_html << " (" << pages.size() << " replay page"
+                      << (pages.size() == 1 ? "" : "s") << " linked)\n";
+          }
+          return kExitOk;
+        }
+        BenchSpec spec = st->spec;
+        spec.policies = split_list(st->policies);
+        spec.traffic = split_list(st->traffic);
+        spec.seeds = parse_seed_list(st->seeds);
+        if (!st->map.empty()) spec.map = st->map;
+        if (!st->config.empty()) spec.config = st->config;
+        spec.out = st->out;
+        if (!st->shard.empty())
+          std::tie(spec.shard_index, spec.shard_count) = parse_shard(st->shard);
+        const double total_sim_s = spec.minutes * 60.0 *
+                                   static_cast<double>(bench_combinations(spec).size()) /
+                                   spec.shard_count;
+        const bool draw = !st->quiet && stderr_is_terminal();
+        // The pages come from the binary: check that they are there before any run.
+        if (!st->html.empty()) {
+          (void)embedded_page(kReportPageName);
+          (void)embedded_page(kViewerPageName);
+        }
+        BenchOutcome o;
+        {
+          const InterruptScope interrupt;
+          try {
+            o = run_bench(spec, &InterruptScope::flag(), [&](const BenchProgress& p) {
+              if (draw) draw_progress(p, total_sim_s);
+            });
+          } catch (...) {
+            if (draw) std::fprintf(stderr, "\n");
+            throw;
+          }
+          if (draw) std::fprintf(stderr, "\n");
+        }
+        if (o.interrupted) {
+          std::cerr << "bench: interrupted; " << o.runs_done << " finished runs kept in "
+                    << (spec.out / "runs.jsonl").string() << "; rerun with --resume to finish\n";
+          return kExitInterrupted;
+        }
+        if (!st->quiet) {
+          std::cout << o.summary_markdown << "\n";
+          const double hours_per_minute =
+              o.wall_s > 0 ? (o.simulated_s / 3600.0) / (o.wall_s / 60.0) : 0.0;
+          std::printf(
+              "%zu runs (%zu new) in %.1f s on %d jobs: %.1f simulated hours per wall-clock "
+              "minute\n",
+              o.runs_done, o.runs_new, o.wall_s, spec.jobs, hours_per_minute);
+          std::cout << "written: " << spec.out.string()
+                    << "/{runs.jsonl,summary.csv,summary.md,bench.json}\n";
+          for (const auto& r : o.replays) std::cout << "replay: " << r.string() << "\n";
+        }
+        if (!st->html.empty()) {
+          const auto pages = write_bench_report(spec.out, st->html, embedded_page(kReportPageName),
+                                                embedded_page(kViewerPageName));
+          if (!st->quiet) {
+            std::cout << "report: " << st->html << " (" << pages.size() << " replay page"
+                      << (pages.size() == 1 ? "" : "s") << " linked)\n";
+          }
+        }
+        return kExitOk;
+      }};
 }
 
 }  // namespace overtake::app

@@ -80,7 +80,8 @@ json summarize_bench(const std::vector<json>& runs, const std::vector<std::strin
         miles += (*r)["distance_miles"].get<double>();
         seconds += (*r)["duration_s"].get<double>();
         free_miles.push_back((*r)["best_incident_free_miles"].get<double>());
-        for (const auto& type : incident_types()) counts[type] += (*r)["incident_counts"][type].get<double>();
+        for (const auto& type : incident_types())
+          counts[type] += (*r)["incident_counts"][type].get<double>();
         const json& pk = (*r)["peak"];
         peak_acc = std::max(peak_acc, pk["acceleration_mps2"].get<double>());
         peak_jerk = std::max(peak_jerk, pk["jerk_mps3"].get<double>());
@@ -89,7 +90,8 @@ json summarize_bench(const std::vector<json>& runs, const std::vector<std::strin
         p50s.push_back((*r)["timing"]["p50_us"].get<double>());
         const json& timing = (*r)["timing"];
         worst_p99 = std::max(worst_p99, timing["p99_us"].get<double>());
-        worst_wall_p99 = std::max(worst_wall_p99, timing.value("wall_p99_us", timing["p99_us"].get<double>()));
+        worst_wall_p99 =
+            std::max(worst_wall_p99, timing.value("wall_p99_us", timing["p99_us"].get<double>()));
       }
       json per100 = json::object();
       double total_incidents = 0.0;
@@ -106,26 +108,28 @@ json summarize_bench(const std::vector<json>& runs, const std::vector<std::strin
       status_share["normal"] = cycles > 0 ? 1.0 - status_share["least_bad"].get<double>() -
                                                 status_share["fallback"].get<double>()
                                           : 0.0;
-      rows.push_back({{"policy", p},
-                      {"traffic", t},
-                      {"runs", mine.size()},
-                      {"total_miles", miles},
-                      {"mean_speed_mph", seconds > 0 ? miles * core::kMetresPerMile / seconds * core::kMphPerMps : 0.0},
-                      {"incidents", total_incidents},
-                      {"incidents_per_100mi", miles > 0 ? 100.0 * total_incidents / miles : 0.0},
-                      {"incidents_per_100mi_by_type", per100},
-                      {"incident_free_miles_median", median(free_miles)},
-                      {"incident_free_miles_worst", *std::min_element(free_miles.begin(), free_miles.end())},
-                      {"peak_acceleration_mps2", peak_acc},
-                      {"peak_jerk_mps3", peak_jerk},
-                      {"peak_strict_acceleration_mps2", strict_acc},
-                      {"peak_strict_jerk_mps3", strict_jerk},
-                      {"plan_status_share", status_share},
-                      {"runs_ended_early", ended_early},
-                      {"timing",
-                       {{"planner_p50_us_median", median(p50s)},
-                        {"planner_p99_us_worst", worst_p99},
-                        {"planner_wall_p99_us_worst", worst_wall_p99}}}});
+      rows.push_back(
+          {{"policy", p},
+           {"traffic", t},
+           {"runs", mine.size()},
+           {"total_miles", miles},
+           {"mean_speed_mph",
+            seconds > 0 ? miles * core::kMetresPerMile / seconds * core::kMphPerMps : 0.0},
+           {"incidents", total_incidents},
+           {"incidents_per_100mi", miles > 0 ? 100.0 * total_incidents / miles : 0.0},
+           {"incidents_per_100mi_by_type", per100},
+           {"incident_free_miles_median", median(free_miles)},
+           {"incident_free_miles_worst", *std::min_element(free_miles.begin(), free_miles.end())},
+           {"peak_acceleration_mps2", peak_acc},
+           {"peak_jerk_mps3", peak_jerk},
+           {"peak_strict_acceleration_mps2", strict_acc},
+           {"peak_strict_jerk_mps3", strict_jerk},
+           {"plan_status_share", status_share},
+           {"runs_ended_early", ended_early},
+           {"timing",
+            {{"planner_p50_us_median", median(p50s)},
+             {"planner_p99_us_worst", worst_p99},
+             {"planner_wall_p99_us_worst", worst_wall_p99}}}});
     }
   }
   return rows;
@@ -141,24 +145,35 @@ std::string summary_csv(const json& rows) {
     line += '\n';
     return line;
   };
-  std::vector<std::string> header{"policy", "traffic", "runs", "total_miles", "mean_speed_mph", "incidents",
+  std::vector<std::string> header{"policy",
+                                  "traffic",
+                                  "runs",
+                                  "total_miles",
+                                  "mean_speed_mph",
+                                  "incidents",
                                   "incidents_per_100mi"};
   for (const auto& type : incident_types()) header.push_back(type + std::string("_per_100mi"));
-  for (const char* h : {"incident_free_miles_median", "incident_free_miles_worst", "peak_acceleration_mps2",
-                        "peak_jerk_mps3", "peak_strict_acceleration_mps2", "peak_strict_jerk_mps3",
-                        "planner_p50_us_median", "planner_p99_us_worst", "planner_wall_p99_us_worst",
-                        "least_bad_cycle_share", "fallback_cycle_share", "runs_ended_early"}) {
+  for (const char* h :
+       {"incident_free_miles_median", "incident_free_miles_worst", "peak_acceleration_mps2",
+        "peak_jerk_mps3", "peak_strict_acceleration_mps2", "peak_strict_jerk_mps3",
+        "planner_p50_us_median", "planner_p99_us_worst", "planner_wall_p99_us_worst",
+        "least_bad_cycle_share", "fallback_cycle_share", "runs_ended_early"}) {
     header.emplace_back(h);
   }
   std::string out = join(header);
   for (const json& r : rows) {
-    std::vector<std::string> f{r["policy"].get<std::string>(), r["traffic"].get<std::string>(),
-                               std::to_string(r["runs"].get<std::size_t>()), fmt(r["total_miles"], 3),
-                               fmt(r["mean_speed_mph"], 3), fmt(r["incidents"], 0),
+    std::vector<std::string> f{r["policy"].get<std::string>(),
+                               r["traffic"].get<std::string>(),
+                               std::to_string(r["runs"].get<std::size_t>()),
+                               fmt(r["total_miles"], 3),
+                               fmt(r["mean_speed_mph"], 3),
+                               fmt(r["incidents"], 0),
                                fmt(r["incidents_per_100mi"], 3)};
-    for (const auto& type : incident_types()) f.push_back(fmt(r["incidents_per_100mi_by_type"][type], 3));
-    for (const char* k : {"incident_free_miles_median", "incident_free_miles_worst", "peak_acceleration_mps2",
-                          "peak_jerk_mps3", "peak_strict_acceleration_mps2", "peak_strict_jerk_mps3"}) {
+    for (const auto& type : incident_types())
+      f.push_back(fmt(r["incidents_per_100mi_by_type"][type], 3));
+    for (const char* k :
+         {"incident_free_miles_median", "incident_free_miles_worst", "peak_acceleration_mps2",
+          "peak_jerk_mps3", "peak_strict_acceleration_mps2", "peak_strict_jerk_mps3"}) {
       f.push_back(fmt(r[k], 3));
     }
     f.push_back(fmt(r["timing"]["planner_p50_us_median"], 1));
@@ -174,7 +189,8 @@ std::string summary_csv(const json& rows) {
 
 std::string summary_markdown(const json& rows) {
   std::string out =
-      "| policy | traffic | runs | miles | mean mph | incidents /100 mi | collision | speeding | max acc | "
+      "| policy | traffic | runs | miles | mean mph | incidents /100 mi | collision | speeding | "
+      "max acc | "
       "max jerk | outside lane | incident-free mi (median / worst) | peak acc / jerk (rubric) | "
       "peak acc / jerk (strict) | planner CPU us (p50 / p99) | cycles least-bad / fallback | "
       "ended early |\n"
@@ -185,11 +201,13 @@ std::string summary_markdown(const json& rows) {
            std::to_string(r["runs"].get<std::size_t>()) + " | " + fmt(r["total_miles"], 1) + " | " +
            fmt(r["mean_speed_mph"], 2) + " | " + fmt(r["incidents_per_100mi"], 1);
     for (const auto& type : incident_types()) out += " | " + fmt(by[type], 1);
-    out += " | " + fmt(r["incident_free_miles_median"], 2) + " / " + fmt(r["incident_free_miles_worst"], 2) +
-           " | " + fmt(r["peak_acceleration_mps2"], 1) + " / " + fmt(r["peak_jerk_mps3"], 1) + " | " +
-           fmt(r["peak_strict_acceleration_mps2"], 1) + " / " + fmt(r["peak_strict_jerk_mps3"], 1) + " | " +
-           fmt(r["timing"]["planner_p50_us_median"], 0) + " / " + fmt(r["timing"]["planner_p99_us_worst"], 0) +
-           " | " + percent(r["plan_status_share"]["least_bad"]) + " / " +
+    out += " | " + fmt(r["incident_free_miles_median"], 2) + " / " +
+           fmt(r["incident_free_miles_worst"], 2) + " | " + fmt(r["peak_acceleration_mps2"], 1) +
+           " / " + fmt(r["peak_jerk_mps3"], 1) + " | " +
+           fmt(r["peak_strict_acceleration_mps2"], 1) + " / " + fmt(r["peak_strict_jerk_mps3"], 1) +
+           " | " + fmt(r["timing"]["planner_p50_us_median"], 0) + " / " +
+           fmt(r["timing"]["planner_p99_us_worst"], 0) + " | " +
+           percent(r["plan_status_share"]["least_bad"]) + " / " +
            percent(r["plan_status_share"]["fallback"]) + " | " +
            std::to_string(r["runs_ended_early"].get<std::size_t>()) + " |\n";
   }

@@ -27,15 +27,21 @@ Subcommand register_calibrate(CLI::App& app) {
       "against the accept ranges (docs/fidelity.md). Exit status 1 when a row fails.");
   cmd->add_option("--seeds", st->seeds, "Seeds: a range and/or list, e.g. 1-10 or 1,5,9-12")
       ->capture_default_str();
-  cmd->add_option("--minutes", st->opts.minutes, "Simulated minutes per seed")->capture_default_str();
-  cmd->add_option("--policy", st->opts.policy, "Policy that drives the ego (it shapes the traffic around it)")
+  cmd->add_option("--minutes", st->opts.minutes, "Simulated minutes per seed")
       ->capture_default_str();
-  cmd->add_option("--traffic", st->opts.traffic, "Traffic profile (faithful, calm)")->capture_default_str();
-  cmd->add_option("--map", st->map, "Map file; default: the built-in track")->check(CLI::ExistingFile);
+  cmd->add_option("--policy", st->opts.policy,
+                  "Policy that drives the ego (it shapes the traffic around it)")
+      ->capture_default_str();
+  cmd->add_option("--traffic", st->opts.traffic, "Traffic profile (faithful, calm)")
+      ->capture_default_str();
+  cmd->add_option("--map", st->map, "Map file; default: the built-in track")
+      ->check(CLI::ExistingFile);
   cmd->add_option("--config", st->config, "JSON file overriding default parameters")
       ->check(CLI::ExistingFile);
-  cmd->add_option("--jobs,-j", st->opts.jobs, "Runs in parallel (default: all cores)")->capture_default_str();
-  cmd->add_option("--json", st->json, "Also write the figures and the comparison as JSON to this file");
+  cmd->add_option("--jobs,-j", st->opts.jobs, "Runs in parallel (default: all cores)")
+      ->capture_default_str();
+  cmd->add_option("--json", st->json,
+                  "Also write the figures and the comparison as JSON to this file");
   return {cmd, [st] {
             CalibrateOptions o = st->opts;
             o.seeds = parse_seed_list(st->seeds);
@@ -46,9 +52,11 @@ Subcommand register_calibrate(CLI::App& app) {
             }
             const TrafficFigures f = calibrate(o);
             const std::vector<CalibrationRow> rows = compare_with_original(f);
-            std::printf("overtake calibrate: %zu seeds x %g min, policy %s, %s traffic, %ld rows (%.0f car-minutes)\n",
-                        o.seeds.size(), o.minutes, o.policy.c_str(), o.traffic.c_str(), f.rows,
-                        f.car_minutes);
+            std::printf(
+                "overtake calibrate: %zu seeds x %g min, policy %s, %s traffic, %ld rows (%.0f "
+                "car-minutes)\n",
+                o.seeds.size(), o.minutes, o.policy.c_str(), o.traffic.c_str(), f.rows,
+                f.car_minutes);
             std::cout << format_calibration(rows);
             std::cout.flush();
             const nlohmann::json j = calibration_to_json(f, rows);

@@ -3,10 +3,10 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
-#include <mutex>
-#include <thread>
 #include <cstdio>
+#include <mutex>
 #include <numeric>
+#include <thread>
 
 #include "overtake/app/commands.hpp"
 #include "overtake/core/units.hpp"
@@ -91,7 +91,8 @@ void TrafficObserver::observe(double t_s, const core::Telemetry& tel) {
     const bool road = on_road(c.d_m);
     const double speed_mps = core::norm(c.velocity_mps);
     // Placement: onto the road, or a jump along it.
-    const bool placed = road && (!tr.seen || !tr.on_road || core::distance(tr.position, c.position) > kJumpM);
+    const bool placed =
+        road && (!tr.seen || !tr.on_road || core::distance(tr.position, c.position) > kJumpM);
     if (placed && tr.seen) {
       ++placements_;
       ++tr.segment;
@@ -136,7 +137,8 @@ TrafficFigures TrafficObserver::figures() const {
   f.speed_mean_mph = mean(speeds);
   double var = 0.0;
   for (double v : speeds) var += (v - f.speed_mean_mph) * (v - f.speed_mean_mph);
-  f.speed_sd_mph = speeds.size() > 1 ? std::sqrt(var / static_cast<double>(speeds.size() - 1)) : 0.0;
+  f.speed_sd_mph =
+      speeds.size() > 1 ? std::sqrt(var / static_cast<double>(speeds.size() - 1)) : 0.0;
   f.speed_p5_mph = percentile(speeds, 0.05);
   f.speed_p50_mph = percentile(speeds, 0.50);
   f.speed_p95_mph = percentile(speeds, 0.95);
@@ -180,10 +182,11 @@ TrafficFigures TrafficObserver::figures() const {
   }
   f.hold_median_change_mph = percentile(changes, 0.5);
   f.hold_share_small =
-      changes.empty() ? 0.0
-                      : static_cast<double>(std::count_if(changes.begin(), changes.end(),
-                                                          [](double v) { return v < kHoldSmallMph; })) /
-                            static_cast<double>(changes.size());
+      changes.empty()
+          ? 0.0
+          : static_cast<double>(std::count_if(changes.begin(), changes.end(),
+                                              [](double v) { return v < kHoldSmallMph; })) /
+                static_cast<double>(changes.size());
 
   f.lane_changes_per_car_minute =
       f.car_minutes > 0.0 ? static_cast<double>(changes_.size()) / f.car_minutes : 0.0;
@@ -198,7 +201,8 @@ TrafficFigures TrafficObserver::figures() const {
   for (const Row& r : rows_) {
     // The first lane change of this car at or after r.t_s - margin.
     const LaneChange key{r.run, r.car, r.t_s - kChangeMarginS};
-    const auto it = std::lower_bound(sorted_changes.begin(), sorted_changes.end(), key, by_car_time);
+    const auto it =
+        std::lower_bound(sorted_changes.begin(), sorted_changes.end(), key, by_car_time);
     const bool near_change = it != sorted_changes.end() && it->run == r.run && it->car == r.car &&
                              it->t_s < r.t_s + kChangeMarginS;
     if (!near_change) wander.push_back(std::abs(r.d_m - core::lane_center_d(r.lane, road_)));
@@ -208,7 +212,8 @@ TrafficFigures TrafficObserver::figures() const {
   f.wander_max_m = wander.empty() ? 0.0 : *std::max_element(wander.begin(), wander.end());
 
   if (!within_.empty()) {
-    f.within_60m_mean = std::accumulate(within_.begin(), within_.end(), 0.0) / static_cast<double>(within_.size());
+    f.within_60m_mean =
+        std::accumulate(within_.begin(), within_.end(), 0.0) / static_cast<double>(within_.size());
     f.within_60m_min = *std::min_element(within_.begin(), within_.end());
     f.within_60m_max = *std::max_element(within_.begin(), within_.end());
   }
@@ -244,8 +249,10 @@ void TrafficObserver::merge(const TrafficObserver& o) {
   within_.insert(within_.end(), o.within_.begin(), o.within_.end());
   farthest_m_ = std::max(farthest_m_, o.farthest_m_);
   placements_ += o.placements_;
-  first_frame_mps_.insert(first_frame_mps_.end(), o.first_frame_mps_.begin(), o.first_frame_mps_.end());
-  parked_at_start_.insert(parked_at_start_.end(), o.parked_at_start_.begin(), o.parked_at_start_.end());
+  first_frame_mps_.insert(first_frame_mps_.end(), o.first_frame_mps_.begin(),
+                          o.first_frame_mps_.end());
+  parked_at_start_.insert(parked_at_start_.end(), o.parked_at_start_.begin(),
+                          o.parked_at_start_.end());
   ego_distance_m_ += o.ego_distance_m_;
   ego_duration_s_ += o.ego_duration_s_;
 }
@@ -278,7 +285,8 @@ TrafficFigures calibrate(const CalibrateOptions& opts) {
         obs.begin_run();
         const DriveResult r = drive_on(*track, config, o);
         obs.end_run(r.report.distance_m, r.report.duration_s);
-        if (r.report.outcome.ended_early()) throw std::runtime_error(sim::ended_early_text(r.report.outcome));
+        if (r.report.outcome.ended_early())
+          throw std::runtime_error(sim::ended_early_text(r.report.outcome));
       } catch (const std::exception& e) {
         const std::lock_guard<std::mutex> lock(failure_mutex);
         if (failure.empty()) failure = "seed " + std::to_string(opts.seeds[k]) + ": " + e.what();
@@ -304,17 +312,20 @@ std::vector<CalibrationRow> compare_with_original(const TrafficFigures& f) {
     rows.push_back({std::move(key), std::move(stat), std::move(original), std::move(accept), value,
                     std::move(shown), pass});
   };
-  add("speed_mean_mph", "traffic speed, mean (sd) (mph)", "39.2 (5.7)", "36 - 42.5", f.speed_mean_mph,
-      fmt("%.1f", f.speed_mean_mph) + fmt(" (%.1f)", f.speed_sd_mph),
+  add("speed_mean_mph", "traffic speed, mean (sd) (mph)", "39.2 (5.7)", "36 - 42.5",
+      f.speed_mean_mph, fmt("%.1f", f.speed_mean_mph) + fmt(" (%.1f)", f.speed_sd_mph),
       f.speed_mean_mph >= 36.0 && f.speed_mean_mph <= 42.5);
   add("speed_p95_mph", "traffic speed p5 / p50 / p95 (mph)", "31.8 / 39.1 / 47.2", "p95 <= 50",
       f.speed_p95_mph,
-      fmt("%.1f", f.speed_p5_mph) + fmt(" / %.1f", f.speed_p50_mph) + fmt(" / %.1f", f.speed_p95_mph),
+      fmt("%.1f", f.speed_p5_mph) + fmt(" / %.1f", f.speed_p50_mph) +
+          fmt(" / %.1f", f.speed_p95_mph),
       f.speed_p95_mph <= 50.0);
   add("share_above_50_mph", "share of traffic rows above 50 mph", "0.4%", "<= 2%",
-      f.share_above_50_mph, fmt("%.2f%%", 100.0 * f.share_above_50_mph), f.share_above_50_mph <= 0.02);
-  add("ahead_behind_mean_mph", "cars ahead of the ego / behind, mean speed (mph)", "38.8 / 39.5", "",
-      f.ahead_mean_mph, fmt("%.1f", f.ahead_mean_mph) + fmt(" / %.1f", f.behind_mean_mph), std::nullopt);
+      f.share_above_50_mph, fmt("%.2f%%", 100.0 * f.share_above_50_mph),
+      f.share_above_50_mph <= 0.02);
+  add("ahead_behind_mean_mph", "cars ahead of the ego / behind, mean speed (mph)", "38.8 / 39.5",
+      "", f.ahead_mean_mph, fmt("%.1f", f.ahead_mean_mph) + fmt(" / %.1f", f.behind_mean_mph),
+      std::nullopt);
   std::string lanes;
   for (std::size_t l = 0; l < f.lane_mean_mph.size(); ++l) {
     lanes += (l ? " / " : "") + fmt("%.1f", f.lane_mean_mph[l]);
@@ -323,10 +334,12 @@ std::vector<CalibrationRow> compare_with_original(const TrafficFigures& f) {
       f.lane_mean_mph.empty() ? 0.0 : f.lane_mean_mph.front(), lanes, std::nullopt);
   add("hold_median_change_mph", "a car's speed 8-39 s later: median change (mph)",
       "0.0 (64% < 0.5 mph)", "median <= 1", f.hold_median_change_mph,
-      fmt("%.2f", f.hold_median_change_mph) + fmt(" (%.0f%% < 0.5 mph)", 100.0 * f.hold_share_small),
+      fmt("%.2f", f.hold_median_change_mph) +
+          fmt(" (%.0f%% < 0.5 mph)", 100.0 * f.hold_share_small),
       f.hold_median_change_mph <= 1.0);
-  add("lane_changes_per_car_minute", "traffic lane changes per car-minute", ">= 0.30 (a lower bound)",
-      "0.15 - 1.0", f.lane_changes_per_car_minute, fmt("%.2f", f.lane_changes_per_car_minute),
+  add("lane_changes_per_car_minute", "traffic lane changes per car-minute",
+      ">= 0.30 (a lower bound)", "0.15 - 1.0", f.lane_changes_per_car_minute,
+      fmt("%.2f", f.lane_changes_per_car_minute),
       f.lane_changes_per_car_minute >= 0.15 && f.lane_changes_per_car_minute <= 1.0);
   add("within_60m_mean", "cars within +-60 m of the ego, mean per frame (range)", "4.0 (1-8)",
       "2.5 - 6", f.within_60m_mean,
@@ -340,15 +353,17 @@ std::vector<CalibrationRow> compare_with_original(const TrafficFigures& f) {
       fmt("%.2f", f.wander_p50_m) + fmt(" / %.2f", f.wander_p95_m) + fmt(" / %.2f", f.wander_max_m),
       f.wander_p50_m >= 0.03 && f.wander_p50_m <= 0.3);
   add("first_frame_mps", "first frame of a newly placed car (m/s)",
-      "40-53 (the cap read as m/s), then cap/2.237", "40 - 60",
-      f.first_frame_max_mps,
-      f.first_frames_seen == 0 ? std::string("not seen")
-                               : fmt("%.1f", f.first_frame_min_mps) + fmt("-%.1f", f.first_frame_max_mps) +
-                                     " (" + std::to_string(f.first_frames_seen) + " of " +
-                                     std::to_string(f.placements) + " placements seen)",
-      f.first_frames_seen > 0 && f.first_frame_min_mps >= 40.0 - 1e-6 && f.first_frame_max_mps <= 60.0 + 1e-6);
+      "40-53 (the cap read as m/s), then cap/2.237", "40 - 60", f.first_frame_max_mps,
+      f.first_frames_seen == 0
+          ? std::string("not seen")
+          : fmt("%.1f", f.first_frame_min_mps) + fmt("-%.1f", f.first_frame_max_mps) + " (" +
+                std::to_string(f.first_frames_seen) + " of " + std::to_string(f.placements) +
+                " placements seen)",
+      f.first_frames_seen > 0 && f.first_frame_min_mps >= 40.0 - 1e-6 &&
+          f.first_frame_max_mps <= 60.0 + 1e-6);
   add("parked_at_start", "cars parked off the road at the start of a run", "10-12 of 12", "10 - 12",
-      f.parked_at_start, fmt("%.1f", f.parked_at_start), f.parked_at_start >= 10.0 && f.parked_at_start <= 12.0);
+      f.parked_at_start, fmt("%.1f", f.parked_at_start),
+      f.parked_at_start >= 10.0 && f.parked_at_start <= 12.0);
   add("ego_mean_speed_mph", "the planner's own mean speed (mph)", "students: 38.7 - 46.2", "",
       f.ego_mean_speed_mph, fmt("%.1f", f.ego_mean_speed_mph), std::nullopt);
   return rows;
@@ -371,8 +386,8 @@ std::string format_calibration(const std::vector<CalibrationRow>& rows) {
   for (const CalibrationRow& r : rows) {
     const std::string verdict = !r.pass ? "" : (*r.pass ? "  pass" : "  FAIL");
     std::snprintf(buf, sizeof buf, "  %-*s  %-*s  %-*s  %s%s\n", static_cast<int>(w),
-                  r.statistic.c_str(), static_cast<int>(wo), r.original.c_str(), static_cast<int>(wv),
-                  r.shown.c_str(), r.accept.c_str(), verdict.c_str());
+                  r.statistic.c_str(), static_cast<int>(wo), r.original.c_str(),
+                  static_cast<int>(wv), r.shown.c_str(), r.accept.c_str(), verdict.c_str());
     out += buf;
   }
   return out;
@@ -411,8 +426,11 @@ json calibration_to_json(const TrafficFigures& f, const std::vector<CalibrationR
   json cmp = json::array();
   bool all = true;
   for (const CalibrationRow& r : rows) {
-    json row = {{"key", r.key}, {"statistic", r.statistic}, {"original", r.original},
-                {"accept", r.accept}, {"overtake", r.shown}};
+    json row = {{"key", r.key},
+                {"statistic", r.statistic},
+                {"original", r.original},
+                {"accept", r.accept},
+                {"overtake", r.shown}};
     row["pass"] = r.pass ? json(*r.pass) : json(nullptr);
     if (r.pass && !*r.pass) all = false;
     cmp.push_back(row);

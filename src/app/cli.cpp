@@ -1,15 +1,15 @@
+#include <poll.h>
+#include <sys/stat.h>
+#include <unistd.h>
 #include <CLI/CLI.hpp>
 #include <algorithm>
+#include <cerrno>
 #include <charconv>
 #include <chrono>
-#include <cerrno>
 #include <cstdio>
 #include <cstring>
 #include <iostream>
 #include <thread>
-#include <poll.h>
-#include <sys/stat.h>
-#include <unistd.h>
 
 #include "overtake/app/cli.hpp"
 #include "overtake/app/commands.hpp"
@@ -31,17 +31,17 @@ std::string policy_help() {
   return out;
 }
 
-int cmd_drive(DriveOptions opts, const std::optional<std::filesystem::path>& json_out,
-              bool quiet) {
-  const double total_s = opts.minutes_from_scenario ? 0.0 : opts.minutes * 60.0;  // 0: not known yet
+int cmd_drive(DriveOptions opts, const std::optional<std::filesystem::path>& json_out, bool quiet) {
+  const double total_s =
+      opts.minutes_from_scenario ? 0.0 : opts.minutes * 60.0;  // 0: not known yet
   ProgressLine progress(!quiet, total_s);
   // Ctrl-C or SIGTERM stops the run at the next step, keeping everything: the scorecard, the
   // JSON and the replay, marked ended early (exit 130). A live run goes at real time, and
   // afterwards a second Ctrl-C stops serving the page.
   const InterruptScope interrupt;
   const auto wall0 = std::chrono::steady_clock::now();
-  const DriveResult result =
-      drive(opts, [&](double t, double dist) { progress.update(t, dist); }, &InterruptScope::flag());
+  const DriveResult result = drive(
+      opts, [&](double t, double dist) { progress.update(t, dist); }, &InterruptScope::flag());
   RunOutputs out;
   out.json = json_out;
   out.quiet = quiet;
@@ -53,7 +53,8 @@ int cmd_drive(DriveOptions opts, const std::optional<std::filesystem::path>& jso
 /// A track spec's error in the command line's words: its fields by their flags.
 std::string in_flag_words(std::string message) {
   const auto replace_all = [&](const std::string& from, const std::string& to) {
-    for (std::size_t at = message.find(from); at != std::string::npos; at = message.find(from, at + to.size())) {
+    for (std::size_t at = message.find(from); at != std::string::npos;
+         at = message.find(from, at + to.size())) {
       message.replace(at, from.size(), to);
     }
   };
@@ -93,8 +94,8 @@ int cmd_track(const core::TrackSpec& spec, const std::optional<std::filesystem::
     std::fprintf(stderr,
                  "track: seed %llu, %zu waypoints, loop %.1f m, spacing %.1f-%.1f m, tightest "
                  "lane radius %.0f m%s%s\n",
-                 static_cast<unsigned long long>(spec.seed), map.waypoints.size(), map.loop_length_m,
-                 check.min_spacing_m, check.max_spacing_m, check.min_radius_m,
+                 static_cast<unsigned long long>(spec.seed), map.waypoints.size(),
+                 map.loop_length_m, check.min_spacing_m, check.max_spacing_m, check.min_radius_m,
                  out_path ? ", written to " : "", out_path ? out_path->string().c_str() : "");
   }
   return 0;
@@ -102,10 +103,13 @@ int cmd_track(const core::TrackSpec& spec, const std::optional<std::filesystem::
 
 }  // namespace
 
-bool stderr_is_terminal() { return ::isatty(STDERR_FILENO) != 0; }
+bool stderr_is_terminal() {
+  return ::isatty(STDERR_FILENO) != 0;
+}
 
 void print_live_address(const std::string& url) {
-  std::fprintf(stderr, "live view at %s (the run goes at real time; Ctrl-C stops it)\n", url.c_str());
+  std::fprintf(stderr, "live view at %s (the run goes at real time; Ctrl-C stops it)\n",
+               url.c_str());
 }
 
 int finish_run(const DriveResult& result, const DriveOptions& opts, const RunOutputs& out) {
@@ -120,17 +124,22 @@ int finish_run(const DriveResult& result, const DriveOptions& opts, const RunOut
     write_file_atomic(*out.json, report_to_json(result.report, result.provenance).dump(2) + "\n");
     if (!out.quiet) std::cout << "  report written to " << out.json->string() << "\n";
   }
-  if (opts.record && !out.quiet) std::cout << "  replay written to " << opts.record->string() << "\n";
+  if (opts.record && !out.quiet)
+    std::cout << "  replay written to " << opts.record->string() << "\n";
   flush_stdout_or_throw();  // now: a live view may keep the process up until Ctrl-C
   switch (result.report.outcome.end) {
-    case sim::RunEnd::stopped: return kExitInterrupted;
-    case sim::RunEnd::planner_failed: return kExitFailure;
-    case sim::RunEnd::completed: break;
+    case sim::RunEnd::stopped:
+      return kExitInterrupted;
+    case sim::RunEnd::planner_failed:
+      return kExitFailure;
+    case sim::RunEnd::completed:
+      break;
   }
   if (result.live) {
     std::fprintf(stderr, "the run is over; the live view stays at %s until Ctrl-C\n",
                  result.live->url().c_str());
-    while (!InterruptScope::flag().load()) std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    while (!InterruptScope::flag().load())
+      std::this_thread::sleep_for(std::chrono::milliseconds(100));
   }
   return kExitOk;
 }
@@ -198,8 +207,9 @@ void add_run_flags(CLI::App& cmd, RunFlags& f) {
   cmd.add_option("--config", f.config,
                  "JSON file overriding any of the default parameters (see `overtake config`)")
       ->check(CLI::ExistingFile);
-  cmd.add_option("--scenario", f.scenario,
-                 "Scripted scenario (JSON: ego start, cars, timed events) instead of random traffic")
+  cmd.add_option(
+         "--scenario", f.scenario,
+         "Scripted scenario (JSON: ego start, cars, timed events) instead of random traffic")
       ->check(CLI::ExistingFile);
   f.minutes = cmd.add_option("--minutes", f.opts.minutes,
                              "Simulated minutes to drive (default 30, or the scenario's duration)");
@@ -217,14 +227,16 @@ void add_run_flags(CLI::App& cmd, RunFlags& f) {
   cmd.add_option("--record", f.record,
                  "Record a replay of the run to this file (every step's cars, the planned paths,\n"
                  "the referee's figures and incidents); watch it with `overtake view FILE`");
-  auto* live = cmd.add_flag("--live", f.live_on,
-                            "Serve the run's live view (open the printed address in a browser); the run\n"
-                            "then goes at real time, and the page stays served after it until Ctrl-C");
+  auto* live =
+      cmd.add_flag("--live", f.live_on,
+                   "Serve the run's live view (open the printed address in a browser); the run\n"
+                   "then goes at real time, and the page stays served after it until Ctrl-C");
   cmd.add_option("--port", f.live.port, "With --live: TCP port of the page (0: any free port)")
       ->capture_default_str()
       ->needs(live);
-  cmd.add_option("--host", f.live.host,
-                 "With --live: address to serve on (loopback by default; the page is for this machine)")
+  cmd.add_option(
+         "--host", f.live.host,
+         "With --live: address to serve on (loopback by default; the page is for this machine)")
       ->capture_default_str()
       ->needs(live);
   cmd.add_flag("--quiet,-q", f.quiet, "No progress line or extra messages");
@@ -270,16 +282,20 @@ Subcommand register_track(CLI::App& app) {
     bool quiet = false;
   };
   auto st = std::make_shared<State>();
-  auto* cmd = app.add_subcommand("track", "Generate a closed highway loop map in the original file format.");
+  auto* cmd = app.add_subcommand("track",
+                                 "Generate a closed highway loop map in the original file format.");
   cmd->add_option("--seed", st->spec.seed, "Seed of the track's shape (0 to 2^64 - 1)")
       ->check(seed_validator())
       ->capture_default_str();
-  cmd->add_option("--length-m", st->spec.length_m, "Loop length in metres, about")->capture_default_str();
+  cmd->add_option("--length-m", st->spec.length_m, "Loop length in metres, about")
+      ->capture_default_str();
   cmd->add_option("--straight-spacing-m", st->spec.straight_spacing_m,
                   "Waypoint spacing on straights (bends get closer ones)")
       ->capture_default_str();
-  cmd->add_option("--min-spacing-m", st->spec.min_spacing_m, "Smallest waypoint spacing")->capture_default_str();
-  cmd->add_option("--max-spacing-m", st->spec.max_spacing_m, "Largest waypoint spacing")->capture_default_str();
+  cmd->add_option("--min-spacing-m", st->spec.min_spacing_m, "Smallest waypoint spacing")
+      ->capture_default_str();
+  cmd->add_option("--max-spacing-m", st->spec.max_spacing_m, "Largest waypoint spacing")
+      ->capture_default_str();
   cmd->add_option("-o,--output", st->out, "Write the map here (default: standard output)");
   cmd->add_flag("--quiet,-q", st->quiet, "No summary line");
   return {cmd, [st] {
@@ -299,9 +315,10 @@ Subcommand register_config(CLI::App& app) {
       "config", "Print the parameters in effect as JSON (the defaults, or with --config applied).");
   cmd->add_option("--config", st->file, "JSON file overriding any default parameters")
       ->check(CLI::ExistingFile);
-  cmd->add_flag("--defaults", st->defaults,
-                "Print this build's own defaults (the params structs), without reading the built-in\n"
-                "config/overtake.json: the file's contents, when regenerating it")
+  cmd->add_flag(
+         "--defaults", st->defaults,
+         "Print this build's own defaults (the params structs), without reading the built-in\n"
+         "config/overtake.json: the file's contents, when regenerating it")
       ->excludes("--config");
   return {cmd, [st] {
             std::optional<std::filesystem::path> path;
@@ -318,10 +335,9 @@ int run_cli(int argc, const char* const* argv) {
       "and planners to drive it. Run `overtake <command> --help` for a command's options."};
   app.require_subcommand(1);
   app.set_version_flag("--version", "overtake " + overtake_version());
-  const std::vector<Subcommand> commands{register_drive(app), register_track(app),
-                                         register_config(app), register_bench(app),
-                                         register_serve(app), register_sim(app),
-                                         register_view(app), register_calibrate(app)};
+  const std::vector<Subcommand> commands{
+      register_drive(app), register_track(app), register_config(app), register_bench(app),
+      register_serve(app), register_sim(app),   register_view(app),   register_calibrate(app)};
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

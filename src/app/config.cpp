@@ -70,7 +70,8 @@ class Reader {
   }
   void check_unknown() const {
     for (auto it = j_.begin(); it != j_.end(); ++it) {
-      if (!seen_.count(it.key())) errors_.push_back("unknown key '" + key_path(it.key().c_str()) + "'");
+      if (!seen_.count(it.key()))
+        errors_.push_back("unknown key '" + key_path(it.key().c_str()) + "'");
     }
   }
 
@@ -111,8 +112,8 @@ class Writer {
   json& j_;
 };
 
-using sim::describe;
 using planner::describe;
+using sim::describe;
 
 [[noreturn]] void fail(std::string_view source, const std::vector<std::string>& errors) {
   std::ostringstream os;
@@ -181,7 +182,8 @@ json parse_json_text(std::string_view text, std::string_view source) {
           Level& here = levels.back();
           here.key = parsed.get<std::string>();
           if (!here.keys.insert(here.key).second && duplicate.empty()) {
-            for (const Level& l : levels) duplicate += l.object ? (duplicate.empty() ? "" : ".") + l.key : "[]";
+            for (const Level& l : levels)
+              duplicate += l.object ? (duplicate.empty() ? "" : ".") + l.key : "[]";
           }
         }
         break;

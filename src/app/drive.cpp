@@ -28,7 +28,8 @@ std::string policy_list() {
 void validate_drive_options(const DriveOptions& opts) {
   if (!(opts.minutes > 0.0) || opts.minutes > kMaxMinutes || !std::isfinite(opts.minutes)) {
     std::ostringstream os;
-    os << "--minutes must be more than 0 and at most " << kMaxMinutes << " (got " << opts.minutes << ")";
+    os << "--minutes must be more than 0 and at most " << kMaxMinutes << " (got " << opts.minutes
+       << ")";
     throw UsageError(os.str());
   }
   if (opts.steps_per_call < 0 || opts.steps_per_call > 1000) {
@@ -36,16 +37,20 @@ void validate_drive_options(const DriveOptions& opts) {
                      std::to_string(opts.steps_per_call) + ")");
   }
   if (!sim::parse_traffic_profile(opts.traffic)) {
-    throw UsageError("--traffic: unknown profile '" + opts.traffic + "' (available: faithful, calm)");
+    throw UsageError("--traffic: unknown profile '" + opts.traffic +
+                     "' (available: faithful, calm)");
   }
   const auto policies = planner::list_policies();
-  const bool known = std::any_of(policies.begin(), policies.end(),
-                                 [&](const planner::PolicyInfo& p) { return p.name == opts.policy; });
+  const bool known =
+      std::any_of(policies.begin(), policies.end(),
+                  [&](const planner::PolicyInfo& p) { return p.name == opts.policy; });
   if (!known && !opts.external) {
-    throw UsageError("--policy: unknown policy '" + opts.policy + "' (available: " + policy_list() + ")");
+    throw UsageError("--policy: unknown policy '" + opts.policy + "' (available: " + policy_list() +
+                     ")");
   }
   if (opts.live && (opts.live->port < 0 || opts.live->port > 65535)) {
-    throw UsageError("--port must be between 0 and 65535 (got " + std::to_string(opts.live->port) + ")");
+    throw UsageError("--port must be between 0 and 65535 (got " + std::to_string(opts.live->port) +
+                     ")");
   }
 }
 
@@ -94,9 +99,10 @@ DriveResult drive_on(const Track& track, const Config& config, const DriveOption
                      const std::atomic<bool>* stop, const sim::Scenario* scenario) {
   validate_drive_options(opts);
   const auto profile = sim::parse_traffic_profile(opts.traffic);
-  auto world_ptr = scenario ? std::make_unique<sim::World>(track.map, track.line, config.world, *scenario)
-                            : std::make_unique<sim::World>(track.map, track.line, config.world, *profile,
-                                                           opts.seed);
+  auto world_ptr =
+      scenario
+          ? std::make_unique<sim::World>(track.map, track.line, config.world, *scenario)
+          : std::make_unique<sim::World>(track.map, track.line, config.world, *profile, opts.seed);
   sim::World& world = *world_ptr;
   DriveResult result;
   result.provenance = provenance_of(track, config, opts, profile, scenario);

@@ -1,12 +1,12 @@
 #include "overtake/app/io.hpp"
 
+#include <unistd.h>
 #include <cerrno>
 #include <cstring>
 #include <fstream>
 #include <sstream>
 #include <stdexcept>
 #include <system_error>
-#include <unistd.h>
 
 namespace overtake::app {
 

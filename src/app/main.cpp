@@ -1,3 +1,5 @@
 #include "overtake/app/commands.hpp"
 
-int main(int argc, char** argv) { return overtake::app::run_cli(argc, argv); }
+int main(int argc, char** argv) {
+  return overtake::app::run_cli(argc, argv);
+}

@@ -18,8 +18,8 @@ void ProgressLine::update(double t_s, double distance_m) {
   const double wall_s = std::chrono::duration<double>(now - start_).count();
   char total[32] = "";
   if (total_s_ > 0.0) std::snprintf(total, sizeof total, " / %.1f", total_s_ / 60.0);
-  std::fprintf(stderr, "\r  %6.1f%s min simulated   %7.2f mi   %6.0fx real time ", t_s / 60.0, total,
-               core::metres_to_miles(distance_m), wall_s > 0 ? t_s / wall_s : 0.0);
+  std::fprintf(stderr, "\r  %6.1f%s min simulated   %7.2f mi   %6.0fx real time ", t_s / 60.0,
+               total, core::metres_to_miles(distance_m), wall_s > 0 ? t_s / wall_s : 0.0);
   std::fflush(stderr);
   shown_ = true;
 }

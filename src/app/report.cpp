@@ -12,11 +12,16 @@ using nlohmann::json;
 
 const char* value_unit(sim::IncidentType t) {
   switch (t) {
-    case sim::IncidentType::collision: return "car_id";
-    case sim::IncidentType::speeding: return "mph";
-    case sim::IncidentType::max_acceleration: return "m/s^2";
-    case sim::IncidentType::max_jerk: return "m/s^3";
-    case sim::IncidentType::outside_lane: return "d_m";
+    case sim::IncidentType::collision:
+      return "car_id";
+    case sim::IncidentType::speeding:
+      return "mph";
+    case sim::IncidentType::max_acceleration:
+      return "m/s^2";
+    case sim::IncidentType::max_jerk:
+      return "m/s^3";
+    case sim::IncidentType::outside_lane:
+      return "d_m";
   }
   return "";
 }
@@ -27,16 +32,19 @@ double report_value(const sim::Incident& i) {
 
 std::string steps_text(const RunProvenance& p) {
   if (p.steps_per_call > 0) return std::to_string(p.steps_per_call);
-  return "random " + std::to_string(p.min_steps_per_call) + "-" + std::to_string(p.max_steps_per_call);
+  return "random " + std::to_string(p.min_steps_per_call) + "-" +
+         std::to_string(p.max_steps_per_call);
 }
 
 json plan_status_json(const sim::RunReport& r) {
   json cycles = json::object();
   for (std::size_t i = 0; i < core::kPlanStatusCount; ++i) {
-    cycles[std::string(core::to_string(static_cast<core::PlanStatus>(i)))] = r.plan_status_cycles[i];
+    cycles[std::string(core::to_string(static_cast<core::PlanStatus>(i)))] =
+        r.plan_status_cycles[i];
   }
-  return {{"cycles", cycles},
-          {"first_reason", r.first_plan_reason.empty() ? json(nullptr) : json(r.first_plan_reason)}};
+  return {
+      {"cycles", cycles},
+      {"first_reason", r.first_plan_reason.empty() ? json(nullptr) : json(r.first_plan_reason)}};
 }
 
 std::string printf_string(const char* format, auto... args) {
@@ -121,11 +129,13 @@ std::string format_scorecard(const sim::RunReport& r, const RunProvenance& p) {
        << r.incident_counts[i];
   }
   os << ")\n";
-  if (r.exact_outside_lane != r.incident_counts[static_cast<std::size_t>(sim::IncidentType::outside_lane)]) {
+  if (r.exact_outside_lane !=
+      r.incident_counts[static_cast<std::size_t>(sim::IncidentType::outside_lane)]) {
     os << "  outside of lane on the exact d (not the rubric's): " << r.exact_outside_lane << "\n";
   }
-  os << printf_string("  peak, rubric       speed %.2f mph   acceleration %.2f m/s^2   jerk %.2f m/s^3\n",
-                      core::mps_to_mph(r.peak.speed_mps), r.peak.acceleration_mps2, r.peak.jerk_mps3);
+  os << printf_string(
+      "  peak, rubric       speed %.2f mph   acceleration %.2f m/s^2   jerk %.2f m/s^3\n",
+      core::mps_to_mph(r.peak.speed_mps), r.peak.acceleration_mps2, r.peak.jerk_mps3);
   os << printf_string("  peak, strict 0.1 s acceleration %.2f m/s^2   jerk %.2f m/s^3\n",
                       r.peak.strict_acceleration_mps2, r.peak.strict_jerk_mps3);
   os << "  time per lane     ";
@@ -134,11 +144,11 @@ std::string format_scorecard(const sim::RunReport& r, const RunProvenance& p) {
     os << printf_string(" %zu: %5.1f%%", l, pct);
   }
   os << "\n";
-  os << printf_string("  planner time       p50 %.1f us   p99 %.1f us   max %.1f us   (%ld cycles, %s)\n",
-                      r.timing.p50_us, r.timing.p99_us, r.timing.max_us, r.planner_cycles,
-                      r.timing.clock == sim::CycleClock::thread_cpu
-                          ? "thread CPU time"
-                          : "round trip over the protocol, wall clock");
+  os << printf_string(
+      "  planner time       p50 %.1f us   p99 %.1f us   max %.1f us   (%ld cycles, %s)\n",
+      r.timing.p50_us, r.timing.p99_us, r.timing.max_us, r.planner_cycles,
+      r.timing.clock == sim::CycleClock::thread_cpu ? "thread CPU time"
+                                                    : "round trip over the protocol, wall clock");
   if (r.timing.clock == sim::CycleClock::thread_cpu) {
     os << printf_string("  planner wall time  p99 %.1f us   max %.1f us\n", r.timing.wall_p99_us,
                         r.timing.wall_max_us);
@@ -148,12 +158,14 @@ std::string format_scorecard(const sim::RunReport& r, const RunProvenance& p) {
   if (unusual > 0) {
     const auto share = [&](core::PlanStatus s) {
       const long n = r.plan_status_cycles[static_cast<std::size_t>(s)];
-      return r.planner_cycles > 0 ? 100.0 * static_cast<double>(n) / static_cast<double>(r.planner_cycles)
-                                  : 0.0;
+      return r.planner_cycles > 0
+                 ? 100.0 * static_cast<double>(n) / static_cast<double>(r.planner_cycles)
+                 : 0.0;
     };
-    os << printf_string("  plan status        normal %.1f%%   least-bad %.1f%%   fallback %.1f%% of cycles\n",
-                        share(core::PlanStatus::normal), share(core::PlanStatus::least_bad),
-                        share(core::PlanStatus::fallback));
+    os << printf_string(
+        "  plan status        normal %.1f%%   least-bad %.1f%%   fallback %.1f%% of cycles\n",
+        share(core::PlanStatus::normal), share(core::PlanStatus::least_bad),
+        share(core::PlanStatus::fallback));
     os << "    first: " << r.first_plan_reason << "\n";
   }
   constexpr std::size_t kShown = 10;

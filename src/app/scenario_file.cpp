@@ -47,7 +47,8 @@ class Fields {
     }
     const double x = v.get<double>();
     if (!(x >= lo && x <= hi)) {
-      errors_.push_back(at(key) + ": " + v.dump() + " is out of range (" + fmt(lo) + " to " + fmt(hi) + ")");
+      errors_.push_back(at(key) + ": " + v.dump() + " is out of range (" + fmt(lo) + " to " +
+                        fmt(hi) + ")");
       return fallback;
     }
     return x;
@@ -63,11 +64,12 @@ class Fields {
       errors_.push_back(at(key) + ": expected an integer, got " + v.dump());
       return fallback;
     }
-    const bool in_range = v.is_number_unsigned() ? v.get<std::uint64_t>() <= static_cast<std::uint64_t>(hi)
-                                                 : v.get<std::int64_t>() >= lo && v.get<std::int64_t>() <= hi;
+    const bool in_range = v.is_number_unsigned()
+                              ? v.get<std::uint64_t>() <= static_cast<std::uint64_t>(hi)
+                              : v.get<std::int64_t>() >= lo && v.get<std::int64_t>() <= hi;
     if (!in_range) {
-      errors_.push_back(at(key) + ": " + v.dump() + " is out of range (" + std::to_string(lo) + " to " +
-                        std::to_string(hi) + ")");
+      errors_.push_back(at(key) + ": " + v.dump() + " is out of range (" + std::to_string(lo) +
+                        " to " + std::to_string(hi) + ")");
       return fallback;
     }
     return v.get<int>();
@@ -101,8 +103,10 @@ sim::Scenario parse_scenario(const json& j, std::string_view source, const core:
   sim::Scenario sc;
   Fields top(j, "scenario", errors);
   if (top.has("name")) {
-    if (j["name"].is_string()) sc.name = j["name"].get<std::string>();
-    else errors.push_back("scenario.name: expected a string");
+    if (j["name"].is_string())
+      sc.name = j["name"].get<std::string>();
+    else
+      errors.push_back("scenario.name: expected a string");
   }
   top.has("description");
   if (top.has("duration_s")) {
@@ -131,9 +135,11 @@ sim::Scenario parse_scenario(const json& j, std::string_view source, const core:
         sim::ScriptedCar c;
         const bool has_gap = car.has("gap_m");
         const bool has_s = car.has("s_m");
-        if (has_gap == has_s) car.error("give exactly one of gap_m (from the ego) or s_m (absolute)");
-        c.s_m = has_gap ? sc.ego_s_m + car.number("gap_m", 0.0, false, -kMaxDistanceM, kMaxDistanceM)
-                        : car.number("s_m", 0.0, false, -kMaxDistanceM, kMaxDistanceM);
+        if (has_gap == has_s)
+          car.error("give exactly one of gap_m (from the ego) or s_m (absolute)");
+        c.s_m = has_gap
+                    ? sc.ego_s_m + car.number("gap_m", 0.0, false, -kMaxDistanceM, kMaxDistanceM)
+                    : car.number("s_m", 0.0, false, -kMaxDistanceM, kMaxDistanceM);
         c.lane = car.integer("lane", 1, true, 0, road.lane_count - 1);
         c.speed_mps = car.number("speed_mps", 0.0, true, 0.0, kMaxSpeedMps);
         car.check_unknown();
@@ -154,10 +160,13 @@ sim::Scenario parse_scenario(const json& j, std::string_view source, const core:
           ev.error("car " + std::to_string(e.car) + " is not one of the scenario's " +
                    std::to_string(sc.cars.size()) + " cars");
         }
-        const int kinds = static_cast<int>(ev.has("change_lane")) + static_cast<int>(ev.has("brake_mps2")) +
+        const int kinds = static_cast<int>(ev.has("change_lane")) +
+                          static_cast<int>(ev.has("brake_mps2")) +
                           static_cast<int>(ev.has("speed_mps"));
         if (kinds != 1) {
-          ev.error("give exactly one of change_lane, brake_mps2 (with duration_s) or speed_mps (with accel_mps2)");
+          ev.error(
+              "give exactly one of change_lane, brake_mps2 (with duration_s) or speed_mps (with "
+              "accel_mps2)");
         } else if (ev.has("change_lane")) {
           e.action = sim::ScenarioAction::change_lane;
           e.lane = ev.integer("change_lane", 0, false, 0, road.lane_count - 1);
@@ -184,8 +193,9 @@ sim::Scenario parse_scenario(const json& j, std::string_view source, const core:
     for (const auto& e : errors) msg += "\n  - " + e;
     throw ConfigError(msg);
   }
-  std::stable_sort(sc.events.begin(), sc.events.end(),
-                   [](const sim::ScenarioEvent& a, const sim::ScenarioEvent& b) { return a.t_s < b.t_s; });
+  std::stable_sort(
+      sc.events.begin(), sc.events.end(),
+      [](const sim::ScenarioEvent& a, const sim::ScenarioEvent& b) { return a.t_s < b.t_s; });
   return sc;
 }
 

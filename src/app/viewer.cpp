@@ -48,7 +48,7 @@ std::string_view embedded_page(std::string_view name) {
 }
 
 replay::ReplayHeader replay_header_for(const Track& track, const Config& config,
-                                    const RunProvenance& p, double duration_s) {
+                                       const RunProvenance& p, double duration_s) {
   replay::ReplayProvenance rp;
   rp.policy = p.policy;
   rp.traffic = p.traffic;
@@ -169,7 +169,8 @@ int run_view(const ViewOptions& opts, const std::atomic<bool>& stop,
     throw UsageError("--port must be between 0 and 65535 (got " + std::to_string(opts.port) + ")");
   }
   if (opts.html && same_file(*opts.html, opts.replay)) {
-    throw UsageError("--html " + opts.html->string() + " is the replay itself; it would be overwritten by the page");
+    throw UsageError("--html " + opts.html->string() +
+                     " is the replay itself; it would be overwritten by the page");
   }
   std::string warning;
   std::string bytes = load_replay_for_view(opts.replay, opts.partial, &warning);

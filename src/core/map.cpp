@@ -2,13 +2,13 @@
 
 #include <algorithm>
 #include <cctype>
-#include <cstdio>
 #include <charconv>
 #include <cmath>
+#include <cstdio>
 #include <numeric>
 #include <optional>
-#include <utility>
 #include <sstream>
+#include <utility>
 
 #include "overtake/core/hash.hpp"
 
@@ -62,7 +62,8 @@ double parse_field(std::string_view field, std::string_view source, std::size_t 
   return value;
 }
 
-bool segments_intersect(const Waypoint& a, const Waypoint& b, const Waypoint& c, const Waypoint& d) {
+bool segments_intersect(const Waypoint& a, const Waypoint& b, const Waypoint& c,
+                        const Waypoint& d) {
   const auto orient = [](const Waypoint& p, const Waypoint& q, const Waypoint& r) {
     const double v = (q.x_m - p.x_m) * (r.y_m - p.y_m) - (q.y_m - p.y_m) * (r.x_m - p.x_m);
     return (v > 0.0) - (v < 0.0);
@@ -90,7 +91,8 @@ std::optional<std::pair<std::size_t, std::size_t>> find_crossing(const std::vect
   std::iota(order.begin(), order.end(), 0);
   const auto lo = [&](std::size_t i) { return std::min(w[i].x_m, w[(i + 1) % n].x_m); };
   const auto hi = [&](std::size_t i) { return std::max(w[i].x_m, w[(i + 1) % n].x_m); };
-  std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return lo(a) < lo(b); });
+  std::sort(order.begin(), order.end(),
+            [&](std::size_t a, std::size_t b) { return lo(a) < lo(b); });
   for (std::size_t k = 0; k < n; ++k) {
     const std::size_t i = order[k];
     for (std::size_t m = k + 1; m < n && lo(order[m]) <= hi(i); ++m) {
@@ -124,8 +126,8 @@ Map parse_map(std::string_view text, std::string_view source, const MapRules& ru
     if (fields.empty() || fields.front().front() == '#') continue;
     if (fields.size() != 5) {
       fail(source, line_no,
-           "expected 5 numbers (x y s dx dy), found " + std::to_string(fields.size()) +
-               " field" + (fields.size() == 1 ? "" : "s"));
+           "expected 5 numbers (x y s dx dy), found " + std::to_string(fields.size()) + " field" +
+               (fields.size() == 1 ? "" : "s"));
     }
     double v[5];
     for (int c = 0; c < 5; ++c) v[c] = parse_field(fields[c], source, line_no, c);
@@ -140,12 +142,14 @@ Map parse_map(std::string_view text, std::string_view source, const MapRules& ru
     for (int c : {0, 1, 2}) {
       if (std::abs(v[c]) > rules.max_abs_coordinate_m) {
         fail(source, line_no,
-             std::string(kColumnNames[c]) + " = " + fmt(v[c]) + " is out of range: a map's x, y and s must be within +-" +
+             std::string(kColumnNames[c]) + " = " + fmt(v[c]) +
+                 " is out of range: a map's x, y and s must be within +-" +
                  fmt(rules.max_abs_coordinate_m) + " m");
       }
     }
     if (map.waypoints.size() >= rules.max_waypoints) {
-      fail(source, line_no, "too many waypoints: a map may have at most " + std::to_string(rules.max_waypoints));
+      fail(source, line_no,
+           "too many waypoints: a map may have at most " + std::to_string(rules.max_waypoints));
     }
     if (!map.waypoints.empty() && !(wp.s_m > map.waypoints.back().s_m)) {
       fail(source, line_no,
@@ -173,8 +177,8 @@ Map parse_map(std::string_view text, std::string_view source, const MapRules& ru
   }
   if (map.waypoints.size() < rules.min_waypoints) {
     throw MapError(std::string(source) + ": only " + std::to_string(map.waypoints.size()) +
-                   " waypoint" + (map.waypoints.size() == 1 ? "" : "s") + "; a map needs at least " +
-                   std::to_string(rules.min_waypoints));
+                   " waypoint" + (map.waypoints.size() == 1 ? "" : "s") +
+                   "; a map needs at least " + std::to_string(rules.min_waypoints));
   }
 
   // Duplicate points: sort indices by x and compare neighbours within the tolerance.
@@ -202,7 +206,8 @@ Map parse_map(std::string_view text, std::string_view source, const MapRules& ru
   const Waypoint& first = map.waypoints.front();
   const Waypoint& last = map.waypoints.back();
   map.loop_length_m = last.s_m - first.s_m + std::hypot(first.x_m - last.x_m, first.y_m - last.y_m);
-  if (!(map.loop_length_m >= rules.min_loop_length_m) || !(map.loop_length_m <= rules.max_loop_length_m)) {
+  if (!(map.loop_length_m >= rules.min_loop_length_m) ||
+      !(map.loop_length_m <= rules.max_loop_length_m)) {
     throw MapError(std::string(source) + ": the loop is " + fmt(map.loop_length_m) +
                    " m long; a map's loop must be " + fmt(rules.min_loop_length_m) + " to " +
                    fmt(rules.max_loop_length_m) + " m");

@@ -32,12 +32,14 @@ void ParamChecker::finite(std::string_view k, double v) {
 }
 
 void ParamChecker::in_range(std::string_view k, double v, double lo, double hi) {
-  if (!(v >= lo && v <= hi)) add(k, "must be between " + format(lo) + " and " + format(hi), format(v));
+  if (!(v >= lo && v <= hi))
+    add(k, "must be between " + format(lo) + " and " + format(hi), format(v));
 }
 
 void ParamChecker::in_range(std::string_view k, int v, int lo, int hi) {
   if (v < lo || v > hi) {
-    add(k, "must be between " + std::to_string(lo) + " and " + std::to_string(hi), std::to_string(v));
+    add(k, "must be between " + std::to_string(lo) + " and " + std::to_string(hi),
+        std::to_string(v));
   }
 }
 
@@ -51,7 +53,8 @@ void ParamChecker::at_least(std::string_view k, int v, int lo) {
 
 void ParamChecker::ordered(std::string_view lo_key, double lo, std::string_view hi_key, double hi) {
   if (lo > hi) {
-    out_.push_back(key(lo_key) + " (" + format(lo) + ") must not exceed " + key(hi_key) + " (" + format(hi) + ")");
+    out_.push_back(key(lo_key) + " (" + format(lo) + ") must not exceed " + key(hi_key) + " (" +
+                   format(hi) + ")");
   }
 }
 

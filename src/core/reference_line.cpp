@@ -7,11 +7,11 @@
 namespace overtake::core {
 namespace {
 
-constexpr double kSampleSpacingM = 2.0;        // dense samples for the global search
+constexpr double kSampleSpacingM = 2.0;  // dense samples for the global search
 constexpr double kMaxSamples = 1e6;
-constexpr double kHintMaxOffsetM = 30.0;       // a hinted projection farther off is re-searched
-constexpr double kHintMaxJumpM = 200.0;        // ... and so is one far from the hint
-constexpr double kMinNormalAgreement = 0.5;    // cos 60 degrees
+constexpr double kHintMaxOffsetM = 30.0;     // a hinted projection farther off is re-searched
+constexpr double kHintMaxJumpM = 200.0;      // ... and so is one far from the hint
+constexpr double kMinNormalAgreement = 0.5;  // cos 60 degrees
 constexpr int kMaxNewtonIterations = 30;
 constexpr double kNewtonMaxStepM = 20.0;
 constexpr double kNewtonToleranceM = 1e-10;
@@ -56,10 +56,10 @@ ReferenceLine::ReferenceLine(const Map& map, double smoothing_m3) : map_(map) {
     const RoadFrame f = frame(w[i].s_m);
     const double c = dot(f.normal, {w[i].dx, w[i].dy});
     if (!(c >= kMinNormalAgreement)) {  // also refuses a NaN normal
-      throw MapError(map.source + ": waypoint " + std::to_string(i + 1) + " (s = " +
-                     std::to_string(w[i].s_m) + "): its normal is " +
-                     std::to_string(static_cast<int>(std::lround(std::acos(std::max(-1.0, c)) * 180.0 /
-                                                                 3.141592653589793))) +
+      throw MapError(map.source + ": waypoint " + std::to_string(i + 1) +
+                     " (s = " + std::to_string(w[i].s_m) + "): its normal is " +
+                     std::to_string(static_cast<int>(
+                         std::lround(std::acos(std::max(-1.0, c)) * 180.0 / 3.141592653589793))) +
                      " degrees off the road's; normals must point away from the divider");
     }
   }
@@ -129,8 +129,8 @@ double ReferenceLine::refine(Vec2 p, double s0) const {
     const Vec2 d1{ex.d1, ey.d1};
     const Vec2 d2{ex.d2, ey.d2};
     const Vec2 off = p - r;
-    const double g = dot(off, d1);                    // zero at the foot point
-    double gp = -dot(d1, d1) + dot(off, d2);          // dg/ds, negative near a minimum
+    const double g = dot(off, d1);                          // zero at the foot point
+    double gp = -dot(d1, d1) + dot(off, d2);                // dg/ds, negative near a minimum
     double step = gp < -1e-12 ? -g / gp : g / dot(d1, d1);  // gradient step if not convex
     if (step > kNewtonMaxStepM) step = kNewtonMaxStepM;
     if (step < -kNewtonMaxStepM) step = -kNewtonMaxStepM;

@@ -23,8 +23,8 @@ bool strictly_increasing(std::span<const double> t) {
 }  // namespace
 
 PiecewiseCubic PiecewiseCubic::from_second_derivatives(std::span<const double> t,
-                                                      std::span<const double> y,
-                                                      std::span<const double> m) {
+                                                       std::span<const double> y,
+                                                       std::span<const double> m) {
   PiecewiseCubic s;
   s.knots_.assign(t.begin(), t.end());
   s.pieces_.reserve(t.size() - 1);
@@ -69,8 +69,7 @@ std::optional<PiecewiseCubic> PiecewiseCubic::natural(std::span<const double> t,
 }
 
 std::optional<PiecewiseCubic> PiecewiseCubic::periodic(std::span<const double> t,
-                                                       std::span<const double> y,
-                                                       double period) {
+                                                       std::span<const double> y, double period) {
   const std::size_t n = t.size();
   if (n < 3 || y.size() != n || !all_finite(t) || !all_finite(y) || !std::isfinite(period) ||
       !strictly_increasing(t) || !(t.front() + period > t.back())) {

@@ -21,7 +21,9 @@ double wire_round(double value) {
 
 namespace {
 
-Vec2 round_vec(Vec2 v) { return {wire_round(v.x), wire_round(v.y)}; }
+Vec2 round_vec(Vec2 v) {
+  return {wire_round(v.x), wire_round(v.y)};
+}
 
 }  // namespace
 

@@ -61,10 +61,11 @@ void validate_reference(const PlannerParams& all, std::vector<std::string>& out)
             "must be between keep_points + 10 and 1000", t.path_points);
   c.positive("trajectory.check_step_s", t.check_step_s);
   c.positive("trajectory.horizon_s", t.horizon_s);
-  c.require(!(t.check_step_s > 0.0 && t.horizon_s / t.check_step_s > 1000.0), "trajectory.horizon_s",
-            "must be at most 1000 check steps", t.horizon_s);
+  c.require(!(t.check_step_s > 0.0 && t.horizon_s / t.check_step_s > 1000.0),
+            "trajectory.horizon_s", "must be at most 1000 check steps", t.horizon_s);
   c.positive("trajectory.max_speed_mps", t.max_speed_mps);
-  c.at_most("behaviour.cruise_speed_mps", b.cruise_speed_mps, t.max_speed_mps, "trajectory.max_speed_mps");
+  c.at_most("behaviour.cruise_speed_mps", b.cruise_speed_mps, t.max_speed_mps,
+            "trajectory.max_speed_mps");
   c.positive("trajectory.max_accel_mps2", t.max_accel_mps2);
   c.positive("trajectory.max_jerk_mps3", t.max_jerk_mps3);
   c.positive("trajectory.lateral_jerk_mps3", t.lateral_jerk_mps3);
@@ -73,7 +74,8 @@ void validate_reference(const PlannerParams& all, std::vector<std::string>& out)
   c.non_negative("trajectory.road_edge_margin_m", t.road_edge_margin_m);
   c.positive_list("trajectory.cruise_times_s", t.cruise_times_s);
   c.positive_list("trajectory.follow_times_s", t.follow_times_s);
-  c.require(!t.speed_offsets_mps.empty(), "trajectory.speed_offsets_mps", "must list at least one value");
+  c.require(!t.speed_offsets_mps.empty(), "trajectory.speed_offsets_mps",
+            "must list at least one value");
   for (const double x : t.speed_offsets_mps) {
     c.require(std::isfinite(x), "trajectory.speed_offsets_mps", "must hold numbers");
   }
@@ -94,14 +96,15 @@ void validate_reference(const PlannerParams& all, std::vector<std::string>& out)
   }
   c.positive("trajectory.brake_level_jerk_mps3", t.brake_level_jerk_mps3);
   c.non_negative("trajectory.ahead_collision_slack_s", t.ahead_collision_slack_s);
-  for (const auto& [key, v] : {std::pair<const char*, double>{"trajectory.progress_weight", t.progress_weight},
-                               {"trajectory.lon_jerk_weight", t.lon_jerk_weight},
-                               {"trajectory.lat_jerk_weight", t.lat_jerk_weight},
-                               {"trajectory.lat_time_weight", t.lat_time_weight},
-                               {"trajectory.lane_weight", t.lane_weight},
-                               {"trajectory.proximity_weight", t.proximity_weight},
-                               {"trajectory.change_early_window_s", t.change_early_window_s},
-                               {"trajectory.rear_weight", t.rear_weight}}) {
+  for (const auto& [key, v] :
+       {std::pair<const char*, double>{"trajectory.progress_weight", t.progress_weight},
+        {"trajectory.lon_jerk_weight", t.lon_jerk_weight},
+        {"trajectory.lat_jerk_weight", t.lat_jerk_weight},
+        {"trajectory.lat_time_weight", t.lat_time_weight},
+        {"trajectory.lane_weight", t.lane_weight},
+        {"trajectory.proximity_weight", t.proximity_weight},
+        {"trajectory.change_early_window_s", t.change_early_window_s},
+        {"trajectory.rear_weight", t.rear_weight}}) {
     c.non_negative(key, v);
   }
   c.at_least("trajectory.max_kinematic_checks", t.max_kinematic_checks, 1);
@@ -124,8 +127,8 @@ std::vector<std::string> validate(const PlannerParams& p) {
   for (const double a : w.anchor_distances_m) {
     if (!(a > last) || !std::isfinite(a)) {
       c.require(false, "walkthrough.anchor_distances_m",
-                "must be positive and increasing (got " + core::ParamChecker::format(a) + " after " +
-                    core::ParamChecker::format(last) + ")");
+                "must be positive and increasing (got " + core::ParamChecker::format(a) +
+                    " after " + core::ParamChecker::format(last) + ")");
       break;
     }
     last = a;
@@ -157,7 +160,8 @@ std::vector<std::string> validate(const PlannerParams& p) {
   shared.positive("car.width_m", p.car.width_m);
   validate_reference(p, out);
   c.require(w.start_lane >= 0 && w.start_lane < p.road.lane_count, "walkthrough.start_lane",
-            "must be a lane of the road, 0 to " + std::to_string(p.road.lane_count - 1), w.start_lane);
+            "must be a lane of the road, 0 to " + std::to_string(p.road.lane_count - 1),
+            w.start_lane);
   return out;
 }
 

@@ -17,7 +17,8 @@ std::vector<PolicyInfo> list_policies() {
       {"seed000", "write-up 000: per-lane gaps and speeds, speed-dependent minimum gaps"},
       {"seed001", "write-up 001: lane change after 40 cycles of slowing, 35 m gap check"},
       {"seed002", "write-up 002: 30 m ahead / 5 m behind proximity per lane, 80-point path"},
-      {"seed003", "write-up 003: prioritised rules, strong acceleration, return to the middle lane"},
+      {"seed003",
+       "write-up 003: prioritised rules, strong acceleration, return to the middle lane"},
       {"seed004", "write-up 004: 20 m / 10 m free-lane test, speed matching, 45 m anchor"},
   };
 }

@@ -77,7 +77,8 @@ Seed000Policy::Seed000Policy(const core::ReferenceLine& line, const PlannerParam
 core::PlanResult Seed000Policy::plan(const core::Telemetry& t) {
   const auto cars = seen_cars(t, true);
   const auto n = static_cast<std::size_t>(lane_count());
-  std::vector<double> gap_ahead(n, p_.no_car_gap_m), gap_behind(n, p_.no_car_gap_m), speed_ahead(n, 0.0);
+  std::vector<double> gap_ahead(n, p_.no_car_gap_m), gap_behind(n, p_.no_car_gap_m),
+      speed_ahead(n, 0.0);
   for (const SeenCar& c : cars) {
     const auto l = static_cast<std::size_t>(core::lane_of(c.d_m, road_));
     if (c.gap_m > 0.0) {
@@ -101,12 +102,14 @@ core::PlanResult Seed000Policy::plan(const core::Telemetry& t) {
     };
     auto empty = [&](int l) { return speed_ahead[static_cast<std::size_t>(l)] == 0.0; };
     auto faster = [&](int l) {
-      return speed_ahead[static_cast<std::size_t>(l)] > speed_ahead[static_cast<std::size_t>(lane_)];
+      return speed_ahead[static_cast<std::size_t>(l)] >
+             speed_ahead[static_cast<std::size_t>(lane_)];
     };
     const int last = lane_count() - 1;
     if (lane_ == 0 || lane_ == last) {
       const int middle = lane_ == 0 ? 1 : last - 1;
-      if (middle >= 0 && middle <= last && roomy(middle) && (faster(middle) || empty(middle))) lane_ = middle;
+      if (middle >= 0 && middle <= last && roomy(middle) && (faster(middle) || empty(middle)))
+        lane_ = middle;
     } else {
       const int left = lane_ - 1;
       const int right = lane_ + 1;
@@ -138,8 +141,8 @@ core::PlanResult Seed001Policy::plan(const core::Telemetry& t) {
   bool change_left = lane_ > 0;
   bool change_right = lane_ < lane_count() - 1;
   for (const SeenCar& c : cars) {
-    const bool near = (c.gap_m > 0.0 && c.gap_m < p_.gap_front_m) ||
-                      (c.gap_m < 0.0 && -c.gap_m < p_.gap_rear_m);
+    const bool near =
+        (c.gap_m > 0.0 && c.gap_m < p_.gap_front_m) || (c.gap_m < 0.0 && -c.gap_m < p_.gap_rear_m);
     if (!near) continue;
     if (change_left && in_lane(c.d_m, lane_ - 1)) change_left = false;
     if (change_right && in_lane(c.d_m, lane_ + 1)) change_right = false;
@@ -207,12 +210,16 @@ core::PlanResult Seed003Policy::plan(const core::Telemetry& t) {
     const bool forward = c.gap_m > 0.0 && c.gap_m <= p_.max_dist_front_m;
     const bool back = c.gap_m <= 0.0 && -c.gap_m <= p_.max_dist_back_m;
     if (forward || back) {
-      if (car_lane == lane_ - 1) safe_left = false;
-      else if (car_lane == lane_ + 1) safe_right = false;
+      if (car_lane == lane_ - 1)
+        safe_left = false;
+      else if (car_lane == lane_ + 1)
+        safe_right = false;
     }
     if (safe_left && safe_right) {
-      if (car_lane == lane_ - 1) min_speed_left = std::min(min_speed_left, c.speed_mps);
-      else if (car_lane == lane_ + 1) min_speed_right = std::min(min_speed_right, c.speed_mps);
+      if (car_lane == lane_ - 1)
+        min_speed_left = std::min(min_speed_left, c.speed_mps);
+      else if (car_lane == lane_ + 1)
+        min_speed_right = std::min(min_speed_right, c.speed_mps);
     }
     if (in_lane(c.d_m, lane_) && c.gap_m > 0.0 && c.gap_m < base_.too_close_m) {
       close = true;
@@ -266,9 +273,11 @@ bool Seed004Policy::lane_free(const core::Telemetry& t, int lane, double my_s_m)
   for (const core::CarObservation& c : t.cars) {
     if (static_cast<int>(c.d_m) / static_cast<int>(road_.lane_width_m) != lane) continue;
     const double gap = line_.s_ahead(my_s_m, c.s_m);
-    if ((gap >= 0.0 && gap <= p_.free_ahead_m) || (gap < 0.0 && -gap < p_.free_behind_m)) return false;
+    if ((gap >= 0.0 && gap <= p_.free_ahead_m) || (gap < 0.0 && -gap < p_.free_behind_m))
+      return false;
     const double other_speed_mps = core::norm(c.velocity_mps);
-    if (-gap > p_.free_behind_m && -gap < p_.faster_behind_m && my_speed_as_written < other_speed_mps) {
+    if (-gap > p_.free_behind_m && -gap < p_.faster_behind_m &&
+        my_speed_as_written < other_speed_mps) {
       return false;
     }
   }

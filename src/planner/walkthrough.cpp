@@ -33,8 +33,7 @@ core::PlanResult WalkthroughPolicy::plan(const core::Telemetry& t) {
   const std::size_t prev_size = t.previous_path.size();
   const double car_s = prev_size > 0 ? t.end_path.s_m : t.ego.s_m;
   const double ahead_time_s = static_cast<double>(prev_size) * step_s_;
-  const bool too_close =
-      car_too_close(t, line_, lane_, car_s, ahead_time_s, p_.too_close_m, road_);
+  const bool too_close = car_too_close(t, line_, lane_, car_s, ahead_time_s, p_.too_close_m, road_);
   if (too_close) {
     // The walkthrough has no floor here; a floor of one step keeps the points apart.
     ref_speed_mps_ = std::max(ref_speed_mps_ - p_.speed_step_mps, p_.speed_step_mps);

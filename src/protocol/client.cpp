@@ -281,8 +281,8 @@ sim::RunReport run_realtime(sim::World& world, PlannerConnection& connection,
                                   seconds_text(options.reply_timeout));
       }
 
-      const auto frame = connection.receive(
-          awaiting ? std::min(run.next_step_due(), reply_deadline) : run.next_step_due());
+      const auto frame = connection.receive(awaiting ? std::min(run.next_step_due(), reply_deadline)
+                                                     : run.next_step_due());
       if (!frame) continue;
       const Sorted s = sort_planner_frame(*frame);
       if (s.kind == Sorted::fatal) throw sim::PlannerFailure(s.text);
@@ -306,8 +306,7 @@ sim::RunReport run_realtime(sim::World& world, PlannerConnection& connection,
       awaiting = false;
       std::optional<double> round_trip_us;
       if (awaiting_full) {
-        round_trip_us =
-            std::chrono::duration<double, std::micro>(Clock::now() - sent_at).count();
+        round_trip_us = std::chrono::duration<double, std::micro>(Clock::now() - sent_at).count();
       }
       if (!reply.value().manual) {
         run.apply(core::normal_plan(std::move(reply).value().path), round_trip_us,

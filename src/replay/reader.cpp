@@ -47,7 +47,8 @@ T header_integer(const json& j, const char* key, const char* where) {
   const bool fits = v.is_number_unsigned()  ? std::in_range<T>(v.get<std::uint64_t>())
                     : v.is_number_integer() ? std::in_range<T>(v.get<std::int64_t>())
                                             : false;
-  if (!fits) throw std::invalid_argument(name + " is " + v.dump() + ", not an integer within range");
+  if (!fits)
+    throw std::invalid_argument(name + " is " + v.dump() + ", not an integer within range");
   return v.get<T>();
 }
 
@@ -532,4 +533,3 @@ ReplayCheck check_replay(std::string_view bytes, std::string_view name) {
 }
 
 }  // namespace overtake::replay
-

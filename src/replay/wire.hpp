@@ -18,8 +18,6 @@
 
 namespace overtake::replay::wire {
 
-
-
 inline constexpr double kCmPerM = 100.0;
 inline constexpr double kYawUnitsPerRad = 1e4;
 inline constexpr std::size_t kRecordHeadBytes = 5;   // u8 kind, u32 length
@@ -33,10 +31,10 @@ inline constexpr std::size_t kMaxRecordBytes = std::size_t{64} << 20;  // larger
 inline constexpr std::size_t kDeflateChunkBytes = std::size_t{64} << 10;
 inline constexpr std::size_t kSyncEveryBytes = std::size_t{1} << 20;
 inline constexpr std::size_t kInflateChunkBytes = std::size_t{256} << 10;
-inline constexpr int kDeflateLevel = 6;  // zlib's default: level 9 is 0.2 % smaller and twice as slow
+inline constexpr int kDeflateLevel =
+    6;  // zlib's default: level 9 is 0.2 % smaller and twice as slow
 inline constexpr const char* kUnfinishedReport =
     R"({"ended_early":"the recording stopped before the run's report"})";
-
 
 // ---- little-endian fields -----------------------------------------------------------------
 
@@ -172,6 +170,5 @@ class Reader {
 inline std::string incident_type_name(std::size_t i) {
   return std::string(sim::to_string(static_cast<sim::IncidentType>(i)));
 }
-
 
 }  // namespace overtake::replay::wire

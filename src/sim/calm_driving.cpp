@@ -48,8 +48,7 @@ void CalmImpl::build_vehicles(CalmTraffic& t, const EgoView& ego, double ego_s, 
   e.s_m = ego_s;
   e.speed_mps = ego.speed_mps;
   // The ego's acceleration, from its speed at the previous step (0 at the first).
-  e.accel_mps2 =
-      t.ego_prev_speed_mps_ >= 0.0 ? (ego.speed_mps - t.ego_prev_speed_mps_) / dt : 0.0;
+  e.accel_mps2 = t.ego_prev_speed_mps_ >= 0.0 ? (ego.speed_mps - t.ego_prev_speed_mps_) / dt : 0.0;
   e.now_lanes = e.follow_lanes = ego_lanes(t, ego.frenet.d_m);
   e.car = -1;
 }
@@ -67,8 +66,7 @@ CalmImpl::Nearest CalmImpl::leader(const CalmTraffic& t, int self, unsigned lane
   return best;
 }
 
-double CalmImpl::idm(const CalmTraffic& t, double v, double v0, double gap_m,
-                     double leader_speed) {
+double CalmImpl::idm(const CalmTraffic& t, double v, double v0, double gap_m, double leader_speed) {
   const CalmTrafficParams& p = t.params_.calm;
   const double ratio = v / std::max(v0, kMinDesiredSpeedMps);
   const double free_term = p.accel_exponent == 4.0 ? (ratio * ratio) * (ratio * ratio)
@@ -85,8 +83,8 @@ double CalmImpl::idm(const CalmTraffic& t, double v, double v0, double gap_m,
   return p.max_accel_mps2 * (1.0 - free_term - interaction);
 }
 
-double CalmImpl::cah(const CalmTraffic& t, double v, double leader_speed,
-                     double leader_accel, double bumper_gap_m) {
+double CalmImpl::cah(const CalmTraffic& t, double v, double leader_speed, double leader_accel,
+                     double bumper_gap_m) {
   const double a_l = std::min(leader_accel, t.params_.calm.max_accel_mps2);
   const double denom = leader_speed * leader_speed - 2.0 * bumper_gap_m * a_l;
   if (leader_speed * (v - leader_speed) <= -2.0 * bumper_gap_m * a_l && denom > 1e-9) {
@@ -253,7 +251,8 @@ void CalmImpl::move(CalmTraffic& t, CalmCar& c, const Decision& dec, double dt) 
   c.accel_mps2 = (dec.new_speed_mps - c.speed_mps) / dt;
   c.speed_mps = dec.new_speed_mps;
   if (dec.change_to_lane >= 0) {
-    c.manoeuvre = LaneManoeuvre{c.lane, dec.change_to_lane, c.d_m, 0.0, p.calm.lane_change_duration_s};
+    c.manoeuvre =
+        LaneManoeuvre{c.lane, dec.change_to_lane, c.d_m, 0.0, p.calm.lane_change_duration_s};
     c.lane = dec.change_to_lane;
     c.since_lane_change_s = 0.0;
     c.lane_offset_m = 0.0;

@@ -90,8 +90,7 @@ struct CalmImpl {
   [[nodiscard]] static unsigned ego_lanes(const CalmTraffic& t, double ego_d) {
     unsigned mask = 0;
     for (int k = 0; k < t.road_.lane_count; ++k) {
-      if (std::abs(ego_d - core::lane_center_d(k, t.road_)) <
-          kEgoLaneRadiusM) {
+      if (std::abs(ego_d - core::lane_center_d(k, t.road_)) < kEgoLaneRadiusM) {
         mask |= lane_bit(k);
       }
     }

@@ -38,7 +38,8 @@ void CalmImpl::regions(const CalmTraffic& t, double ego_s, Region& behind, Regio
   behind.min_speed_mps = p.placement.behind_min_speed_mps;
   behind.max_speed_mps = p.placement.behind_max_speed_mps;
   clamp_pair(forward(t, ego_s, waypoint_s(t, prev + p.placement.ahead_min_waypoints)),
-             forward(t, ego_s, waypoint_s(t, prev + p.placement.ahead_max_waypoints)), ahead_region);
+             forward(t, ego_s, waypoint_s(t, prev + p.placement.ahead_max_waypoints)),
+             ahead_region);
   ahead_region.min_speed_mps = p.placement.ahead_min_speed_mps;
   ahead_region.max_speed_mps = p.placement.ahead_max_speed_mps;
 }
@@ -78,8 +79,8 @@ CalmImpl::EgoSpot CalmImpl::ego_spot(const CalmTraffic& t, const EgoView& ego) {
   return e;
 }
 
-bool CalmImpl::spot_ok(const CalmTraffic& t, int i, int limit, double s, double d,
-                       int lane, double speed, const EgoSpot& ego) {
+bool CalmImpl::spot_ok(const CalmTraffic& t, int i, int limit, double s, double d, int lane,
+                       double speed, const EgoSpot& ego) {
   const TrafficParams& p = t.params_;
   const core::Vec2 pos = t.line_.to_cartesian({s, d});
   const double min_sq = p.placement.min_spawn_distance_m * p.placement.min_spawn_distance_m;
@@ -148,8 +149,9 @@ bool CalmImpl::try_place(CalmTraffic& t, int i, int limit, const EgoView& ego_vi
   const Wander w = draw_wander(t, c);
   const double offset = p.calm.wander_amplitude_m * std::sin(w.phase_rad);
   for (int attempt = 0; attempt < p.placement.max_spawn_attempts; ++attempt) {
-    const bool is_behind = where == Where::either ? t.spawn_rng_.chance(p.placement.behind_probability)
-                                                  : where == Where::behind;
+    const bool is_behind = where == Where::either
+                               ? t.spawn_rng_.chance(p.placement.behind_probability)
+                               : where == Where::behind;
     const Region& r = is_behind ? behind : ahead_region;
     const double off = t.spawn_rng_.uniform(r.lo_m, r.hi_m);
     const int lane = t.spawn_rng_.uniform_int(0, t.road_.lane_count - 1);
@@ -171,7 +173,8 @@ void CalmImpl::place_fallback(CalmTraffic& t, int i, const EgoView& ego_view) {
   cache_positions(t, i);
   const Wander w = draw_wander(t, c);
   const double offset = p.calm.wander_amplitude_m * std::sin(w.phase_rad);
-  const double cruise = t.spawn_rng_.uniform(p.placement.ahead_min_speed_mps, p.placement.ahead_max_speed_mps);
+  const double cruise =
+      t.spawn_rng_.uniform(p.placement.ahead_min_speed_mps, p.placement.ahead_max_speed_mps);
   double s = ego.s_m;
   int lane = 0;
   for (int k = 0; k < kFallbackTries; ++k) {

@@ -56,8 +56,8 @@ void CalmTraffic::start(const EgoView& ego) {
     if (CalmImpl::try_place(*this, i, i, ego, true, Where::behind)) continue;
     CalmImpl::place_fallback(*this, i, ego);
   }
-  frames_to_batch_ =
-      spawn_rng_.uniform_int(params_.placement.batch_min_frames, params_.placement.batch_max_frames);
+  frames_to_batch_ = spawn_rng_.uniform_int(params_.placement.batch_min_frames,
+                                            params_.placement.batch_max_frames);
   publish();
 }
 
@@ -109,8 +109,8 @@ void CalmTraffic::step(const EgoView& ego, double dt_s) {
       (void)CalmImpl::try_place(*this, static_cast<int>(i), static_cast<int>(n), ego, false,
                                 CalmImpl::Where::either);
     }
-    frames_to_batch_ =
-        spawn_rng_.uniform_int(params_.placement.batch_min_frames, params_.placement.batch_max_frames);
+    frames_to_batch_ = spawn_rng_.uniform_int(params_.placement.batch_min_frames,
+                                              params_.placement.batch_max_frames);
   }
   publish();
 }
@@ -192,4 +192,3 @@ void CalmTraffic::apply_event(const ScenarioEvent& e) {
 }
 
 }  // namespace overtake::sim
-

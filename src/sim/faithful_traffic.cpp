@@ -97,7 +97,8 @@ void FaithfulTraffic::build_open_road_table() {
   std::vector<double> i2(total, 0.0);
   double prev_k = 0.0;
   for (std::size_t b = 0; b < total; ++b) {
-    const core::RoadFrame fr = line_.frame(line_.wrap_s(line_.start_s_m() + static_cast<double>(b)));
+    const core::RoadFrame fr =
+        line_.frame(line_.wrap_s(line_.start_s_m() + static_cast<double>(b)));
     // The frame's normal is on the side d grows: turning left moves a straight ray to the
     // right of the road.
     const double side = core::cross(fr.tangent, fr.normal) < 0.0 ? 1.0 : -1.0;
@@ -136,8 +137,8 @@ void FaithfulTraffic::park(std::size_t i) {
   c.position = parked_[i];
   c.closest_waypoint = chords_.closest(c.position);
   c.map_frenet = chords_.to_frenet(c.position, c.closest_waypoint);
-  c.heading_rad = std::atan2(chords_.forward(c.closest_waypoint).y,
-                             chords_.forward(c.closest_waypoint).x);
+  c.heading_rad =
+      std::atan2(chords_.forward(c.closest_waypoint).y, chords_.forward(c.closest_waypoint).x);
 }
 
 void FaithfulTraffic::start(const EgoView& /*ego*/) {
@@ -233,12 +234,12 @@ void FaithfulTraffic::batch(const EgoView& ego) {
   }
   frame_counter_ = 0;
   // The original's Random.Range(20, 60): 20 to 59, a batch when the counter reaches it.
-  frames_to_batch_ =
-      spawn_rng_.uniform_int(p.batch_min_frames, std::max(p.batch_min_frames, p.batch_max_frames - 1));
+  frames_to_batch_ = spawn_rng_.uniform_int(p.batch_min_frames,
+                                            std::max(p.batch_min_frames, p.batch_max_frames - 1));
 }
 
-void FaithfulTraffic::put_on_road_for_testing(std::size_t i, double s_m, int lane,
-                                              double speed_mps, double cap_mps) {
+void FaithfulTraffic::put_on_road_for_testing(std::size_t i, double s_m, int lane, double speed_mps,
+                                              double cap_mps) {
   TrafficCar& c = cars_[i];
   Driver& dr = drivers_[i];
   const double d = core::lane_center_d(lane, road_);
@@ -420,7 +421,8 @@ FaithfulTraffic::Command FaithfulTraffic::decide(std::size_t i, const EgoView& e
       chords_.offset_point(dr.target_waypoint, core::lane_center_d(lane, road_) + lateral_m);
   const core::Vec2 fwd = unit(c.heading_rad);
   const core::Vec2 rel = target - c.position;
-  const double angle_deg = core::rad_to_deg(std::atan2(-core::cross(fwd, rel), core::dot(fwd, rel)));
+  const double angle_deg =
+      core::rad_to_deg(std::atan2(-core::cross(fwd, rel), core::dot(fwd, rel)));
   cmd.steer = std::clamp(angle_deg * f_.steer_sensitivity_per_deg, -1.0, 1.0);
 
   dr.sight = sight.kind;

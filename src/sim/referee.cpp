@@ -144,7 +144,8 @@ void Referee::update_rubric(const EgoFrame& f) {
   const long have = std::min<long>(ring_filled_, n);
   double curvature_sum = 0.0;
   for (long k = 0; k + 2 < have; ++k) {
-    curvature_sum += triple_curvature(recent(have - 1 - k), recent(have - 2 - k), recent(have - 3 - k));
+    curvature_sum +=
+        triple_curvature(recent(have - 1 - k), recent(have - 2 - k), recent(have - 3 - k));
   }
   const double mean_curvature = have > 2 ? curvature_sum / static_cast<double>(have - 2) : 0.0;
   const double block_s = n * step_s_;

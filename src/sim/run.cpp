@@ -113,16 +113,16 @@ void Stepper::end(RunEnd end, std::string reason) {
 }
 
 RunReport Stepper::report() const {
-  return scorecard_.report(world_, ended_.value_or(RunOutcome{RunEnd::completed, world_.time_s(), {}}),
-                           options_.clock);
+  return scorecard_.report(
+      world_, ended_.value_or(RunOutcome{RunEnd::completed, world_.time_s(), {}}), options_.clock);
 }
 
 void Stepper::emit_frame(std::size_t incidents_before) {
   if (!options_.observer) return;
   scorecard_.fill_frame(world_, frame_);
   const std::vector<Incident>& incidents = scorecard_.referee().incidents();
-  options_.observer->on_frame(
-      frame_, std::span<const Incident>(incidents).subspan(incidents_before));
+  options_.observer->on_frame(frame_,
+                              std::span<const Incident>(incidents).subspan(incidents_before));
 }
 
 // ---- the lock-step loop -------------------------------------------------------------------

@@ -8,17 +8,22 @@ namespace overtake::sim {
 
 std::string_view to_string(RunEnd end) {
   switch (end) {
-    case RunEnd::completed: return "completed";
-    case RunEnd::stopped: return "stopped";
-    case RunEnd::planner_failed: return "planner_failed";
+    case RunEnd::completed:
+      return "completed";
+    case RunEnd::stopped:
+      return "stopped";
+    case RunEnd::planner_failed:
+      return "planner_failed";
   }
   return "unknown";
 }
 
 std::string ended_early_text(const RunOutcome& outcome) {
   switch (outcome.end) {
-    case RunEnd::completed: return {};
-    case RunEnd::stopped: return "stopped";
+    case RunEnd::completed:
+      return {};
+    case RunEnd::stopped:
+      return "stopped";
     case RunEnd::planner_failed:
       return "planner failed at t = " + std::to_string(outcome.t_s) + " s: " + outcome.reason;
   }

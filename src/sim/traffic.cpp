@@ -45,8 +45,8 @@ std::string_view to_string(TrafficProfile p) {
 
 Traffic::Traffic(const core::Map& map, const core::ReferenceLine& line,
                  const core::WaypointFrenet& chords, const TrafficParams& params,
-                 const core::RoadParams& road, const core::CarFootprint& car, TrafficProfile profile,
-                 std::uint64_t seed)
+                 const core::RoadParams& road, const core::CarFootprint& car,
+                 TrafficProfile profile, std::uint64_t seed)
     : map_(map),
       line_(line),
       chords_(chords),
@@ -64,9 +64,13 @@ Traffic::Traffic(const core::Map& map, const core::ReferenceLine& line,
 
 Traffic::~Traffic() = default;
 
-void Traffic::place_initial(const EgoView& ego) { model_->start(ego); }
+void Traffic::place_initial(const EgoView& ego) {
+  model_->start(ego);
+}
 
-void Traffic::step(const EgoView& ego, double dt_s) { model_->step(ego, dt_s); }
+void Traffic::step(const EgoView& ego, double dt_s) {
+  model_->step(ego, dt_s);
+}
 
 std::optional<int> Traffic::resolve_contacts(const EgoView& ego) {
   std::optional<int> touched;
@@ -81,9 +85,9 @@ std::optional<int> Traffic::resolve_contacts(const EgoView& ego) {
     const core::OrientedBox box = footprint(c);
     const std::optional<core::Penetration> pen = core::box_penetration(ego.body, box);
     if (!pen || pen->depth_m <= 0.0) continue;
-    const core::Vec2 v = after_push(c.speed_mps * core::Vec2{std::cos(c.heading_rad),
-                                                             std::sin(c.heading_rad)},
-                                    ego_v, pen->normal, 1.0);
+    const core::Vec2 v =
+        after_push(c.speed_mps * core::Vec2{std::cos(c.heading_rad), std::sin(c.heading_rad)},
+                   ego_v, pen->normal, 1.0);
     model_->on_contact(i, pen->depth_m * pen->normal, speed_along(v, c.heading_rad), ego.body);
     if (!touched) touched = c.id;
   }
@@ -97,8 +101,10 @@ std::optional<int> Traffic::resolve_contacts(const EgoView& ego) {
       const core::OrientedBox box_b = footprint(b);
       const std::optional<core::Penetration> pen = core::box_penetration(box_a, box_b);
       if (!pen || pen->depth_m <= 0.0) continue;
-      const core::Vec2 va = a.speed_mps * core::Vec2{std::cos(a.heading_rad), std::sin(a.heading_rad)};
-      const core::Vec2 vb = b.speed_mps * core::Vec2{std::cos(b.heading_rad), std::sin(b.heading_rad)};
+      const core::Vec2 va =
+          a.speed_mps * core::Vec2{std::cos(a.heading_rad), std::sin(a.heading_rad)};
+      const core::Vec2 vb =
+          b.speed_mps * core::Vec2{std::cos(b.heading_rad), std::sin(b.heading_rad)};
       const core::Vec2 new_b = after_push(vb, va, pen->normal, 0.5);
       const core::Vec2 new_a = after_push(va, vb, -1.0 * pen->normal, 0.5);
       const double half = 0.5 * pen->depth_m;

@@ -20,7 +20,9 @@ double yaw_0_2pi(double yaw) {
   return y;
 }
 
-double round_to(double v, double step) { return std::round(v / step) * step; }
+double round_to(double v, double step) {
+  return std::round(v / step) * step;
+}
 
 }  // namespace
 
@@ -37,14 +39,15 @@ World::World(const core::Map& map, const core::ReferenceLine& line, const WorldP
 
 World::World(const core::Map& map, const core::ReferenceLine& line, const WorldParams& params,
              const Scenario& scenario)
-    : World(map, line,
-            [&] {
-              WorldParams p = params;
-              p.ego.start_s_m = scenario.ego_s_m;
-              p.ego.start_d_m = scenario.ego_d_m;
-              return p;
-            }(),
-            TrafficProfile::faithful, 0) {
+    : World(
+          map, line,
+          [&] {
+            WorldParams p = params;
+            p.ego.start_s_m = scenario.ego_s_m;
+            p.ego.start_d_m = scenario.ego_d_m;
+            return p;
+          }(),
+          TrafficProfile::faithful, 0) {
   traffic_.set_script(scenario.cars);
   events_ = scenario.events;
   if (scenario.ego_speed_mps > 0.0) {
@@ -134,7 +137,7 @@ void World::step() {
 }
 
 EgoFrame World::ego_frame() const {
-  return {time_s(), ego_.position, ego_.speed_mps, ego_.map_frenet.s_m, ego_.map_frenet.d_m,
+  return {time_s(),        ego_.position, ego_.speed_mps, ego_.map_frenet.s_m, ego_.map_frenet.d_m,
           ego_.frenet.d_m, contact_};
 }
 

@@ -92,19 +92,18 @@ std::optional<http::response<http::string_body>> refusal(
     std::string names = "localhost, 127.0.0.1, [::1]";
     const std::string bound = host_for_url(sh.bound_host);
     if (!is_loopback_name(bound)) names += " and " + bound;
-    return refuse(http::status::misdirected_request,
-                  "this server answers only to " + names + " (any port); the request is for '" +
-                      shown(host) + "'\n");
+    return refuse(http::status::misdirected_request, "this server answers only to " + names +
+                                                         " (any port); the request is for '" +
+                                                         shown(host) + "'\n");
   }
   if (websocket::is_upgrade(req)) {
     const auto origin = req.find(http::field::origin);
     if (origin != req.end()) {
       const std::string_view value(origin->value().data(), origin->value().size());
       if (!same_origin(value, host)) {
-        return refuse(http::status::forbidden,
-                      "websocket refused: its Origin '" + shown(value) +
-                          "' is not the page served here (http://" + shown(host) +
-                          "); only that page may open it\n");
+        return refuse(http::status::forbidden, "websocket refused: its Origin '" + shown(value) +
+                                                   "' is not the page served here (http://" +
+                                                   shown(host) + "); only that page may open it\n");
       }
     }
   }

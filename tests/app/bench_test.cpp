@@ -14,15 +14,16 @@
 namespace overtake::app {
 namespace {
 
-using ::testing::HasSubstr;
 using nlohmann::json;
+using ::testing::HasSubstr;
 namespace fs = std::filesystem;
 
 class BenchTest : public ::testing::Test {
  protected:
   void SetUp() override {
     root_ = fs::temp_directory_path() /
-            ("overtake_bench_test_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
+            ("overtake_bench_test_" +
+             std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
     fs::remove_all(root_);
     fs::create_directories(root_);
   }
@@ -190,7 +191,8 @@ TEST_F(BenchTest, ResumeRefusesDuplicatedAndForeignRows) {
     (void)run_bench(s, nullptr, {});
     FAIL() << "a foreign row was resumed";
   } catch (const UsageError& e) {
-    EXPECT_THAT(std::string(e.what()), HasSubstr("the row of run 0 is not walkthrough / faithful / seed 1"));
+    EXPECT_THAT(std::string(e.what()),
+                HasSubstr("the row of run 0 is not walkthrough / faithful / seed 1"));
   }
   // An index beyond the bench.
   other["index"] = 7;
@@ -303,7 +305,8 @@ TEST(BenchSummary, PlanStatusesAndEarlyEndsAreSummed) {
   EXPECT_NEAR(share["normal"].get<double>(), 1.0 - share["fallback"].get<double>(), 1e-12);
   EXPECT_EQ(rows[0]["runs_ended_early"], 1);
   EXPECT_THAT(summary_markdown(rows), HasSubstr("| 0.0% / 10.0% | 1 |"));
-  EXPECT_THAT(summary_csv(rows), HasSubstr("least_bad_cycle_share,fallback_cycle_share,runs_ended_early"));
+  EXPECT_THAT(summary_csv(rows),
+              HasSubstr("least_bad_cycle_share,fallback_cycle_share,runs_ended_early"));
 }
 
 }  // namespace

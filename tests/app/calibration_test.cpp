@@ -47,7 +47,9 @@ TEST(TrafficObserver, MeasuresSpeedsNeighboursAndLaneChanges) {
     const double t = 0.1 * k;
     const double ego_s = 100.0 + v * t;
     const double d1 = t < 5.0 ? 2.0 : t < 10.0 ? 6.0 : 10.0;
-    obs.observe(t, frame(ego_s, {{0, ego_s + 30.0, 6.0, v}, {1, ego_s - 100.0, d1, v}, {2, 6700.0, -280.0, 0.0}}));
+    obs.observe(
+        t, frame(ego_s,
+                 {{0, ego_s + 30.0, 6.0, v}, {1, ego_s - 100.0, d1, v}, {2, 6700.0, -280.0, 0.0}}));
   }
   obs.end_run(v * 40.0, 40.0);
   const TrafficFigures f = obs.figures();
@@ -71,7 +73,7 @@ TEST(TrafficObserver, SeesPlacementsAndTheirFirstFrame) {
   obs.observe(0.0, frame(100.0, {{0, 6700.0, -280.0, 0.0}}));  // parked at the start
   obs.observe(0.02, frame(100.0, {{0, 40.0, 6.0, 52.0}}));     // placed: its cap as m/s
   obs.observe(0.04, frame(100.0, {{0, 40.4, 6.0, v}}));
-  obs.observe(0.06, frame(100.0, {{0, 400.0, 6.0, v}}));       // placed again, frame missed
+  obs.observe(0.06, frame(100.0, {{0, 400.0, 6.0, v}}));  // placed again, frame missed
   const TrafficFigures f = obs.figures();
   EXPECT_EQ(f.placements, 2);
   EXPECT_EQ(f.first_frames_seen, 1);
@@ -82,7 +84,8 @@ TEST(TrafficObserver, SeesPlacementsAndTheirFirstFrame) {
 // original (calibration data): every accept range holds over fixed seeds.
 TEST(Calibration, TheFaithfulWorldMeetsEveryAcceptRange) {
   CalibrateOptions o;
-  o.seeds = sanitized() ? std::vector<std::uint64_t>{1, 2} : std::vector<std::uint64_t>{1, 2, 3, 4, 5, 6};
+  o.seeds =
+      sanitized() ? std::vector<std::uint64_t>{1, 2} : std::vector<std::uint64_t>{1, 2, 3, 4, 5, 6};
   o.minutes = sanitized() ? 4.0 : 10.0;
   o.jobs = 2;
   const TrafficFigures f = calibrate(o);

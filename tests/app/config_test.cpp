@@ -17,8 +17,8 @@
 namespace overtake::app {
 namespace {
 
-using ::testing::HasSubstr;
 using nlohmann::json;
+using ::testing::HasSubstr;
 
 json shipped() {
   std::ifstream in(std::string(OVERTAKE_SOURCE_DIR) + "/config/overtake.json");
@@ -46,7 +46,8 @@ TEST(ConfigDefaults, ShippedFileHoldsExactlyTheStructDefaults) {
 
 TEST(ConfigOverrides, ASubsetOfKeysOverridesOnlyThose) {
   const Config c = apply_config_json(
-      Config{}, json::parse(R"({"world": {"traffic": {"car_count": 5, "calm": {"politeness": 0.1}}}})"),
+      Config{},
+      json::parse(R"({"world": {"traffic": {"car_count": 5, "calm": {"politeness": 0.1}}}})"),
       "user.json");
   EXPECT_EQ(c.world.traffic.car_count, 5);
   EXPECT_DOUBLE_EQ(c.world.traffic.calm.politeness, 0.1);
@@ -54,7 +55,8 @@ TEST(ConfigOverrides, ASubsetOfKeysOverridesOnlyThose) {
 }
 
 TEST(ConfigOverrides, RoadIsSharedByWorldAndPlanner) {
-  const Config c = apply_config_json(Config{}, json::parse(R"({"road": {"lane_width_m": 3.7}})"), "u");
+  const Config c =
+      apply_config_json(Config{}, json::parse(R"({"road": {"lane_width_m": 3.7}})"), "u");
   EXPECT_DOUBLE_EQ(c.world.road.lane_width_m, 3.7);
   EXPECT_DOUBLE_EQ(c.planner.road.lane_width_m, 3.7);
 }
@@ -75,7 +77,8 @@ TEST(ConfigStep, EveryPolicySpacesItsPointsForTheWorldsStep) {
       ASSERT_TRUE(policy);
       sim::RunOptions opts;
       opts.duration_s = 60.0;
-      (void)sim::run_drive(world, [&](const core::Telemetry& t) { return policy->plan(t); }, opts);
+      (void)sim::run_drive(
+          world, [&](const core::Telemetry& t) { return policy->plan(t); }, opts);
       const double speed_mps = world.ego().speed_mps;
       ASSERT_GT(speed_mps, 20.0);  // cruising
       const std::vector<core::Vec2> queue = world.telemetry().previous_path;
@@ -91,15 +94,16 @@ TEST(ConfigStep, EveryPolicySpacesItsPointsForTheWorldsStep) {
 TEST(ConfigErrors, ThePlannersStepKeysAreGoneForTheWorlds) {
   EXPECT_THAT(error_of(json::parse(R"({"planner": {"walkthrough": {"step_s": 0.04}}})")),
               HasSubstr("unknown key 'planner.walkthrough.step_s'"));
-  EXPECT_THAT(error_of(json::parse(R"({"planner": {"reference": {"trajectory": {"step_s": 0.04}}}})")),
-              HasSubstr("unknown key 'planner.reference.trajectory.step_s'"));
+  EXPECT_THAT(
+      error_of(json::parse(R"({"planner": {"reference": {"trajectory": {"step_s": 0.04}}}})")),
+      HasSubstr("unknown key 'planner.reference.trajectory.step_s'"));
   EXPECT_THAT(error_of(json::parse(R"({"planner": {"step_s": 0.04}})")),
               HasSubstr("unknown key 'planner.step_s'"));
 }
 
 TEST(ConfigOverrides, TheCarFootprintIsOneSectionForEveryBody) {
-  const Config c =
-      apply_config_json(Config{}, json::parse(R"({"car": {"length_m": 5.2, "width_m": 2.1}})"), "u");
+  const Config c = apply_config_json(
+      Config{}, json::parse(R"({"car": {"length_m": 5.2, "width_m": 2.1}})"), "u");
   EXPECT_EQ(c.world.car, c.car);
   EXPECT_EQ(c.planner.car, c.car);
   EXPECT_DOUBLE_EQ(c.world.car.length_m, 5.2);
@@ -108,8 +112,9 @@ TEST(ConfigOverrides, TheCarFootprintIsOneSectionForEveryBody) {
   const replay::ReplayHeader h = replay::make_replay_header(track->line, c.world, {});
   EXPECT_DOUBLE_EQ(h.car_length_m, 5.2);
   EXPECT_DOUBLE_EQ(h.car_width_m, 2.1);
-  for (const char* old : {R"({"world": {"ego": {"length_m": 5}}})", R"({"world": {"traffic": {"car_width_m": 2}}})",
-                          R"({"planner": {"reference": {"car_length_m": 5}}})"}) {
+  for (const char* old :
+       {R"({"world": {"ego": {"length_m": 5}}})", R"({"world": {"traffic": {"car_width_m": 2}}})",
+        R"({"planner": {"reference": {"car_length_m": 5}}})"}) {
     EXPECT_THAT(error_of(json::parse(old)), HasSubstr("unknown key")) << old;
   }
   EXPECT_THAT(error_of(json::parse(R"({"car": {"width_m": 0.1}})")),
@@ -134,14 +139,16 @@ TEST(ConfigErrors, WrongTypeIsNamed) {
 }
 
 TEST(ConfigErrors, InvalidValuesAreNamedWithTheValue) {
-  const std::string e = error_of(json::parse(
-      R"({"world": {"traffic": {"car_count": -1}, "referee": {"max_jerk_mps3": 0}}})"));
+  const std::string e = error_of(
+      json::parse(R"({"world": {"traffic": {"car_count": -1}, "referee": {"max_jerk_mps3": 0}}})"));
   EXPECT_THAT(e, HasSubstr("world.traffic.car_count must be between 0 and 64 (got -1)"));
   EXPECT_THAT(e, HasSubstr("world.referee.max_jerk_mps3 must be a positive number (got 0)"));
-  EXPECT_THAT(error_of(json::parse(R"({"world": {"min_steps_per_call": 3, "max_steps_per_call": 2}})")),
-              HasSubstr("world.min_steps_per_call (3) must not exceed world.max_steps_per_call (2)"));
-  EXPECT_THAT(error_of(json::parse(R"({"planner": {"walkthrough": {"anchor_distances_m": [30, 20]}}})")),
-              HasSubstr("planner.walkthrough.anchor_distances_m must be positive and increasing"));
+  EXPECT_THAT(
+      error_of(json::parse(R"({"world": {"min_steps_per_call": 3, "max_steps_per_call": 2}})")),
+      HasSubstr("world.min_steps_per_call (3) must not exceed world.max_steps_per_call (2)"));
+  EXPECT_THAT(
+      error_of(json::parse(R"({"planner": {"walkthrough": {"anchor_distances_m": [30, 20]}}})")),
+      HasSubstr("planner.walkthrough.anchor_distances_m must be positive and increasing"));
 }
 
 TEST(ConfigErrors, AbsurdValuesAreRefusedWithTheirBounds) {
@@ -156,10 +163,12 @@ TEST(ConfigErrors, AbsurdValuesAreRefusedWithTheirBounds) {
 
 TEST(ConfigErrors, AKeyGivenTwiceIsRefused) {
   try {
-    (void)apply_config_text(Config{}, R"({"world": {"step_s": 0.02, "traffic": {}, "step_s": 0.05}})", "twice.json");
+    (void)apply_config_text(
+        Config{}, R"({"world": {"step_s": 0.02, "traffic": {}, "step_s": 0.05}})", "twice.json");
     FAIL() << "a duplicated key was accepted";
   } catch (const ConfigError& e) {
-    EXPECT_THAT(std::string(e.what()), HasSubstr("twice.json: the key 'world.step_s' is given twice"));
+    EXPECT_THAT(std::string(e.what()),
+                HasSubstr("twice.json: the key 'world.step_s' is given twice"));
   }
   try {
     (void)apply_config_text(Config{}, R"({"road": {}, "road": {}})", "twice.json");
@@ -168,7 +177,8 @@ TEST(ConfigErrors, AKeyGivenTwiceIsRefused) {
     EXPECT_THAT(std::string(e.what()), HasSubstr("the key 'road' is given twice"));
   }
   // The same key in different objects is fine.
-  EXPECT_NO_THROW((void)apply_config_text(Config{}, R"({"world": {"traffic": {"car_count": 3}}, "planner": {}})", "ok.json"));
+  EXPECT_NO_THROW((void)apply_config_text(
+      Config{}, R"({"world": {"traffic": {"car_count": 3}}, "planner": {}})", "ok.json"));
 }
 
 TEST(ConfigErrors, MissingAndMalformedFilesAreNamed) {
@@ -196,7 +206,8 @@ TEST(ConfigErrors, MissingAndMalformedFilesAreNamed) {
 // out_of_range, not as a parse error, and it escaped as a bare library exception that named
 // neither the file nor the fault's place.
 TEST(ConfigErrors, ANumberBeyondADoubleIsBadJsonNamingTheFile) {
-  for (const char* text : {R"({"road": {"lane_width_m": 1e999}})", R"({"world": {"step_s": -1e400}})"}) {
+  for (const char* text :
+       {R"({"road": {"lane_width_m": 1e999}})", R"({"world": {"step_s": -1e400}})"}) {
     try {
       (void)apply_config_text(Config{}, text, "huge.json");
       ADD_FAILURE() << "accepted " << text;

@@ -12,8 +12,8 @@
 namespace overtake::app {
 namespace {
 
-using ::testing::HasSubstr;
 using nlohmann::json;
+using ::testing::HasSubstr;
 
 json report_without_timing(const DriveOptions& o) {
   const DriveResult r = drive(o);
@@ -39,16 +39,19 @@ TEST(DriveDeterminism, SameSeedSameReportByteForByte) {
 }
 
 TEST(DriveDeterminism, DifferentSeedsDiffer) {
-  EXPECT_NE(report_without_timing(short_drive(1)).dump(), report_without_timing(short_drive(2)).dump());
+  EXPECT_NE(report_without_timing(short_drive(1)).dump(),
+            report_without_timing(short_drive(2)).dump());
 }
 
 TEST(DriveReport, HasTheDocumentedKeys) {
   const json j = report_without_timing(short_drive(3));
-  for (const char* key : {"distance_miles", "duration_s", "mean_speed_mph", "best_incident_free_miles",
-                          "incident_counts", "incidents", "peak", "lane_changes", "config"}) {
+  for (const char* key :
+       {"distance_miles", "duration_s", "mean_speed_mph", "best_incident_free_miles",
+        "incident_counts", "incidents", "peak", "lane_changes", "config"}) {
     EXPECT_TRUE(j.contains(key)) << key;
   }
-  for (const char* type : {"collision", "speeding", "max_acceleration", "max_jerk", "outside_lane"}) {
+  for (const char* type :
+       {"collision", "speeding", "max_acceleration", "max_jerk", "outside_lane"}) {
     EXPECT_TRUE(j["incident_counts"].contains(type)) << type;
   }
   for (const char* key : {"speed_mph", "acceleration_mps2", "jerk_mps3", "strict_acceleration_mps2",
@@ -65,7 +68,8 @@ TEST(DriveReport, HasTheDocumentedKeys) {
   EXPECT_EQ(j["end"], "completed");
   EXPECT_TRUE(j["ended_early"].is_null());
   const json& cycles = j["plan_status"]["cycles"];
-  EXPECT_EQ(cycles["normal"].get<long>() + cycles["least_bad"].get<long>() + cycles["fallback"].get<long>(),
+  EXPECT_EQ(cycles["normal"].get<long>() + cycles["least_bad"].get<long>() +
+                cycles["fallback"].get<long>(),
             j["planner_cycles"].get<long>());
 }
 
@@ -109,7 +113,8 @@ TEST(DriveErrors, UnknownPolicyListsTheAvailableOnes) {
 }
 
 TEST(DriveErrors, UnknownTrafficProfile) {
-  EXPECT_THAT(usage_error(short_drive(1, "dense")), HasSubstr("--traffic: unknown profile 'dense'"));
+  EXPECT_THAT(usage_error(short_drive(1, "dense")),
+              HasSubstr("--traffic: unknown profile 'dense'"));
 }
 
 TEST(DriveErrors, BadNumbersNameTheFlag) {
@@ -166,7 +171,8 @@ TEST(Cli, DriveWritesTheJsonReport) {
   const auto path = std::filesystem::temp_directory_path() / "overtake_cli_report.json";
   std::filesystem::remove(path);
   testing::internal::CaptureStdout();
-  EXPECT_EQ(cli({"drive", "--minutes", "0.5", "--seed", "4", "--json", path.c_str(), "--quiet"}), 0);
+  EXPECT_EQ(cli({"drive", "--minutes", "0.5", "--seed", "4", "--json", path.c_str(), "--quiet"}),
+            0);
   const std::string out = testing::internal::GetCapturedStdout();
   EXPECT_THAT(out, HasSubstr("mean speed"));
   const json j = json::parse(read_file(path));

@@ -6,7 +6,8 @@
 // fails. `timing` is never compared (it is not part of the determinism promise).
 //
 // To write the file anew after a change that is meant to change behaviour:
-//   OVERTAKE_UPDATE_GOLDEN=1 ./build/release/tests/overtake_app_tests --gtest_filter='GoldenReports.*'
+//   OVERTAKE_UPDATE_GOLDEN=1 ./build/release/tests/overtake_app_tests
+//   --gtest_filter='GoldenReports.*'
 
 #include <gtest/gtest.h>
 
@@ -38,8 +39,9 @@ std::vector<GoldenRun> golden_runs() {
   for (const std::string& policy : policies) {
     for (const std::string traffic : {"faithful", "calm"}) {
       for (const std::string seed : {"1", "5"}) {
-        runs.push_back({policy + "-" + traffic + "-seed" + seed,
-                        {"--policy", policy, "--traffic", traffic, "--seed", seed, "--minutes", "3"}});
+        runs.push_back(
+            {policy + "-" + traffic + "-seed" + seed,
+             {"--policy", policy, "--traffic", traffic, "--seed", seed, "--minutes", "3"}});
       }
     }
   }
@@ -50,8 +52,9 @@ std::vector<GoldenRun> golden_runs() {
     runs.push_back({"reference-scenario-" + scenario,
                     {"--scenario", scenarios + scenario + ".json", "--minutes", "1"}});
   }
-  runs.push_back({"seed003-scenario-cut_in_20m",
-                  {"--policy", "seed003", "--scenario", scenarios + "cut_in_20m.json", "--minutes", "1"}});
+  runs.push_back(
+      {"seed003-scenario-cut_in_20m",
+       {"--policy", "seed003", "--scenario", scenarios + "cut_in_20m.json", "--minutes", "1"}});
   return runs;
 }
 
@@ -129,7 +132,8 @@ TEST_F(GoldenReports, SameSeedsGiveTheSameReportsAsTheKeptOnes) {
   }
   std::string note;
   for (const std::string& k : added) note += (note.empty() ? "" : ", ") + k;
-  if (!note.empty()) std::cout << "keys added since the kept reports (not compared): " << note << "\n";
+  if (!note.empty())
+    std::cout << "keys added since the kept reports (not compared): " << note << "\n";
 }
 
 // The comparison is not vacuous: another seed's report differs from the kept one in the keys

@@ -23,10 +23,9 @@
 namespace overtake::app {
 namespace {
 
-using ::testing::HasSubstr;
 using nlohmann::json;
+using ::testing::HasSubstr;
 namespace fs = std::filesystem;
-
 
 int cli(std::vector<const char*> args) {
   args.insert(args.begin(), "overtake");
@@ -55,7 +54,8 @@ class RobustnessTest : public ::testing::Test {
 
 TEST_F(RobustnessTest, SeedsOutOfRangeAreRefusedNotWrapped) {
   // -1 and 2^64 once ran as the same seed as 2^64 - 1.
-  for (const char* bad : {"-1", "18446744073709551616", "99999999999999999999999", "1e3", "", "0x10"}) {
+  for (const char* bad :
+       {"-1", "18446744073709551616", "99999999999999999999999", "1e3", "", "0x10"}) {
     const auto [rc, err] = cli_err({"drive", "--minutes", "0.01", "--seed", bad});
     EXPECT_EQ(rc, 2) << bad;
     EXPECT_THAT(err, HasSubstr("a seed is a whole number from 0 to 18446744073709551615")) << bad;
@@ -63,14 +63,16 @@ TEST_F(RobustnessTest, SeedsOutOfRangeAreRefusedNotWrapped) {
   const auto [rc, err] = cli_err({"track", "--seed", "-5"});
   EXPECT_EQ(rc, 2);
   EXPECT_THAT(err, HasSubstr("a seed is a whole number"));
-  EXPECT_EQ(cli_err({"drive", "--minutes", "0.01", "--seed", "18446744073709551615", "-q"}).first, 0);
+  EXPECT_EQ(cli_err({"drive", "--minutes", "0.01", "--seed", "18446744073709551615", "-q"}).first,
+            0);
   // sim checks its seed before it looks for the planner.
   const auto [sim_rc, sim_err] = cli_err({"sim", "--planner", "ws://127.0.0.1:1", "--seed", "-1"});
   EXPECT_EQ(sim_rc, 2);
   EXPECT_THAT(sim_err, HasSubstr("a seed is a whole number"));
   // bench and calibrate read seed lists: 2^64 is out of range, 2^64 - 1 is a seed.
   for (const char* cmd : {"bench", "calibrate"}) {
-    const auto [list_rc, list_err] = cli_err({cmd, "--seeds", "18446744073709551616", "--minutes", "0.01"});
+    const auto [list_rc, list_err] =
+        cli_err({cmd, "--seeds", "18446744073709551616", "--minutes", "0.01"});
     EXPECT_EQ(list_rc, 2) << cmd;
     EXPECT_THAT(list_err, HasSubstr("'18446744073709551616' is out of range")) << cmd;
   }
@@ -96,7 +98,8 @@ TEST_F(RobustnessTest, StepsPerCallZeroIsRefusedWithTheRange) {
 TEST_F(RobustnessTest, JsonAndRecordOnOneFileAreRefused) {
   const std::string f = (dir_ / "run.out").string();
   const std::string same = (dir_ / "." / "run.out").string();
-  const auto [rc, err] = cli_err({"drive", "--minutes", "0.01", "--json", f.c_str(), "--record", same.c_str()});
+  const auto [rc, err] =
+      cli_err({"drive", "--minutes", "0.01", "--json", f.c_str(), "--record", same.c_str()});
   EXPECT_EQ(rc, 2);
   EXPECT_THAT(err, HasSubstr("--json and --record name the same file"));
   EXPECT_FALSE(fs::exists(f));
@@ -156,9 +159,10 @@ TEST_F(RobustnessTest, InterruptedDriveKeepsEverything) {
     const fs::path out = dir_ / "out.txt";
     fs::remove(report);
     fs::remove(replay);
-    const pid_t pid = test::start_overtake({"drive", "--minutes", "600", "--policy", "walkthrough", "--json", report.string(),
-                             "--record", replay.string(), "-q"},
-                            out, dir_ / "err.txt");
+    const pid_t pid =
+        test::start_overtake({"drive", "--minutes", "600", "--policy", "walkthrough", "--json",
+                              report.string(), "--record", replay.string(), "-q"},
+                             out, dir_ / "err.txt");
     // Wait until the recording has begun (its partial file exists), then a little more.
     for (int i = 0; i < 500 && !fs::exists(replay.string() + ".partial"); ++i) {
       std::this_thread::sleep_for(std::chrono::milliseconds(10));

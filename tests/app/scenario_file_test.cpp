@@ -14,8 +14,8 @@
 namespace overtake::app {
 namespace {
 
-using ::testing::HasSubstr;
 using nlohmann::json;
+using ::testing::HasSubstr;
 
 std::string error_of(const std::string& text) {
   try {
@@ -54,7 +54,8 @@ TEST(ScenarioFile, ErrorsNameTheKey) {
               HasSubstr("scenario.cars[0]: give exactly one of gap_m"));
   EXPECT_THAT(error_of(R"({"cars": [{"gap_m": 5, "lane": 7, "speed_mps": 15}]})"),
               HasSubstr("scenario.cars[0].lane: 7 is out of range (0 to 2)"));
-  EXPECT_THAT(error_of(R"({"cars": [{"gap_m": 5, "lane": 0}]})"), HasSubstr("scenario.cars[0].speed_mps: missing"));
+  EXPECT_THAT(error_of(R"({"cars": [{"gap_m": 5, "lane": 0}]})"),
+              HasSubstr("scenario.cars[0].speed_mps: missing"));
   EXPECT_THAT(error_of(R"({"ego": {"speed_mps": "fast"}})"),
               HasSubstr("scenario.ego.speed_mps: expected a finite number"));
   EXPECT_THAT(error_of(R"({"events": [{"t_s": 1, "car": 0, "change_lane": 1}]})"),
@@ -66,8 +67,10 @@ TEST(ScenarioFile, ErrorsNameTheKey) {
                            "events": [{"t_s": 1, "car": 0}]})"),
               HasSubstr("give exactly one of change_lane"));
   EXPECT_THAT(error_of(R"({"speed": 3})"), HasSubstr("scenario.speed: unknown key"));
-  EXPECT_THAT(error_of(R"({"duration_s": -1})"), HasSubstr("scenario.duration_s: -1 is out of range (0 to 604800)"));
-  EXPECT_THAT(error_of(R"({"duration_s": 0})"), HasSubstr("scenario.duration_s: must be more than 0"));
+  EXPECT_THAT(error_of(R"({"duration_s": -1})"),
+              HasSubstr("scenario.duration_s: -1 is out of range (0 to 604800)"));
+  EXPECT_THAT(error_of(R"({"duration_s": 0})"),
+              HasSubstr("scenario.duration_s: must be more than 0"));
   EXPECT_THAT(error_of(R"([])"), HasSubstr("scenario: expected an object"));
 }
 
@@ -81,12 +84,14 @@ TEST(ScenarioFile, NumbersAreBoundedNotWrappedOrSaturated) {
               HasSubstr("scenario.cars[0].speed_mps: 1e+300 is out of range (0 to 100)"));
   EXPECT_THAT(error_of(R"({"ego": {"speed_mps": 1000000}})"),
               HasSubstr("scenario.ego.speed_mps: 1000000 is out of range (0 to 100)"));
-  EXPECT_THAT(error_of(R"({"ego": {"s_m": 1e12}})"), HasSubstr("scenario.ego.s_m: 1000000000000.0 is out of range"));
+  EXPECT_THAT(error_of(R"({"ego": {"s_m": 1e12}})"),
+              HasSubstr("scenario.ego.s_m: 1000000000000.0 is out of range"));
   EXPECT_THAT(error_of(R"({"cars": [{"gap_m": 5, "lane": 1, "speed_mps": 1}],
                            "events": [{"t_s": 1, "car": 18446744073709551617, "change_lane": 0}]})"),
               HasSubstr("scenario.events[0].car"));
   // A scenario longer than a week is the scenario's fault, not --minutes'.
-  EXPECT_THAT(error_of(R"({"duration_s": 1e9})"), HasSubstr("scenario.duration_s: 1000000000.0 is out of range (0 to 604800)"));
+  EXPECT_THAT(error_of(R"({"duration_s": 1e9})"),
+              HasSubstr("scenario.duration_s: 1000000000.0 is out of range (0 to 604800)"));
 }
 
 // The largest values a scenario may hold still give a report of finite numbers (1e300 m/s

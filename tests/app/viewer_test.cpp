@@ -411,8 +411,8 @@ TEST_F(ViewerTest, ServerAnswersThePageTheReplayAnd404) {
 
   EXPECT_EQ(http_get(server.port(), "/other").status, 404u);
   // Nothing but the page and the replay is served: no path reaches a file.
-  for (const char* target : {"/../../../../etc/passwd", "/%2e%2e/%2e%2e/etc/passwd", "/replay.otr/../../x",
-                             "//etc/passwd"}) {
+  for (const char* target : {"/../../../../etc/passwd", "/%2e%2e/%2e%2e/etc/passwd",
+                             "/replay.otr/../../x", "//etc/passwd"}) {
     EXPECT_EQ(http_get(server.port(), target).status, 404u) << target;
   }
   EXPECT_EQ(http_get(server.port(), "/live").status, 404u);  // no live feed here
@@ -560,8 +560,8 @@ TEST_F(ViewerTest, LiveViewStreamsTheSameRecordsAsTheReplay) {
 
   // The live records are the replay file's body, inflated: the same decoding works.
   const replay::Replay from_file = replay::read_replay(dir_ / "r.otr");
-  const replay::Replay from_live =
-      replay::parse_replay(replay::replay_preamble(header) + test::deflate_all(got_records), "live");
+  const replay::Replay from_live = replay::parse_replay(
+      replay::replay_preamble(header) + test::deflate_all(got_records), "live");
   EXPECT_EQ(from_live.frames.size(), from_file.frames.size());
   EXPECT_EQ(from_live.paths.size(), from_file.paths.size());
   EXPECT_EQ(from_live.end_json, from_file.end_json);

@@ -51,14 +51,16 @@ TEST(MapParse, BlankLinesCommentsAndCrlfAreAccepted) {
 }
 
 TEST(MapErrors, WrongColumnCountNamesTheLine) {
-  const std::string e = error_of("0 -100 0 0 -1\n100 0 141.4 1\n0 100 282.8 0 1\n-100 0 424.3 -1 0\n");
+  const std::string e =
+      error_of("0 -100 0 0 -1\n100 0 141.4 1\n0 100 282.8 0 1\n-100 0 424.3 -1 0\n");
   EXPECT_THAT(e, HasSubstr("bad.csv:2:"));
   EXPECT_THAT(e, HasSubstr("expected 5 numbers"));
   EXPECT_THAT(e, HasSubstr("found 4"));
 }
 
 TEST(MapErrors, NotANumberNamesLineAndColumn) {
-  const std::string e = error_of("0 -100 0 0 -1\n100 0 141.4 1 0\n0 abc 282.8 0 1\n-100 0 424.3 -1 0\n");
+  const std::string e =
+      error_of("0 -100 0 0 -1\n100 0 141.4 1 0\n0 abc 282.8 0 1\n-100 0 424.3 -1 0\n");
   EXPECT_THAT(e, HasSubstr("bad.csv:3:"));
   EXPECT_THAT(e, HasSubstr("column 2 (y) is not a number: 'abc'"));
 }
@@ -69,36 +71,42 @@ TEST(MapErrors, TrailingGarbageInANumberIsNotANumber) {
 }
 
 TEST(MapErrors, NanIsRejected) {
-  const std::string e = error_of("0 -100 0 0 -1\n100 nan 141.4 1 0\n0 100 282.8 0 1\n-100 0 424.3 -1 0\n");
+  const std::string e =
+      error_of("0 -100 0 0 -1\n100 nan 141.4 1 0\n0 100 282.8 0 1\n-100 0 424.3 -1 0\n");
   EXPECT_THAT(e, HasSubstr("bad.csv:2:"));
   EXPECT_THAT(e, HasSubstr("not finite"));
 }
 
 TEST(MapErrors, InfinityIsRejected) {
-  const std::string e = error_of("0 -100 0 0 -1\n100 0 141.4 1 0\n0 100 inf 0 1\n-100 0 424.3 -1 0\n");
+  const std::string e =
+      error_of("0 -100 0 0 -1\n100 0 141.4 1 0\n0 100 inf 0 1\n-100 0 424.3 -1 0\n");
   EXPECT_THAT(e, HasSubstr("bad.csv:3:"));
   EXPECT_THAT(e, HasSubstr("column 3 (s) is not finite"));
 }
 
 TEST(MapErrors, SNotIncreasingNamesBothLines) {
-  const std::string e = error_of("0 -100 0 0 -1\n100 0 141.4 1 0\n0 100 141.4 0 1\n-100 0 424.3 -1 0\n");
+  const std::string e =
+      error_of("0 -100 0 0 -1\n100 0 141.4 1 0\n0 100 141.4 0 1\n-100 0 424.3 -1 0\n");
   EXPECT_THAT(e, HasSubstr("bad.csv:3:"));
   EXPECT_THAT(e, HasSubstr("does not increase"));
   EXPECT_THAT(e, HasSubstr("line 2"));
 }
 
 TEST(MapErrors, NormalNotUnitLength) {
-  const std::string e = error_of("0 -100 0 0 -1\n100 0 141.4 1.02 0\n0 100 282.8 0 1\n-100 0 424.3 -1 0\n");
+  const std::string e =
+      error_of("0 -100 0 0 -1\n100 0 141.4 1.02 0\n0 100 282.8 0 1\n-100 0 424.3 -1 0\n");
   EXPECT_THAT(e, HasSubstr("bad.csv:2:"));
   EXPECT_THAT(e, HasSubstr("unit vector"));
 }
 
 TEST(MapErrors, NormalWithinOnePercentIsAccepted) {
-  EXPECT_EQ(error_of("0 -100 0 0 -1\n100 0 141.4 1.009 0\n0 100 282.8 0 1\n-100 0 424.3 -1 0\n"), "");
+  EXPECT_EQ(error_of("0 -100 0 0 -1\n100 0 141.4 1.009 0\n0 100 282.8 0 1\n-100 0 424.3 -1 0\n"),
+            "");
 }
 
 TEST(MapErrors, DuplicatePointNamesBothLines) {
-  const std::string e = error_of("0 -100 0 0 -1\n100 0 141.4 1 0\n0 100 282.8 0 1\n100 0 424.3 1 0\n-100 0 624.3 -1 0\n");
+  const std::string e = error_of(
+      "0 -100 0 0 -1\n100 0 141.4 1 0\n0 100 282.8 0 1\n100 0 424.3 1 0\n-100 0 624.3 -1 0\n");
   EXPECT_THAT(e, HasSubstr("bad.csv:4:"));
   EXPECT_THAT(e, HasSubstr("duplicates the point on line 2"));
 }
@@ -118,11 +126,14 @@ TEST(MapErrors, EmptyFile) {
 /// kGood with every x, y and s multiplied by `k`.
 std::string scaled(double k) {
   std::string out;
-  const double pts[4][5] = {{0, -100, 0, 0, -1}, {100, 0, 141.4214, 1, 0}, {0, 100, 282.8427, 0, 1},
+  const double pts[4][5] = {{0, -100, 0, 0, -1},
+                            {100, 0, 141.4214, 1, 0},
+                            {0, 100, 282.8427, 0, 1},
                             {-100, 0, 424.2641, -1, 0}};
   for (const auto& p : pts) {
     char line[200];
-    std::snprintf(line, sizeof line, "%.17g %.17g %.17g %g %g\n", p[0] * k, p[1] * k, p[2] * k, p[3], p[4]);
+    std::snprintf(line, sizeof line, "%.17g %.17g %.17g %g %g\n", p[0] * k, p[1] * k, p[2] * k,
+                  p[3], p[4]);
     out += line;
   }
   return out;
@@ -137,15 +148,21 @@ TEST(MapLimits, HugeCoordinatesAreRefusedNamingTheLine) {
 }
 
 TEST(MapLimits, TooShortOrTooLongALoopIsRefused) {
-  EXPECT_THAT(error_of(scaled(0.1)), HasSubstr("the loop is 56.56854562 m long; a map's loop must be 200 to 200000 m"));
+  EXPECT_THAT(error_of(scaled(0.1)),
+              HasSubstr("the loop is 56.56854562 m long; a map's loop must be 200 to 200000 m"));
   // 95 km by 8 km, every number within range: 206 km around.
-  const std::string long_loop = "0 0 -99000 0 -1\n95000 0 -4000 1 0\n95000 8000 4000 0 1\n0 8000 99000 -1 0\n";
-  EXPECT_THAT(error_of(long_loop), HasSubstr("the loop is 206000 m long; a map's loop must be 200 to 200000 m"));
+  const std::string long_loop =
+      "0 0 -99000 0 -1\n95000 0 -4000 1 0\n95000 8000 4000 0 1\n0 8000 99000 -1 0\n";
+  EXPECT_THAT(error_of(long_loop),
+              HasSubstr("the loop is 206000 m long; a map's loop must be 200 to 200000 m"));
 }
 
 TEST(MapLimits, SThatIsNotADistanceAlongTheRoadIsRefused) {
   const std::string text = "0 -100 0 0 -1\n100 0 14142 1 0\n0 100 28284 0 1\n-100 0 42426 -1 0\n";
-  EXPECT_THAT(error_of(text), HasSubstr("bad.csv:2: s grows by 14142 m from line 1, but the waypoints are 141.4213562 m apart"));
+  EXPECT_THAT(
+      error_of(text),
+      HasSubstr(
+          "bad.csv:2: s grows by 14142 m from line 1, but the waypoints are 141.4213562 m apart"));
 }
 
 TEST(MapLimits, ALoopThatCrossesItselfIsRefused) {
@@ -156,14 +173,18 @@ TEST(MapLimits, ALoopThatCrossesItselfIsRefused) {
       "200 200 282.8427 1 0\n"
       "200 0 482.8427 0 1\n"
       "0 200 765.6854 -1 0\n";
-  EXPECT_THAT(error_of(text), HasSubstr("the road crosses itself: the divider between lines 1-2 crosses it between lines 3-4"));
+  EXPECT_THAT(
+      error_of(text),
+      HasSubstr(
+          "the road crosses itself: the divider between lines 1-2 crosses it between lines 3-4"));
   EXPECT_EQ(error_of(kGood), "");
 }
 
 TEST(MapLimits, TooManyWaypointsAreRefused) {
   std::string text;
   for (int i = 0; i < 20001; ++i) text += std::to_string(i) + " 0 " + std::to_string(i) + " 0 1\n";
-  EXPECT_THAT(error_of(text), HasSubstr("bad.csv:20001: too many waypoints: a map may have at most 20000"));
+  EXPECT_THAT(error_of(text),
+              HasSubstr("bad.csv:20001: too many waypoints: a map may have at most 20000"));
 }
 
 TEST(MapLimits, AReferenceLineRefusesALoopItCannotSample) {

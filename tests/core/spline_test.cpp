@@ -112,7 +112,7 @@ TEST(PeriodicSmoothingSpline, DampsRoundingNoiseButKeepsTheShape) {
     const double want_d2 = -kAmp * k * k * std::sin(k * x);
     rough_err = std::max(rough_err, std::abs(rough->eval(x).d2 - want_d2));
     smooth_err = std::max(smooth_err, std::abs(smooth->eval(x).d2 - want_d2));
-    smooth_pos = std::max(smooth_pos, std::abs((*smooth)(x) - kAmp * std::sin(k * x)));
+    smooth_pos = std::max(smooth_pos, std::abs((*smooth)(x)-kAmp * std::sin(k * x)));
   }
   EXPECT_GT(rough_err, 0.3 * kAmp * k * k);
   EXPECT_LT(smooth_err, 0.1 * rough_err);

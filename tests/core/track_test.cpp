@@ -238,7 +238,8 @@ TEST(TrackGenerate, WideStraightSpacingMakesASparseMap) {
   EXPECT_TRUE(r.ok()) << joined(r.problems);
   EXPECT_GT(r.max_spacing_m, 85.0);
   EXPECT_LE(r.max_spacing_m, 90.0);
-  EXPECT_GT(r.mean_spacing_m, 1.4 * check_track(load(generate_track(spec_with(4))), spec_with(4)).mean_spacing_m);
+  EXPECT_GT(r.mean_spacing_m,
+            1.4 * check_track(load(generate_track(spec_with(4))), spec_with(4)).mean_spacing_m);
 }
 
 // ---- The checker finds faults ----

@@ -33,7 +33,8 @@ TEST(WireRound, IsIdempotent) {
 
 TEST(WireRound, PassesNonFiniteValuesThrough) {
   EXPECT_TRUE(std::isnan(wire_round(std::numeric_limits<double>::quiet_NaN())));
-  EXPECT_EQ(wire_round(std::numeric_limits<double>::infinity()), std::numeric_limits<double>::infinity());
+  EXPECT_EQ(wire_round(std::numeric_limits<double>::infinity()),
+            std::numeric_limits<double>::infinity());
 }
 
 TEST(WireRound, RoundsYawInDegreesAndSpeedInMph) {
@@ -66,7 +67,8 @@ TEST(BoxesOverlap, RotationMatters) {
 
 TEST(MengerCurvature, CircleThroughThreePoints) {
   const double r = 150.0;
-  const Vec2 a{r, 0}, b{r * std::cos(0.1), r * std::sin(0.1)}, c{r * std::cos(0.2), r * std::sin(0.2)};
+  const Vec2 a{r, 0}, b{r * std::cos(0.1), r * std::sin(0.1)},
+      c{r * std::cos(0.2), r * std::sin(0.2)};
   EXPECT_NEAR(menger_curvature(a, b, c), 1.0 / r, 1e-9);   // counter-clockwise: positive
   EXPECT_NEAR(menger_curvature(c, b, a), -1.0 / r, 1e-9);  // clockwise: negative
   EXPECT_EQ(menger_curvature(a, a, c), 0.0);

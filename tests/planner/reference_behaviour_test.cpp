@@ -21,7 +21,8 @@ class BehaviourTest : public ::testing::Test {
     return {1000.0, speed_mps, core::lane_center_d(lane), 1.0};
   }
   /// Decides `cycles` times on the same scene (0.04 s apart); returns the last decision.
-  BehaviourDecision run(const std::vector<CarPrediction>& cars, const EgoSnapshot& ego, int cycles = 1) {
+  BehaviourDecision run(const std::vector<CarPrediction>& cars, const EgoSnapshot& ego,
+                        int cycles = 1) {
     BehaviourDecision d;
     for (int i = 0; i < cycles; ++i) d = decide(cars, ego, state_, 0.04, kLength, params_, road_);
     return d;
@@ -59,9 +60,9 @@ TEST(SafetyGaps, RssGapGrowsWithTheSpeedDifference) {
 
 TEST(SafetyGaps, AFollowerClosingFastHasNoRoomEvenFromFarBehind) {
   const ReferenceBehaviourParams p;
-  EXPECT_GT(rear_room(30.0, 2.0, kLength, p), 0.0);   // reacts in time
-  EXPECT_LT(rear_room(60.0, 9.0, kLength, p), 0.0);   // reacts only at 10 m: too late
-  EXPECT_LT(rear_room(5.5, -1.0, kLength, p), 0.0);   // slower, but already too close
+  EXPECT_GT(rear_room(30.0, 2.0, kLength, p), 0.0);  // reacts in time
+  EXPECT_LT(rear_room(60.0, 9.0, kLength, p), 0.0);  // reacts only at 10 m: too late
+  EXPECT_LT(rear_room(5.5, -1.0, kLength, p), 0.0);  // slower, but already too close
   EXPECT_GT(rear_room(8.0, -1.0, kLength, p), 0.0);
 }
 
@@ -88,7 +89,8 @@ TEST_F(BehaviourTest, TheMiddleLaneIsUsedToReachAFasterFarLane) {
 
 TEST_F(BehaviourTest, EquallyBlockedLanesAreNotWorthAChange) {
   std::vector<CarPrediction> cars;
-  for (int l = 0; l < 3; ++l) cars.push_back(test::lane_car(l, 1030.0, core::lane_center_d(l), 15.0));
+  for (int l = 0; l < 3; ++l)
+    cars.push_back(test::lane_car(l, 1030.0, core::lane_center_d(l), 15.0));
   for (int i = 0; i < 200; ++i) {
     const BehaviourDecision d = run(cars, ego_in(1, 15.0));
     EXPECT_EQ(d.target_lane, 1);

@@ -23,14 +23,16 @@ class PolicyTest : public ::testing::Test {
 
   /// What the simulator reports after the car drove `k` points of `path` (trimmed as the
   /// simulator does: rounded, the first point kept).
-  core::Telemetry after(const core::Telemetry& before, const std::vector<core::Vec2>& path, std::size_t k) const {
+  core::Telemetry after(const core::Telemetry& before, const std::vector<core::Vec2>& path,
+                        std::size_t k) const {
     const auto sent = core::round_like_wire(path);
     core::Telemetry t = before;
     const core::Vec2 car = sent[k - 1];
     const core::Vec2 next = sent[k];
     const core::FrenetPoint f = line_.to_frenet(car, before.ego.s_m);
     const core::Vec2 before_car = k >= 2 ? sent[k - 2] : before.ego.position;
-    t.ego = {car, std::atan2(next.y - car.y, next.x - car.x), core::distance(car, before_car) / 0.02, f.s_m, f.d_m};
+    t.ego = {car, std::atan2(next.y - car.y, next.x - car.x),
+             core::distance(car, before_car) / 0.02, f.s_m, f.d_m};
     t.previous_path.assign(sent.begin() + static_cast<std::ptrdiff_t>(k), sent.end());
     t.end_path = line_.to_frenet(t.previous_path.back(), f.s_m);
     return core::round_like_wire(t);
@@ -76,7 +78,8 @@ TEST_F(PolicyTest, TheJointWithTheKeptPathIsSmooth) {
   const double h = 0.1;
   double peak_acc = 0.0, peak_jerk = 0.0;
   for (std::size_t i = 3 * w; i < driven.size(); ++i) {
-    const core::Vec2 p0 = driven[i], p1 = driven[i - w], p2 = driven[i - 2 * w], p3 = driven[i - 3 * w];
+    const core::Vec2 p0 = driven[i], p1 = driven[i - w], p2 = driven[i - 2 * w],
+                     p3 = driven[i - 3 * w];
     peak_acc = std::max(peak_acc, core::norm(p0 - 2.0 * p1 + p2) / (h * h));
     peak_jerk = std::max(peak_jerk, core::norm(p0 - 3.0 * p1 + 3.0 * p2 - p3) / (h * h * h));
   }
@@ -98,7 +101,9 @@ TEST_F(PolicyTest, OddInputNeverThrowsAndAlwaysGivesAPath) {
   one.previous_path = {one.ego.position};
   EXPECT_NO_THROW({ EXPECT_FALSE(p.plan(one).path.empty()); });
   core::Telemetry crowded = test::ego_at(line_, 300.0, 6.0, 0.0);
-  for (int i = 0; i < 12; ++i) crowded.cars.push_back(test::observed_car(line_, i, 300.0 + 5.0 * (i - 6), 2.0 + 4.0 * (i % 3), 0.0));
+  for (int i = 0; i < 12; ++i)
+    crowded.cars.push_back(
+        test::observed_car(line_, i, 300.0 + 5.0 * (i - 6), 2.0 + 4.0 * (i % 3), 0.0));
   EXPECT_NO_THROW({ EXPECT_FALSE(p.plan(crowded).path.empty()); });
 }
 
@@ -110,7 +115,8 @@ TEST_F(PolicyTest, DrivesAcrossTheLapWrapWithoutAJump) {
   auto policy = make_policy("reference", line_, params_);
   sim::RunOptions opts;
   opts.duration_s = 25.0;
-  const auto r = sim::run_drive(world, [&](const core::Telemetry& t) { return policy->plan(t); }, opts);
+  const auto r = sim::run_drive(
+      world, [&](const core::Telemetry& t) { return policy->plan(t); }, opts);
   EXPECT_TRUE(r.incidents.empty());
   EXPECT_GT(r.distance_m, 300.0);  // crossed the wrap
   EXPECT_LT(r.peak.strict_jerk_mps3, 10.0);
@@ -142,9 +148,11 @@ TEST_P(SeededDrives, NoIncidentsAndAMeanSpeedFloor) {
     sim::RunOptions opts;
     opts.duration_s = minutes * 60.0;
     opts.seed = static_cast<std::uint64_t>(seed);
-    const auto r = sim::run_drive(world, [&](const core::Telemetry& t) { return policy->plan(t); }, opts);
-    EXPECT_TRUE(r.incidents.empty()) << "seed " << seed << ": " << r.incidents.size() << " incidents, first at t = "
-                                     << (r.incidents.empty() ? 0.0 : r.incidents.front().t_s);
+    const auto r = sim::run_drive(
+        world, [&](const core::Telemetry& t) { return policy->plan(t); }, opts);
+    EXPECT_TRUE(r.incidents.empty())
+        << "seed " << seed << ": " << r.incidents.size()
+        << " incidents, first at t = " << (r.incidents.empty() ? 0.0 : r.incidents.front().t_s);
     EXPECT_LT(r.peak.strict_acceleration_mps2, 10.0) << "seed " << seed;
     EXPECT_LT(r.peak.strict_jerk_mps3, 10.0) << "seed " << seed;
     EXPECT_LT(core::mps_to_mph(r.peak.speed_mps), 50.0) << "seed " << seed;
@@ -176,8 +184,10 @@ TEST_P(SeededDrives, WaypointsUpTo90MetresApart) {
     sim::RunOptions opts;
     opts.duration_s = minutes * 60.0;
     opts.seed = static_cast<std::uint64_t>(seed);
-    const auto r = sim::run_drive(world, [&](const core::Telemetry& t) { return policy->plan(t); }, opts);
-    EXPECT_TRUE(r.incidents.empty()) << "seed " << seed << ": " << r.incidents.size() << " incidents";
+    const auto r = sim::run_drive(
+        world, [&](const core::Telemetry& t) { return policy->plan(t); }, opts);
+    EXPECT_TRUE(r.incidents.empty())
+        << "seed " << seed << ": " << r.incidents.size() << " incidents";
     EXPECT_LT(r.peak.strict_jerk_mps3, 10.0) << "seed " << seed;
     metres += r.distance_m;
     seconds += r.duration_s;
@@ -186,8 +196,11 @@ TEST_P(SeededDrives, WaypointsUpTo90MetresApart) {
 }
 
 INSTANTIATE_TEST_SUITE_P(BothProfiles, SeededDrives,
-                         ::testing::Values(sim::TrafficProfile::faithful, sim::TrafficProfile::calm),
-                         [](const auto& param_info) { return std::string(sim::to_string(param_info.param)); });
+                         ::testing::Values(sim::TrafficProfile::faithful,
+                                           sim::TrafficProfile::calm),
+                         [](const auto& param_info) {
+                           return std::string(sim::to_string(param_info.param));
+                         });
 
 }  // namespace
 }  // namespace overtake::planner::reference

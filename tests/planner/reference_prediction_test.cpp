@@ -88,12 +88,14 @@ TEST_F(PredictionTest, ABrakingCarKeepsBrakingForAWhileAndNeverReverses) {
 TEST_F(PredictionTest, TracksGiveAccelerationAndForgetCarsPlacedAgain) {
   std::vector<CarTrack> tracks;
   core::Telemetry t;
-  t.cars = {test::observed_car(line_, 0, 300.0, 6.0, 20.0), test::observed_car(line_, 1, 400.0, 2.0, 20.0)};
+  t.cars = {test::observed_car(line_, 0, 300.0, 6.0, 20.0),
+            test::observed_car(line_, 1, 400.0, 2.0, 20.0)};
   auto first = predict_cars(t, line_, 280.0, 0.0, tracks, params_, road_, 4.7);
   ASSERT_EQ(first.size(), 2u);
   EXPECT_EQ(first[0].s_ddot, 0.0);
   // 0.04 s later: car 0 slowed by 0.32 m/s (8 m/s^2); car 1 jumped 150 m (placed again).
-  t.cars = {test::observed_car(line_, 0, 300.8, 6.0, 19.68), test::observed_car(line_, 1, 550.0, 2.0, 19.68)};
+  t.cars = {test::observed_car(line_, 0, 300.8, 6.0, 19.68),
+            test::observed_car(line_, 1, 550.0, 2.0, 19.68)};
   auto second = predict_cars(t, line_, 281.0, 0.04, tracks, params_, road_, 4.7);
   EXPECT_NEAR(second[0].s_ddot, -8.0, 0.05);
   EXPECT_EQ(second[1].s_ddot, 0.0);
@@ -105,7 +107,8 @@ TEST_F(PredictionTest, ParkedCarsAreNoTrafficAndTheFirstFramesSlipIsUndone) {
   core::Telemetry t;
   // Car 0 waits parked 280 m off the road; car 1 was just placed: its velocity reads its cap
   // (50 mph) as m/s.
-  t.cars = {test::observed_car(line_, 0, 300.0, -280.0, 0.0), test::observed_car(line_, 1, 400.0, 6.0, 50.0)};
+  t.cars = {test::observed_car(line_, 0, 300.0, -280.0, 0.0),
+            test::observed_car(line_, 1, 400.0, 6.0, 50.0)};
   const auto cars = predict_cars(t, line_, 280.0, 0.0, tracks, params_, road_, 4.7);
   ASSERT_EQ(cars.size(), 1u);
   EXPECT_EQ(cars[0].id, 1);
@@ -128,7 +131,8 @@ TEST_F(PredictionTest, ACarBehindIsTakenToSpeedUpALittleAboveItsFastestSeen) {
   t.cars = {test::observed_car(line_, 1, 250.0, 6.0, 60.0)};
   cars = predict_cars(t, line_, 280.0, 0.0, tracks, params_, road_, 4.7);
   EXPECT_NEAR(cars[0].speed_mps, core::mph_to_mps(60.0), 1e-6);
-  EXPECT_NEAR(cars[0].s_dot_at(30.0), core::mph_to_mps(60.0) + params_.follower_speed_margin_mps, 0.3);
+  EXPECT_NEAR(cars[0].s_dot_at(30.0), core::mph_to_mps(60.0) + params_.follower_speed_margin_mps,
+              0.3);
 }
 
 TEST_F(PredictionTest, ACarCloseBehindItsLeaderIsTakenToBrakeInAWave) {
@@ -137,7 +141,8 @@ TEST_F(PredictionTest, ACarCloseBehindItsLeaderIsTakenToBrakeInAWave) {
   // Ahead of the ego: car 0 12 m (bumper to bumper) behind car 1, both at 18 m/s. With a cap
   // of 50 mph it reacts within 0.5 * (50 - 18) = 16 m and brakes towards 18 "mph".
   const double cap_speed = 0.81 * core::mph_to_mps(50.0);
-  t.cars = {test::observed_car(line_, 0, 300.0, 6.0, cap_speed), test::observed_car(line_, 1, 316.7, 6.0, 18.0)};
+  t.cars = {test::observed_car(line_, 0, 300.0, 6.0, cap_speed),
+            test::observed_car(line_, 1, 316.7, 6.0, 18.0)};
   const auto cars = predict_cars(t, line_, 200.0, 0.0, tracks, params_, road_, 4.7);
   ASSERT_EQ(cars.size(), 2u);
   EXPECT_LT(cars[0].s_ddot, -5.0);

@@ -30,13 +30,15 @@ ScenarioRun run_scenario(const std::string& file, std::uint64_t seed) {
   static const auto track = app::load_track(std::nullopt);
   const app::Config config = app::default_config();
   ScenarioRun out;
-  out.scenario = app::load_scenario(std::filesystem::path(OVERTAKE_SOURCE_DIR) / "tests/scenarios" / file, config.road);
+  out.scenario = app::load_scenario(
+      std::filesystem::path(OVERTAKE_SOURCE_DIR) / "tests/scenarios" / file, config.road);
   sim::World world(track->map, track->line, config.world, out.scenario);
   auto policy = make_policy("reference", track->line, config.planner);
   sim::RunOptions opts;
   opts.duration_s = out.scenario.duration_s.value_or(30.0);
   opts.seed = seed;
-  out.report = sim::run_drive(world, [&](const core::Telemetry& t) { return policy->plan(t); }, opts);
+  out.report = sim::run_drive(
+      world, [&](const core::Telemetry& t) { return policy->plan(t); }, opts);
   return out;
 }
 
@@ -47,9 +49,10 @@ TEST_P(Scenarios, NoIncidentsAndWithinTheStrictLimits) {
     const ScenarioRun r = run_scenario(GetParam(), seed);
     const auto& rep = r.report;
     EXPECT_EQ(rep.outcome.end, sim::RunEnd::completed) << sim::ended_early_text(rep.outcome);
-    EXPECT_TRUE(rep.incidents.empty()) << r.scenario.name << ", seed " << seed << ": " << rep.incidents.size()
-                                       << " incidents, the first at t = "
-                                       << (rep.incidents.empty() ? 0.0 : rep.incidents.front().t_s) << " s";
+    EXPECT_TRUE(rep.incidents.empty())
+        << r.scenario.name << ", seed " << seed << ": " << rep.incidents.size()
+        << " incidents, the first at t = "
+        << (rep.incidents.empty() ? 0.0 : rep.incidents.front().t_s) << " s";
     EXPECT_LT(rep.peak.strict_acceleration_mps2, kLimit) << r.scenario.name << ", seed " << seed;
     EXPECT_LT(rep.peak.strict_jerk_mps3, kLimit) << r.scenario.name << ", seed " << seed;
     EXPECT_LT(core::mps_to_mph(rep.peak.speed_mps), 50.0) << r.scenario.name << ", seed " << seed;
@@ -57,11 +60,12 @@ TEST_P(Scenarios, NoIncidentsAndWithinTheStrictLimits) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Reference, Scenarios,
-                         ::testing::Values("cut_in_20m.json", "all_lanes_blocked.json", "hard_brake_ahead.json",
-                                           "fast_car_in_target_lane.json", "stop_and_go.json",
-                                           "lap_wrap_lane_change.json"),
+                         ::testing::Values("cut_in_20m.json", "all_lanes_blocked.json",
+                                           "hard_brake_ahead.json", "fast_car_in_target_lane.json",
+                                           "stop_and_go.json", "lap_wrap_lane_change.json"),
                          [](const auto& param_info) {
-                           std::string name = param_info.param.substr(0, param_info.param.find('.'));
+                           std::string name =
+                               param_info.param.substr(0, param_info.param.find('.'));
                            return name;
                          });
 

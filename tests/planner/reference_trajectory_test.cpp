@@ -17,7 +17,8 @@ class TrajectoryTest : public ::testing::Test {
   TrajectoryTest() : map_(overtake::test::circle_map()), line_(map_) {}
 
   /// Lateral hold at d, longitudinal quartic from v0 to v1 over t.
-  [[nodiscard]] static Trajectory straight(double d, double v0, double v1, double t, double s0 = 1000.0) {
+  [[nodiscard]] static Trajectory straight(double d, double v0, double v1, double t,
+                                           double s0 = 1000.0) {
     Trajectory tr;
     tr.lateral = quintic(d, 0.0, 0.0, d, 0.0, 0.0, 1.0);
     tr.longitudinal.poly = quartic(s0, v0, 0.0, v1, 0.0, t);
@@ -41,14 +42,16 @@ class TrajectoryTest : public ::testing::Test {
 };
 
 TEST_F(TrajectoryTest, AGentlePathPassesTheCartesianCheck) {
-  const KinematicReport r = check_kinematics(straight(6.0, 20.0, 21.0, 4.0), line_, params_.trajectory);
+  const KinematicReport r =
+      check_kinematics(straight(6.0, 20.0, 21.0, 4.0), line_, params_.trajectory);
   EXPECT_TRUE(r.ok);
   EXPECT_LT(r.peak_accel_mps2, 1.0);
   EXPECT_LT(r.peak_speed_mps, params_.trajectory.max_speed_mps);
 }
 
 TEST_F(TrajectoryTest, SpeedingIsCaught) {
-  const KinematicReport r = check_kinematics(straight(6.0, 22.0, 23.0, 2.0), line_, params_.trajectory);
+  const KinematicReport r =
+      check_kinematics(straight(6.0, 22.0, 23.0, 2.0), line_, params_.trajectory);
   EXPECT_FALSE(r.ok);
   EXPECT_GT(r.peak_speed_mps, params_.trajectory.max_speed_mps);
   EXPECT_LT(r.first_violation_s, 2.0);
@@ -56,7 +59,8 @@ TEST_F(TrajectoryTest, SpeedingIsCaught) {
 
 TEST_F(TrajectoryTest, HardBrakingAndJerkAreCaught) {
   // 20 -> 5 m/s in 1.5 s: peak deceleration 15 m/s^2 and jerk 40 m/s^3.
-  const KinematicReport r = check_kinematics(straight(6.0, 20.0, 5.0, 1.5), line_, params_.trajectory);
+  const KinematicReport r =
+      check_kinematics(straight(6.0, 20.0, 5.0, 1.5), line_, params_.trajectory);
   EXPECT_FALSE(r.ok);
   EXPECT_GT(r.peak_accel_mps2, params_.trajectory.max_accel_mps2);
   EXPECT_GT(r.peak_jerk_mps3, params_.trajectory.max_jerk_mps3);
@@ -65,7 +69,8 @@ TEST_F(TrajectoryTest, HardBrakingAndJerkAreCaught) {
 
 TEST_F(TrajectoryTest, TheCurvatureCountsInTheTotalAcceleration) {
   // A tight circle: at 20 m/s on radius ~1100 m, v^2 k is 0.36 m/s^2 ...
-  const KinematicReport r = check_kinematics(straight(6.0, 20.0, 20.0, 1.0), line_, params_.trajectory);
+  const KinematicReport r =
+      check_kinematics(straight(6.0, 20.0, 20.0, 1.0), line_, params_.trajectory);
   EXPECT_NEAR(r.peak_accel_mps2, 400.0 / 1094.0, 0.02);
   // ... and a 1 s lane change adds a lateral acceleration of 5.8 * 4 / 1 = 23 m/s^2.
   const KinematicReport fast = check_kinematics(change(1, 0, 20.0, 1.0), line_, params_.trajectory);
@@ -75,7 +80,8 @@ TEST_F(TrajectoryTest, TheCurvatureCountsInTheTotalAcceleration) {
 
 TEST_F(TrajectoryTest, DrivingIntoASlowerCarIsACollision) {
   const std::vector<CarPrediction> cars = {test::lane_car(0, 1030.0, 6.0, 10.0)};
-  const CollisionReport r = check_collisions(straight(6.0, 20.0, 20.0, 1.0), cars, 0.0, 1.0, params_, road_, car_);
+  const CollisionReport r =
+      check_collisions(straight(6.0, 20.0, 20.0, 1.0), cars, 0.0, 1.0, params_, road_, car_);
   EXPECT_FALSE(r.ok);
   EXPECT_EQ(r.car_id, 0);
   // It closes 10 m/s on a 30 m gap; the margins make it a bit earlier than 2.5 s.
@@ -84,16 +90,19 @@ TEST_F(TrajectoryTest, DrivingIntoASlowerCarIsACollision) {
 }
 
 TEST_F(TrajectoryTest, CarsInOtherLanesAndFollowersAreNoCollision) {
-  const std::vector<CarPrediction> cars = {test::lane_car(0, 1010.0, 2.3, 10.0),   // lane 0, wandering
-                                           test::lane_car(1, 990.0, 10.0, 25.0),   // lane 2, passing
-                                           test::lane_car(2, 985.0, 6.0, 24.0)};   // follows the ego
-  EXPECT_TRUE(check_collisions(straight(6.0, 20.0, 20.0, 1.0), cars, 0.0, 1.0, params_, road_, car_).ok);
+  const std::vector<CarPrediction> cars = {
+      test::lane_car(0, 1010.0, 2.3, 10.0),  // lane 0, wandering
+      test::lane_car(1, 990.0, 10.0, 25.0),  // lane 2, passing
+      test::lane_car(2, 985.0, 6.0, 24.0)};  // follows the ego
+  EXPECT_TRUE(
+      check_collisions(straight(6.0, 20.0, 20.0, 1.0), cars, 0.0, 1.0, params_, road_, car_).ok);
 }
 
 TEST_F(TrajectoryTest, ACutInAheadIsACollisionForTheLaneKeeper) {
   // 20 m ahead in lane 0, drifting into lane 1 at 17.9 m/s; the ego keeps 21.9 m/s.
   const std::vector<CarPrediction> cars = {test::lane_car(0, 1020.0, 2.5, 17.9, 1.0)};
-  const CollisionReport r = check_collisions(straight(6.0, 21.9, 21.9, 1.0), cars, 0.0, 1.0, params_, road_, car_);
+  const CollisionReport r =
+      check_collisions(straight(6.0, 21.9, 21.9, 1.0), cars, 0.0, 1.0, params_, road_, car_);
   EXPECT_FALSE(r.ok);
 }
 
@@ -116,7 +125,8 @@ TEST_F(TrajectoryTest, TheBandAroundALaneLineIsKnown) {
 class PlanTest : public TrajectoryTest {
  protected:
   [[nodiscard]] TrajectoryPlan plan(const FrenetState& start, int target_lane,
-                                    const std::vector<CarPrediction>& cars, double band_s = 0.0) const {
+                                    const std::vector<CarPrediction>& cars,
+                                    double band_s = 0.0) const {
     TrajectoryRequest req;
     req.start = start;
     req.target_lane = target_lane;
@@ -165,7 +175,8 @@ TEST_F(PlanTest, ItSlowsBehindAStoppedCarAndStopsShortOfIt) {
   const TrajectoryPlan p = plan({1000.0, 20.0, 0.0, 6.0, 0.0, 0.0}, 1, cars);
   EXPECT_NE(p.status, PlanStatus::least_bad);
   double min_gap = 1e9;
-  for (double t = 0.0; t <= 12.0; t += 0.1) min_gap = std::min(min_gap, 1080.0 - p.trajectory.at(t).s_m);
+  for (double t = 0.0; t <= 12.0; t += 0.1)
+    min_gap = std::min(min_gap, 1080.0 - p.trajectory.at(t).s_m);
   EXPECT_GT(min_gap, car_.length_m);
   EXPECT_LT(p.trajectory.at(0.5).s_ddot, -0.5);
 }
@@ -185,7 +196,8 @@ TEST_F(PlanTest, ItNeverLingersOnALaneLine) {
   // whichever lane it ends in, it is off the line within the limit.
   const FrenetState start{1000.0, 20.0, 0.0, 4.2, -0.2, 0.0};
   const TrajectoryPlan p = plan(start, 1, {}, 0.5);
-  EXPECT_LE(band_time(p.trajectory, 0.5, params_.trajectory), params_.trajectory.max_band_time_s + 0.1);
+  EXPECT_LE(band_time(p.trajectory, 0.5, params_.trajectory),
+            params_.trajectory.max_band_time_s + 0.1);
 }
 
 TEST_F(PlanTest, WhenEveryWayOffTheLineTakesTooLongItTakesTheQuickest) {
@@ -197,7 +209,8 @@ TEST_F(PlanTest, WhenEveryWayOffTheLineTakesTooLongItTakesTheQuickest) {
 TEST_F(PlanTest, WithNothingFeasibleItBrakesWithinTheJerkLimit) {
   // A car stopped 8 m ahead in every lane: no candidate avoids it.
   std::vector<CarPrediction> cars;
-  for (int l = 0; l < 3; ++l) cars.push_back(test::lane_car(l, 1012.0, core::lane_center_d(l), 0.0));
+  for (int l = 0; l < 3; ++l)
+    cars.push_back(test::lane_car(l, 1012.0, core::lane_center_d(l), 0.0));
   const TrajectoryPlan p = plan({1000.0, 20.0, 0.0, 6.0, 0.0, 0.0}, 1, cars);
   EXPECT_NE(p.status, PlanStatus::feasible);
   const double a0 = p.trajectory.at(0.0).s_ddot;

@@ -92,7 +92,8 @@ TEST_F(WalkthroughTest, DrivesAnEmptyRoadAtJustUnderTheLimitWithoutIncident) {
   ASSERT_TRUE(policy);
   sim::RunOptions opts;
   opts.duration_s = 120.0;
-  const auto r = sim::run_drive(world, [&](const core::Telemetry& t) { return policy->plan(t); }, opts);
+  const auto r = sim::run_drive(
+      world, [&](const core::Telemetry& t) { return policy->plan(t); }, opts);
   EXPECT_TRUE(r.incidents.empty());
   EXPECT_LT(core::mps_to_mph(r.peak.speed_mps), 50.0);
   EXPECT_GT(core::mps_to_mph(r.peak.speed_mps), 49.0);

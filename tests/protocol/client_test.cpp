@@ -23,7 +23,7 @@ namespace {
 using ::testing::HasSubstr;
 using ::testing::Not;
 using ::testing::StartsWith;
-using namespace testing;  // NOLINT: the test helpers
+using namespace testing;  // NOLINT(google-build-using-namespace): the test helpers
 
 // A fake planner that drives well: the walkthrough policy behind the codec. `misbehave` may
 // replace the answer to any message.
@@ -258,8 +258,10 @@ TEST(ProtocolClient, ALateSecondReplyPutsTheRunOutOfStepEveryTime) {
           }));
       LogCapture log;
       const auto report = lock_step(planner.url(), 0.02 * kCycles, log, 3s, 1);
-      EXPECT_THAT(sim::ended_early_text(report.outcome), StartsWith("planner failed at t = ")) << log.dump();
-      EXPECT_THAT(sim::ended_early_text(report.outcome), HasSubstr("out of step: the planner replied twice"));
+      EXPECT_THAT(sim::ended_early_text(report.outcome), StartsWith("planner failed at t = "))
+          << log.dump();
+      EXPECT_THAT(sim::ended_early_text(report.outcome),
+                  HasSubstr("out of step: the planner replied twice"));
       if (c.in_handler) {
         EXPECT_LE(report.planner_cycles, twice_at + 2) << "found at once";
       }
@@ -475,7 +477,8 @@ TEST(ProtocolClient, RealTimeStallEndsTheRunWhileTheWorldKeepsStepping) {
   sim::RunOptions run;
   run.duration_s = 30.0;
   const sim::RunReport report = run_realtime(world, c, o, run);
-  EXPECT_THAT(sim::ended_early_text(report.outcome), HasSubstr("the planner stalled: no reply within 0.3 s"));
+  EXPECT_THAT(sim::ended_early_text(report.outcome),
+              HasSubstr("the planner stalled: no reply within 0.3 s"));
   EXPECT_GE(report.duration_s, 0.3);  // the world went on for the whole wait
   EXPECT_LT(report.duration_s, 5.0);
 }

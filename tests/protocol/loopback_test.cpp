@@ -17,7 +17,7 @@
 namespace overtake::protocol {
 namespace {
 
-using namespace testing;  // NOLINT: the test helpers
+using namespace testing;  // NOLINT(google-build-using-namespace): the test helpers
 using nlohmann::json;
 
 int run_cli(std::vector<std::string> args) {
@@ -94,7 +94,8 @@ TEST(ProtocolLoopback, LockStepOverTheWireEqualsInProcessDrive) {
 // `sim` is the drive's wiring with a remote planner: a scripted scenario runs over the wire
 // as it does in process.
 TEST(ProtocolLoopback, AScenarioOverTheWireEqualsInProcessDrive) {
-  const std::string scenario = std::string(OVERTAKE_SOURCE_DIR) + "/tests/scenarios/cut_in_20m.json";
+  const std::string scenario =
+      std::string(OVERTAKE_SOURCE_DIR) + "/tests/scenarios/cut_in_20m.json";
   ServerFixture server("walkthrough");
   app::DriveOptions o;
   o.policy = "walkthrough";
@@ -152,8 +153,8 @@ TEST(ProtocolLoopback, SimRecordsTheSameRunAsDrive) {
   EXPECT_EQ(b.header.provenance.policy, "walkthrough");
 
   // Real time: every step, and the paths as they arrived.
-  EXPECT_EQ(run_cli({"sim", "--planner", server.url(), "--minutes", "0.02", "--realtime", "--record",
-                     (dir / "rt.otr").string(), "--quiet"}),
+  EXPECT_EQ(run_cli({"sim", "--planner", server.url(), "--minutes", "0.02", "--realtime",
+                     "--record", (dir / "rt.otr").string(), "--quiet"}),
             app::kExitOk);
   const replay::Replay rt = replay::read_replay(dir / "rt.otr");
   EXPECT_EQ(rt.frames.size(), 61u);

@@ -12,7 +12,7 @@ namespace {
 
 using ::testing::HasSubstr;
 using ::testing::StartsWith;
-using namespace testing;  // NOLINT: the test helpers
+using namespace testing;  // NOLINT(google-build-using-namespace): the test helpers
 
 constexpr std::string_view kControlStart = R"(42["control",)";
 constexpr std::size_t kTwoMiB = std::size_t{2} << 20;

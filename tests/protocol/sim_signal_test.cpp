@@ -22,7 +22,7 @@ namespace overtake::protocol {
 namespace {
 
 using ::testing::HasSubstr;
-using namespace testing;  // NOLINT: the test helpers
+using namespace testing;  // NOLINT(google-build-using-namespace): the test helpers
 namespace fs = std::filesystem;
 
 const fs::path kBinary = test::overtake_binary();
@@ -104,8 +104,8 @@ TEST_F(SimSignal, CtrlCStopsTheWaitForAStalledPlanner) {
     const auto track = default_track();
     static const auto policy =
         planner::make_policy("walkthrough", track->line, app::default_config().planner);
-    return FakeAction{
-        {t.ok() && t.value() ? format_control(policy->plan(*t.value()).path) : std::string(kManual)}};
+    return FakeAction{{t.ok() && t.value() ? format_control(policy->plan(*t.value()).path)
+                                           : std::string(kManual)}};
   });
   stop_with(SIGINT, planner.url(), [&got] { return got.load() > 50; }, {"--reply-timeout", "600"});
 }

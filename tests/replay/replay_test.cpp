@@ -519,16 +519,14 @@ TEST_F(ReplayTest, HeaderIntegersMustBeIntegersThatFit) {
   };
   EXPECT_EQ(with(R"("lanes":3)", R"("lanes":3)"), "");
   EXPECT_EQ(with(R"("seed":5)", R"("seed":18446744073709551615)"), "");
-  EXPECT_THAT(with(R"("lanes":3)", R"("lanes":1e300)"),
-              HasSubstr("corrupt header (bytes 16-"));
+  EXPECT_THAT(with(R"("lanes":3)", R"("lanes":1e300)"), HasSubstr("corrupt header (bytes 16-"));
   EXPECT_THAT(with(R"("lanes":3)", R"("lanes":1e300)"),
               HasSubstr("'road.lanes' is 1e+300, not an integer within range"));
   EXPECT_THAT(with(R"("lanes":3)", R"("lanes":3.5)"),
               HasSubstr("'road.lanes' is 3.5, not an integer within range"));
   EXPECT_THAT(with(R"("lanes":3)", R"("lanes":4294967299)"),
               HasSubstr("'road.lanes' is 4294967299, not an integer within range"));
-  EXPECT_THAT(with(R"("lanes":3)", R"("lanes":"3")"),
-              HasSubstr("'road.lanes' is not an integer"));
+  EXPECT_THAT(with(R"("lanes":3)", R"("lanes":"3")"), HasSubstr("'road.lanes' is not an integer"));
   EXPECT_THAT(with(R"("seed":5)", R"("seed":-1)"),
               HasSubstr("'provenance.seed' is -1, not an integer within range"));
   EXPECT_THAT(with(R"("seed":5)", R"("seed":-1.5e300)"),

@@ -50,7 +50,8 @@ class TrafficTest : public ::testing::Test {
 
   /// The ego driving along its lane at its speed.
   [[nodiscard]] EgoView advance(const EgoView& e) const {
-    return ego_at(e.frenet.s_m + line_.s_rate(e.frenet, e.speed_mps) * kDt, e.frenet.d_m, e.speed_mps);
+    return ego_at(e.frenet.s_m + line_.s_rate(e.frenet, e.speed_mps) * kDt, e.frenet.d_m,
+                  e.speed_mps);
   }
 
   /// A car on its lane centre without wander.
@@ -126,8 +127,10 @@ TEST_F(TrafficTest, InitialPlacementFollowsTheSpawnRule) {
                     static_cast<long>(map_.waypoints.size());
   const double ahead_lo = line_.s_ahead(ego.frenet.s_m, waypoint_s(prev + pl.ahead_min_waypoints));
   const double ahead_hi = line_.s_ahead(ego.frenet.s_m, waypoint_s(prev + pl.ahead_max_waypoints));
-  const double behind_lo = line_.s_ahead(ego.frenet.s_m, waypoint_s(prev - pl.behind_max_waypoints));
-  const double behind_hi = line_.s_ahead(ego.frenet.s_m, waypoint_s(prev - pl.behind_min_waypoints));
+  const double behind_lo =
+      line_.s_ahead(ego.frenet.s_m, waypoint_s(prev - pl.behind_max_waypoints));
+  const double behind_hi =
+      line_.s_ahead(ego.frenet.s_m, waypoint_s(prev - pl.behind_min_waypoints));
   const int ego_lane = core::lane_of(ego.frenet.d_m);
   for (std::uint64_t seed = 1; seed <= 20; ++seed) {
     SCOPED_TRACE("seed " + std::to_string(seed));
@@ -145,7 +148,8 @@ TEST_F(TrafficTest, InitialPlacementFollowsTheSpawnRule) {
             << "cars " << i << " and " << j;
       }
       EXPECT_EQ(core::lane_of(c.d_m), c.lane);
-      EXPECT_LE(std::abs(c.d_m - core::lane_center_d(c.lane)), params_.calm.wander_amplitude_m + 1e-9);
+      EXPECT_LE(std::abs(c.d_m - core::lane_center_d(c.lane)),
+                params_.calm.wander_amplitude_m + 1e-9);
       EXPECT_EQ(c.speed_mps, c.cruise_mps);
       EXPECT_FALSE(c.manoeuvre.has_value());
       const double off = line_.s_ahead(ego.frenet.s_m, c.s_m);
@@ -194,7 +198,8 @@ TEST_F(TrafficTest, FarCarsArePlacedAgainInBatches) {
           if (std::abs(line_.s_ahead(before[i], t.calm_cars()[i].s_m)) > 5.0) ++jumped;
         }
         max_batch = std::max(max_batch, jumped);
-        if (car0_back < 0 && std::abs(line_.s_ahead(ego.frenet.s_m, t.calm_cars()[0].s_m)) <= 200.0) {
+        if (car0_back < 0 &&
+            std::abs(line_.s_ahead(ego.frenet.s_m, t.calm_cars()[0].s_m)) <= 200.0) {
           car0_back = frame;
         }
       }
@@ -339,7 +344,8 @@ TEST_F(TrafficTest, BodiesMatchTheCarsMotion) {
   const core::RoadFrame f = line_.frame(1000.0);
   EXPECT_NEAR(core::norm(b.reported_velocity_mps), 20.0, 1e-9);
   EXPECT_NEAR(core::dot(b.reported_velocity_mps, f.tangent), 20.0, 1e-9);
-  EXPECT_NEAR(core::distance(b.position, f.position + core::lane_center_d(2) * f.normal), 0.0, 1e-9);
+  EXPECT_NEAR(core::distance(b.position, f.position + core::lane_center_d(2) * f.normal), 0.0,
+              1e-9);
   EXPECT_NEAR(core::wrap_angle_rad(b.heading_rad - f.heading_rad), 0.0, 1e-9);
   const core::FrenetPoint chord = chords_.to_frenet(b.position);
   EXPECT_DOUBLE_EQ(b.map_frenet.s_m, chord.s_m);

@@ -132,7 +132,8 @@ TEST_F(FaithfulTest, PlacedExactlyOnAWaypointBehindOrAheadWithItsCapAsTheFirstVe
       bool on_spot = false;
       for (int off : {-3, -2, 4, 5}) {
         const std::size_t wp = chords_.wrap_index(static_cast<long>(ego.closest_waypoint) + off);
-        if (core::distance(c.position, chords_.offset_point(wp, core::lane_center_d(c.lane))) < 1e-9) {
+        if (core::distance(c.position, chords_.offset_point(wp, core::lane_center_d(c.lane))) <
+            1e-9) {
           on_spot = true;
           const double cap = t.drivers()[i].cap_mps;
           if (off < 0) {
@@ -146,7 +147,8 @@ TEST_F(FaithfulTest, PlacedExactlyOnAWaypointBehindOrAheadWithItsCapAsTheFirstVe
           }
           // The first frame reports the cap read as m/s (2.237 times too fast), along the road.
           EXPECT_NEAR(core::norm(c.reported_velocity_mps), core::mps_to_mph(cap), 1e-9);
-          EXPECT_GT(core::dot(c.reported_velocity_mps, chords_.forward(wp)), 0.99 * core::mps_to_mph(cap));
+          EXPECT_GT(core::dot(c.reported_velocity_mps, chords_.forward(wp)),
+                    0.99 * core::mps_to_mph(cap));
         }
       }
       EXPECT_TRUE(on_spot) << "car " << i << " seed " << seed;
@@ -415,7 +417,7 @@ TEST_F(FaithfulTest, ALaneChangeSwitchesTheLaneAtOnceAndSteersOver) {
     if (switched >= 0 && k == switched + 5 * 50) break;
   }
   ASSERT_GE(switched, 0);
-  EXPECT_LT(d_at_switch, 3.0);  // the index changed before the car moved over
+  EXPECT_LT(d_at_switch, 3.0);                        // the index changed before the car moved over
   EXPECT_NEAR(t.cars()[0].map_frenet.d_m, 6.0, 0.6);  // 5 s later: in the new lane
 }
 
@@ -424,9 +426,10 @@ TEST_F(FaithfulTest, ALaneChangeSwitchesTheLaneAtOnceAndSteersOver) {
 TEST_F(FaithfulTest, AfterAContactTheCarBehindSlowsAndVeersAway) {
   FaithfulTraffic t = held(1);
   t.put_on_road_for_testing(0, 1000.0, 1, 20.0, core::mph_to_mps(50.0));
-  const core::OrientedBox front{t.cars()[0].position + 5.0 * core::Vec2{std::cos(t.cars()[0].heading_rad),
-                                                                         std::sin(t.cars()[0].heading_rad)},
-                                t.cars()[0].heading_rad, 4.7, 1.9};
+  const core::OrientedBox front{
+      t.cars()[0].position +
+          5.0 * core::Vec2{std::cos(t.cars()[0].heading_rad), std::sin(t.cars()[0].heading_rad)},
+      t.cars()[0].heading_rad, 4.7, 1.9};
   t.on_contact(0, {}, 15.0, front);
   const FaithfulTraffic::Driver& d = t.drivers()[0];
   EXPECT_GT(d.avoid_until_s, t.time_s());

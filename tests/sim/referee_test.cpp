@@ -5,8 +5,8 @@
 #include <array>
 #include <cmath>
 #include <optional>
-#include <utility>
 #include <stdexcept>
+#include <utility>
 #include <vector>
 
 #include "overtake/core/geometry.hpp"
@@ -194,7 +194,8 @@ TEST(RefereeOutsideLane, OffTheRoadForOneStep) {
 TEST(RefereeOutsideLane, TheEdgeFollowsTheLanes) {
   core::RoadParams four_lanes;
   four_lanes.lane_count = 4;
-  for (const auto& [d, outside] : {std::pair{11.3, false}, std::pair{15.1, false}, std::pair{15.3, true}}) {
+  for (const auto& [d, outside] :
+       {std::pair{11.3, false}, std::pair{15.1, false}, std::pair{15.3, true}}) {
     StraightDriver drv;
     drv.referee = Referee{RefereeParams{}, kDt, four_lanes};
     drv.hold(20.0, 1.0);
@@ -435,14 +436,18 @@ TEST(RefereeStrictNow, OnACircleItIsNormal) {
   Referee r{RefereeParams{}, kDt};
   for (int i = 0; i < 100; ++i) {
     const double a = kSpeed * kDt * i / kRadius;
-    r.observe({i * kDt, {kRadius * std::cos(a), kRadius * std::sin(a)}, kSpeed, 0.0, kLaneCentreD,
-               kLaneCentreD, {}});
+    r.observe({i * kDt,
+               {kRadius * std::cos(a), kRadius * std::sin(a)},
+               kSpeed,
+               0.0,
+               kLaneCentreD,
+               kLaneCentreD,
+               {}});
   }
   const StrictFigures f = r.current_strict();
   EXPECT_NEAR(f.normal_mps2, kSpeed * kSpeed / kRadius, kCircleRelTol * kSpeed * kSpeed / kRadius);
   EXPECT_NEAR(f.tangential_mps2, 0.0, 1e-6);
 }
-
 
 // --- the original's ways of measuring ------------------------------------------------------
 

@@ -24,7 +24,9 @@ class RunTest : public ::testing::Test {
  protected:
   RunTest() : map_(test::circle_map()), line_(map_) {}
 
-  World make_world(std::uint64_t seed = 1) { return World(map_, line_, params_, TrafficProfile::faithful, seed); }
+  World make_world(std::uint64_t seed = 1) {
+    return World(map_, line_, params_, TrafficProfile::faithful, seed);
+  }
 
   // Cruises lane 1; every 5th cycle says it fell back, every 7th (not 5th) that it took the
   // least bad of its candidates.
@@ -60,9 +62,11 @@ TEST_F(RunTest, EveryCycleIsCountedByItsPlanStatus) {
   const RunReport r = run_drive(world, cruise_with_statuses(cycle), opts);
   ASSERT_EQ(r.planner_cycles, 500);  // 1000 steps, 2 per cycle
   ASSERT_EQ(cycle, 500);
-  const auto count = [&](core::PlanStatus s) { return r.plan_status_cycles[static_cast<std::size_t>(s)]; };
-  EXPECT_EQ(count(core::PlanStatus::fallback), 100);         // 5, 10, ..., 500
-  EXPECT_EQ(count(core::PlanStatus::least_bad), 71 - 14);    // multiples of 7, not of 35
+  const auto count = [&](core::PlanStatus s) {
+    return r.plan_status_cycles[static_cast<std::size_t>(s)];
+  };
+  EXPECT_EQ(count(core::PlanStatus::fallback), 100);       // 5, 10, ..., 500
+  EXPECT_EQ(count(core::PlanStatus::least_bad), 71 - 14);  // multiples of 7, not of 35
   EXPECT_EQ(count(core::PlanStatus::normal), 500 - 100 - 57);
   EXPECT_EQ(r.first_plan_reason, "fallback at cycle 5");
   EXPECT_EQ(r.outcome.end, RunEnd::completed);
@@ -168,7 +172,8 @@ TEST_F(RunTest, WatchersSeeEveryFrameEveryIncidentOnceAndEveryPath) {
       world,
       [&](const core::Telemetry& t) {
         std::vector<core::Vec2> path;
-        for (int i = 1; i <= 50; ++i) path.push_back(line_.to_cartesian({t.ego.s_m + 0.5 * i, kLaneD}));
+        for (int i = 1; i <= 50; ++i)
+          path.push_back(line_.to_cartesian({t.ego.s_m + 0.5 * i, kLaneD}));
         return core::normal_plan(std::move(path));
       },
       opts);
@@ -191,7 +196,8 @@ TEST(PaceClock, RealTimePutsStepKAtKStepTimesAfterTheStart) {
   const auto start = PaceClock::Clock::now();
   const PaceClock real(Pace::real_time, 0.02, start);
   EXPECT_EQ(real.due(0), start);
-  EXPECT_EQ(real.due(50) - start, std::chrono::duration_cast<PaceClock::Clock::duration>(std::chrono::seconds(1)));
+  EXPECT_EQ(real.due(50) - start,
+            std::chrono::duration_cast<PaceClock::Clock::duration>(std::chrono::seconds(1)));
   EXPECT_EQ(real.due(7) - real.due(6), real.due(1) - real.due(0));
   const PaceClock free(Pace::unpaced, 0.02, start);
   EXPECT_EQ(free.due(1000), start);  // every step is due at once
@@ -208,8 +214,8 @@ TEST_F(RunTest, TheStepperSaysWhenTheNextStepIsDue) {
   // time on by one step time each step.
   run.step();
   run.step();
-  EXPECT_EQ(run.next_step_due() - first,
-            2 * std::chrono::duration_cast<PaceClock::Clock::duration>(std::chrono::duration<double>(0.02)));
+  EXPECT_EQ(run.next_step_due() - first, 2 * std::chrono::duration_cast<PaceClock::Clock::duration>(
+                                                 std::chrono::duration<double>(0.02)));
   EXPECT_FALSE(run.finished());
   run.end(RunEnd::planner_failed, "gone");
   run.end(RunEnd::stopped);  // the first end counts

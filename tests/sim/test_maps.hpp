@@ -47,7 +47,8 @@ namespace overtake::test {
     const int n = static_cast<int>(std::lround(core::kPi * radius_m / spacing_m));
     for (int i = 0; i < n; ++i) {
       const double a = a0 + core::kPi * i / n;
-      pts.push_back({cx + radius_m * std::cos(a), cy + radius_m * std::sin(a), std::cos(a), std::sin(a)});
+      pts.push_back(
+          {cx + radius_m * std::cos(a), cy + radius_m * std::sin(a), std::cos(a), std::sin(a)});
     }
   };
   straight(0.0, 0.0, 1.0);
@@ -59,8 +60,8 @@ namespace overtake::test {
   double s = 0.0;
   for (std::size_t i = 0; i < pts.size(); ++i) {
     if (i > 0) s += std::hypot(pts[i][0] - pts[i - 1][0], pts[i][1] - pts[i - 1][1]);
-    std::snprintf(line, sizeof line, "%.6f %.6f %.6f %.9f %.9f\n", pts[i][0], pts[i][1], s, pts[i][2],
-                  pts[i][3]);
+    std::snprintf(line, sizeof line, "%.6f %.6f %.6f %.9f %.9f\n", pts[i][0], pts[i][1], s,
+                  pts[i][2], pts[i][3]);
     text += line;
   }
   return core::parse_map(text, "test:stadium");

@@ -31,7 +31,8 @@ class WorldTest : public ::testing::Test {
   // n points along lane 1 from the ego, `spacing_m` apart.
   std::vector<core::Vec2> ahead(const World& w, int n, double spacing_m) const {
     std::vector<core::Vec2> out;
-    for (int i = 1; i <= n; ++i) out.push_back(line_.to_cartesian({w.ego().frenet.s_m + spacing_m * i, 6.0}));
+    for (int i = 1; i <= n; ++i)
+      out.push_back(line_.to_cartesian({w.ego().frenet.s_m + spacing_m * i, 6.0}));
     return out;
   }
 
@@ -122,8 +123,8 @@ TEST_F(WorldTest, TelemetryReportsTheQueueAndItsEndMeasuredFromTheEgosWaypoint) 
   EXPECT_NEAR(t.ego.s_m, w.ego().map_frenet.s_m, 1e-3);
   EXPECT_NEAR(t.ego.d_m, w.ego().map_frenet.d_m, 1e-4);
   // The speed of the last step: from the first point to the second, over 0.02 s.
-  EXPECT_NEAR(core::mps_to_mph(t.ego.speed_mps), core::mps_to_mph(core::distance(path[0], path[1]) / 0.02),
-              1e-4);
+  EXPECT_NEAR(core::mps_to_mph(t.ego.speed_mps),
+              core::mps_to_mph(core::distance(path[0], path[1]) / 0.02), 1e-4);
 }
 
 TEST_F(WorldTest, OnABendTheReportedDIsTheChordsNotTheCurves) {

@@ -99,7 +99,8 @@ std::vector<LaneView> assess_lanes(const std::vector<CarPrediction>& cars, const
     if (v.follower >= 0) {
       const double own = std::min(ego.speed_mps, v.expected_speed_mps);
       const double closing = v.follower_speed_mps - own;
-      const double fast = std::clamp((closing - p.rear_threat_speed_mps) / p.rear_threat_span_mps, 0.0, 1.0);
+      const double fast =
+          std::clamp((closing - p.rear_threat_speed_mps) / p.rear_threat_span_mps, 0.0, 1.0);
       const double near = std::clamp(1.0 - v.follower_gap_m / p.rear_threat_range_m, 0.0, 1.0);
       v.rear_threat = fast * near;
     }
@@ -155,11 +156,13 @@ BehaviourDecision decide(const std::vector<CarPrediction>& cars, const EgoSnapsh
     state.target_lane = cur;
     state.goal_lane = cur;
   }
-  const bool settled = state.target_lane == cur &&
-                       std::abs(ego.d_m - core::lane_center_d(cur, road)) < kSettledM;
+  const bool settled =
+      state.target_lane == cur && std::abs(ego.d_m - core::lane_center_d(cur, road)) < kSettledM;
   state.since_settled_s = settled ? state.since_settled_s + elapsed_s : 0.0;
 
-  const auto lane = [&](int l) -> const LaneView& { return out.lanes[static_cast<std::size_t>(l)]; };
+  const auto lane = [&](int l) -> const LaneView& {
+    return out.lanes[static_cast<std::size_t>(l)];
+  };
   if (!settled) {
     // Changing lanes (or centring): carry on unless a car came alongside in the target lane
     // before we crossed. (The trajectory layer returns when the change is no longer safe.)

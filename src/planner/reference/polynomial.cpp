@@ -35,7 +35,8 @@ double Polynomial1d::jerk_cost() const {
   const double b = 24.0 * c[4];
   const double g = 60.0 * c[5];
   const double t = duration_s;
-  return t * (a * a + t * (a * b + t * ((b * b + 2.0 * a * g) / 3.0 + t * (0.5 * b * g + t * g * g / 5.0))));
+  return t * (a * a + t * (a * b + t * ((b * b + 2.0 * a * g) / 3.0 +
+                                        t * (0.5 * b * g + t * g * g / 5.0))));
 }
 
 Polynomial1d quintic(double x0, double v0, double a0, double x1, double v1, double a1,
@@ -65,7 +66,11 @@ Polynomial1d quartic(double x0, double v0, double a0, double v1, double a1, doub
   const double da = a1 - a0;
   Polynomial1d p;
   p.duration_s = t;
-  p.c = {x0, v0, 0.5 * a0, (3.0 * dv - da * t) / (3.0 * t * t), (da * t - 2.0 * dv) / (4.0 * t * t * t),
+  p.c = {x0,
+         v0,
+         0.5 * a0,
+         (3.0 * dv - da * t) / (3.0 * t * t),
+         (da * t - 2.0 * dv) / (4.0 * t * t * t),
          0.0};
   return p;
 }
@@ -122,7 +127,8 @@ BrakingProfile::BrakingProfile(double x0, double v0, double a0, double brake, do
 
 double BrakingProfile::jerk_cost() const {
   double cost = 0.0;
-  for (std::size_t i = 0; i < 3; ++i) cost += states_[i].j * states_[i].j * (start_[i + 1] - start_[i]);
+  for (std::size_t i = 0; i < 3; ++i)
+    cost += states_[i].j * states_[i].j * (start_[i + 1] - start_[i]);
   return cost;
 }
 

@@ -149,7 +149,8 @@ void anticipate_waves(std::vector<CarPrediction>& cars, const std::vector<CarTra
       if (!lead || o.s_m < lead->s_m) lead = &o;
     }
     if (!lead) continue;
-    const auto track = std::find_if(tracks.begin(), tracks.end(), [&](const CarTrack& t) { return t.id == c.id; });
+    const auto track =
+        std::find_if(tracks.begin(), tracks.end(), [&](const CarTrack& t) { return t.id == c.id; });
     const double top = track == tracks.end() ? c.speed_mps : track->top_speed_mps;
     const double cap_mph = core::mps_to_mph(cap_estimate(top, p));
     const double scale = c.s_dot > 1e-9 && c.speed_mps > 1e-9 ? c.speed_mps / c.s_dot : 1.0;
@@ -164,9 +165,9 @@ void anticipate_waves(std::vector<CarPrediction>& cars, const std::vector<CarTra
   }
 }
 
-std::vector<CarPrediction> predict_cars(const core::Telemetry& telemetry,
-                                        const LaneFrame& frame, double ego_s_m,
-                                        double elapsed_s, std::vector<CarTrack>& tracks,
+std::vector<CarPrediction> predict_cars(const core::Telemetry& telemetry, const LaneFrame& frame,
+                                        double ego_s_m, double elapsed_s,
+                                        std::vector<CarTrack>& tracks,
                                         const ReferencePredictionParams& params,
                                         const core::RoadParams& road, double car_length_m) {
   std::vector<CarPrediction> out;
@@ -179,10 +180,12 @@ std::vector<CarPrediction> predict_cars(const core::Telemetry& telemetry,
     // The original reports a newly placed car's speed cap read as m/s for one frame (2.24
     // times its real speed); no car on its roads goes that fast.
     core::Vec2 velocity = car.velocity_mps;
-    if (core::norm(velocity) > params.max_plausible_speed_mps) velocity = (1.0 / core::kMphPerMps) * velocity;
+    if (core::norm(velocity) > params.max_plausible_speed_mps)
+      velocity = (1.0 / core::kMphPerMps) * velocity;
     const FrenetState x = frenet_from_cartesian(frame, car.position, velocity, car.s_m);
     // Cars waiting off the road (the original parks them far beside it) are no traffic.
-    if (x.d_m < -params.off_road_margin_m || x.d_m > road_width + params.off_road_margin_m) continue;
+    if (x.d_m < -params.off_road_margin_m || x.d_m > road_width + params.off_road_margin_m)
+      continue;
     const RoadPoint at = road_point(frame, x.s_m, x.d_m);
     const double speed = x.s_dot * at.along_scale;
     double accel = 0.0;
@@ -190,7 +193,8 @@ std::vector<CarPrediction> predict_cars(const core::Telemetry& telemetry,
     const auto prev = std::find_if(tracks.begin(), tracks.end(),
                                    [&](const CarTrack& t) { return t.id == car.id; });
     if (prev != tracks.end() && elapsed_s > 0.0 &&
-        std::abs(line.s_ahead(prev->s_m, x.s_m) - prev->s_dot * elapsed_s) < params.max_track_jump_m) {
+        std::abs(line.s_ahead(prev->s_m, x.s_m) - prev->s_dot * elapsed_s) <
+            params.max_track_jump_m) {
       accel = (x.s_dot - prev->s_dot) / elapsed_s;
       // A change no car's brakes or engine make is a glitch of the report, not a motion.
       if (std::abs(accel * at.along_scale) > params.max_plausible_accel_mps2) accel = 0.0;

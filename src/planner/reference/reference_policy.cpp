@@ -44,9 +44,12 @@ FrenetState carried(const FrenetState& x, double dt_s) {
 
 core::PlanStatus to_core(PlanStatus s) {
   switch (s) {
-    case PlanStatus::feasible: return core::PlanStatus::normal;
-    case PlanStatus::least_bad: return core::PlanStatus::least_bad;
-    case PlanStatus::fallback: return core::PlanStatus::fallback;
+    case PlanStatus::feasible:
+      return core::PlanStatus::normal;
+    case PlanStatus::least_bad:
+      return core::PlanStatus::least_bad;
+    case PlanStatus::fallback:
+      return core::PlanStatus::fallback;
   }
   return core::PlanStatus::fallback;
 }
@@ -65,7 +68,8 @@ std::string status_reason(const TrajectoryPlan& plan) {
 
 ReferencePolicy::ReferencePolicy(const core::ReferenceLine& line, const PlannerParams& params)
     : line_(line),
-      smooth_line_(std::make_shared<const core::ReferenceLine>(line.map(), params.reference.line_smoothing_m3)),
+      smooth_line_(std::make_shared<const core::ReferenceLine>(line.map(),
+                                                               params.reference.line_smoothing_m3)),
       frame_(LaneFrame::chord_aligned(*smooth_line_, params.road)),
       road_(params.road),
       step_s_(params.step_s),
@@ -75,7 +79,8 @@ ReferencePolicy::ReferencePolicy(const core::ReferenceLine& line, const PlannerP
 }
 
 FrenetState ReferencePolicy::observed_state(const core::Telemetry& t) const {
-  const core::Vec2 v = t.ego.speed_mps * core::Vec2{std::cos(t.ego.yaw_rad), std::sin(t.ego.yaw_rad)};
+  const core::Vec2 v =
+      t.ego.speed_mps * core::Vec2{std::cos(t.ego.yaw_rad), std::sin(t.ego.yaw_rad)};
   return frenet_from_cartesian(frame_, t.ego.position, v, t.ego.s_m);
 }
 
@@ -90,17 +95,20 @@ core::PlanResult ReferencePolicy::plan(const core::Telemetry& t) {
   FrenetState car;
   if (have_plan_ && remaining >= 2 && remaining <= sent_.size()) {
     consumed = sent_.size() - remaining;
-    const bool queue_matches = core::distance(t.previous_path.front(), sent_[consumed]) < kSyncToleranceM;
+    const bool queue_matches =
+        core::distance(t.previous_path.front(), sent_[consumed]) < kSyncToleranceM;
     const bool car_matches =
         consumed == 0 || core::distance(t.ego.position, sent_[consumed - 1]) < kSyncToleranceM;
     if (queue_matches && car_matches) {
       car = consumed == 0 ? origin_ : states_[consumed - 1];
       synced_ = true;
-      driven_.insert(driven_.end(), states_.begin(), states_.begin() + static_cast<std::ptrdiff_t>(consumed));
+      driven_.insert(driven_.end(), states_.begin(),
+                     states_.begin() + static_cast<std::ptrdiff_t>(consumed));
       for (std::size_t i = 0; i < consumed; ++i) {
-        band_time_s_ = in_line_band(frame_.original_d(states_[i].s_m, states_[i].d_m), tp.line_band_m, road_)
-                           ? band_time_s_ + dt
-                           : 0.0;
+        band_time_s_ =
+            in_line_band(frame_.original_d(states_[i].s_m, states_[i].d_m), tp.line_band_m, road_)
+                ? band_time_s_ + dt
+                : 0.0;
       }
     }
   }
@@ -110,7 +118,8 @@ core::PlanResult ReferencePolicy::plan(const core::Telemetry& t) {
   states.reserve(n_points);
   points.reserve(n_points);
   if (synced_) {
-    const std::size_t keep = std::min<std::size_t>(static_cast<std::size_t>(std::max(tp.keep_points, 0)), remaining);
+    const std::size_t keep =
+        std::min<std::size_t>(static_cast<std::size_t>(std::max(tp.keep_points, 0)), remaining);
     for (std::size_t i = 0; i < keep; ++i) {
       states.push_back(states_[consumed + i]);
       points.push_back(t.previous_path[i]);
@@ -128,7 +137,8 @@ core::PlanResult ReferencePolicy::plan(const core::Telemetry& t) {
   }
   double band_time = band_time_s_;
   for (const FrenetState& x : states) {
-    band_time = in_line_band(frame_.original_d(x.s_m, x.d_m), tp.line_band_m, road_) ? band_time + dt : 0.0;
+    band_time =
+        in_line_band(frame_.original_d(x.s_m, x.d_m), tp.line_band_m, road_) ? band_time + dt : 0.0;
   }
   // Keep s within one loop at the car (the plan may run past the end).
   const double shift = line_.wrap_s(car.s_m) - car.s_m;
@@ -139,8 +149,8 @@ core::PlanResult ReferencePolicy::plan(const core::Telemetry& t) {
   const double elapsed = synced_ ? static_cast<double>(consumed) * dt : 0.0;
 
   // Prediction, behaviour, trajectory.
-  predictions_ = predict_cars(t, frame_, car.s_m, elapsed, tracks_, p_.prediction, road_,
-                              car_.length_m);
+  predictions_ =
+      predict_cars(t, frame_, car.s_m, elapsed, tracks_, p_.prediction, road_, car_.length_m);
   const RoadPoint at_car = road_point(frame_, car.s_m, car.d_m);
   EgoSnapshot ego;
   ego.s_m = car.s_m;

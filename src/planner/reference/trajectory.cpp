@@ -69,8 +69,8 @@ struct LatCandidate {
 
 struct CarSamples {
   int id = 0;
-  double cap_mps = 0.0;  // estimated speed cap
-  bool speeding_up = false;  // accelerating now: not a car that brakes for the ego
+  double cap_mps = 0.0;                    // estimated speed cap
+  bool speeding_up = false;                // accelerating now: not a car that brakes for the ego
   std::vector<double> s, s_dot, d, d_dot;  // k = 0 .. n
 };
 
@@ -206,7 +206,8 @@ CollisionReport collide(const Track1d& lon, const Track1d& lat, bool ego_changin
                                                       (core::mps_to_mph(c.cap_mps) - own_v * mps) +
                                                   length);
       if (side_gap < kSensorCoverM && -ahead <= sees_at) {
-        if (rear_room(-ahead, closing, length, p.behaviour, sees_at) < 0.0) r = {false, t, c.id, true};
+        if (rear_room(-ahead, closing, length, p.behaviour, sees_at) < 0.0)
+          r = {false, t, c.id, true};
         break;
       }
       if (-ahead < lon_need) {
@@ -239,7 +240,8 @@ KinematicReport kinematics(const Track1d& lon, const Track1d& lat, const Grid& g
     back[0] = at.position;
     if (k < 0) continue;
     const double t = g.t(k);
-    const double speed = std::hypot(lon.v[e] * at.along_scale, lat.v[e] - at.offset_slope * lon.v[e]);
+    const double speed =
+        std::hypot(lon.v[e] * at.along_scale, lat.v[e] - at.offset_slope * lon.v[e]);
     const double accel = core::norm(back[0] - 2.0 * back[1] + back[2]) / h2;
     const double jerk = core::norm(back[0] - 3.0 * back[1] + 3.0 * back[2] - back[3]) / h3;
     r.peak_speed_mps = std::max(r.peak_speed_mps, speed);
@@ -327,7 +329,8 @@ BandTime band_time(const Track1d& lat, const Grid& g, double already_s, double h
   double run = already_s;
   for (int k = 0; k <= g.n; ++k) {
     const double s = x0.s_m + x0.s_dot * g.t(k);
-    if (in_line_band(frame.original_d(s, lat.x[static_cast<std::size_t>(k + kBack)]), half_width, road)) {
+    if (in_line_band(frame.original_d(s, lat.x[static_cast<std::size_t>(k + kBack)]), half_width,
+                     road)) {
       run += k == 0 ? 0.0 : g.h;
       b.longest_s = std::max(b.longest_s, run);
       if (run > limit_s && b.overstay_s == kInf) b.overstay_s = g.t(k);
@@ -362,7 +365,8 @@ bool on_road(const Track1d& lat, const Grid& g, const LaneFrame& frame, const Fr
 
 bool in_line_band(double d_m, double half_width_m, const core::RoadParams& road) {
   if (road.lane_count < 2) return false;
-  const double k = std::clamp(std::round(d_m / road.lane_width_m), 1.0, static_cast<double>(road.lane_count - 1));
+  const double k = std::clamp(std::round(d_m / road.lane_width_m), 1.0,
+                              static_cast<double>(road.lane_count - 1));
   return std::abs(d_m - k * road.lane_width_m) <= half_width_m;
 }
 
@@ -381,15 +385,18 @@ KinematicReport check_kinematics(const Trajectory& t, const LaneFrame& line,
 }
 
 CollisionReport check_collisions(const Trajectory& t, const std::vector<CarPrediction>& cars,
-                                 double start_delay_s, double metres_per_s, const ReferenceParams& p,
-                                 const core::RoadParams& road, const core::CarFootprint& car) {
+                                 double start_delay_s, double metres_per_s,
+                                 const ReferenceParams& p, const core::RoadParams& road,
+                                 const core::CarFootprint& car) {
   const Grid g = grid_of(p.trajectory);
   const Track1d lon = sample(g, [&](double x) { return t.longitudinal.at(x); });
   const Track1d lat = sample(g, [&](double x) { return t.lateral.at(x); });
   const double d0 = lat.x[kBack];
   const bool changing = core::lane_of(d0, road) != t.end_lane;
-  const bool sideways = changing || std::abs(d0 - core::lane_center_d(core::lane_of(d0, road), road)) > kSidewaysM;
-  return collide(lon, lat, changing, sideways, g, sample_cars(cars, start_delay_s, lon.x[kBack], g), metres_per_s, p, car);
+  const bool sideways =
+      changing || std::abs(d0 - core::lane_center_d(core::lane_of(d0, road), road)) > kSidewaysM;
+  return collide(lon, lat, changing, sideways, g, sample_cars(cars, start_delay_s, lon.x[kBack], g),
+                 metres_per_s, p, car);
 }
 
 TrajectoryPlan plan_trajectory(const LaneFrame& line, const TrajectoryRequest& req,
@@ -408,7 +415,8 @@ TrajectoryPlan plan_trajectory(const LaneFrame& line, const TrajectoryRequest& r
   const int start_lane = core::lane_of(x0.d_m, road);
   std::vector<int> lanes{req.target_lane};
   const auto add_lane = [&](int l) {
-    if (l >= 0 && l < road.lane_count && std::find(lanes.begin(), lanes.end(), l) == lanes.end()) lanes.push_back(l);
+    if (l >= 0 && l < road.lane_count && std::find(lanes.begin(), lanes.end(), l) == lanes.end())
+      lanes.push_back(l);
   };
   add_lane(start_lane);
   if (in_line_band(x0.d_m, tp.line_band_m, road)) {
@@ -446,7 +454,8 @@ TrajectoryPlan plan_trajectory(const LaneFrame& line, const TrajectoryRequest& r
     double behind_gap = kInf;
     for (std::size_t i = 0; i < car_samples.size(); ++i) {
       const CarSamples& c = car_samples[i];
-      const auto pred = std::find_if(cars.begin(), cars.end(), [&](const CarPrediction& x) { return x.id == c.id; });
+      const auto pred = std::find_if(cars.begin(), cars.end(),
+                                     [&](const CarPrediction& x) { return x.id == c.id; });
       if (!pred->occupies(l)) continue;
       const double gap = c.s[0] - x0.s_m;
       if (gap >= 0.0) {
@@ -457,10 +466,12 @@ TrajectoryPlan plan_trajectory(const LaneFrame& line, const TrajectoryRequest& r
       }
     }
     std::sort(ahead.begin(), ahead.end());
-    for (std::size_t i = 0; i < ahead.size() && i < 2; ++i) lc.ahead.push_back(&car_samples[ahead[i].second]);
+    for (std::size_t i = 0; i < ahead.size() && i < 2; ++i)
+      lc.ahead.push_back(&car_samples[ahead[i].second]);
     if (!ahead.empty()) {
       const int id = car_samples[ahead.front().second].id;
-      lc.leader = &*std::find_if(cars.begin(), cars.end(), [&](const CarPrediction& x) { return x.id == id; });
+      lc.leader = &*std::find_if(cars.begin(), cars.end(),
+                                 [&](const CarPrediction& x) { return x.id == id; });
     }
   }
 
@@ -472,7 +483,8 @@ TrajectoryPlan plan_trajectory(const LaneFrame& line, const TrajectoryRequest& r
     const double target = core::lane_center_d(l, road);
     const double dist = std::abs(target - x0.d_m);
     const bool hold = dist < kHoldLateralM && std::abs(x0.d_dot_mps) < kHoldLateralM;
-    const double t_min = std::max(tp.min_lateral_time_s, std::cbrt(60.0 * dist / tp.lateral_jerk_mps3));
+    const double t_min =
+        std::max(tp.min_lateral_time_s, std::cbrt(60.0 * dist / tp.lateral_jerk_mps3));
     for (const double f : tp.lateral_time_factors) {
       LatCandidate c;
       c.poly = quintic(x0.d_m, x0.d_dot_mps, x0.d_ddot_mps2, target, 0.0, 0.0, t_min * f);
@@ -481,12 +493,13 @@ TrajectoryPlan plan_trajectory(const LaneFrame& line, const TrajectoryRequest& r
       if (!axis_ok(g, at, tp.max_accel_mps2, tp.max_jerk_mps3, false)) continue;
       c.samples = sample(g, at);
       if (!on_road(c.samples, g, line, x0, tp, road)) continue;
-      c.cost = tp.lat_jerk_weight * c.poly.jerk_cost() + (hold ? 0.0 : tp.lat_time_weight * c.poly.duration_s) +
+      c.cost = tp.lat_jerk_weight * c.poly.jerk_cost() +
+               (hold ? 0.0 : tp.lat_time_weight * c.poly.duration_s) +
                tp.lane_weight * std::abs(l - req.target_lane);
       // Longer than the budget on a lane line costs; as long as the original counts as an
       // incident is an incident.
-      const BandTime band =
-          band_time(c.samples, g, req.band_time_s, tp.line_band_m, tp.band_incident_s, line, x0, road);
+      const BandTime band = band_time(c.samples, g, req.band_time_s, tp.line_band_m,
+                                      tp.band_incident_s, line, x0, road);
       // (Of two that overstay as soon, the one that leaves the line sooner is less bad.)
       c.overstay_s = band.overstay_s - kOverstayTieBreak * band.longest_s;
       c.cost += tp.linger_weight * std::max(0.0, band.longest_s - tp.max_band_time_s);
@@ -527,7 +540,8 @@ TrajectoryPlan plan_trajectory(const LaneFrame& line, const TrajectoryRequest& r
   std::vector<const CarPrediction*> leaders;
   for (const int l : lanes) {
     const CarPrediction* lead = lane_cars[static_cast<std::size_t>(l)].leader;
-    if (lead && std::find(leaders.begin(), leaders.end(), lead) == leaders.end()) leaders.push_back(lead);
+    if (lead && std::find(leaders.begin(), leaders.end(), lead) == leaders.end())
+      leaders.push_back(lead);
   }
   for (const CarPrediction* lead : leaders) {
     for (const double t : tp.follow_times_s) {
@@ -546,7 +560,8 @@ TrajectoryPlan plan_trajectory(const LaneFrame& line, const TrajectoryRequest& r
   add_lon(braking);
   Longitudinal gentle;
   gentle.braking = true;
-  gentle.brake = BrakingProfile(x0.s_m, x0.s_dot, x0.s_ddot, kGentleStopMps2 / mps, kGentleStopJerkMps3 / mps);
+  gentle.brake =
+      BrakingProfile(x0.s_m, x0.s_dot, x0.s_ddot, kGentleStopMps2 / mps, kGentleStopJerkMps3 / mps);
   add_lon(gentle);
   // Braking between the two, each reached gently enough to leave room for a lateral motion.
   for (std::size_t i = 0; i < tp.brake_levels_mps2.size(); ++i) {
@@ -563,7 +578,8 @@ TrajectoryPlan plan_trajectory(const LaneFrame& line, const TrajectoryRequest& r
   for (std::size_t j = 0; j < lons.size(); ++j) {
     for (const int l : lanes) {
       const LaneCars& lc = lane_cars[static_cast<std::size_t>(l)];
-      soft[j * lane_n + static_cast<std::size_t>(l)] = lane_cost(lons[j].samples, g, lc.ahead, lc.behind, mps, params, car);
+      soft[j * lane_n + static_cast<std::size_t>(l)] =
+          lane_cost(lons[j].samples, g, lc.ahead, lc.behind, mps, params, car);
     }
   }
 
@@ -579,12 +595,14 @@ TrajectoryPlan plan_trajectory(const LaneFrame& line, const TrajectoryRequest& r
     const auto end = static_cast<std::size_t>(lats[i].end_lane);
     for (std::size_t j = 0; j < lons.size(); ++j) {
       double c = lats[i].cost + lons[j].cost + soft[j * lane_n + end].full;
-      if (lats[i].end_lane != start_lane) c += soft[j * lane_n + static_cast<std::size_t>(start_lane)].early;
+      if (lats[i].end_lane != start_lane)
+        c += soft[j * lane_n + static_cast<std::size_t>(start_lane)].early;
       combos.push_back({c, static_cast<std::uint32_t>(i), static_cast<std::uint32_t>(j)});
     }
   }
   plan.candidates = static_cast<int>(combos.size());
-  std::sort(combos.begin(), combos.end(), [](const Combo& a, const Combo& b) { return a.cost < b.cost; });
+  std::sort(combos.begin(), combos.end(),
+            [](const Combo& a, const Combo& b) { return a.cost < b.cost; });
 
   const auto make = [&](const Combo& c) {
     Trajectory t;
@@ -606,7 +624,8 @@ TrajectoryPlan plan_trajectory(const LaneFrame& line, const TrajectoryRequest& r
     const LonCandidate& lon = lons[c.lon];
     ++plan.collision_checks;
     const bool changing = lat.end_lane != start_lane;
-    const CollisionReport col = collide(lon.samples, lat.samples, changing, changing || off_centre, g, car_samples, mps, params, car);
+    const CollisionReport col = collide(lon.samples, lat.samples, changing, changing || off_centre,
+                                        g, car_samples, mps, params, car);
     if (!col.ok || lat.overstay_s < kInf) {
       // An incident ahead: a collision, or lingering on a lane line (the original counts it
       // as one, so it is weighed as one, at the time it would count).
@@ -643,16 +662,20 @@ TrajectoryPlan plan_trajectory(const LaneFrame& line, const TrajectoryRequest& r
     for (const LatCandidate& c : lats) {
       double lat_jerk = 0.0;
       for (int k = 0; k <= g.n; ++k) lat_jerk = std::max(lat_jerk, std::abs(c.poly.at(g.t(k)).j));
-      const double room = tp.fallback_total_jerk_mps3 * tp.fallback_total_jerk_mps3 - lat_jerk * lat_jerk;
-      const double brake_jerk = std::clamp(std::sqrt(std::max(0.0, room)), kGentleStopJerkMps3, tp.fallback_jerk_mps3);
+      const double room =
+          tp.fallback_total_jerk_mps3 * tp.fallback_total_jerk_mps3 - lat_jerk * lat_jerk;
+      const double brake_jerk =
+          std::clamp(std::sqrt(std::max(0.0, room)), kGentleStopJerkMps3, tp.fallback_jerk_mps3);
       Longitudinal brake;
       brake.braking = true;
-      brake.brake = BrakingProfile(x0.s_m, x0.s_dot, x0.s_ddot, tp.fallback_brake_mps2 / mps, brake_jerk / mps);
+      brake.brake = BrakingProfile(x0.s_m, x0.s_dot, x0.s_ddot, tp.fallback_brake_mps2 / mps,
+                                   brake_jerk / mps);
       const Track1d brake_samples = sample(g, [&](double t) { return brake.at(t); });
       const bool changing = c.end_lane != start_lane;
-      const CollisionReport col = collide(brake_samples, c.samples, changing, changing || off_centre, g,
-                                          car_samples, mps, params, car);
-      const KinematicReport kin = kinematics(brake_samples, c.samples, g, line, tp, false, req.history);
+      const CollisionReport col = collide(brake_samples, c.samples, changing,
+                                          changing || off_centre, g, car_samples, mps, params, car);
+      const KinematicReport kin =
+          kinematics(brake_samples, c.samples, g, line, tp, false, req.history);
       const double incident = std::min(col.ok ? kInf : lateness(col), c.overstay_s);
       // Within the checked limits; else within the total jerk allowed to a fallback; else not.
       const auto tier = [&](const KinematicReport& k) {
@@ -678,15 +701,18 @@ TrajectoryPlan plan_trajectory(const LaneFrame& line, const TrajectoryRequest& r
   } else {
     fallback.end_lane = start_lane;
     const double back_to = core::lane_center_d(start_lane, road);
-    fallback.lateral = quintic(x0.d_m, x0.d_dot_mps, x0.d_ddot_mps2, back_to, 0.0, 0.0,
-                               std::max(tp.min_lateral_time_s,
-                                        std::cbrt(60.0 * std::abs(back_to - x0.d_m) / tp.lateral_jerk_mps3)));
+    fallback.lateral =
+        quintic(x0.d_m, x0.d_dot_mps, x0.d_ddot_mps2, back_to, 0.0, 0.0,
+                std::max(tp.min_lateral_time_s,
+                         std::cbrt(60.0 * std::abs(back_to - x0.d_m) / tp.lateral_jerk_mps3)));
   }
   if (lats.empty()) {
-    const CollisionReport fb = check_collisions(fallback, cars, req.start_delay_s, mps, params, road, car);
+    const CollisionReport fb =
+        check_collisions(fallback, cars, req.start_delay_s, mps, params, road, car);
     fallback_incident = fb.ok ? kInf : lateness(fb);
   }
-  std::stable_sort(failed.begin(), failed.end(), [](const auto& a, const auto& b) { return a.first > b.first; });
+  std::stable_sort(failed.begin(), failed.end(),
+                   [](const auto& a, const auto& b) { return a.first > b.first; });
   int tried = 0;
   for (const auto& [when, n] : failed) {
     if (when <= fallback_incident || tried >= kLeastBadChecks) break;

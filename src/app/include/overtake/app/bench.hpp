@@ -61,12 +61,12 @@ struct BenchProgress {
 
 /// What a bench produced.
 struct BenchOutcome {
-  std::size_t runs_done = 0;       ///< runs in runs.jsonl (including resumed ones)
-  std::size_t runs_new = 0;        ///< runs made by this call
+  std::size_t runs_done = 0;  ///< runs in runs.jsonl (including resumed ones)
+  std::size_t runs_new = 0;   ///< runs made by this call
   bool interrupted = false;
   double wall_s = 0.0;
-  double simulated_s = 0.0;        ///< simulated by this call
-  std::string summary_markdown;    ///< also written to summary.md
+  double simulated_s = 0.0;                    ///< simulated by this call
+  std::string summary_markdown;                ///< also written to summary.md
   std::vector<std::filesystem::path> replays;  ///< recorded by record_worst (merge: copied)
 };
 

@@ -18,33 +18,33 @@ namespace overtake::app {
 
 /// The traffic figures of one or more runs.
 struct TrafficFigures {
-  long rows = 0;                      ///< sampled sensor-fusion rows of cars on the road
-  double car_minutes = 0.0;           ///< time cars were observed on the road
+  long rows = 0;             ///< sampled sensor-fusion rows of cars on the road
+  double car_minutes = 0.0;  ///< time cars were observed on the road
   double speed_mean_mph = 0.0;
   double speed_sd_mph = 0.0;
   double speed_p5_mph = 0.0;
   double speed_p50_mph = 0.0;
   double speed_p95_mph = 0.0;
-  double share_above_50_mph = 0.0;    ///< fraction of rows
-  double ahead_mean_mph = 0.0;        ///< cars ahead of the ego
+  double share_above_50_mph = 0.0;  ///< fraction of rows
+  double ahead_mean_mph = 0.0;      ///< cars ahead of the ego
   double behind_mean_mph = 0.0;
-  std::vector<double> lane_mean_mph;  ///< per lane
+  std::vector<double> lane_mean_mph;    ///< per lane
   double hold_median_change_mph = 0.0;  ///< |speed change| of a car 8-39 s later, median
   double hold_share_small = 0.0;        ///< ... share under 0.5 mph
   double lane_changes_per_car_minute = 0.0;
-  double within_60m_mean = 0.0;       ///< cars within +-60 m of the ego (along s), per frame
+  double within_60m_mean = 0.0;  ///< cars within +-60 m of the ego (along s), per frame
   int within_60m_min = 0;
   int within_60m_max = 0;
-  double farthest_m = 0.0;            ///< largest |s - ego s| of a car on the road
-  double wander_p50_m = 0.0;          ///< |d - lane centre| away from lane changes
+  double farthest_m = 0.0;    ///< largest |s - ego s| of a car on the road
+  double wander_p50_m = 0.0;  ///< |d - lane centre| away from lane changes
   double wander_p95_m = 0.0;
   double wander_max_m = 0.0;
-  int placements = 0;                 ///< cars seen newly placed
-  double first_frame_min_mps = 0.0;   ///< speed of a placed car on the frame right after its
-  double first_frame_max_mps = 0.0;   ///<   placement (when the planner saw that frame)
+  int placements = 0;                ///< cars seen newly placed
+  double first_frame_min_mps = 0.0;  ///< speed of a placed car on the frame right after its
+  double first_frame_max_mps = 0.0;  ///<   placement (when the planner saw that frame)
   int first_frames_seen = 0;
-  double parked_at_start = 0.0;       ///< cars off the road in a run's first telemetry (mean)
-  double ego_mean_speed_mph = 0.0;    ///< the planner's own mean speed
+  double parked_at_start = 0.0;     ///< cars off the road in a run's first telemetry (mean)
+  double ego_mean_speed_mph = 0.0;  ///< the planner's own mean speed
 };
 
 /// Accumulates the figures from the telemetry a planner receives, run by run.
@@ -127,12 +127,12 @@ struct CalibrateOptions {
 
 /// One row of the comparison with the original.
 struct CalibrationRow {
-  std::string key;         ///< JSON key
-  std::string statistic;   ///< what it measures
-  std::string original;    ///< the original's figure (calibration data)
-  std::string accept;      ///< accept range ("" when only shown)
-  double value = 0.0;      ///< overtake's figure
-  std::string shown;       ///< overtake's figure as printed
+  std::string key;           ///< JSON key
+  std::string statistic;     ///< what it measures
+  std::string original;      ///< the original's figure (calibration data)
+  std::string accept;        ///< accept range ("" when only shown)
+  double value = 0.0;        ///< overtake's figure
+  std::string shown;         ///< overtake's figure as printed
   std::optional<bool> pass;  ///< empty when there is no accept range
 };
 

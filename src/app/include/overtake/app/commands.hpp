@@ -36,7 +36,8 @@ struct Track {
 };
 
 /// The map file at `path`, or the built-in default track. Throws core::MapError.
-[[nodiscard]] std::shared_ptr<const Track> load_track(const std::optional<std::filesystem::path>& path);
+[[nodiscard]] std::shared_ptr<const Track> load_track(
+    const std::optional<std::filesystem::path>& path);
 
 /// Where the live view of a run is served (`--live`).
 struct LiveOptions {
@@ -53,7 +54,7 @@ using RunLoop = std::function<sim::RunReport(sim::World& world, const sim::RunOp
 /// A planner reached through a RunLoop, and how the report names it.
 struct ExternalPlanner {
   RunLoop loop;
-  std::string name;         ///< the report's `policy` (default: the address)
+  std::string name;     ///< the report's `policy` (default: the address)
   std::string address;  ///< e.g. the remote planner's ws:// URL (shown on the scorecard)
 };
 
@@ -96,9 +97,10 @@ struct DriveResult {
 /// Checks the options (UsageError naming the flag), loads everything and runs the drive.
 /// `progress` (may be empty) is called now and then with simulated time and distance;
 /// `stop` (may be null) ends the run early when set.
-[[nodiscard]] DriveResult drive(const DriveOptions& opts,
-                                const std::function<void(double t_s, double distance_m)>& progress = {},
-                                const std::atomic<bool>* stop = nullptr);
+[[nodiscard]] DriveResult drive(
+    const DriveOptions& opts,
+    const std::function<void(double t_s, double distance_m)>& progress = {},
+    const std::atomic<bool>* stop = nullptr);
 
 /// What a drive loads before it runs: the config, the track, the scenario (when one is
 /// given), and the options with the scenario's duration applied.
@@ -113,19 +115,20 @@ struct DriveInputs {
 [[nodiscard]] DriveInputs load_drive_inputs(const DriveOptions& opts);
 
 /// drive() on inputs already loaded (`sim --planner` loads them before it connects).
-[[nodiscard]] DriveResult drive_loaded(const DriveInputs& inputs,
-                                       const std::function<void(double t_s, double distance_m)>& progress = {},
-                                       const std::atomic<bool>* stop = nullptr);
+[[nodiscard]] DriveResult drive_loaded(
+    const DriveInputs& inputs,
+    const std::function<void(double t_s, double distance_m)>& progress = {},
+    const std::atomic<bool>* stop = nullptr);
 
 /// Like drive(), with the map and config already loaded.
 /// `stop` (may be null) ends the run early when set; `scenario` (may be null) replaces the
 /// random traffic (opts.scenario is not read here). With opts.record the replay is written
 /// (also when the run fails: it ends with the report so far); with opts.live the run is
 /// served live and paced at real time.
-[[nodiscard]] DriveResult drive_on(const Track& track, const Config& config, const DriveOptions& opts,
-                                   const std::function<void(double t_s, double distance_m)>& progress = {},
-                                   const std::atomic<bool>* stop = nullptr,
-                                   const sim::Scenario* scenario = nullptr);
+[[nodiscard]] DriveResult drive_on(
+    const Track& track, const Config& config, const DriveOptions& opts,
+    const std::function<void(double t_s, double distance_m)>& progress = {},
+    const std::atomic<bool>* stop = nullptr, const sim::Scenario* scenario = nullptr);
 
 /// What the command line does with a finished run.
 struct RunOutputs {

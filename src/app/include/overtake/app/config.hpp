@@ -45,7 +45,8 @@ class ConfigError : public std::runtime_error {
 /// Applies the keys present in `j` (any subset) on top of `base`. Unknown keys, wrong types
 /// and invalid values are errors naming `source` and the key. The road and the car footprint
 /// are copied into the world's and planner's params, and the world's step into the planner's.
-[[nodiscard]] Config apply_config_json(Config base, const nlohmann::json& j, std::string_view source);
+[[nodiscard]] Config apply_config_json(Config base, const nlohmann::json& j,
+                                       std::string_view source);
 
 /// apply_config_json on the text of a config file (parse_json_text, then the keys); every
 /// fault is a ConfigError naming `source`.

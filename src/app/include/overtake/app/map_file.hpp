@@ -9,6 +9,7 @@ namespace overtake::app {
 
 /// Reads and parses a map file in the original format. Throws core::MapError naming the path
 /// (also when the file cannot be read).
-[[nodiscard]] core::Map load_map_file(const std::filesystem::path& path, const core::MapRules& rules = {});
+[[nodiscard]] core::Map load_map_file(const std::filesystem::path& path,
+                                      const core::MapRules& rules = {});
 
 }  // namespace overtake::app

@@ -27,6 +27,7 @@ namespace overtake::app {
                                                 const core::RoadParams& road);
 
 /// Reads a scenario file.
-[[nodiscard]] sim::Scenario load_scenario(const std::filesystem::path& path, const core::RoadParams& road);
+[[nodiscard]] sim::Scenario load_scenario(const std::filesystem::path& path,
+                                          const core::RoadParams& road);
 
 }  // namespace overtake::app

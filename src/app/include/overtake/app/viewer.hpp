@@ -35,8 +35,8 @@ inline constexpr std::string_view kReplaysFolder = "replays";
 
 /// The replay header of a run: the track's lane lines, the config's limits, the provenance.
 [[nodiscard]] replay::ReplayHeader replay_header_for(const Track& track, const Config& config,
-                                                  const RunProvenance& provenance,
-                                                  double duration_s);
+                                                     const RunProvenance& provenance,
+                                                     double duration_s);
 
 /// The `end` record of a replay: the report JSON without `timing` (deterministic).
 [[nodiscard]] std::string replay_report_json(const sim::RunReport& report,

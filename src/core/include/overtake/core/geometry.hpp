@@ -18,13 +18,25 @@ struct Vec2 {
   friend constexpr bool operator==(Vec2, Vec2) = default;
 };
 
-[[nodiscard]] constexpr double dot(Vec2 a, Vec2 b) { return a.x * b.x + a.y * b.y; }
-[[nodiscard]] constexpr double cross(Vec2 a, Vec2 b) { return a.x * b.y - a.y * b.x; }
-[[nodiscard]] inline double norm(Vec2 a) { return std::hypot(a.x, a.y); }
-[[nodiscard]] inline double distance(Vec2 a, Vec2 b) { return norm(a - b); }
-[[nodiscard]] constexpr double distance_sq(Vec2 a, Vec2 b) { return dot(a - b, a - b); }
+[[nodiscard]] constexpr double dot(Vec2 a, Vec2 b) {
+  return a.x * b.x + a.y * b.y;
+}
+[[nodiscard]] constexpr double cross(Vec2 a, Vec2 b) {
+  return a.x * b.y - a.y * b.x;
+}
+[[nodiscard]] inline double norm(Vec2 a) {
+  return std::hypot(a.x, a.y);
+}
+[[nodiscard]] inline double distance(Vec2 a, Vec2 b) {
+  return norm(a - b);
+}
+[[nodiscard]] constexpr double distance_sq(Vec2 a, Vec2 b) {
+  return dot(a - b, a - b);
+}
 /// The vector turned 90 degrees clockwise (to the right of the direction of travel).
-[[nodiscard]] constexpr Vec2 right_of(Vec2 a) { return {a.y, -a.x}; }
+[[nodiscard]] constexpr Vec2 right_of(Vec2 a) {
+  return {a.y, -a.x};
+}
 
 /// A position along the road: s along the reference line, d to the right of it (away from
 /// the divider).
@@ -47,8 +59,8 @@ struct OrientedBox {
 
 /// How two overlapping rectangles interpenetrate: the shortest push that separates them.
 struct Penetration {
-  Vec2 normal;          ///< unit, pointing from the first box towards the second
-  double depth_m = 0.0; ///< moving the second box this far along `normal` separates them
+  Vec2 normal;           ///< unit, pointing from the first box towards the second
+  double depth_m = 0.0;  ///< moving the second box this far along `normal` separates them
 };
 
 /// The penetration of two rectangles (separating-axis test, smallest overlap over the four

@@ -45,17 +45,17 @@ class MapError : public std::runtime_error {
 struct MapRules {
   std::size_t min_waypoints = 4;
   std::size_t max_waypoints = 20000;  ///< (the original map has 181)
-  double normal_tolerance = 0.01;      ///< |(dx, dy)| within 1 +- this
-  double min_point_spacing_m = 0.01;   ///< two waypoints closer than this are duplicates
+  double normal_tolerance = 0.01;     ///< |(dx, dy)| within 1 +- this
+  double min_point_spacing_m = 0.01;  ///< two waypoints closer than this are duplicates
   /// Largest |x|, |y| or |s|: 100 km (positions then keep a decimetre or better on the
   /// original's 7-digit wire).
   double max_abs_coordinate_m = 100000.0;
-  double min_loop_length_m = 200.0;    ///< the ego starts 125 m along; traffic needs room
+  double min_loop_length_m = 200.0;  ///< the ego starts 125 m along; traffic needs room
   double max_loop_length_m = 200000.0;
   /// Each step of s between consecutive waypoints is within this factor of their straight
   /// distance (s is a distance along the road).
   double max_s_step_ratio = 2.0;
-  double s_step_slack_m = 1.0;         ///< ... give or take this much
+  double s_step_slack_m = 1.0;  ///< ... give or take this much
 };
 
 /// Parses and validates map text: numbers, unit normals, increasing s, no duplicate points,

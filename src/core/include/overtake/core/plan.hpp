@@ -25,9 +25,12 @@ inline constexpr std::size_t kPlanStatusCount = 3;
 /// "normal", "least_bad", "fallback" (the report's keys).
 [[nodiscard]] constexpr std::string_view to_string(PlanStatus s) {
   switch (s) {
-    case PlanStatus::normal: return "normal";
-    case PlanStatus::least_bad: return "least_bad";
-    case PlanStatus::fallback: return "fallback";
+    case PlanStatus::normal:
+      return "normal";
+    case PlanStatus::least_bad:
+      return "least_bad";
+    case PlanStatus::fallback:
+      return "fallback";
   }
   return "unknown";
 }

@@ -56,9 +56,7 @@ class Rng {
   constexpr bool chance(double p) { return uniform01() < p; }
 
  private:
-  static constexpr std::uint64_t rotl(std::uint64_t x, int k) {
-    return (x << k) | (x >> (64 - k));
-  }
+  static constexpr std::uint64_t rotl(std::uint64_t x, int k) { return (x << k) | (x >> (64 - k)); }
   std::uint64_t state_[4]{};
 };
 

@@ -14,9 +14,9 @@ namespace overtake::core {
 
 /// The reference line's local frame at one s.
 struct RoadFrame {
-  Vec2 position;         ///< on the divider (d = 0)
-  Vec2 tangent;          ///< unit, direction of travel
-  Vec2 normal;           ///< unit, away from the divider (increasing d)
+  Vec2 position;  ///< on the divider (d = 0)
+  Vec2 tangent;   ///< unit, direction of travel
+  Vec2 normal;    ///< unit, away from the divider (increasing d)
   double heading_rad = 0.0;
   double curvature_1pm = 0.0;  ///< signed curvature of the d = 0 line, positive for a left turn
   double ds_scale = 1.0;       ///< metres travelled on the divider line per unit of s
@@ -71,7 +71,7 @@ class ReferenceLine {
   PiecewiseCubic y_;
   double start_s_m_ = 0.0;
   double length_m_ = 0.0;
-  double side_ = 1.0;  // +1: normal to the right of travel, -1: to the left
+  double side_ = 1.0;             // +1: normal to the right of travel, -1: to the left
   std::vector<double> sample_s_;  // dense samples for global projection
   std::vector<Vec2> sample_xy_;
 };

@@ -42,7 +42,8 @@ class PiecewiseCubic {
   /// non-finite stiffness.
   [[nodiscard]] static std::optional<PiecewiseCubic> periodic_smoothing(std::span<const double> t,
                                                                         std::span<const double> y,
-                                                                        double period, double stiffness);
+                                                                        double period,
+                                                                        double stiffness);
 
   /// Index of the piece that holds t (clamped to the first or last piece).
   [[nodiscard]] std::size_t piece(double t) const;

@@ -13,11 +13,21 @@ inline constexpr double kMphPerMps = 2.23693629;
 inline constexpr double kMetresPerMile = 1609.344;
 inline constexpr double kPi = std::numbers::pi;
 
-[[nodiscard]] constexpr double mph_to_mps(double mph) { return mph / kMphPerMps; }
-[[nodiscard]] constexpr double mps_to_mph(double mps) { return mps * kMphPerMps; }
-[[nodiscard]] constexpr double deg_to_rad(double deg) { return deg * kPi / 180.0; }
-[[nodiscard]] constexpr double rad_to_deg(double rad) { return rad * 180.0 / kPi; }
-[[nodiscard]] constexpr double metres_to_miles(double m) { return m / kMetresPerMile; }
+[[nodiscard]] constexpr double mph_to_mps(double mph) {
+  return mph / kMphPerMps;
+}
+[[nodiscard]] constexpr double mps_to_mph(double mps) {
+  return mps * kMphPerMps;
+}
+[[nodiscard]] constexpr double deg_to_rad(double deg) {
+  return deg * kPi / 180.0;
+}
+[[nodiscard]] constexpr double rad_to_deg(double rad) {
+  return rad * 180.0 / kPi;
+}
+[[nodiscard]] constexpr double metres_to_miles(double m) {
+  return m / kMetresPerMile;
+}
 
 /// Wraps an angle to (-pi, pi].
 [[nodiscard]] inline double wrap_angle_rad(double a) {

@@ -15,26 +15,26 @@ namespace overtake::planner {
 struct WalkthroughParams {
   double target_speed_mps = core::mph_to_mps(49.5);
   double speed_step_mps = core::mph_to_mps(0.224);  ///< change of reference speed per cycle
-  double too_close_m = 30.0;          ///< a car ahead in the lane nearer than this: slow down
+  double too_close_m = 30.0;  ///< a car ahead in the lane nearer than this: slow down
   std::vector<double> anchor_distances_m = {30.0, 60.0, 90.0};
   int path_points = 50;
-  double horizon_x_m = 30.0;          ///< points are spaced along this much of the spline
+  double horizon_x_m = 30.0;  ///< points are spaced along this much of the spline
   int start_lane = 1;
   friend bool operator==(const WalkthroughParams&, const WalkthroughParams&) = default;
 };
 
 /// seed000: per-lane gap and speed bookkeeping, speed-dependent minimum gaps.
 struct Seed000Params {
-  double min_gap_ahead_per_mph_m = 10.0 / 49.5;   ///< min gap ahead = this x ego speed (mph)
-  double min_gap_behind_mph_m = 20.0 * 49.5;      ///< min gap behind = this / ego speed (mph)
-  double open_lane_gap_m = 60.0;                  ///< a lane with this much room ahead is worth it
-  double no_car_gap_m = 1000.0;                   ///< the gap recorded for a lane with no car
+  double min_gap_ahead_per_mph_m = 10.0 / 49.5;  ///< min gap ahead = this x ego speed (mph)
+  double min_gap_behind_mph_m = 20.0 * 49.5;     ///< min gap behind = this / ego speed (mph)
+  double open_lane_gap_m = 60.0;                 ///< a lane with this much room ahead is worth it
+  double no_car_gap_m = 1000.0;                  ///< the gap recorded for a lane with no car
   friend bool operator==(const Seed000Params&, const Seed000Params&) = default;
 };
 
 /// seed001: a deceleration counter that triggers a lane change, 35 m gap check.
 struct Seed001Params {
-  int patience_cycles = 40;        ///< lane change once decelerating for more than this
+  int patience_cycles = 40;  ///< lane change once decelerating for more than this
   double gap_front_m = 35.0;
   double gap_rear_m = 35.0;
   friend bool operator==(const Seed001Params&, const Seed001Params&) = default;
@@ -50,7 +50,7 @@ struct Seed002Params {
 
 /// seed003: prioritised rules, strong acceleration, return to the middle lane.
 struct Seed003Params {
-  double max_dist_front_m = 30.0;   ///< write-up silent on its value: the too-close distance
+  double max_dist_front_m = 30.0;  ///< write-up silent on its value: the too-close distance
   double max_dist_back_m = 5.0;
   double strong_speed_step_mps = core::mph_to_mps(0.424);
   double middle_return_speed_mps = core::mph_to_mps(49.4);
@@ -67,7 +67,6 @@ struct Seed004Params {
   double change_first_anchor_m = 45.0;
   friend bool operator==(const Seed004Params&, const Seed004Params&) = default;
 };
-
 
 /// reference, prediction layer: how other cars are expected to move.
 struct ReferencePredictionParams {
@@ -99,10 +98,11 @@ struct ReferencePredictionParams {
   double free_speed_share = 0.81;
   double min_cap_mps = core::mph_to_mps(40.0);  ///< ... a cap is at least this ...
   double max_cap_mps = core::mph_to_mps(60.0);  ///< ... and at most this ...
-  double reaction_gain_m = 0.5;        ///< ... it reacts within this * (cap - leader's m/s) ...
-  double wave_brake_mps2 = 7.0;        ///< ... and then brakes about this hard ...
-  double wave_recover_mps2 = 3.0;      ///< ... and speeds back up at this.
-  friend bool operator==(const ReferencePredictionParams&, const ReferencePredictionParams&) = default;
+  double reaction_gain_m = 0.5;    ///< ... it reacts within this * (cap - leader's m/s) ...
+  double wave_brake_mps2 = 7.0;    ///< ... and then brakes about this hard ...
+  double wave_recover_mps2 = 3.0;  ///< ... and speeds back up at this.
+  friend bool operator==(const ReferencePredictionParams&,
+                         const ReferencePredictionParams&) = default;
 };
 
 /// reference, behaviour layer: which lane to aim for, at what speed, and the safety gaps.
@@ -111,17 +111,17 @@ struct ReferenceBehaviourParams {
   double lookahead_m = 200.0;          ///< cars farther ahead do not shape a lane's cost
   double evaluation_horizon_s = 20.0;  ///< a lane's speed is averaged over this much time
   // RSS longitudinal distance (Shalev-Shwartz et al. 2017) with jerk-limited ego braking.
-  double response_time_s = 0.2;        ///< rho: the ego's response time
-  double ego_brake_mps2 = 6.0;         ///< braking the ego commits to (<= the fallback's)
-  double ego_brake_jerk_mps3 = 7.0;    ///< ... reached at this jerk
-  double lead_brake_mps2 = 8.0;        ///< worst braking of the car ahead
-  double min_gap_m = 4.0;              ///< bumper to bumper, at any speed
+  double response_time_s = 0.2;      ///< rho: the ego's response time
+  double ego_brake_mps2 = 6.0;       ///< braking the ego commits to (<= the fallback's)
+  double ego_brake_jerk_mps3 = 7.0;  ///< ... reached at this jerk
+  double lead_brake_mps2 = 8.0;      ///< worst braking of the car ahead
+  double min_gap_m = 4.0;            ///< bumper to bumper, at any speed
   /// Cars behind react to the ego only this close, centre to centre (the faithful world's
   /// 10 m; later reactions are always safe)...
   double follower_reaction_gap_m = 10.0;
-  double follower_brake_mps2 = 7.0;    ///< ... and then brake at least this hard
-  double follower_response_s = 0.1;    ///< ... after this delay
-  double follower_margin_m = 1.2;      ///< bumper to bumper left when a follower has stopped closing
+  double follower_brake_mps2 = 7.0;  ///< ... and then brake at least this hard
+  double follower_response_s = 0.1;  ///< ... after this delay
+  double follower_margin_m = 1.2;    ///< bumper to bumper left when a follower has stopped closing
   /// A lane change needs this share of the RSS gap ahead in the target lane.
   double change_front_factor = 0.5;
   /// ... and this share when it only passes through that lane to the one beyond.
@@ -130,26 +130,27 @@ struct ReferenceBehaviourParams {
   double change_dwell_s = 1.0;         ///< after a lane change, wait this long before the next
   double speed_weight = 1.0;           ///< lane cost per unit of lost speed (fraction of cruise)
   double change_cost = 0.005;          ///< lane cost per lane to cross
-  double hysteresis = 0.015;            ///< a lane must be this much cheaper to change to it
+  double hysteresis = 0.015;           ///< a lane must be this much cheaper to change to it
   double rear_threat_weight = 0.5;     ///< lane cost of a car closing fast from behind
   double rear_threat_speed_mps = 3.0;  ///< closing faster than this is a threat ...
   double rear_threat_span_mps = 5.0;   ///< ... and a full one this much faster
   double rear_threat_range_m = 80.0;   ///< ... within this distance
   double passing_speed_mps = 9.0;      ///< closing speed on a slower car in the next lane
-  friend bool operator==(const ReferenceBehaviourParams&, const ReferenceBehaviourParams&) = default;
+  friend bool operator==(const ReferenceBehaviourParams&,
+                         const ReferenceBehaviourParams&) = default;
 };
 
 /// reference, trajectory layer: jerk-minimising Frenet candidates (Werling et al. 2010) and
 /// their checks.
 struct ReferenceTrajectoryParams {
-  int keep_points = 3;               ///< points of the previous path kept for latency
-  int path_points = 75;              ///< points sent each cycle (kept ones included)
-  double check_step_s = 0.1;         ///< candidates are checked at this spacing
-  double horizon_s = 5.0;            ///< checked and costed over this long
+  int keep_points = 3;                             ///< points of the previous path kept for latency
+  int path_points = 75;                            ///< points sent each cycle (kept ones included)
+  double check_step_s = 0.1;                       ///< candidates are checked at this spacing
+  double horizon_s = 5.0;                          ///< checked and costed over this long
   double max_speed_mps = core::mph_to_mps(49.88);  ///< checked limit (the rubric's is 50 mph)
-  double max_accel_mps2 = 7.0;       ///< total (tangential and normal), checked
-  double max_jerk_mps3 = 7.5;        ///< checked over 0.1 s windows as the strict figures are
-  double lateral_jerk_mps3 = 5.0;    ///< sets the shortest lateral manoeuvre for a distance
+  double max_accel_mps2 = 7.0;                     ///< total (tangential and normal), checked
+  double max_jerk_mps3 = 7.5;      ///< checked over 0.1 s windows as the strict figures are
+  double lateral_jerk_mps3 = 5.0;  ///< sets the shortest lateral manoeuvre for a distance
   double min_lateral_time_s = 1.2;
   std::vector<double> lateral_time_factors = {1.0, 1.3, 1.7, 2.5};
   /// The ego's middle stays this far inside the road's edges (the divider and
@@ -159,12 +160,12 @@ struct ReferenceTrajectoryParams {
   std::vector<double> cruise_times_s = {1.5, 2.5, 4.0, 6.0};
   std::vector<double> speed_offsets_mps = {0.0, -1.0, -2.5, -5.0, -9.0};
   std::vector<double> follow_times_s = {1.5, 2.5, 3.5, 5.0, 7.0};
-  double line_band_m = 0.8;          ///< half width of the band about an inner lane line ...
-  double max_band_time_s = 2.4;      ///< ... in which the ego may stay this long without cost ...
-  double linger_weight = 1000.0;     ///< ... costs this per second beyond ...
-  double band_incident_s = 2.9;      ///< ... and this long counts as an incident (the original's 3 s)
-  double lon_margin_m = 1.0;         ///< bumper to bumper, hard
-  double lat_margin_m = 0.35;        ///< side to side, hard
+  double line_band_m = 0.8;       ///< half width of the band about an inner lane line ...
+  double max_band_time_s = 2.4;   ///< ... in which the ego may stay this long without cost ...
+  double linger_weight = 1000.0;  ///< ... costs this per second beyond ...
+  double band_incident_s = 2.9;   ///< ... and this long counts as an incident (the original's 3 s)
+  double lon_margin_m = 1.0;      ///< bumper to bumper, hard
+  double lat_margin_m = 0.35;     ///< side to side, hard
   double fallback_brake_mps2 = 6.0;  ///< the braking fallback ...
   double fallback_jerk_mps3 = 7.0;   ///< ... reached at this jerk at most ...
   /// ... or less, so that with the lateral motion's jerk the total stays within this.
@@ -177,17 +178,18 @@ struct ReferenceTrajectoryParams {
   /// from behind may not see the ego at all).
   double ahead_collision_slack_s = 1.0;
   // cost weights
-  double progress_weight = 1.0;      ///< per metre short of cruising at the wanted speed
-  double lon_jerk_weight = 0.05;     ///< per (m/s^3)^2 s
+  double progress_weight = 1.0;   ///< per metre short of cruising at the wanted speed
+  double lon_jerk_weight = 0.05;  ///< per (m/s^3)^2 s
   double lat_jerk_weight = 0.2;
-  double lat_time_weight = 0.5;      ///< per second of lateral manoeuvre
-  double lane_weight = 20.0;         ///< for ending away from the behaviour's lane
-  double proximity_weight = 150.0;   ///< for being inside the RSS gap ahead
+  double lat_time_weight = 0.5;     ///< per second of lateral manoeuvre
+  double lane_weight = 20.0;        ///< for ending away from the behaviour's lane
+  double proximity_weight = 150.0;  ///< for being inside the RSS gap ahead
   /// During a lane change the cars ahead in the lane being left count for this long.
   double change_early_window_s = 2.0;
-  double rear_weight = 150.0;        ///< for leaving a closing car behind too little room
-  int max_kinematic_checks = 40;     ///< candidates checked in Cartesian per cycle
-  friend bool operator==(const ReferenceTrajectoryParams&, const ReferenceTrajectoryParams&) = default;
+  double rear_weight = 150.0;     ///< for leaving a closing car behind too little room
+  int max_kinematic_checks = 40;  ///< candidates checked in Cartesian per cycle
+  friend bool operator==(const ReferenceTrajectoryParams&,
+                         const ReferenceTrajectoryParams&) = default;
 };
 
 /// The reference planner: prediction, behaviour and trajectory layers.

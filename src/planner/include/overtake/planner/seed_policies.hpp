@@ -15,8 +15,8 @@ namespace overtake::planner {
 
 /// Another car as a seed planner sees it, relative to the s it plans from.
 struct SeenCar {
-  double gap_m = 0.0;       ///< along the road from the planning s; negative: behind
-  double speed_mps = 0.0;   ///< |velocity|
+  double gap_m = 0.0;      ///< along the road from the planning s; negative: behind
+  double speed_mps = 0.0;  ///< |velocity|
   double d_m = 0.0;
 };
 

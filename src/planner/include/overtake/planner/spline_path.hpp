@@ -12,12 +12,12 @@ namespace overtake::planner {
 
 /// What to build.
 struct SplinePathSpec {
-  double target_d_m = 6.0;                    ///< lateral position the anchors lie on
-  double ref_speed_mps = 0.0;                 ///< spacing of the new points
-  std::vector<double> anchor_distances_m;     ///< ahead of the end of the queued path, along s
-  int path_points = 50;                       ///< queued + new points
-  double horizon_x_m = 30.0;                  ///< points are spaced by this much of the spline
-  double step_s = 0.0;                        ///< time between points: the world's step (required)
+  double target_d_m = 6.0;                 ///< lateral position the anchors lie on
+  double ref_speed_mps = 0.0;              ///< spacing of the new points
+  std::vector<double> anchor_distances_m;  ///< ahead of the end of the queued path, along s
+  int path_points = 50;                    ///< queued + new points
+  double horizon_x_m = 30.0;               ///< points are spaced by this much of the spline
+  double step_s = 0.0;                     ///< time between points: the world's step (required)
 };
 
 /// The queued path followed by new points on a natural cubic spline through two points

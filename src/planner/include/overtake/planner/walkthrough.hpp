@@ -13,8 +13,8 @@ namespace overtake::planner {
 /// True when a car ahead in `lane`, projected `ahead_time_s` forward at its speed, is within
 /// `too_close_m` of `from_s_m` along the road.
 [[nodiscard]] bool car_too_close(const core::Telemetry& t, const core::ReferenceLine& line,
-                                 int lane, double from_s_m, double ahead_time_s,
-                                 double too_close_m, const core::RoadParams& road);
+                                 int lane, double from_s_m, double ahead_time_s, double too_close_m,
+                                 const core::RoadParams& road);
 
 /// The walkthrough policy.
 class WalkthroughPolicy final : public Policy {

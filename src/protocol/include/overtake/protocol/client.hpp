@@ -157,11 +157,11 @@ class RemotePlanner {
                                            const ClientOptions& options, sim::RunOptions run);
 
 /// Runs `world` against the remote planner in real time (the stepper paced at real time): a
-/// step every world step_s of wall time, the queue consumed while the planner thinks, a full telemetry after each reply when
-/// anything stepped since the last one and `42["telemetry",null]` when nothing did (the
-/// planner's `manual` then waits for the next step). Ends early, with the report so far, on a
-/// stall, a disconnect or a malformed reply. Planner time = round trip of full telemetries.
-/// run.observer (when set) sees the start, every step, and each path when it arrives.
+/// step every world step_s of wall time, the queue consumed while the planner thinks, a full
+/// telemetry after each reply when anything stepped since the last one and `42["telemetry",null]`
+/// when nothing did (the planner's `manual` then waits for the next step). Ends early, with the
+/// report so far, on a stall, a disconnect or a malformed reply. Planner time = round trip of full
+/// telemetries. run.observer (when set) sees the start, every step, and each path when it arrives.
 [[nodiscard]] sim::RunReport run_realtime(sim::World& world, PlannerConnection& connection,
                                           const ClientOptions& options, sim::RunOptions run);
 

@@ -16,7 +16,7 @@ namespace overtake::sim {
 struct LaneManoeuvre {
   int from_lane = 0;
   int to_lane = 0;
-  double from_d_m = 0.0;  ///< lateral position when it started
+  double from_d_m = 0.0;   ///< lateral position when it started
   double elapsed_s = 0.0;  ///< time into it (its clock runs slower when the car crawls)
   double duration_s = 0.0;
 };
@@ -25,11 +25,11 @@ struct LaneManoeuvre {
 struct CalmCar {
   double s_m = 0.0;
   double d_m = 0.0;
-  double speed_mps = 0.0;     ///< along its lane
-  double accel_mps2 = 0.0;    ///< along its lane, over the last step
-  double d_rate_mps = 0.0;    ///< lateral speed (dd/dt)
-  double cruise_mps = 0.0;    ///< the speed it wants to drive
-  int lane = 1;               ///< lane it keeps, or moves to during a lane change
+  double speed_mps = 0.0;   ///< along its lane
+  double accel_mps2 = 0.0;  ///< along its lane, over the last step
+  double d_rate_mps = 0.0;  ///< lateral speed (dd/dt)
+  double cruise_mps = 0.0;  ///< the speed it wants to drive
+  int lane = 1;             ///< lane it keeps, or moves to during a lane change
   std::optional<LaneManoeuvre> manoeuvre;
   double since_lane_change_s = 1e9;
   bool held_up = false;          ///< reacting to a vehicle ahead (this step)
@@ -41,14 +41,14 @@ struct CalmCar {
   /// Set for a car of a scripted scenario: it keeps its lane and speed until an event.
   struct Script {
     double target_speed_mps = 0.0;
-    double rate_mps2 = 3.0;       ///< how fast it reaches the target speed
-    double brake_mps2 = 0.0;      ///< braking under way ...
-    double brake_left_s = 0.0;    ///< ... for this much longer
-    int change_to_lane = -1;      ///< a lane change to start at the next step
+    double rate_mps2 = 3.0;     ///< how fast it reaches the target speed
+    double brake_mps2 = 0.0;    ///< braking under way ...
+    double brake_left_s = 0.0;  ///< ... for this much longer
+    int change_to_lane = -1;    ///< a lane change to start at the next step
   };
   std::optional<Script> script;
-  bool far = false;            ///< farther than the despawn distance; waiting to be placed again
-  core::Rng rng;               ///< this car's own random stream
+  bool far = false;  ///< farther than the despawn distance; waiting to be placed again
+  core::Rng rng;     ///< this car's own random stream
 };
 
 class CalmTraffic final : public TrafficModel {
@@ -86,21 +86,21 @@ class CalmTraffic final : public TrafficModel {
   std::vector<CalmCar> cars_;
   std::vector<TrafficCar> bodies_;
   // Per-step scratch, reused so that step() does not allocate.
-  struct Vehicle {               // a car or the ego as the others see it this step
-    double s_m = 0.0;            // wrapped
+  struct Vehicle {     // a car or the ego as the others see it this step
+    double s_m = 0.0;  // wrapped
     double speed_mps = 0.0;
-    double accel_mps2 = 0.0;     // over the last step
-    unsigned follow_lanes = 0;   // lanes it occupies for following (bit per lane)
-    unsigned now_lanes = 0;      // lanes it counts in for lane-clear checks
-    int car = -1;                // index into cars_, -1 for the ego
+    double accel_mps2 = 0.0;    // over the last step
+    unsigned follow_lanes = 0;  // lanes it occupies for following (bit per lane)
+    unsigned now_lanes = 0;     // lanes it counts in for lane-clear checks
+    int car = -1;               // index into cars_, -1 for the ego
   };
-  struct Decision {              // what a car does this step, from the previous frame
-    double accel_mps2 = 0.0;     // applied
-    double idm_mps2 = 0.0;       // plain IDM, unclamped, for MOBIL
+  struct Decision {           // what a car does this step, from the previous frame
+    double accel_mps2 = 0.0;  // applied
+    double idm_mps2 = 0.0;    // plain IDM, unclamped, for MOBIL
     double new_speed_mps = 0.0;
-    int leader = -1;             // index into vehicles_, -1 when none
-    double leader_gap_m = 0.0;   // centre to centre along s
-    int change_to_lane = -1;     // start a lane change into this lane, -1 for none
+    int leader = -1;            // index into vehicles_, -1 when none
+    double leader_gap_m = 0.0;  // centre to centre along s
+    int change_to_lane = -1;    // start a lane change into this lane, -1 for none
   };
   std::vector<Vehicle> vehicles_;
   std::vector<Decision> decisions_;

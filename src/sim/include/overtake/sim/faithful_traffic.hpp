@@ -54,23 +54,23 @@ class FaithfulTraffic final : public TrafficModel {
  public:
   /// One car's driver: the state the original's CarAIControl keeps.
   struct Driver {
-    double cap_mps = 0.0;               ///< speed cap (drawn at placement)
-    std::size_t target_waypoint = 0;    ///< the waypoint it steers for
-    int lane_change_time = 0;           ///< steps since its last lane change (saturates)
-    std::vector<int> clear_counts;      ///< counted clear steps, per target lane
-    bool staged = false;                ///< waiting in the queue to be placed
-    bool fresh = false;                 ///< placed this frame (reports its cap as m/s)
-    double avoid_until_s = -1.0;        ///< evasive action after a contact, until then ...
-    double avoid_slowdown = 1.0;        ///< ... desired speed times this ...
-    double avoid_offset_m = 0.0;        ///< ... and the target offset sideways by this
+    double cap_mps = 0.0;             ///< speed cap (drawn at placement)
+    std::size_t target_waypoint = 0;  ///< the waypoint it steers for
+    int lane_change_time = 0;         ///< steps since its last lane change (saturates)
+    std::vector<int> clear_counts;    ///< counted clear steps, per target lane
+    bool staged = false;              ///< waiting in the queue to be placed
+    bool fresh = false;               ///< placed this frame (reports its cap as m/s)
+    double avoid_until_s = -1.0;      ///< evasive action after a contact, until then ...
+    double avoid_slowdown = 1.0;      ///< ... desired speed times this ...
+    double avoid_offset_m = 0.0;      ///< ... and the target offset sideways by this
     SmoothNoise noise;
     // What it saw and decided at its last step (for tests and viewers).
     SightKind sight = SightKind::nothing;
-    int sight_car = -1;                 ///< index of the car it saw
-    double sight_distance_m = 0.0;      ///< 0 when the ray met nothing
+    int sight_car = -1;             ///< index of the car it saw
+    double sight_distance_m = 0.0;  ///< 0 when the ray met nothing
     bool reacting = false;
     double desired_mph = 0.0;
-    double pedal = 0.0;                 ///< throttle (> 0) or brake (< 0), in [-1, 1]
+    double pedal = 0.0;  ///< throttle (> 0) or brake (< 0), in [-1, 1]
   };
 
   FaithfulTraffic(const core::WaypointFrenet& chords, const core::ReferenceLine& line,
@@ -132,8 +132,8 @@ class FaithfulTraffic final : public TrafficModel {
   std::vector<Driver> drivers_;
   std::vector<core::Vec2> parked_;
   std::vector<Command> commands_;
-  std::deque<std::size_t> queue_;       // staged cars, in the order they went far
-  bool init_ = true;                    // the first frame places a batch at once
+  std::deque<std::size_t> queue_;  // staged cars, in the order they went far
+  bool init_ = true;               // the first frame places a batch at once
   bool batches_held_ = false;
   int frame_counter_ = 0;
   int frames_to_batch_ = 0;

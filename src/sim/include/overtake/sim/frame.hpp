@@ -13,8 +13,8 @@ namespace overtake::sim {
 /// A traffic car's body in a frame.
 struct CarPose {
   int id = 0;
-  core::Vec2 position;     ///< centre of its body (m)
-  double yaw_rad = 0.0;    ///< where its body points
+  core::Vec2 position;   ///< centre of its body (m)
+  double yaw_rad = 0.0;  ///< where its body points
   double speed_mps = 0.0;
   friend bool operator==(const CarPose&, const CarPose&) = default;
 };

@@ -31,21 +31,21 @@ struct EgoParams {
 /// Where traffic cars are put around the ego (the original's CarAIControl.Spawn and
 /// CarTraffic's batches). Speeds are the cars' speed caps.
 struct PlacementParams {
-  double despawn_distance_m = 200.0;     ///< farther than this from the ego: placed again
+  double despawn_distance_m = 200.0;  ///< farther than this from the ego: placed again
   double behind_probability = 0.5;
-  int behind_min_waypoints = 2;          ///< behind the ego's closest waypoint ...
+  int behind_min_waypoints = 2;  ///< behind the ego's closest waypoint ...
   int behind_max_waypoints = 3;
-  int ahead_min_waypoints = 4;           ///< ... or ahead of it
+  int ahead_min_waypoints = 4;  ///< ... or ahead of it
   int ahead_max_waypoints = 5;
   double behind_min_speed_mps = core::mph_to_mps(50.0);
   double behind_max_speed_mps = core::mph_to_mps(60.0);
   double ahead_min_speed_mps = core::mph_to_mps(40.0);
   double ahead_max_speed_mps = core::mph_to_mps(50.0);
-  double min_spawn_distance_m = 6.0;     ///< a spot closer than this to another car is drawn again
+  double min_spawn_distance_m = 6.0;  ///< a spot closer than this to another car is drawn again
   int max_spawn_attempts = 500;
-  int batch_min_frames = 20;             ///< a batch every 20-60 frames ...
+  int batch_min_frames = 20;  ///< a batch every 20-60 frames ...
   int batch_max_frames = 60;
-  int batch_min_cars = 1;                ///< ... places 1-3 waiting cars
+  int batch_min_cars = 1;  ///< ... places 1-3 waiting cars
   int batch_max_cars = 3;
   friend bool operator==(const PlacementParams&, const PlacementParams&) = default;
 };
@@ -55,29 +55,30 @@ struct PlacementParams {
 /// response, wander) are (ours) and calibrated against telemetry recorded from it.
 struct FaithfulTrafficParams {
   // Start: the cars wait off the road until the batches place them.
-  double parked_d_m = -280.0;            ///< (ours) waiting cars stand this far on the divider's side ...
+  double parked_d_m = -280.0;  ///< (ours) waiting cars stand this far on the divider's side ...
   double parked_s_before_end_m = 260.0;  ///< ... around s = loop length - this, 6 m apart
   // Speed law: throttle = (cap - speed) in mph * sensitivity, braking likewise, times a wander.
   double accel_sensitivity_per_mph = 0.04;
   double brake_sensitivity_per_mph = 1.0;
-  double accel_wander_amount = 0.1;      ///< throttle scaled by 1 - this + this * noise
-  double wander_rate_hz = 0.1;           ///< the noise is sampled at time * this
-  double engine_mps2 = 7.5;              ///< (ours) acceleration at full throttle
-  double drag_per_s = 0.13;              ///< (ours) deceleration per m/s of speed
-  double brake_mps2 = 8.0;               ///< (ours) deceleration at full brake
+  double accel_wander_amount = 0.1;  ///< throttle scaled by 1 - this + this * noise
+  double wander_rate_hz = 0.1;       ///< the noise is sampled at time * this
+  double engine_mps2 = 7.5;          ///< (ours) acceleration at full throttle
+  double drag_per_s = 0.13;          ///< (ours) deceleration per m/s of speed
+  double brake_mps2 = 8.0;           ///< (ours) deceleration at full brake
   // Following: one ray straight ahead from the front of the car.
-  double reaction_gain_m = 0.5;          ///< reaction distance = this * (own cap in mph - body's speed in m/s)
-  double no_body_reaction_m = 10.0;      ///< reaction distance when the ray meets no body
-  double ray_horizon_m = 250.0;          ///< (ours) a ray still on the road this far meets nothing
-  double scenery_margin_m = 3.0;         ///< (ours) a ray this far beyond the road's edges meets scenery
+  double reaction_gain_m =
+      0.5;  ///< reaction distance = this * (own cap in mph - body's speed in m/s)
+  double no_body_reaction_m = 10.0;  ///< reaction distance when the ray meets no body
+  double ray_horizon_m = 250.0;      ///< (ours) a ray still on the road this far meets nothing
+  double scenery_margin_m = 3.0;  ///< (ours) a ray this far beyond the road's edges meets scenery
   // Lane changes (each counted step: reacting, fast enough, settled, near a waypoint).
   double lane_change_min_speed_mps = core::mph_to_mps(15.0);
-  int lane_change_wait_steps = 100;      ///< steps since its last lane change
-  double waypoint_trigger_m = 15.0;      ///< within this of its next waypoint
-  double clear_gap_m = 20.0;             ///< a lane is clear with no car within this in s ...
-  double car_lane_half_width_m = 2.0;    ///< ... among the cars with d within this of its centre ...
-  double ego_lane_half_width_m = 3.0;    ///< ... and the ego within this
-  int clear_steps = 50;                  ///< moves after more than this many clear counted steps
+  int lane_change_wait_steps = 100;    ///< steps since its last lane change
+  double waypoint_trigger_m = 15.0;    ///< within this of its next waypoint
+  double clear_gap_m = 20.0;           ///< a lane is clear with no car within this in s ...
+  double car_lane_half_width_m = 2.0;  ///< ... among the cars with d within this of its centre ...
+  double ego_lane_half_width_m = 3.0;  ///< ... and the ego within this
+  int clear_steps = 50;                ///< moves after more than this many clear counted steps
   // Steering towards the next waypoint's lane point.
   double steer_sensitivity_per_deg = 0.05;
   double max_steer_deg = 25.0;           ///< (ours) full steering lock
@@ -87,8 +88,8 @@ struct FaithfulTrafficParams {
   double target_reach_per_lane_m = 4.0;  ///< ... this * lane of the car
   double lateral_wander_m = 0.35;        ///< (ours) the target is offset by (2 noise - 1) * this
   // After a contact with another car or the ego.
-  double avoid_time_s = 1.0;             ///< evasive action for this long:
-  double avoid_slowdown = 0.5;           ///< desired speed times this when the other is in front
+  double avoid_time_s = 1.0;    ///< evasive action for this long:
+  double avoid_slowdown = 0.5;  ///< desired speed times this when the other is in front
   friend bool operator==(const FaithfulTrafficParams&, const FaithfulTrafficParams&) = default;
 };
 
@@ -101,17 +102,17 @@ struct CalmTrafficParams {
   double max_accel_mps2 = 1.5;
   double comfort_decel_mps2 = 2.0;
   double accel_exponent = 4.0;
-  double max_brake_mps2 = 9.0;           ///< physical braking limit
+  double max_brake_mps2 = 9.0;  ///< physical braking limit
   double politeness = 0.3;
   double change_threshold_mps2 = 0.2;
-  double safe_decel_mps2 = 4.0;          ///< a change may not force the new follower to brake harder
+  double safe_decel_mps2 = 4.0;  ///< a change may not force the new follower to brake harder
   double lane_change_interval_s = 4.0;
   /// In its lane, a spot must also leave room to brake to the other car's speed.
   double spawn_brake_mps2 = 6.0;
-  double wander_amplitude_m = 0.3;       ///< lateral wander about the lane centre
+  double wander_amplitude_m = 0.3;  ///< lateral wander about the lane centre
   double wander_min_period_s = 8.0;
   double wander_max_period_s = 20.0;
-  double lane_change_duration_s = 3.0;   ///< minimum-jerk lateral profile (also scripted cars)
+  double lane_change_duration_s = 3.0;  ///< minimum-jerk lateral profile (also scripted cars)
   friend bool operator==(const CalmTrafficParams&, const CalmTrafficParams&) = default;
 };
 
@@ -129,15 +130,15 @@ struct RefereeParams {
   double speed_limit_mps = core::mph_to_mps(50.0);
   double max_accel_mps2 = 10.0;
   double max_jerk_mps3 = 10.0;
-  int accel_block_steps = 10;            ///< speed averaged over blocks of 10 steps (0.2 s)
-  int jerk_group_blocks = 5;             ///< block totals averaged over groups of 5 (1 s)
+  int accel_block_steps = 10;  ///< speed averaged over blocks of 10 steps (0.2 s)
+  int jerk_group_blocks = 5;   ///< block totals averaged over groups of 5 (1 s)
   /// Outside the road within this of its edges, or beyond them: d under this, or over the
   /// road's width (lane_count * lane_width_m) less this (0.8 and 11.2 on three 4 m lanes).
   double edge_margin_m = 0.8;
-  double line_band_half_width_m = 0.8;   ///< around each lane line between lanes
-  int straddle_max_steps = 150;          ///< in a band for more than this: outside of lane
-  int latch_steps = 50;                  ///< a persisting incident counts again after this
-  int strict_window_steps = 5;           ///< (ours) 0.1 s windows for the strict figures
+  double line_band_half_width_m = 0.8;  ///< around each lane line between lanes
+  int straddle_max_steps = 150;         ///< in a band for more than this: outside of lane
+  int latch_steps = 50;                 ///< a persisting incident counts again after this
+  int strict_window_steps = 5;          ///< (ours) 0.1 s windows for the strict figures
   friend bool operator==(const RefereeParams&, const RefereeParams&) = default;
 };
 
@@ -145,14 +146,14 @@ struct RefereeParams {
 struct WorldParams {
   /// The fixed step; also the planners' (PlannerParams::step_s), copied by the config loader.
   double step_s = core::kDefaultStepS;
-  core::RoadParams road;      ///< the config's `road`, copied in by the config loader
-  core::CarFootprint car;     ///< the config's `car` (every body, the ego's too), likewise
+  core::RoadParams road;   ///< the config's `road`, copied in by the config loader
+  core::CarFootprint car;  ///< the config's `car` (every body, the ego's too), likewise
   EgoParams ego;
   TrafficParams traffic;
   RefereeParams referee;
   /// Round what the planner sees and what it sends as the original's wire format does.
   bool wire_rounding = true;
-  int min_steps_per_call = 1;            ///< (ours) lock-step latency K drawn from [min, max]
+  int min_steps_per_call = 1;  ///< (ours) lock-step latency K drawn from [min, max]
   int max_steps_per_call = 3;
   friend bool operator==(const WorldParams&, const WorldParams&) = default;
 };

@@ -13,7 +13,6 @@ namespace overtake::sim {
 /// before it; if it is the first, drop it only when the car stands on it (within
 /// `stand_on_tolerance_m`). Ties go to the earliest point.
 [[nodiscard]] std::vector<core::Vec2> trim_new_path(std::span<const core::Vec2> path,
-                                                    core::Vec2 car,
-                                                    double stand_on_tolerance_m);
+                                                    core::Vec2 car, double stand_on_tolerance_m);
 
 }  // namespace overtake::sim

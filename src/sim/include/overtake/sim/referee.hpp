@@ -56,10 +56,11 @@ struct Peaks {
 /// The strict figures at the newest step: finite differences over 0.1 s windows
 /// (RefereeParams::strict_window_steps), centred one window back. Zero until enough steps.
 struct StrictFigures {
-  double tangential_mps2 = 0.0;    ///< along the direction of travel; negative when slowing
-  double normal_mps2 = 0.0;        ///< across it (magnitude)
-  double acceleration_mps2 = 0.0;  ///< total: the figure whose peak is Peaks::strict_acceleration_mps2
-  double jerk_mps3 = 0.0;          ///< the figure whose peak is Peaks::strict_jerk_mps3
+  double tangential_mps2 = 0.0;  ///< along the direction of travel; negative when slowing
+  double normal_mps2 = 0.0;      ///< across it (magnitude)
+  double acceleration_mps2 =
+      0.0;                 ///< total: the figure whose peak is Peaks::strict_acceleration_mps2
+  double jerk_mps3 = 0.0;  ///< the figure whose peak is Peaks::strict_jerk_mps3
   friend bool operator==(const StrictFigures&, const StrictFigures&) = default;
 };
 

@@ -11,9 +11,9 @@ namespace overtake::sim {
 
 /// A car placed by the script.
 struct ScriptedCar {
-  double s_m = 0.0;          ///< absolute s on the map (wrapped)
+  double s_m = 0.0;  ///< absolute s on the map (wrapped)
   int lane = 1;
-  double speed_mps = 0.0;    ///< its speed, held until an event changes it
+  double speed_mps = 0.0;  ///< its speed, held until an event changes it
 };
 
 /// What an event does.
@@ -40,9 +40,9 @@ struct Scenario {
   std::optional<double> duration_s;  ///< default run length
   double ego_s_m = 124.8336;
   double ego_d_m = 6.164833;
-  double ego_speed_mps = 0.0;        ///< the ego starts at this speed along its lane
-  std::vector<ScriptedCar> cars;     ///< replace the random traffic (ids in order)
-  std::vector<ScenarioEvent> events; ///< sorted by time when loaded
+  double ego_speed_mps = 0.0;         ///< the ego starts at this speed along its lane
+  std::vector<ScriptedCar> cars;      ///< replace the random traffic (ids in order)
+  std::vector<ScenarioEvent> events;  ///< sorted by time when loaded
 };
 
 }  // namespace overtake::sim

@@ -31,26 +31,26 @@ enum class TrafficProfile {
 
 /// The ego as traffic sees it: a body to react to and to keep clear of.
 struct EgoView {
-  core::OrientedBox body;         ///< its footprint now
+  core::OrientedBox body;  ///< its footprint now
   double speed_mps = 0.0;
-  core::FrenetPoint frenet;       ///< on the reference line
-  core::FrenetPoint map_frenet;   ///< as the original measures it (waypoint chords)
+  core::FrenetPoint frenet;      ///< on the reference line
+  core::FrenetPoint map_frenet;  ///< as the original measures it (waypoint chords)
   std::size_t closest_waypoint = 0;
 };
 
 /// One traffic car as a body: where it is, where it points, how fast it goes.
 struct TrafficCar {
   int id = 0;
-  core::Vec2 position;            ///< centre of its body
-  double heading_rad = 0.0;       ///< where its body points
-  double speed_mps = 0.0;         ///< along its heading
+  core::Vec2 position;       ///< centre of its body
+  double heading_rad = 0.0;  ///< where its body points
+  double speed_mps = 0.0;    ///< along its heading
   /// What sensor fusion reports as its velocity: heading * speed, except on the first frame
   /// after it was placed, when the original reports its speed cap read as m/s.
   core::Vec2 reported_velocity_mps;
-  core::FrenetPoint map_frenet;   ///< s and d as the original reports them (waypoint chords)
+  core::FrenetPoint map_frenet;  ///< s and d as the original reports them (waypoint chords)
   std::size_t closest_waypoint = 0;
-  int lane = 1;                   ///< the lane it keeps, or moves into
-  bool parked = false;            ///< waiting off the road to be placed (not a body on the road)
+  int lane = 1;         ///< the lane it keeps, or moves into
+  bool parked = false;  ///< waiting off the road to be placed (not a body on the road)
 };
 
 /// What drives the cars. Implementations keep their own state and publish the bodies.

@@ -24,8 +24,8 @@ struct EgoState {
   core::Vec2 position;
   double yaw_rad = 0.0;
   double speed_mps = 0.0;
-  core::FrenetPoint frenet;       ///< on the reference line
-  core::FrenetPoint map_frenet;   ///< as the original measures and reports it (waypoint chords)
+  core::FrenetPoint frenet;      ///< on the reference line
+  core::FrenetPoint map_frenet;  ///< as the original measures and reports it (waypoint chords)
   std::size_t closest_waypoint = 0;
 };
 

@@ -16,12 +16,14 @@ namespace overtake::planner::reference {
 
 /// Distance (m) to stop from `speed_mps` braking at up to `brake_mps2`, reached at `jerk_mps3`
 /// from zero acceleration.
-[[nodiscard]] double jerk_limited_stop_distance(double speed_mps, double brake_mps2, double jerk_mps3);
+[[nodiscard]] double jerk_limited_stop_distance(double speed_mps, double brake_mps2,
+                                                double jerk_mps3);
 
 /// RSS minimum bumper-to-bumper distance (m) from the ego, behind at `rear_mps`, to a car
 /// ahead at `front_mps`: the ego keeps its speed for the response time, then brakes with
 /// limited jerk; the car ahead brakes as hard as it can. Never less than min_gap_m.
-[[nodiscard]] double rss_front_gap(double rear_mps, double front_mps, const ReferenceBehaviourParams& p);
+[[nodiscard]] double rss_front_gap(double rear_mps, double front_mps,
+                                   const ReferenceBehaviourParams& p);
 
 /// Room (m) left, bumper to bumper beyond the margin, when a car behind at centre distance
 /// `centre_gap_m` closes at `closing_mps` on the ego and reacts as late as followers do
@@ -43,17 +45,17 @@ struct EgoSnapshot {
 /// One lane as seen from the ego.
 struct LaneView {
   int lane = 0;
-  int leader = -1;                 ///< index into the predictions, -1: none within lookahead
-  double leader_gap_m = 1e9;       ///< bumper to bumper
+  int leader = -1;            ///< index into the predictions, -1: none within lookahead
+  double leader_gap_m = 1e9;  ///< bumper to bumper
   double leader_speed_mps = 0.0;
-  int follower = -1;               ///< nearest car behind
-  double follower_gap_m = 1e9;     ///< bumper to bumper
+  int follower = -1;            ///< nearest car behind
+  double follower_gap_m = 1e9;  ///< bumper to bumper
   double follower_speed_mps = 0.0;
-  bool alongside = false;          ///< a car overlaps the ego's length (with a margin)
-  double expected_speed_mps = 0.0; ///< average over the evaluation horizon
-  double rear_threat = 0.0;        ///< 0 .. 1: a car closing fast from behind
-  bool enterable = false;          ///< an adjacent lane with room to move into now
-  bool passable = false;           ///< ... or at least to pass through to the lane beyond
+  bool alongside = false;           ///< a car overlaps the ego's length (with a margin)
+  double expected_speed_mps = 0.0;  ///< average over the evaluation horizon
+  double rear_threat = 0.0;         ///< 0 .. 1: a car closing fast from behind
+  bool enterable = false;           ///< an adjacent lane with room to move into now
+  bool passable = false;            ///< ... or at least to pass through to the lane beyond
   double cost = 0.0;
 };
 
@@ -74,13 +76,15 @@ struct BehaviourState {
 struct BehaviourDecision {
   int target_lane = 1;
   int goal_lane = 1;
-  double speed_mps = 0.0;        ///< wanted speed (cruise, or less when passing a slow queue)
+  double speed_mps = 0.0;  ///< wanted speed (cruise, or less when passing a slow queue)
   std::vector<LaneView> lanes;
 };
 
 /// Chooses the target lane and speed. `elapsed_s`: time since the last decision.
-[[nodiscard]] BehaviourDecision decide(const std::vector<CarPrediction>& cars, const EgoSnapshot& ego,
-                                       BehaviourState& state, double elapsed_s, double car_length_m,
-                                       const ReferenceBehaviourParams& p, const core::RoadParams& road);
+[[nodiscard]] BehaviourDecision decide(const std::vector<CarPrediction>& cars,
+                                       const EgoSnapshot& ego, BehaviourState& state,
+                                       double elapsed_s, double car_length_m,
+                                       const ReferenceBehaviourParams& p,
+                                       const core::RoadParams& road);
 
 }  // namespace overtake::planner::reference

@@ -54,17 +54,17 @@ class LaneFrame {
  private:
   const core::ReferenceLine* line_;
   std::optional<core::PiecewiseCubic> offset_;  // of s; none: no offset
-  std::vector<double> reading_;  // the chords' d minus the line's, per metre of s
+  std::vector<double> reading_;                 // the chords' d minus the line's, per metre of s
 };
 
 /// The reference line's geometry at one (s, d).
 struct RoadPoint {
-  core::Vec2 position;        ///< map position of (s, d)
-  core::Vec2 tangent;         ///< unit, direction of travel
-  core::Vec2 normal;          ///< unit, increasing d
-  double along_scale = 1.0;   ///< metres travelled along the road at d per unit of s
-  double curvature_1pm = 0.0; ///< signed curvature of the line at offset d (left turn > 0)
-  double offset_slope = 0.0;  ///< the frame's d(offset)/ds there
+  core::Vec2 position;         ///< map position of (s, d)
+  core::Vec2 tangent;          ///< unit, direction of travel
+  core::Vec2 normal;           ///< unit, increasing d
+  double along_scale = 1.0;    ///< metres travelled along the road at d per unit of s
+  double curvature_1pm = 0.0;  ///< signed curvature of the line at offset d (left turn > 0)
+  double offset_slope = 0.0;   ///< the frame's d(offset)/ds there
 };
 
 /// The frame's geometry at (s, d) with one evaluation of the line.

@@ -31,8 +31,8 @@ struct Polynomial1d {
 };
 
 /// The quintic from (x0, v0, a0) to (x1, v1, a1) in `duration_s` (> 0).
-[[nodiscard]] Polynomial1d quintic(double x0, double v0, double a0, double x1, double v1,
-                                   double a1, double duration_s);
+[[nodiscard]] Polynomial1d quintic(double x0, double v0, double a0, double x1, double v1, double a1,
+                                   double duration_s);
 
 /// The quartic from (x0, v0, a0) to velocity v1 and acceleration a1 in `duration_s` (> 0),
 /// its end position free.

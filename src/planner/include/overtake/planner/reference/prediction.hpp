@@ -9,41 +9,41 @@
 #include <vector>
 
 #include "overtake/core/reference_line.hpp"
-#include "overtake/planner/reference/frenet.hpp"
 #include "overtake/core/road.hpp"
 #include "overtake/core/telemetry.hpp"
 #include "overtake/planner/params.hpp"
+#include "overtake/planner/reference/frenet.hpp"
 
 namespace overtake::planner::reference {
 
 /// What a car was last seen doing (kept between cycles to estimate its acceleration).
 struct CarTrack {
   int id = -1;
-  double s_m = 0.0;    ///< wrapped, as observed
-  double s_dot = 0.0;  ///< along the road
-  double s_ddot = 0.0; ///< estimated acceleration along the road
+  double s_m = 0.0;            ///< wrapped, as observed
+  double s_dot = 0.0;          ///< along the road
+  double s_ddot = 0.0;         ///< estimated acceleration along the road
   double top_speed_mps = 0.0;  ///< the fastest it has been seen going
 };
 
 /// One car's predicted motion, from the time it was observed.
 struct CarPrediction {
   int id = 0;
-  double s_m = 0.0;        ///< unwrapped: within half a loop of the ego's s
-  double s_dot = 0.0;      ///< ds/dt along the road
-  double s_ddot = 0.0;     ///< acceleration continued for a short while (braking; or
-                           ///< speeding up, for cars behind the ego); 0 otherwise
+  double s_m = 0.0;           ///< unwrapped: within half a loop of the ego's s
+  double s_dot = 0.0;         ///< ds/dt along the road
+  double s_ddot = 0.0;        ///< acceleration continued for a short while (braking; or
+                              ///< speeding up, for cars behind the ego); 0 otherwise
   double brake_time_s = 0.0;  ///< how long s_ddot is continued
   /// After that, it speeds back up at this (units of s per second squared; 0: it does not)
   /// to its speed now: a car braking in a stop-and-go wave surges again.
   double recover_s_ddot = 0.0;
-  double cap_mps = 0.0;       ///< estimated speed cap (0: unknown)
+  double cap_mps = 0.0;              ///< estimated speed cap (0: unknown)
   double observed_accel_mps2 = 0.0;  ///< its acceleration along the road, as estimated now
-  double speed_mps = 0.0;  ///< along the road, m/s
+  double speed_mps = 0.0;            ///< along the road, m/s
   double d_m = 0.0;
   double d_dot_mps = 0.0;
-  int lane = 0;            ///< the lane its d lies in now
-  int target_lane = 0;     ///< where it is heading (== lane unless changing)
-  bool changing = false;   ///< a lane change detected
+  int lane = 0;                  ///< the lane its d lies in now
+  int target_lane = 0;           ///< where it is heading (== lane unless changing)
+  bool changing = false;         ///< a lane change detected
   double change_from_d_m = 0.0;  ///< lane change: start and end d of the lateral profile ...
   double change_to_d_m = 0.0;
   double change_progress = 0.0;  ///< ... and the share of its time already done, in [0, 1]
@@ -70,13 +70,10 @@ struct CarPrediction {
 /// anchors the cars' unwrapped s;
 /// `tracks` holds last cycle's tracks and is replaced by this cycle's; `elapsed_s` is the
 /// time since the last cycle (0: unknown, no acceleration estimate).
-[[nodiscard]] std::vector<CarPrediction> predict_cars(const core::Telemetry& telemetry,
-                                                      const LaneFrame& frame,
-                                                      double ego_s_m, double elapsed_s,
-                                                      std::vector<CarTrack>& tracks,
-                                                      const ReferencePredictionParams& params,
-                                                      const core::RoadParams& road,
-                                                      double car_length_m);
+[[nodiscard]] std::vector<CarPrediction> predict_cars(
+    const core::Telemetry& telemetry, const LaneFrame& frame, double ego_s_m, double elapsed_s,
+    std::vector<CarTrack>& tracks, const ReferencePredictionParams& params,
+    const core::RoadParams& road, double car_length_m);
 
 /// A car's speed cap estimated from the fastest it has been seen going (traffic settles at
 /// free_speed_share of its cap), within the caps drawn.

@@ -52,17 +52,17 @@ class ReferencePolicy final : public Policy {
   // The planner's own line, near the waypoints (shared and immutable: copies of the policy
   // keep the frame's pointer valid).
   std::shared_ptr<const core::ReferenceLine> smooth_line_;
-  LaneFrame frame_;                  // on it, d as the original measures it
+  LaneFrame frame_;  // on it, d as the original measures it
   core::RoadParams road_;
-  double step_s_;                    // the world's step: spacing of path points in time
-  core::CarFootprint car_;           // every car's, the ego's included
+  double step_s_;           // the world's step: spacing of path points in time
+  core::CarFootprint car_;  // every car's, the ego's included
   ReferenceParams p_;
   std::vector<FrenetState> states_;  // state at each point sent last cycle
   std::vector<FrenetState> driven_;  // the last states the car went through, oldest first
   std::vector<core::Vec2> sent_;     // those points as the simulator read them
   FrenetState origin_;               // the car's state when they were sent
   bool have_plan_ = false;
-  double band_time_s_ = 0.0;         // time in a lane-line band without a break, at the car
+  double band_time_s_ = 0.0;  // time in a lane-line band without a break, at the car
   bool synced_ = false;
   std::vector<CarTrack> tracks_;
   std::vector<CarPrediction> predictions_;

@@ -37,9 +37,9 @@ struct Trajectory {
 
 /// What the trajectory layer is asked for.
 struct TrajectoryRequest {
-  FrenetState start;            ///< state at the end of the kept path (s unwrapped)
-  double start_delay_s = 0.0;   ///< time from the cars' observation to `start`
-  int target_lane = 1;          ///< behaviour's lane
+  FrenetState start;           ///< state at the end of the kept path (s unwrapped)
+  double start_delay_s = 0.0;  ///< time from the cars' observation to `start`
+  int target_lane = 1;         ///< behaviour's lane
   double wanted_speed_mps = 0.0;
   /// Time the ego has already spent in a lane-line band, without a break, up to `start`.
   double band_time_s = 0.0;
@@ -65,17 +65,19 @@ struct TrajectoryPlan {
   Trajectory trajectory;
   PlanStatus status = PlanStatus::fallback;
   double cost = 0.0;
-  int candidates = 0;        ///< combinations costed
+  int candidates = 0;  ///< combinations costed
   int collision_checks = 0;
   int kinematic_checks = 0;
-  int collision_failures = 0;  ///< candidates that failed the collision check
-  int blocking_car = -1;       ///< id of the car the cheapest candidate would have hit
+  int collision_failures = 0;    ///< candidates that failed the collision check
+  int blocking_car = -1;         ///< id of the car the cheapest candidate would have hit
   double blocking_time_s = 0.0;  ///< ... and when
 };
 
 /// Chooses this cycle's trajectory. Never fails: the braking fallback always exists.
-[[nodiscard]] TrajectoryPlan plan_trajectory(const LaneFrame& line, const TrajectoryRequest& request,
-                                             const ReferenceParams& params, const core::RoadParams& road,
+[[nodiscard]] TrajectoryPlan plan_trajectory(const LaneFrame& line,
+                                             const TrajectoryRequest& request,
+                                             const ReferenceParams& params,
+                                             const core::RoadParams& road,
                                              const core::CarFootprint& car);
 
 /// Result of the Cartesian check of one trajectory.
@@ -83,7 +85,7 @@ struct KinematicReport {
   bool ok = true;
   double first_violation_s = 1e9;  ///< time of the first sample over a limit
   double peak_speed_mps = 0.0;
-  double peak_accel_mps2 = 0.0;    ///< over 0.1 s windows, tangential and normal together
+  double peak_accel_mps2 = 0.0;  ///< over 0.1 s windows, tangential and normal together
   double peak_jerk_mps3 = 0.0;
 };
 
@@ -101,12 +103,14 @@ struct CollisionReport {
 };
 
 /// Checks `t` against the predicted cars (observed `start_delay_s` before t = 0) with the
-/// margins, every car of footprint `car`; `metres_per_s` converts s to metres along the road. Cars already following the
-/// ego in its lane are left to follow; a car the ego moves in front of must have room to stop
-/// closing (rear_room).
-[[nodiscard]] CollisionReport check_collisions(const Trajectory& t, const std::vector<CarPrediction>& cars,
+/// margins, every car of footprint `car`; `metres_per_s` converts s to metres along the road. Cars
+/// already following the ego in its lane are left to follow; a car the ego moves in front of must
+/// have room to stop closing (rear_room).
+[[nodiscard]] CollisionReport check_collisions(const Trajectory& t,
+                                               const std::vector<CarPrediction>& cars,
                                                double start_delay_s, double metres_per_s,
-                                               const ReferenceParams& p, const core::RoadParams& road,
+                                               const ReferenceParams& p,
+                                               const core::RoadParams& road,
                                                const core::CarFootprint& car);
 
 }  // namespace overtake::planner::reference
