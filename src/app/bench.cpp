@@ -32,6 +32,13 @@ constexpr int kMaxJobs = 256;
 constexpr int kMaxRecordWorst = 1000;
 constexpr const char* kRunsFile = "runs.jsonl";
 constexpr const char* kManifestFile = "bench.json";
+constexpr const char* kLogsDir = "logs";  ///< planner programs' output, one file per run
+
+// Where a planner program's output goes for one run (other planners write none).
+std::filesystem::path planner_log_path(const std::filesystem::path& dir, const std::string& policy,
+                                       const std::string& traffic, std::uint64_t seed) {
+  return dir / (policy + "-" + traffic + "-seed" + std::to_string(seed) + ".log");
+}
 
 std::string host_name() {
   char buf[256] = {};
@@ -65,7 +72,14 @@ std::uint64_t parse_u64(const std::string& s, const std::string& whole) {
 // The manifest: what defines a sweep (everything but the shard).
 json manifest_of(const BenchSpec& spec, const Track& track, const Config& config,
                  std::size_t total) {
-  return {{"policies", spec.policies},
+  json planners = json::object();  // the policies brought by flags: what each one is
+  if (spec.planners) {
+    for (const auto& p : spec.policies) {
+      const PlannerEntry* e = spec.planners->find(p);
+      if (e && e->kind != PlannerKind::builtin) planners[p] = json::parse(e->describe());
+    }
+  }
+  json m = {{"policies", spec.policies},
           {"traffic", spec.traffic},
           {"seeds", spec.seeds},
           {"minutes", spec.minutes},
@@ -74,6 +88,8 @@ json manifest_of(const BenchSpec& spec, const Track& track, const Config& config
           {"params_hash", config_hash(config)},
           {"combinations", total},
           {"shard", std::to_string(spec.shard_index) + "/" + std::to_string(spec.shard_count)}};
+  if (!planners.empty()) m["planners"] = planners;
+  return m;
 }
 
 json sweep_identity(json manifest) {
@@ -204,6 +220,8 @@ std::vector<std::filesystem::path> record_worst(const BenchSpec& spec, std::vect
       o.traffic = run["config"]["traffic"].get<std::string>();
       o.policy = run["config"]["policy"].get<std::string>();
       o.steps_per_call = spec.steps_per_call;
+      o.planners = spec.planners;
+      o.planner_log = planner_log_path(spec.out / "replays", o.policy, o.traffic, o.seed);
       const std::filesystem::path file = dir / bench_replay_name(o.policy, o.traffic, o.seed);
       o.record = file;
       try {
@@ -319,6 +337,7 @@ BenchOutcome run_bench(const BenchSpec& spec, const std::atomic<bool>* stop,
   for (const auto& p : spec.policies) {
     DriveOptions o;
     o.policy = p;
+    o.planners = spec.planners;
     o.minutes = spec.minutes;
     o.steps_per_call = spec.steps_per_call;
     validate_drive_options(o);
@@ -414,6 +433,8 @@ BenchOutcome run_bench(const BenchSpec& spec, const std::atomic<bool>* stop,
       o.traffic = c.traffic;
       o.policy = c.policy;
       o.steps_per_call = spec.steps_per_call;
+      o.planners = spec.planners;
+      o.planner_log = planner_log_path(spec.out / kLogsDir, c.policy, c.traffic, c.seed);
       const auto t0 = std::chrono::steady_clock::now();
       DriveResult r;
       try {

@@ -1,5 +1,6 @@
 // The `overtake bench` and `overtake bench merge` command lines.
 
+#include <algorithm>
 #include <cstdio>
 #include <iostream>
 #include <thread>
@@ -69,6 +70,8 @@ Subcommand register_bench(CLI::App& app) {
     std::string traffic = "faithful,calm";
     std::string map, config, out = "bench-out", shard, html;
     bool quiet = false;
+    PlannerFlags planners;
+    CLI::Option* policies_opt = nullptr;
     std::vector<std::string> merge_dirs;
     std::string merge_out, merge_html;
   };
@@ -79,7 +82,12 @@ Subcommand register_bench(CLI::App& app) {
       "Run every combination of policies x traffic profiles x seeds in parallel and summarise "
       "them\n"
       "(runs.jsonl, summary.csv, summary.md in --out). `overtake bench merge` joins shards.");
-  cmd->add_option("--policies", st->policies, "Comma-separated policies")->capture_default_str();
+  st->policies_opt = cmd->add_option("--policies", st->policies,
+                                     "Comma-separated policies (built-in ones, and the names of\n"
+                                     "planners brought by the flags below). Default: every\n"
+                                     "built-in policy, or only the brought ones when any are")
+                         ->capture_default_str();
+  add_planner_flags(*cmd, st->planners, true);
   cmd->add_option("--seeds", st->seeds, "Seeds: a range and/or list, e.g. 1-20 or 1,5,9-12")
       ->capture_default_str();
   cmd->add_option("--minutes", st->spec.minutes, "Simulated minutes per run")
@@ -147,7 +155,13 @@ Subcommand register_bench(CLI::App& app) {
           return kExitOk;
         }
         BenchSpec spec = st->spec;
-        spec.policies = split_list(st->policies);
+        spec.planners = catalog_from_flags(st->planners);
+        const auto added = spec.planners->added_names();
+        if (st->policies_opt->count() > 0 || added.empty()) spec.policies = split_list(st->policies);
+        for (const auto& name : added) {  // every planner brought by a flag is benched
+          if (std::find(spec.policies.begin(), spec.policies.end(), name) == spec.policies.end())
+            spec.policies.push_back(name);
+        }
         spec.traffic = split_list(st->traffic);
         spec.seeds = parse_seed_list(st->seeds);
         if (!st->map.empty()) spec.map = st->map;

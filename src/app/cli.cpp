@@ -268,9 +268,14 @@ Subcommand register_drive(CLI::App& app) {
   auto* cmd = app.add_subcommand(
       "drive", "Drive a car around the highway among traffic and print its scorecard.");
   add_run_flags(*cmd, *f);
-  cmd->add_option("--policy", f->opts.policy, policy_help())->capture_default_str();
-  return {cmd, [f] {
+  auto* policy = cmd->add_option("--policy", f->opts.policy, policy_help())->capture_default_str();
+  auto planners = std::make_shared<PlannerFlags>();
+  add_planner_flags(*cmd, *planners, false);
+  return {cmd, [f, planners, policy] {
             const auto json_out = apply_run_flags(*f);
+            f->opts.planners = catalog_from_flags(*planners);
+            f->opts.policy =
+                chosen_policy(*f->opts.planners, f->opts.policy, policy->count() > 0);
             return cmd_drive(f->opts, json_out, f->quiet);
           }};
 }

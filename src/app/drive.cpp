@@ -4,6 +4,7 @@
 
 #include "overtake/app/commands.hpp"
 #include "overtake/app/map_file.hpp"
+#include "overtake/app/program_planner.hpp"
 #include "overtake/app/resources.hpp"
 #include "overtake/app/scenario_file.hpp"
 #include "overtake/app/viewer.hpp"
@@ -17,10 +18,13 @@ namespace {
 constexpr double kMaxMinutes = 7.0 * 24.0 * 60.0;
 constexpr const char* kDefaultTrackName = "tracks/default.csv";
 
-std::string policy_list() {
-  std::string out;
-  for (const auto& p : planner::list_policies()) out += (out.empty() ? "" : ", ") + p.name;
-  return out;
+const PlannerCatalog& builtin_catalog() {
+  static const PlannerCatalog catalog;
+  return catalog;
+}
+
+const PlannerCatalog& catalog_of(const DriveOptions& opts) {
+  return opts.planners ? *opts.planners : builtin_catalog();
 }
 
 }  // namespace
@@ -40,13 +44,10 @@ void validate_drive_options(const DriveOptions& opts) {
     throw UsageError("--traffic: unknown profile '" + opts.traffic +
                      "' (available: faithful, calm)");
   }
-  const auto policies = planner::list_policies();
-  const bool known =
-      std::any_of(policies.begin(), policies.end(),
-                  [&](const planner::PolicyInfo& p) { return p.name == opts.policy; });
-  if (!known && !opts.external) {
-    throw UsageError("--policy: unknown policy '" + opts.policy + "' (available: " + policy_list() +
-                     ")");
+  const PlannerCatalog& catalog = catalog_of(opts);
+  if (!opts.external && !catalog.find(opts.policy)) {
+    throw UsageError("--policy: unknown policy '" + opts.policy +
+                     "' (available: " + catalog.names_text() + ")");
   }
   if (opts.live && (opts.live->port < 0 || opts.live->port > 65535)) {
     throw UsageError("--port must be between 0 and 65535 (got " + std::to_string(opts.live->port) +
@@ -79,6 +80,9 @@ RunProvenance provenance_of(const Track& track, const Config& config, const Driv
     p.policy = opts.external->name.empty() ? opts.external->address : opts.external->name;
   } else {
     p.policy = opts.policy;
+    const PlannerEntry* entry = catalog_of(opts).find(opts.policy);
+    if (entry && entry->kind != PlannerKind::builtin) p.planner = entry->describe();
+    if (entry && entry->program && opts.planner_log) p.planner_log = opts.planner_log->string();
   }
   p.traffic = scenario ? "scripted" : std::string(sim::to_string(*profile));
   if (scenario) p.scenario = scenario->name.empty() ? "unnamed scenario" : scenario->name;
@@ -128,10 +132,15 @@ DriveResult drive_on(const Track& track, const Config& config, const DriveOption
   sim::ObserverList observers({writer.get(), result.live ? &result.live->observer() : nullptr});
   run.observer = observers.get();
 
+  const PlannerEntry* entry = opts.external ? nullptr : catalog_of(opts).find(opts.policy);
   if (opts.external) {
     result.report = opts.external->loop(world, run);
+  } else if (entry->program) {
+    const ExternalPlanner program = program_planner(
+        *entry, opts.planner_log.value_or(std::filesystem::path("planner-" + entry->name + ".log")));
+    result.report = program.loop(world, run);
   } else {
-    auto policy = planner::make_policy(opts.policy, track.line, config.planner);
+    auto policy = entry->make(track.line, config.planner);
     const auto& tap = opts.telemetry_tap;
     result.report = sim::run_drive(
         world,

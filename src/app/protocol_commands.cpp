@@ -32,12 +32,6 @@ namespace {
 
 constexpr std::size_t kMinFrameBytes = 1024;
 
-std::string policy_names() {
-  std::string out;
-  for (const auto& p : planner::list_policies()) out += (out.empty() ? "" : ", ") + p.name;
-  return out;
-}
-
 std::string policy_help() {
   std::string out = "Policy to plan with. Available:";
   for (const auto& p : planner::list_policies()) out += "\n  " + p.name + ": " + p.summary;
@@ -64,6 +58,8 @@ struct ServeArgs {
   int port = 4567;
   std::string map, config;
   std::string policy = "reference";
+  bool policy_given = false;
+  PlannerFlags planners;
   std::size_t max_frame_bytes = std::size_t{1} << 20;
   std::size_t max_path_points = protocol::Limits{}.max_path_points;
   bool quiet = false;
@@ -74,11 +70,12 @@ int cmd_serve(const ServeArgs& a) {
     throw UsageError("--port must be between 0 and 65535 (got " + std::to_string(a.port) + ")");
   }
   check_limits(a.max_frame_bytes, a.max_path_points);
-  const auto policies = planner::list_policies();
-  if (std::none_of(policies.begin(), policies.end(),
-                   [&](const auto& p) { return p.name == a.policy; })) {
-    throw UsageError("--policy: unknown policy '" + a.policy + "' (available: " + policy_names() +
-                     ")");
+  const auto catalog = catalog_from_flags(a.planners);
+  const std::string policy = chosen_policy(*catalog, a.policy, a.policy_given);
+  const PlannerEntry* entry = catalog->find(policy);
+  if (!entry) {
+    throw UsageError("--policy: unknown policy '" + policy +
+                     "' (available: " + catalog->names_text() + ")");
   }
   const Config config = load_config(optional_path(a.config));
   const auto track = load_track(optional_path(a.map));
@@ -86,7 +83,8 @@ int cmd_serve(const ServeArgs& a) {
   protocol::PlannerSetup setup;
   setup.line = std::shared_ptr<const core::ReferenceLine>(track, &track->line);
   setup.params = config.planner;
-  setup.policy = a.policy;
+  setup.policy = policy;
+  setup.factory = entry->make;
   protocol::ServeOptions opts;
   opts.host = a.host;
   opts.port = static_cast<std::uint16_t>(a.port);
@@ -195,7 +193,8 @@ Subcommand register_serve(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--map", a->map, "Map file (x y s dx dy per line); default: the built-in track")
       ->check(CLI::ExistingFile);
-  cmd->add_option("--policy", a->policy, policy_help())->capture_default_str();
+  auto* policy = cmd->add_option("--policy", a->policy, policy_help())->capture_default_str();
+  add_planner_flags(*cmd, a->planners, false);
   cmd->add_option("--config", a->config, "JSON file overriding any of the default parameters")
       ->check(CLI::ExistingFile);
   cmd->add_option("--max-frame-bytes", a->max_frame_bytes,
@@ -206,7 +205,10 @@ Subcommand register_serve(CLI::App& app) {
       ->capture_default_str();
   cmd->add_flag("--quiet,-q", a->quiet,
                 "No connection events or status lines (warnings still show)");
-  return {cmd, [a] { return cmd_serve(*a); }};
+  return {cmd, [a, policy] {
+            a->policy_given = policy->count() > 0;
+            return cmd_serve(*a);
+          }};
 }
 
 Subcommand register_sim(CLI::App& app) {

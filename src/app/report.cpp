@@ -103,6 +103,8 @@ json report_to_json(const sim::RunReport& r, const RunProvenance& p) {
                  {"minutes", p.minutes},
                  {"params_hash", p.params_hash}};
   if (!p.scenario.empty()) j["config"]["scenario"] = p.scenario;
+  if (!p.planner.empty()) j["config"]["planner"] = json::parse(p.planner);
+  if (!p.planner_log.empty()) j["config"]["planner_log"] = p.planner_log;
   return j;
 }
 

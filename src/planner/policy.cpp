@@ -35,4 +35,16 @@ std::unique_ptr<Policy> make_policy(std::string_view name, const core::Reference
   return nullptr;
 }
 
+PolicyFactory builtin_policy_factory(std::string_view name) {
+  const auto policies = list_policies();
+  for (const auto& p : policies) {
+    if (p.name == name) {
+      return [n = p.name](const core::ReferenceLine& line, const PlannerParams& params) {
+        return make_policy(n, line, params);
+      };
+    }
+  }
+  return {};
+}
+
 }  // namespace overtake::planner

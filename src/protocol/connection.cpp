@@ -11,6 +11,7 @@
 #include <netinet/in.h>
 #include <netinet/tcp.h>
 #include <sys/socket.h>
+#include <unistd.h>
 
 // GCC 12 may report a false maybe-uninitialized inside Beast's HTTP parser (boost::optional)
 // depending on inlining (seen with the sanitizers).
@@ -217,10 +218,28 @@ struct PlannerConnection::Impl {
 
     ws = std::make_unique<websocket::stream<tcp::socket>>(ioc);
     bool done = false;
-    net::async_connect(ws->next_layer(), endpoints, [&](const error_code& e, const tcp::endpoint&) {
-      ec = e;
-      done = true;
-    });
+    if (opts.open_socket) {
+      // A socket made elsewhere (a planner program's network namespace): connected as it is,
+      // to the first address (connecting to a range would make sockets of our own).
+      const tcp::endpoint to = *endpoints.begin();
+      const int fd = opts.open_socket();
+      if (fd < 0) return "cannot make a socket in the planner's network";
+      ws->next_layer().assign(to.protocol(), fd, ec);
+      if (ec) {
+        ::close(fd);
+        return "cannot use the planner network's socket (" + ec.message() + ")";
+      }
+      ws->next_layer().async_connect(to, [&](const error_code& e) {
+        ec = e;
+        done = true;
+      });
+    } else {
+      net::async_connect(ws->next_layer(), endpoints,
+                         [&](const error_code& e, const tcp::endpoint&) {
+                           ec = e;
+                           done = true;
+                         });
+    }
     if (!run_until([&] { return done; }, deadline)) {
       drop();
       run_until([&] { return done; }, Clock::now() + kCloseTimeout);
@@ -276,6 +295,12 @@ PlannerConnection::PlannerConnection(const PlannerUrl& url, const ClientOptions&
     const auto attempt_deadline = std::min(deadline, Clock::now() + kAttemptTimeout);
     const std::string why = impl_->attempt(url, attempt_deadline);
     if (why.empty()) return;
+    if (options.give_up) {
+      const std::string reason = options.give_up();
+      if (!reason.empty()) {
+        throw ConnectionError("cannot connect to the planner at " + to_string(url) + ": " + reason);
+      }
+    }
     if (Clock::now() + kRetryDelay >= deadline) {
       throw ConnectionError("cannot connect to the planner at " + to_string(url) + " within " +
                             seconds_text(options.connect_timeout) + ": " + why);

@@ -167,9 +167,8 @@ net::awaitable<void> serve_connection(tcp::socket socket, std::shared_ptr<Server
     }
     st->log(LogLevel::info, who + " open");
     const OpenCount counted(*st);
-    PlannerSession session(
-        planner::make_policy(st->setup.policy, *st->setup.line, st->setup.params), st->opts.limits,
-        st->opts.max_frame_bytes);
+    PlannerSession session(st->setup.factory(*st->setup.line, st->setup.params), st->opts.limits,
+                           st->opts.max_frame_bytes);
     long cycles = 0;
     beast::flat_buffer buffer;
     std::string head;
@@ -298,7 +297,9 @@ tcp::endpoint listen_endpoint(net::io_context& ioc, const ServeOptions& opts) {
 void run_server(net::io_context& ioc, const PlannerSetup& setup, const ServeOptions& opts,
                 const std::function<void(std::uint16_t)>& on_listening) {
   if (!setup.line) throw std::invalid_argument("run_server: no reference line");
-  if (!planner::make_policy(setup.policy, *setup.line, setup.params)) {
+  planner::PolicyFactory factory =
+      setup.factory ? setup.factory : planner::builtin_policy_factory(setup.policy);
+  if (!factory) {
     std::string names;
     for (const auto& p : planner::list_policies()) names += (names.empty() ? "" : ", ") + p.name;
     throw std::invalid_argument("--policy: unknown policy '" + setup.policy +
@@ -309,6 +310,7 @@ void run_server(net::io_context& ioc, const PlannerSetup& setup, const ServeOpti
 
   auto st = std::make_shared<ServerState>();
   st->setup = setup;
+  st->setup.factory = std::move(factory);
   st->opts = opts;
   if (!st->opts.log) st->opts.log = stderr_log(true);
 

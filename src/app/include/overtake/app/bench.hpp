@@ -8,11 +8,14 @@
 #include <cstdint>
 #include <filesystem>
 #include <functional>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
 
 #include <nlohmann/json.hpp>
+
+#include "overtake/app/planners.hpp"
 
 namespace overtake::app {
 
@@ -33,6 +36,9 @@ struct BenchSpec {
   /// After the bench, run again with a replay recorded the N runs with most incidents (ties:
   /// lower seed first), into out/replays/<policy>-<traffic>-seed<N>.otr.
   int record_worst = 0;
+  /// The planners `policies` are looked up in (plugins, Python planners, planner programs);
+  /// null: the built-in policies only.
+  std::shared_ptr<const PlannerCatalog> planners;
 };
 
 /// One run of the sweep; `index` is its place in the full (unsharded) order.

@@ -11,6 +11,7 @@
 #include <string>
 
 #include "overtake/app/config.hpp"
+#include "overtake/app/planners.hpp"
 #include "overtake/app/report.hpp"
 #include "overtake/core/map.hpp"
 #include "overtake/core/reference_line.hpp"
@@ -81,6 +82,11 @@ struct DriveOptions {
   std::function<void(double t_s, const core::Telemetry& telemetry)> telemetry_tap;
   /// When set, the planner is this instead of `policy` (`sim --planner`).
   std::optional<ExternalPlanner> external;
+  /// The planners `policy` is looked up in (plugins, Python planners, planner programs);
+  /// null: the built-in policies only.
+  std::shared_ptr<const PlannerCatalog> planners;
+  /// Where a planner program's standard output and error go (`--planner-cmd`).
+  std::optional<std::filesystem::path> planner_log;
 };
 
 /// Checks flag values and names (UsageError naming the flag).

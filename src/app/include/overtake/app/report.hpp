@@ -27,6 +27,12 @@ struct RunProvenance {
   /// `sim --planner`: the remote planner's address (`policy` is then its --name, or this
   /// address); empty for a planner in this process. Shown on the scorecard only.
   std::string planner_url;
+  /// A planner brought by a flag (plugin, Python, program): what it is, as a JSON object's
+  /// text (`PlannerEntry::describe`); empty for a built-in policy. In the report's
+  /// config.planner.
+  std::string planner;
+  /// A planner program's output (`--planner-cmd`): the log file; empty otherwise.
+  std::string planner_log;
 };
 
 /// The JSON report. Deterministic for a given run apart from the `timing` key.

@@ -2,6 +2,7 @@
 // The planner interface: a policy takes the telemetry snapshot of one cycle and returns the
 // path points the ego should drive, the same shape the protocol carries.
 
+#include <functional>
 #include <memory>
 #include <string>
 #include <string_view>
@@ -23,6 +24,11 @@ class Policy {
   [[nodiscard]] virtual core::PlanResult plan(const core::Telemetry& telemetry) = 0;
 };
 
+/// Makes one policy instance (for one drive or one connection). `line` outlives the policy.
+/// Built-in policies, C++ plugins and Python planners are all reached through one.
+using PolicyFactory = std::function<std::unique_ptr<Policy>(const core::ReferenceLine& line,
+                                                            const PlannerParams& params)>;
+
 /// A policy's name and one-line description.
 struct PolicyInfo {
   std::string name;
@@ -37,5 +43,8 @@ struct PolicyInfo {
 [[nodiscard]] std::unique_ptr<Policy> make_policy(std::string_view name,
                                                   const core::ReferenceLine& line,
                                                   const PlannerParams& params);
+
+/// The factory of the named built-in policy, or an empty function when there is none.
+[[nodiscard]] PolicyFactory builtin_policy_factory(std::string_view name);
 
 }  // namespace overtake::planner

@@ -11,6 +11,7 @@
 #include <chrono>
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <stdexcept>
@@ -58,6 +59,13 @@ struct ClientOptions {
   /// When set and true (Ctrl-C), a wait for the planner ends at once: the lock-step run then
   /// ends with ended_early "stopped", as the world loop ends it between cycles.
   const std::atomic<bool>* stop = nullptr;
+  /// When set, makes the TCP socket of each connection attempt (a file descriptor, owned by
+  /// the connection from then on; -1 when none can be made): e.g. one made inside a planner
+  /// program's own network namespace. Empty: an ordinary socket of this process.
+  std::function<int()> open_socket;
+  /// When set, asked between connection attempts: a non-empty answer ends the attempts at
+  /// once with that reason (e.g. the planner program has exited).
+  std::function<std::string()> give_up;
 };
 
 /// One frame received from the peer.

@@ -1,0 +1,102 @@
+#pragma once
+// Where the planners of a run come from: the built-in policies, C++ plugins (`--policy-lib`),
+// Python planners (`--policy-py`) and planner programs written for the original simulator
+// (`--planner-cmd`). Each has a name, as it appears in reports and bench tables; `drive`,
+// `bench`, `serve` and `sim` resolve a name through one catalog.
+
+#include <CLI/CLI.hpp>
+#include <deque>
+#include <filesystem>
+#include <memory>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "overtake/planner/policy.hpp"
+
+namespace overtake::app {
+
+/// How a planner is reached.
+enum class PlannerKind {
+  builtin,  ///< a policy of this build
+  plugin,   ///< a C++ plugin (overtake/planner_plugin.h), in-process
+  python,   ///< a Python callable, in-process
+  program,  ///< a planner program over the original protocol, started by overtake per run
+};
+
+[[nodiscard]] std::string_view to_string(PlannerKind kind);
+
+/// A planner program started for each run (`--planner-cmd`).
+struct ProgramSpec {
+  std::string command;        ///< run by /bin/sh -c
+  std::filesystem::path cwd;  ///< empty: the current directory
+  int port = 4567;            ///< where the program listens (the original's fixed port)
+  double start_timeout_s = 20.0;  ///< to start listening
+  double reply_timeout_s = 5.0;   ///< for each reply
+};
+
+/// One planner a run can be given.
+struct PlannerEntry {
+  std::string name;
+  PlannerKind kind = PlannerKind::builtin;
+  std::string source;            ///< the plugin's path, module:function, or the command
+  planner::PolicyFactory make;   ///< builtin, plugin and python
+  std::optional<ProgramSpec> program;
+  /// What the run's provenance records of it (kind, source, ...): a JSON object's text.
+  [[nodiscard]] std::string describe() const;
+};
+
+/// The planners a command knows: the built-in policies and those its flags brought.
+class PlannerCatalog {
+ public:
+  PlannerCatalog();
+  /// Adds an entry; UsageError (naming `flag`) when its name is taken or not a valid name
+  /// (letters, digits, `_`, `-`, `.`).
+  void add(PlannerEntry entry, std::string_view flag);
+  /// The entry of that name (built-in policies included), or null.
+  [[nodiscard]] const PlannerEntry* find(std::string_view name) const;
+  /// The names the flags brought, in the order given.
+  [[nodiscard]] std::vector<std::string> added_names() const;
+  /// Every name: built-in, then added.
+  [[nodiscard]] std::vector<std::string> all_names() const;
+  /// all_names() joined with ", " (for messages).
+  [[nodiscard]] std::string names_text() const;
+  [[nodiscard]] bool has_programs() const;
+
+ private:
+  std::deque<PlannerEntry> builtin_;
+  std::deque<PlannerEntry> added_;  ///< a deque: entries found stay where they are
+};
+
+/// The flags that bring planners: --policy-lib, --policy-py, and (`programs`) --planner-cmd
+/// with --planner-cwd and --planner-port. Each may be given more than once, as `NAME=VALUE`
+/// or `VALUE` (the name then comes from the value).
+struct PlannerFlags {
+  std::vector<std::string> libs;
+  std::vector<std::string> python;
+  std::vector<std::string> commands;
+  std::string cwd;
+  int port = 4567;
+  double start_timeout_s = 20.0;
+  double reply_timeout_s = 5.0;
+};
+
+/// Registers the planner flags on `cmd` (`programs`: --planner-cmd and its options too).
+void add_planner_flags(CLI::App& cmd, PlannerFlags& flags, bool programs);
+
+/// The catalog the flags give (plugins loaded, Python modules imported: a bad one is refused
+/// here with its reason, before any run).
+[[nodiscard]] std::shared_ptr<const PlannerCatalog> catalog_from_flags(const PlannerFlags& flags);
+
+/// The policy a single-planner command (`drive`, `serve`, `sim`) runs: `policy` when it was
+/// given (`given`), else the one planner the flags brought, else `policy` (the default).
+/// UsageError when the flags brought several and --policy names none of them.
+[[nodiscard]] std::string chosen_policy(const PlannerCatalog& catalog, const std::string& policy,
+                                        bool given);
+
+/// Splits `NAME=VALUE` (NAME: letters, digits, `_`, `-`, `.`; no space before the `=`) into
+/// its parts; without such a prefix the name is empty.
+[[nodiscard]] std::pair<std::string, std::string> split_named(const std::string& text);
+
+}  // namespace overtake::app
