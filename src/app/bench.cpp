@@ -18,6 +18,7 @@
 
 #include "overtake/app/commands.hpp"
 #include "overtake/app/io.hpp"
+#include "overtake/app/program_planner.hpp"
 #include "overtake/app/viewer.hpp"
 #include "overtake/core/hash.hpp"
 #include "overtake/core/units.hpp"
@@ -346,6 +347,10 @@ BenchOutcome run_bench(const BenchSpec& spec, const std::atomic<bool>* stop,
     DriveOptions o;
     o.traffic = t;
     validate_drive_options(o);
+  }
+  for (const auto& p : spec.policies) {  // isolated networks that cannot be had: now
+    const PlannerEntry* e = spec.planners ? spec.planners->find(p) : nullptr;
+    if (e && e->program) (void)program_isolated(*e);
   }
   const Config config = load_config(spec.config);
   const auto track = load_track(spec.map);

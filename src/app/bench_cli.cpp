@@ -9,6 +9,7 @@
 #include "overtake/app/cli.hpp"
 #include "overtake/app/commands.hpp"
 #include "overtake/app/interrupt.hpp"
+#include "overtake/app/planner_process.hpp"
 #include "overtake/app/viewer.hpp"
 #include "overtake/core/units.hpp"
 
@@ -87,7 +88,7 @@ Subcommand register_bench(CLI::App& app) {
                                      "planners brought by the flags below). Default: every\n"
                                      "built-in policy, or only the brought ones when any are")
                          ->capture_default_str();
-  add_planner_flags(*cmd, st->planners, true);
+  add_planner_flags(*cmd, st->planners, PlannerFlagSet::all);
   cmd->add_option("--seeds", st->seeds, "Seeds: a range and/or list, e.g. 1-20 or 1,5,9-12")
       ->capture_default_str();
   cmd->add_option("--minutes", st->spec.minutes, "Simulated minutes per run")
@@ -169,6 +170,14 @@ Subcommand register_bench(CLI::App& app) {
         spec.out = st->out;
         if (!st->shard.empty())
           std::tie(spec.shard_index, spec.shard_count) = parse_shard(st->shard);
+        if (spec.planners->has_programs() && !st->quiet) {
+          std::string why;
+          if (!private_network_available(&why) && st->planners.network == "auto") {
+            std::fprintf(stderr,
+                         "bench: planner programs run one at a time on the host's network: %s\n",
+                         why.c_str());
+          }
+        }
         const double total_sim_s = spec.minutes * 60.0 *
                                    static_cast<double>(bench_combinations(spec).size()) /
                                    spec.shard_count;

@@ -270,7 +270,7 @@ Subcommand register_drive(CLI::App& app) {
   add_run_flags(*cmd, *f);
   auto* policy = cmd->add_option("--policy", f->opts.policy, policy_help())->capture_default_str();
   auto planners = std::make_shared<PlannerFlags>();
-  add_planner_flags(*cmd, *planners, false);
+  add_planner_flags(*cmd, *planners, PlannerFlagSet::in_process);
   return {cmd, [f, planners, policy] {
             const auto json_out = apply_run_flags(*f);
             f->opts.planners = catalog_from_flags(*planners);

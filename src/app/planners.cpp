@@ -132,27 +132,39 @@ bool PlannerCatalog::has_programs() const {
                      [](const PlannerEntry& e) { return e.kind == PlannerKind::program; });
 }
 
-void add_planner_flags(CLI::App& cmd, PlannerFlags& f, bool programs) {
-  cmd.add_option("--policy-lib", f.libs,
-                 "[NAME=]PATH: a C++ planner plugin (a shared library built against\n"
-                 "overtake/planner_plugin.h), run in-process; named by the plugin unless NAME=")
-      ->take_all();
-  cmd.add_option("--policy-py", f.python,
-                 "[NAME=]MODULE:FUNCTION: a Python planner (a callable taking the telemetry and\n"
-                 "returning (path_x, path_y)), run in-process; MODULE is imported from the\n"
-                 "current directory or PYTHONPATH")
-      ->take_all();
-  if (!programs) return;
+void add_planner_flags(CLI::App& cmd, PlannerFlags& f, PlannerFlagSet which) {
+  if (which != PlannerFlagSet::programs) {
+    cmd.add_option("--policy-lib", f.libs,
+                   "[NAME=]PATH: a C++ planner plugin (a shared library built against\n"
+                   "overtake/planner_plugin.h), run in-process; named by the plugin unless NAME=")
+        ->allow_extra_args(false)
+        ->take_all();
+    cmd.add_option("--policy-py", f.python,
+                   "[NAME=]MODULE:FUNCTION: a Python planner (a callable taking the telemetry and\n"
+                   "returning (path_x, path_y)), run in-process; MODULE is imported from the\n"
+                   "current directory or PYTHONPATH")
+        ->allow_extra_args(false)
+        ->take_all();
+  }
+  if (which == PlannerFlagSet::in_process) return;
   cmd.add_option("--planner-cmd", f.commands,
                  "[NAME=]CMD: a planner program written for the original simulator; overtake\n"
                  "starts it for each run (sh -c CMD) in a network namespace of its own, drives it\n"
                  "over the protocol on --planner-port, and stops it afterwards")
+      ->allow_extra_args(false)
       ->take_all();
   cmd.add_option("--planner-cwd", f.cwd, "Working directory of --planner-cmd programs")
       ->check(CLI::ExistingDirectory);
   cmd.add_option("--planner-port", f.port, "Port the --planner-cmd programs listen on")
       ->check(CLI::Range(1, 65535))
       ->capture_default_str();
+  cmd.add_option("--planner-network", f.network,
+                 "auto: each --planner-cmd run in a network of its own where the machine allows\n"
+                 "it (runs in parallel, nothing else can reach the planner), else the host's\n"
+                 "(one run at a time); isolated: always its own (fail when impossible); host")
+      ->check(CLI::IsMember({"auto", "isolated", "host"}))
+      ->capture_default_str();
+  if (which == PlannerFlagSet::programs) return;  // sim: --connect-timeout, --reply-timeout
   cmd.add_option("--planner-start-timeout", f.start_timeout_s,
                  "Seconds a --planner-cmd program has to start listening")
       ->check(CLI::Range(0.1, 3600.0))
@@ -212,6 +224,8 @@ std::shared_ptr<const PlannerCatalog> catalog_from_flags(const PlannerFlags& f) 
     p.port = f.port;
     p.start_timeout_s = f.start_timeout_s;
     p.reply_timeout_s = f.reply_timeout_s;
+    p.realtime = f.realtime;
+    p.network = parse_planner_network(f.network).value_or(PlannerNetwork::automatic);
     e.program = p;
     catalog->add(std::move(e), "--planner-cmd");
   }

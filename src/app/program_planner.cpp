@@ -1,14 +1,144 @@
 #include "overtake/app/program_planner.hpp"
 
-namespace overtake::app {
+#include <netinet/in.h>
+#include <sys/socket.h>
+#include <unistd.h>
 
-ExternalPlanner program_planner(const PlannerEntry& entry, const std::filesystem::path&) {
-  throw std::runtime_error(entry.name + ": planner programs are not built yet");
+#include <chrono>
+#include <cmath>
+#include <map>
+#include <mutex>
+
+#include "overtake/protocol/client.hpp"
+
+namespace overtake::app {
+namespace {
+
+std::chrono::milliseconds ms_of(double seconds) {
+  return std::chrono::milliseconds(std::max<long long>(1, std::llround(seconds * 1000.0)));
 }
 
-bool private_network_available(std::string* why) {
-  if (why) *why = "not built yet";
-  return false;
+// Runs on the host's network take turns, one per port: two programs cannot both listen on
+// it, and a run must not reach another run's planner. The lock is the process's, as the port
+// is the machine's.
+std::mutex& host_port_lock(int port) {
+  static std::mutex guard;
+  static std::map<int, std::mutex> locks;
+  const std::lock_guard lock(guard);
+  return locks[port];
+}
+
+// Whether something on this machine already accepts connections on 127.0.0.1:port.
+bool port_taken(int port) {
+  const int fd = ::socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC, 0);
+  if (fd < 0) return false;
+  sockaddr_in to{};
+  to.sin_family = AF_INET;
+  to.sin_port = htons(static_cast<std::uint16_t>(port));
+  to.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  const bool taken = ::connect(fd, reinterpret_cast<const sockaddr*>(&to), sizeof to) == 0;
+  ::close(fd);
+  return taken;
+}
+
+// A run that ends before its first step, with `reason`: the report of a planner that failed
+// at once (its run is still a row of the bench).
+sim::RunReport failed_at_start(sim::World& world, const sim::RunOptions& run,
+                               const std::string& reason) {
+  return sim::run_drive(
+      world,
+      [&reason](const core::Telemetry&) -> core::PlanResult { throw sim::PlannerFailure(reason); },
+      run);
+}
+
+sim::RunReport run_program(const PlannerEntry& entry, const std::filesystem::path& log,
+                           sim::World& world, const sim::RunOptions& run) {
+  const ProgramSpec& spec = *entry.program;
+  const bool isolated = program_isolated(entry);
+  std::unique_lock<std::mutex> turn;
+  if (!isolated) {
+    turn = std::unique_lock(host_port_lock(spec.port));
+    if (port_taken(spec.port)) {
+      return failed_at_start(
+          world, run,
+          "port " + std::to_string(spec.port) +
+              " on this machine is already in use by another process, so the planner program "
+              "cannot listen there (runs on the host's network need the port free)");
+    }
+  }
+  PlannerProcessOptions po;
+  po.command = spec.command;
+  po.cwd = spec.cwd;
+  po.log = log;
+  po.isolated = isolated;
+  PlannerProcess process(po);
+  const std::string see_log = " (its output: " + log.string() + ")";
+
+  protocol::ClientOptions client;
+  client.connect_timeout = ms_of(spec.start_timeout_s);
+  client.reply_timeout = ms_of(spec.reply_timeout_s);
+  client.log = [](protocol::LogLevel, std::string_view) {};  // the report says what went wrong
+  client.stop = run.stop;
+  if (isolated) client.open_socket = [&process] { return process.open_socket(); };
+  std::string gave_up;
+  client.give_up = [&process, &gave_up]() -> std::string {
+    const std::string ended = process.ended();
+    if (!ended.empty()) gave_up = "the planner program " + ended + " before it listened";
+    return gave_up;
+  };
+  const auto url = protocol::parse_planner_url("ws://127.0.0.1:" + std::to_string(spec.port));
+
+  sim::RunReport report;
+  try {
+    protocol::PlannerConnection connection(url.value(), client);
+    report = spec.realtime ? protocol::run_realtime(world, connection, client, run)
+                           : protocol::run_lock_step(world, connection, client, run);
+    connection.close();
+  } catch (const protocol::ConnectionError& e) {
+    std::string why = e.what();
+    if (!gave_up.empty()) {
+      why = gave_up;
+    } else if (why.find(" within ") != std::string::npos) {
+      const std::size_t last = why.rfind(": ");
+      why = "the planner program did not listen on port " + std::to_string(spec.port) +
+            " within " + protocol::seconds_text(client.connect_timeout) +
+            (last == std::string::npos ? "" : " (the last attempt: " + why.substr(last + 2) + ")");
+    }
+    report = failed_at_start(world, run, why + see_log);
+  }
+  if (report.outcome.end == sim::RunEnd::planner_failed &&
+      report.outcome.reason.find(see_log) == std::string::npos) {
+    const std::string ended = process.ended();
+    if (!ended.empty() && report.outcome.reason.find("the planner program") == std::string::npos)
+      report.outcome.reason += "; the planner program " + ended;
+    report.outcome.reason += see_log;
+  }
+  process.stop();
+  return report;
+}
+
+}  // namespace
+
+bool program_isolated(const PlannerEntry& entry) {
+  const PlannerNetwork network = entry.program ? entry.program->network : PlannerNetwork::host;
+  if (network == PlannerNetwork::host) return false;
+  std::string why;
+  const bool available = private_network_available(&why);
+  if (network == PlannerNetwork::isolated && !available) {
+    throw UsageError("--planner-network isolated: " + why);
+  }
+  return available;
+}
+
+ExternalPlanner program_planner(const PlannerEntry& entry, const std::filesystem::path& log) {
+  ExternalPlanner ext;
+  ext.name = entry.name;
+  ext.address = "ws://127.0.0.1:" + std::to_string(entry.program->port) + " (" + entry.source +
+                ")";
+  ext.loop = [entry, log](sim::World& world, const sim::RunOptions& run) {
+    return run_program(entry, log, world, run);
+  };
+  return ext;
 }
 
 }  // namespace overtake::app

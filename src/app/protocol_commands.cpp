@@ -23,6 +23,7 @@
 #include "overtake/core/hash.hpp"
 #include "overtake/core/units.hpp"
 #include "overtake/planner/policy.hpp"
+#include "overtake/app/program_planner.hpp"
 #include "overtake/protocol/client.hpp"
 #include "overtake/protocol/server.hpp"
 #include "overtake/sim/world.hpp"
@@ -108,6 +109,8 @@ int cmd_serve(const ServeArgs& a) {
 
 struct SimArgs {
   RunFlags run;
+  PlannerFlags programs;
+  std::string planner_log;
   std::string planner;
   std::string name;
   bool realtime = false;
@@ -124,7 +127,53 @@ std::chrono::milliseconds checked_timeout(double seconds, const char* flag) {
   return std::chrono::milliseconds(std::max<long long>(1, std::llround(seconds * 1000.0)));
 }
 
+// `sim --planner-cmd`: overtake starts the program, drives it and stops it (the program's
+// run loop, as in `bench`), the rest as `drive`.
+int cmd_sim_program(SimArgs& a) {
+  if (a.programs.commands.size() != 1) {
+    throw UsageError("--planner-cmd: give one planner program (bench takes several)");
+  }
+  const auto json_out = apply_run_flags(a.run);
+  DriveOptions& opts = a.run.opts;
+  PlannerFlags flags = a.programs;
+  flags.reply_timeout_s = a.reply_timeout_s;
+  flags.start_timeout_s = a.connect_timeout_s;
+  flags.realtime = a.realtime;
+  auto catalog = catalog_from_flags(flags);
+  opts.planners = catalog;
+  opts.policy = catalog->added_names().front();
+  const PlannerEntry* entry = catalog->find(opts.policy);
+  opts.planner_log = a.planner_log.empty() ? std::filesystem::path("planner-" + opts.policy + ".log")
+                                           : std::filesystem::path(a.planner_log);
+  (void)program_isolated(*entry);  // --planner-network isolated where it is impossible: now
+  const DriveInputs inputs = load_drive_inputs(opts);
+  const bool quiet = a.run.quiet;
+  const InterruptScope interrupt;
+  ProgressLine progress(!quiet, inputs.options.minutes * 60.0);
+  const auto wall0 = std::chrono::steady_clock::now();
+  const DriveResult result = drive_loaded(
+      inputs, [&progress](double t, double d) { progress.update(t, d); }, &InterruptScope::flag());
+  RunOutputs out;
+  out.json = json_out;
+  out.quiet = quiet;
+  out.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
+  out.mode = std::string(a.realtime ? "real time" : "lock-step") + " over the protocol, program " +
+             opts.policy + ", its output in " + opts.planner_log->string();
+  progress.clear();
+  return finish_run(result, opts, out);
+}
+
 int cmd_sim(SimArgs& a) {
+  if (!a.programs.commands.empty()) {
+    if (!a.planner.empty()) throw UsageError("--planner and --planner-cmd: give one of them");
+    if (a.realtime && a.run.opts.steps_per_call > 0) {
+      throw UsageError("--steps-per-call applies to lock-step runs only, not with --realtime");
+    }
+    return cmd_sim_program(a);
+  }
+  if (a.planner.empty()) {
+    throw UsageError("give the planner: --planner ws://HOST:PORT, or --planner-cmd CMD");
+  }
   const auto url = protocol::parse_planner_url(a.planner);
   if (!url) throw UsageError("--planner: " + url.error());
   if (a.realtime && a.run.opts.steps_per_call > 0) {
@@ -194,7 +243,7 @@ Subcommand register_serve(CLI::App& app) {
   cmd->add_option("--map", a->map, "Map file (x y s dx dy per line); default: the built-in track")
       ->check(CLI::ExistingFile);
   auto* policy = cmd->add_option("--policy", a->policy, policy_help())->capture_default_str();
-  add_planner_flags(*cmd, a->planners, false);
+  add_planner_flags(*cmd, a->planners, PlannerFlagSet::in_process);
   cmd->add_option("--config", a->config, "JSON file overriding any of the default parameters")
       ->check(CLI::ExistingFile);
   cmd->add_option("--max-frame-bytes", a->max_frame_bytes,
@@ -219,8 +268,11 @@ Subcommand register_sim(CLI::App& app) {
       "print the scorecard.");
   cmd->add_option("--planner", a->planner,
                   "The planner's address, ws://HOST:PORT[/PATH] (default path: "
-                  "/socket.io/?EIO=4&transport=websocket)")
-      ->required();
+                  "/socket.io/?EIO=4&transport=websocket)");
+  add_planner_flags(*cmd, a->programs, PlannerFlagSet::programs);
+  cmd->add_option("--planner-log", a->planner_log,
+                  "With --planner-cmd: the program's output goes here (default:\n"
+                  "planner-NAME.log)");
   cmd->add_option("--name", a->name, "Name of the planner in the report (default: its address)");
   add_run_flags(*cmd, a->run);
   cmd->add_flag(

@@ -110,7 +110,11 @@ json report_to_json(const sim::RunReport& r, const RunProvenance& p) {
 
 std::string format_scorecard(const sim::RunReport& r, const RunProvenance& p) {
   std::ostringstream os;
-  if (p.planner_url.empty()) {
+  if (!p.planner.empty()) {  // brought by a flag: a plugin, a Python planner, a program
+    const json what = json::parse(p.planner);
+    os << "overtake: " << what.value("kind", "planner") << " " << p.policy << " ("
+       << what.value("source", "") << ")";
+  } else if (p.planner_url.empty()) {
     os << "overtake drive: policy " << p.policy;
   } else {
     os << "overtake sim: planner " << (p.policy == p.planner_url ? "" : p.policy + " ") << "at "

@@ -13,6 +13,7 @@
 #include <string_view>
 #include <vector>
 
+#include "overtake/app/planner_process.hpp"
 #include "overtake/planner/policy.hpp"
 
 namespace overtake::app {
@@ -34,6 +35,8 @@ struct ProgramSpec {
   int port = 4567;            ///< where the program listens (the original's fixed port)
   double start_timeout_s = 20.0;  ///< to start listening
   double reply_timeout_s = 5.0;   ///< for each reply
+  PlannerNetwork network = PlannerNetwork::automatic;
+  bool realtime = false;  ///< drive it at real time (sim --realtime) instead of lock-step
 };
 
 /// One planner a run can be given.
@@ -80,10 +83,19 @@ struct PlannerFlags {
   int port = 4567;
   double start_timeout_s = 20.0;
   double reply_timeout_s = 5.0;
+  std::string network = "auto";
+  bool realtime = false;  ///< not a flag of its own: `sim --realtime`
 };
 
-/// Registers the planner flags on `cmd` (`programs`: --planner-cmd and its options too).
-void add_planner_flags(CLI::App& cmd, PlannerFlags& flags, bool programs);
+/// Which planner flags a command takes.
+enum class PlannerFlagSet {
+  in_process,  ///< --policy-lib, --policy-py (drive, serve)
+  programs,    ///< --planner-cmd and its options (sim)
+  all,         ///< both (bench)
+};
+
+/// Registers the planner flags on `cmd`.
+void add_planner_flags(CLI::App& cmd, PlannerFlags& flags, PlannerFlagSet which);
 
 /// The catalog the flags give (plugins loaded, Python modules imported: a bad one is refused
 /// here with its reason, before any run).

@@ -20,8 +20,9 @@ namespace overtake::app {
 [[nodiscard]] ExternalPlanner program_planner(const PlannerEntry& entry,
                                               const std::filesystem::path& log);
 
-/// Whether runs of planner programs can each have a network namespace of their own here
-/// (unprivileged user namespaces, or root); when not, `why` says what is missing.
-[[nodiscard]] bool private_network_available(std::string* why = nullptr);
+/// Whether runs of the planner program `entry` get networks of their own: true or false by
+/// its ProgramSpec::network (automatic: where the machine allows it). UsageError when it
+/// asks for isolated networks and the machine does not allow them.
+[[nodiscard]] bool program_isolated(const PlannerEntry& entry);
 
 }  // namespace overtake::app
