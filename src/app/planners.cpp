@@ -138,9 +138,11 @@ void add_planner_flags(CLI::App& cmd, PlannerFlags& f, bool programs) {
                  "overtake/planner_plugin.h), run in-process; named by the plugin unless NAME=")
       ->take_all();
   cmd.add_option("--policy-py", f.python,
-                 "[NAME=]MODULE:FUNCTION: a Python planner (a callable taking the telemetry and\n"
-                 "returning (path_x, path_y)), run in-process; MODULE is imported from the\n"
-                 "current directory or PYTHONPATH")
+                 "[NAME=]MODULE:FUNCTION or [NAME=]FILE.py:FUNCTION: a Python planner (a\n"
+                 "callable taking the telemetry dict as the original sends it and returning\n"
+                 "(path_x, path_y); a class: one instance per run), run in-process; MODULE is\n"
+                 "imported from the current directory or PYTHONPATH, FILE.py from its folder;\n"
+                 "named after the module unless NAME=")
       ->take_all();
   if (!programs) return;
   cmd.add_option("--planner-cmd", f.commands,
