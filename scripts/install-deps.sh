@@ -18,6 +18,8 @@ packages=(
   cmake ninja-build g++ make pkg-config
   libeigen3-dev nlohmann-json3-dev libcli11-dev libboost-dev zlib1g-dev
   libgtest-dev libgmock-dev libbenchmark-dev
+  # Python planners (--policy-py) and the Python module (OVERTAKE_PYTHON), with its tests.
+  python3-dev python3-pybind11 python3-numpy python3-pytest
   # The fuzz harnesses (make fuzz-smoke, make fuzz): clang, and libFuzzer with the sanitizer
   # runtimes of the same version (libclang-rt-14-dev on Debian 12).
   clang libclang-rt-dev

@@ -68,11 +68,9 @@ std::shared_ptr<const Track> load_track(const std::optional<std::filesystem::pat
   return std::make_shared<const Track>(Track{std::move(map), std::move(line)});
 }
 
-namespace {
-
-RunProvenance provenance_of(const Track& track, const Config& config, const DriveOptions& opts,
-                            const std::optional<sim::TrafficProfile>& profile,
-                            const sim::Scenario* scenario) {
+RunProvenance drive_provenance(const Track& track, const Config& config, const DriveOptions& opts,
+                               const sim::Scenario* scenario) {
+  const auto profile = sim::parse_traffic_profile(opts.traffic);
   RunProvenance p;
   p.seed = opts.seed;
   if (opts.external) {
@@ -96,8 +94,6 @@ RunProvenance provenance_of(const Track& track, const Config& config, const Driv
   return p;
 }
 
-}  // namespace
-
 DriveResult drive_on(const Track& track, const Config& config, const DriveOptions& opts,
                      const std::function<void(double, double)>& progress,
                      const std::atomic<bool>* stop, const sim::Scenario* scenario) {
@@ -109,7 +105,7 @@ DriveResult drive_on(const Track& track, const Config& config, const DriveOption
           : std::make_unique<sim::World>(track.map, track.line, config.world, *profile, opts.seed);
   sim::World& world = *world_ptr;
   DriveResult result;
-  result.provenance = provenance_of(track, config, opts, profile, scenario);
+  result.provenance = drive_provenance(track, config, opts, scenario);
   const RunProvenance& p = result.provenance;
 
   sim::RunOptions run;
@@ -137,7 +133,8 @@ DriveResult drive_on(const Track& track, const Config& config, const DriveOption
     result.report = opts.external->loop(world, run);
   } else if (entry->program) {
     const ExternalPlanner program = program_planner(
-        *entry, opts.planner_log.value_or(std::filesystem::path("planner-" + entry->name + ".log")));
+        *entry,
+        opts.planner_log.value_or(std::filesystem::path("planner-" + entry->name + ".log")));
     result.report = program.loop(world, run);
   } else {
     auto policy = entry->make(track.line, config.planner);

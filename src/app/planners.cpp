@@ -140,9 +140,11 @@ void add_planner_flags(CLI::App& cmd, PlannerFlags& f, PlannerFlagSet which) {
         ->allow_extra_args(false)
         ->take_all();
     cmd.add_option("--policy-py", f.python,
-                   "[NAME=]MODULE:FUNCTION: a Python planner (a callable taking the telemetry and\n"
-                   "returning (path_x, path_y)), run in-process; MODULE is imported from the\n"
-                   "current directory or PYTHONPATH")
+                   "[NAME=]MODULE:FUNCTION or [NAME=]FILE.py:FUNCTION: a Python planner (a\n"
+                   "callable taking the telemetry dict as the original sends it and returning\n"
+                   "(path_x, path_y); a class: one instance per run), run in-process; MODULE is\n"
+                   "imported from the current directory or PYTHONPATH, FILE.py from its folder;\n"
+                   "named after the module unless NAME=")
         ->allow_extra_args(false)
         ->take_all();
   }

@@ -55,6 +55,15 @@ std::string printf_string(const char* format, auto... args) {
 
 }  // namespace
 
+json incident_to_json(const sim::Incident& i) {
+  return {{"type", sim::to_string(i.type)},
+          {"t_s", i.t_s},
+          {"s_m", i.s_m},
+          {"lane", i.lane},
+          {"value", report_value(i)},
+          {"unit", value_unit(i.type)}};
+}
+
 json report_to_json(const sim::RunReport& r, const RunProvenance& p) {
   json j = json::object();
   j["distance_miles"] = core::metres_to_miles(r.distance_m);
@@ -68,14 +77,7 @@ json report_to_json(const sim::RunReport& r, const RunProvenance& p) {
   j["incident_counts"] = counts;
   j["exact_outside_lane"] = r.exact_outside_lane;
   json incidents = json::array();
-  for (const sim::Incident& i : r.incidents) {
-    incidents.push_back({{"type", sim::to_string(i.type)},
-                         {"t_s", i.t_s},
-                         {"s_m", i.s_m},
-                         {"lane", i.lane},
-                         {"value", report_value(i)},
-                         {"unit", value_unit(i.type)}});
-  }
+  for (const sim::Incident& i : r.incidents) incidents.push_back(incident_to_json(i));
   j["incidents"] = incidents;
   j["peak"] = {{"speed_mph", core::mps_to_mph(r.peak.speed_mps)},
                {"acceleration_mps2", r.peak.acceleration_mps2},

@@ -100,6 +100,11 @@ struct DriveResult {
   std::shared_ptr<view::LiveView> live;
 };
 
+/// What the report's `config` says of a drive with these inputs (`scenario` may be null).
+[[nodiscard]] RunProvenance drive_provenance(const Track& track, const Config& config,
+                                             const DriveOptions& opts,
+                                             const sim::Scenario* scenario);
+
 /// Checks the options (UsageError naming the flag), loads everything and runs the drive.
 /// `progress` (may be empty) is called now and then with simulated time and distance;
 /// `stop` (may be null) ends the run early when set.

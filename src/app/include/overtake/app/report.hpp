@@ -35,6 +35,9 @@ struct RunProvenance {
   std::string planner_log;
 };
 
+/// One incident as the report lists it: type, t_s, s_m, lane, value (in `unit`), unit.
+[[nodiscard]] nlohmann::json incident_to_json(const sim::Incident& incident);
+
 /// The JSON report. Deterministic for a given run apart from the `timing` key.
 [[nodiscard]] nlohmann::json report_to_json(const sim::RunReport& r, const RunProvenance& p);
 

@@ -1,0 +1,349 @@
+// The Python module `overtake._overtake` (wrapped by python/overtake/__init__.py): the world
+// stepped from Python (World), whole drives with a Python callable as the planner (drive),
+// and the built-in policies as callables (builtin_policy). An edge like the command line: it
+// drives the world through the same stepper and the same drive as `overtake drive`.
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include <cctype>
+#include <chrono>
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <string>
+
+#include "overtake/app/commands.hpp"
+#include "overtake/app/config.hpp"
+#include "overtake/app/report.hpp"
+#include "overtake/core/map.hpp"
+#include "overtake/planner/policy.hpp"
+#include "overtake/python/bridge.hpp"
+#include "overtake/python/python_policy.hpp"
+#include "overtake/sim/run.hpp"
+#include "overtake/sim/world.hpp"
+
+namespace overtake::pybind {
+namespace {
+
+namespace py = pybind11;
+using Clock = std::chrono::steady_clock;
+
+// A JSON value (a report) as Python values.
+py::object to_python(const nlohmann::json& j) {
+  using T = nlohmann::json::value_t;
+  switch (j.type()) {
+    case T::boolean:
+      return py::bool_(j.get<bool>());
+    case T::number_integer:
+      return py::int_(j.get<std::int64_t>());
+    case T::number_unsigned:
+      return py::int_(j.get<std::uint64_t>());
+    case T::number_float:
+      return py::float_(j.get<double>());
+    case T::string:
+      return py::str(j.get_ref<const std::string&>());
+    case T::array: {
+      py::list l;
+      for (const auto& e : j) l.append(to_python(e));
+      return l;
+    }
+    case T::object: {
+      py::dict d;
+      for (const auto& [k, v] : j.items()) d[py::str(k)] = to_python(v);
+      return d;
+    }
+    default:
+      return py::none();
+  }
+}
+
+// Options of a drive from keyword arguments, as `overtake drive` takes them from flags.
+app::DriveOptions drive_options(const std::optional<std::string>& map, std::uint64_t seed,
+                                const std::string& traffic,
+                                const std::optional<std::string>& config,
+                                const std::optional<int>& steps_per_call, double minutes) {
+  app::DriveOptions o;
+  if (map) o.map = *map;
+  if (config) o.config = *config;
+  o.seed = seed;
+  o.traffic = traffic;
+  o.minutes = minutes;
+  o.steps_per_call = steps_per_call.value_or(0);
+  if (steps_per_call && *steps_per_call <= 0) {
+    throw app::UsageError("steps_per_call must be between 1 and 1000 (got " +
+                          std::to_string(*steps_per_call) + ")");
+  }
+  return o;
+}
+
+// A catalog with one Python planner of that name, for the report's config.
+std::shared_ptr<app::PlannerCatalog> catalog_with(const std::string& name, std::string source,
+                                                  planner::PolicyFactory make) {
+  auto catalog = std::make_shared<app::PlannerCatalog>();
+  app::PlannerEntry e;
+  e.name = name;
+  e.kind = app::PlannerKind::python;
+  e.source = std::move(source);
+  e.make = std::move(make);
+  catalog->add(std::move(e), "name");
+  return catalog;
+}
+
+// ---- World -------------------------------------------------------------------------------
+
+// The world stepped from Python: reset, then step with a path per reply, as `drive` does.
+class World {
+ public:
+  World(const std::optional<std::string>& map, std::uint64_t seed, const std::string& traffic,
+        const std::optional<std::string>& config, const std::optional<int>& steps_per_call,
+        double minutes, const std::string& name) {
+    app::DriveOptions o = drive_options(map, seed, traffic, config, steps_per_call, minutes);
+    o.policy = name;
+    o.planners = catalog_with(name, "overtake.World", {});
+    app::validate_drive_options(o);
+    inputs_ = app::load_drive_inputs(o);
+  }
+
+  py::dict reset(const std::optional<std::uint64_t>& seed) {
+    if (seed) inputs_.options.seed = *seed;
+    const app::DriveOptions& o = inputs_.options;
+    stepper_.reset();
+    const app::Track& track = *inputs_.track;
+    world_ = std::make_unique<sim::World>(track.map, track.line, inputs_.config.world,
+                                          *sim::parse_traffic_profile(o.traffic), o.seed);
+    provenance_ = app::drive_provenance(track, inputs_.config, o, nullptr);
+    sim::RunOptions run;
+    run.duration_s = o.minutes * 60.0;
+    if (o.steps_per_call > 0) run.steps_per_call = o.steps_per_call;
+    run.seed = o.seed;
+    // The planner's time is Python's, between a telemetry given and its path taken back.
+    run.clock = sim::CycleClock::round_trip;
+    stepper_ = std::make_unique<sim::Stepper>(*world_, run);
+    incidents_ = py::list();
+    return telemetry();
+  }
+
+  py::dict telemetry() {
+    const sim::Stepper& s = stepper();
+    py::dict d = python::telemetry_to_dict(s.telemetry());
+    given_at_ = Clock::now();
+    return d;
+  }
+
+  py::tuple step(py::handle path_x, py::handle path_y) {
+    sim::Stepper& s = stepper();
+    if (s.finished()) throw std::runtime_error("the run is over (info['done']); call reset()");
+    const double wall_us =
+        std::chrono::duration<double, std::micro>(Clock::now() - given_at_).count();
+    const std::size_t before = s.scorecard().referee().incidents().size();
+    const long steps_before = world_->steps();
+    try {
+      core::PlanResult plan =
+          core::normal_plan(python::path_from_python(py::make_tuple(path_x, path_y)));
+      py::gil_scoped_release nogil;
+      s.apply(std::move(plan), wall_us, wall_us);
+      s.step_one_call();
+    } catch (const python::PythonError& e) {
+      s.end(sim::RunEnd::planner_failed, std::string("Python planner: ") + e.what());
+    }
+    py::dict out = info_since(before);
+    out["steps_this_call"] = world_->steps() - steps_before;
+    return py::make_tuple(telemetry(), out);
+  }
+
+  py::dict info_since(std::size_t incidents_before) {
+    const sim::Stepper& s = stepper();
+    const sim::Referee& referee = s.scorecard().referee();
+    const auto& all = referee.incidents();
+    py::list fresh;
+    for (std::size_t i = incidents_before; i < all.size(); ++i) {
+      fresh.append(to_python(app::incident_to_json(all[i])));
+    }
+    for (const auto& i : fresh) incidents_.append(i);
+    py::dict counts;
+    const auto n = referee.counts();
+    for (std::size_t t = 0; t < sim::kIncidentTypeCount; ++t) {
+      counts[py::str(std::string(sim::to_string(static_cast<sim::IncidentType>(t))))] = n[t];
+    }
+    const sim::RunReport r = s.finished() ? s.report() : sim::RunReport{};
+    py::dict out;
+    out["time_s"] = world_->time_s();
+    out["steps"] = world_->steps();
+    out["distance_m"] = referee.distance_m();
+    out["incident_counts"] = counts;
+    out["incidents"] = incidents_.attr("copy")();
+    out["new_incidents"] = fresh;
+    out["done"] = s.finished();
+    out["end"] = s.finished() ? std::string(sim::to_string(r.outcome.end)) : std::string("running");
+    const std::string early = s.finished() ? sim::ended_early_text(r.outcome) : std::string();
+    out["ended_early"] = early.empty() ? py::object(py::none()) : py::object(py::str(early));
+    return out;
+  }
+
+  py::object report() const {
+    return to_python(app::report_to_json(stepper().report(), provenance_));
+  }
+
+  [[nodiscard]] bool done() const { return stepper().finished(); }
+  [[nodiscard]] double time_s() const { return world_ ? world_->time_s() : 0.0; }
+  [[nodiscard]] long steps() const { return world_ ? world_->steps() : 0; }
+  [[nodiscard]] double step_s() const { return inputs_.config.world.step_s; }
+
+ private:
+  sim::Stepper& stepper() const {
+    if (!stepper_) throw std::runtime_error("call reset() first");
+    return *stepper_;
+  }
+
+  app::DriveInputs inputs_;
+  app::RunProvenance provenance_;
+  std::unique_ptr<sim::World> world_;
+  std::unique_ptr<sim::Stepper> stepper_;  // refers to world_: reset before it
+  py::list incidents_;
+  Clock::time_point given_at_ = Clock::now();
+};
+
+// ---- built-in policies as callables --------------------------------------------------------
+
+class BuiltinPolicy {
+ public:
+  BuiltinPolicy(const std::string& name, const std::optional<std::string>& map,
+                const std::optional<std::string>& config)
+      : name_(name),
+        config_(app::load_config(config ? std::optional<std::filesystem::path>(*config)
+                                        : std::nullopt)),
+        track_(app::load_track(map ? std::optional<std::filesystem::path>(*map) : std::nullopt)) {
+    policy_ = planner::make_policy(name, track_->line, config_.planner);
+    if (!policy_) {
+      std::string names;
+      for (const auto& p : planner::list_policies()) names += (names.empty() ? "" : ", ") + p.name;
+      throw app::UsageError("unknown policy '" + name + "' (available: " + names + ")");
+    }
+  }
+
+  py::tuple call(py::handle telemetry) {
+    const core::Telemetry t = python::telemetry_from_dict(telemetry);
+    core::PlanResult plan;
+    {
+      py::gil_scoped_release nogil;
+      plan = policy_->plan(t);
+    }
+    status_ = std::string(core::to_string(plan.status));
+    py::list xs(plan.path.size());
+    py::list ys(plan.path.size());
+    for (std::size_t i = 0; i < plan.path.size(); ++i) {
+      xs[i] = plan.path[i].x;
+      ys[i] = plan.path[i].y;
+    }
+    return py::make_tuple(xs, ys);
+  }
+
+  [[nodiscard]] const std::string& name() const { return name_; }
+  [[nodiscard]] const std::string& status() const { return status_; }
+
+ private:
+  std::string name_;
+  app::Config config_;
+  std::shared_ptr<const app::Track> track_;
+  std::unique_ptr<planner::Policy> policy_;  // refers to track_: declared after it
+  std::string status_ = "normal";
+};
+
+// ---- whole drives --------------------------------------------------------------------------
+
+bool usable_name(const std::string& name) {
+  if (name.empty() || name.size() > 64) return false;
+  for (const char c : name) {
+    if (!std::isalnum(static_cast<unsigned char>(c)) && c != '_' && c != '-' && c != '.')
+      return false;
+  }
+  return true;
+}
+
+py::object drive(const py::object& policy, const std::optional<std::string>& map,
+                 std::uint64_t seed, const std::string& traffic, double minutes,
+                 const std::optional<std::string>& config, const std::optional<int>& steps_per_call,
+                 const std::optional<std::string>& name) {
+  app::DriveOptions o = drive_options(map, seed, traffic, config, steps_per_call, minutes);
+  if (py::isinstance<py::str>(policy)) {
+    o.policy = policy.cast<std::string>();
+  } else if (PyCallable_Check(policy.ptr()) != 0) {
+    std::string label = name.value_or("");
+    if (label.empty()) {
+      label = py::str(py::getattr(policy, "__name__", py::str("python")));
+      if (!usable_name(label) || app::PlannerCatalog().find(label)) label = "python";
+    }
+    const std::string source =
+        std::string(py::str(py::getattr(policy, "__module__", py::str("?")))) + ":" +
+        std::string(py::str(py::getattr(policy, "__qualname__", py::str("callable"))));
+    o.planners =
+        catalog_with(label, source, python::callable_policy_factory(python::share(policy), label));
+    o.policy = label;
+  } else {
+    throw app::UsageError("policy must be a built-in policy's name or a callable");
+  }
+  app::DriveResult result;
+  {
+    py::gil_scoped_release nogil;
+    result = app::drive(o);
+  }
+  return to_python(app::report_to_json(result.report, result.provenance));
+}
+
+}  // namespace
+}  // namespace overtake::pybind
+
+PYBIND11_MODULE(_overtake, m) {
+  namespace py = pybind11;
+  using namespace overtake;
+  using namespace overtake::pybind;
+  m.doc() = "overtake: the headless highway simulator, stepped from Python";
+
+  py::register_exception_translator([](std::exception_ptr p) {
+    try {
+      if (p) std::rethrow_exception(p);
+    } catch (const app::UsageError& e) {
+      PyErr_SetString(PyExc_ValueError, e.what());
+    } catch (const app::ConfigError& e) {
+      PyErr_SetString(PyExc_ValueError, e.what());
+    } catch (const core::MapError& e) {
+      PyErr_SetString(PyExc_ValueError, e.what());
+    } catch (const python::PythonError& e) {
+      PyErr_SetString(PyExc_ValueError, e.what());
+    }
+  });
+
+  py::class_<World>(m, "World")
+      .def(py::init<const std::optional<std::string>&, std::uint64_t, const std::string&,
+                    const std::optional<std::string>&, const std::optional<int>&, double,
+                    const std::string&>(),
+           py::arg("map") = py::none(), py::arg("seed") = 1, py::arg("traffic") = "faithful",
+           py::arg("config") = py::none(), py::arg("steps_per_call") = py::none(),
+           py::arg("minutes") = 30.0, py::arg("name") = "python")
+      .def("reset", &World::reset, py::arg("seed") = py::none())
+      .def("step", &World::step, py::arg("path_x"), py::arg("path_y"))
+      .def("telemetry", &World::telemetry)
+      .def("report", &World::report)
+      .def_property_readonly("done", &World::done)
+      .def_property_readonly("time_s", &World::time_s)
+      .def_property_readonly("steps", &World::steps)
+      .def_property_readonly("step_s", &World::step_s);
+
+  py::class_<BuiltinPolicy>(m, "BuiltinPolicy")
+      .def(py::init<const std::string&, const std::optional<std::string>&,
+                    const std::optional<std::string>&>(),
+           py::arg("name"), py::arg("map") = py::none(), py::arg("config") = py::none())
+      .def("__call__", &BuiltinPolicy::call, py::arg("telemetry"))
+      .def_property_readonly("name", &BuiltinPolicy::name)
+      .def_property_readonly("status", &BuiltinPolicy::status);
+
+  m.def("drive", &drive, py::arg("policy"), py::arg("map") = py::none(), py::arg("seed") = 1,
+        py::arg("traffic") = "faithful", py::arg("minutes") = 30.0, py::arg("config") = py::none(),
+        py::arg("steps_per_call") = py::none(), py::arg("name") = py::none());
+
+  m.def("policies", [] {
+    py::dict d;
+    for (const auto& p : planner::list_policies()) d[py::str(p.name)] = p.summary;
+    return d;
+  });
+}

@@ -1,0 +1,46 @@
+"""Shared fixtures: the overtake binary (OVERTAKE_BINARY, set by ctest) and the source tree."""
+import json
+import os
+import pathlib
+import subprocess
+
+import pytest
+
+HERE = pathlib.Path(__file__).resolve().parent
+SOURCE = HERE.parents[1]
+PLANNERS = HERE / "planners"
+
+# What differs between two runs of one drive: the planner's timing, and what the report says
+# of the planner itself (its name and kind).
+VOLATILE = ("timing",)
+
+
+def comparable(report):
+    """The report without the keys that name or time the planner."""
+    r = {k: v for k, v in report.items() if k not in VOLATILE}
+    r["config"] = {k: v for k, v in report["config"].items() if k not in ("policy", "planner")}
+    return r
+
+
+@pytest.fixture(scope="session")
+def binary():
+    path = os.environ.get("OVERTAKE_BINARY")
+    if not path or not os.path.exists(path):
+        pytest.skip("OVERTAKE_BINARY is not set to the overtake binary")
+    return path
+
+
+@pytest.fixture(scope="session")
+def run_binary(binary, tmp_path_factory):
+    """Runs the binary; returns (exit code, JSON report or None, stderr)."""
+
+    def run(*args, cwd=None, env=None):
+        out = tmp_path_factory.mktemp("run") / "report.json"
+        full_env = dict(os.environ)
+        full_env.update(env or {})
+        p = subprocess.run([binary, *args, "--json", str(out), "--quiet"], cwd=cwd, env=full_env,
+                           capture_output=True, text=True, timeout=600)
+        report = json.loads(out.read_text()) if out.exists() and out.stat().st_size else None
+        return p.returncode, report, p.stderr
+
+    return run

@@ -1,0 +1,2 @@
+"""A module whose import raises."""
+raise ImportError("this planner needs a package that is not installed")

@@ -1,0 +1,87 @@
+"""`overtake drive|bench --policy-py`: Python planners in the binary's embedded interpreter."""
+import json
+import os
+
+from conftest import PLANNERS, SOURCE, comparable
+
+# The planners import the overtake module from the build (delegate.py) and their own folder.
+ENV = {"PYTHONPATH": os.environ.get("PYTHONPATH", "")}
+
+
+def test_drive_with_a_python_planner_reports_as_the_builtin(run_binary):
+    code, report, err = run_binary("drive", "--policy-py", "delegate:plan", "--seed", "3",
+                                   "--minutes", "1", cwd=PLANNERS, env=ENV)
+    assert code == 0, err
+    assert report["config"]["policy"] == "delegate"
+    assert report["config"]["planner"] == {"kind": "python", "source": "delegate:plan"}
+    code, builtin, err = run_binary("drive", "--policy", "walkthrough", "--seed", "3",
+                                    "--minutes", "1")
+    assert code == 0, err
+    assert comparable(report) == comparable(builtin)
+
+
+def test_a_file_path_and_a_name(run_binary, tmp_path):
+    code, report, err = run_binary("drive", "--policy-py",
+                                   f"mine={PLANNERS / 'delegate.py'}:Walkthrough", "--minutes",
+                                   "0.5", cwd=tmp_path, env=ENV)
+    assert code == 0, err
+    assert report["config"]["policy"] == "mine" and report["end"] == "completed"
+
+
+def test_the_example_planner_from_its_folder(run_binary):
+    code, report, err = run_binary("drive", "--policy-py", "planner:plan", "--minutes", "1",
+                                   "--seed", "2", cwd=SOURCE / "examples/python")
+    assert code == 0, err
+    assert report["incident_counts"]["collision"] == 0 and report["distance_miles"] > 0.4
+
+
+def test_a_planner_that_raises_ends_the_run_as_planner_failed(run_binary):
+    code, report, err = run_binary("drive", "--policy-py", "broken:raises", "--minutes", "1",
+                                   cwd=PLANNERS)
+    assert code == 1
+    assert report["end"] == "planner_failed"
+    assert "ValueError: boom at s=" in report["ended_early"]
+    assert "broken.py, line" in report["ended_early"]
+
+
+def test_a_nan_ends_the_run_as_planner_failed(run_binary):
+    code, report, _ = run_binary("drive", "--policy-py", "broken:nan", "--minutes", "1",
+                                 cwd=PLANNERS)
+    assert code == 1 and report["end"] == "planner_failed"
+    assert "path_x[1] is not a finite number" in report["ended_early"]
+
+
+def test_loading_errors_are_usage_errors(run_binary):
+    for spec, words in [("no_such_module:plan", ["no_such_module", "ModuleNotFoundError"]),
+                        ("import_fails:plan", ["import_fails", "not installed"]),
+                        ("broken:missing", ["broken", "has no 'missing'"]),
+                        ("broken:not_callable", ["not callable"]),
+                        ("nocolon", ["MODULE:FUNCTION"])]:
+        code, report, err = run_binary("drive", "--policy-py", spec, "--minutes", "1",
+                                       cwd=PLANNERS)
+        assert code == 2, (spec, err)
+        assert report is None
+        for w in words:
+            assert w in err, (spec, err)
+
+
+def test_bench_runs_python_planners_on_several_threads(binary, tmp_path):
+    import subprocess
+    out = tmp_path / "bench"
+    env = dict(os.environ)
+    p = subprocess.run([binary, "bench", "--policy-py", "delegate:Walkthrough",
+                        "--policies", "delegate,walkthrough", "--seeds", "1-4", "--minutes",
+                        "0.5", "--jobs", "3", "--out", str(out), "--quiet"], cwd=PLANNERS,
+                       env=env, capture_output=True, text=True, timeout=600)
+    assert p.returncode == 0, p.stderr
+    runs = [json.loads(line) for line in (out / "runs.jsonl").read_text().splitlines()]
+    by = {}
+    for r in runs:
+        report = r.get("report", r)
+        by[(report["config"]["policy"], report["config"]["seed"])] = report
+    assert len(by) == 8
+    for seed in range(1, 5):
+        python, builtin = by[("delegate", seed)], by[("walkthrough", seed)]
+        assert python["end"] == "completed"
+        python.pop("index", None), builtin.pop("index", None)  # the row number in the bench
+        assert comparable(python) == comparable(builtin)

@@ -1,0 +1,67 @@
+"""overtake.Env: the Gymnasium-style interface."""
+import math
+
+import pytest
+
+import overtake
+
+
+def test_reset_and_step_follow_gymnasium():
+    env = overtake.Env(seed=3, minutes=0.5)
+    obs, info = env.reset(seed=3)
+    assert obs["speed"] == 0 and info["time_s"] == 0 and info["seed"] == 3
+    policy = overtake.builtin_policy("walkthrough")
+    total, distance = 0.0, 0.0
+    terminated = truncated = False
+    while not (terminated or truncated):
+        obs, reward, terminated, truncated, info = env.step(policy(obs))
+        total += reward
+    assert truncated and not terminated
+    assert info["time_s"] == pytest.approx(30.0) and info["end"] == "completed"
+    # no incidents: the rewards add up to the distance driven
+    assert sum(info["incident_counts"].values()) == 0
+    assert total == pytest.approx(info["distance_m"]) and total > 200
+    with pytest.raises(RuntimeError):
+        env.step(policy(obs))
+
+
+@pytest.mark.xfail(reason="the car to aim at is not yet chosen so that the bodies touch")
+def test_a_collision_terminates_with_a_penalty():
+    env = overtake.Env(seed=1, steps_per_call=1, collision_penalty=100.0)
+    obs, _ = env.reset()
+    on_road = []
+    while not on_road:  # traffic is spawned around the car after the start
+        obs, _, _, _, info = env.step(([obs["x"]], [obs["y"]]))
+        on_road = [c for c in obs["sensor_fusion"] if 0 < c[6] < 12 and math.hypot(c[3], c[4]) > 1]
+    car = min(on_road, key=lambda c: math.hypot(c[1] - obs["x"], c[2] - obs["y"]))
+    xs = [car[1] + car[3] * 0.02 * (i + 1) for i in range(50)]
+    ys = [car[2] + car[4] * 0.02 * (i + 1) for i in range(50)]
+    for _ in range(5):
+        obs, reward, terminated, truncated, info = env.step((xs, ys))
+        if terminated:
+            break
+        xs, ys = xs[1:], ys[1:]
+    assert terminated and not truncated
+    assert info["incident_counts"]["collision"] >= 1
+    assert reward < -50
+
+
+def test_a_malformed_action_terminates():
+    env = overtake.Env(seed=1)
+    obs, _ = env.reset()
+    obs, reward, terminated, truncated, info = env.step(([obs["x"], obs["x"] + 1], [obs["y"]]))
+    assert terminated and not truncated and info["end"] == "planner_failed"
+    assert "path_y" in info["ended_early"]
+
+
+def test_reset_with_a_seed_reproduces_the_episode():
+    env = overtake.Env(seed=1, minutes=0.2)
+    firsts = []
+    for seed in (9, 9, 10):
+        policy = overtake.builtin_policy("walkthrough")  # a fresh policy state per episode
+        obs, _ = env.reset(seed=seed)
+        for _ in range(100):
+            obs, *_ = env.step(policy(obs))
+        firsts.append(obs["sensor_fusion"])
+    assert firsts[0] == firsts[1]
+    assert firsts[2] != firsts[0]
