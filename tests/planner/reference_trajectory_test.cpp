@@ -181,6 +181,59 @@ TEST_F(PlanTest, ItSlowsBehindAStoppedCarAndStopsShortOfIt) {
   EXPECT_LT(p.trajectory.at(0.5).s_ddot, -0.5);
 }
 
+TEST_F(PlanTest, TheCostTermsAddUpToTheCostExactly) {
+  const std::vector<CarPrediction> slow = {test::lane_car(0, 1040.0, 6.0, 12.0)};
+  for (const TrajectoryPlan& p : {plan({1000.0, 15.0, 0.8, 6.1, 0.05, -0.02}, 1, {}),
+                                  plan({1000.0, 20.0, 0.0, 6.0, 0.0, 0.0}, 0, {}),
+                                  plan({1000.0, 20.0, 0.0, 6.0, 0.0, 0.0}, 1, slow)}) {
+    ASSERT_NE(p.status, PlanStatus::fallback);
+    EXPECT_EQ(p.cost_terms.total(), p.cost);  // bit for bit: the planner's order of additions
+  }
+}
+
+TEST_F(PlanTest, TheCostTermsSayWhyALaneWasChosen) {
+  // Keeping the lane from its centre: no lateral manoeuvre to pay for, and no lane cost.
+  const TrajectoryPlan keep = plan({1000.0, 20.0, 0.0, 6.0, 0.0, 0.0}, 1, {});
+  ASSERT_EQ(keep.status, PlanStatus::feasible);
+  EXPECT_EQ(keep.trajectory.end_lane, 1);
+  EXPECT_EQ(keep.cost_terms.lateral_time, 0.0);
+  EXPECT_EQ(keep.cost_terms.off_target_lane, 0.0);
+  EXPECT_EQ(keep.cost_terms.early_lane, 0.0);
+  EXPECT_EQ(keep.cost_terms.lane, 0.0);
+
+  // Changing to behaviour's lane: a lateral manoeuvre with its time and jerk, in the lane asked.
+  const TrajectoryPlan change = plan({1000.0, 20.0, 0.0, 6.0, 0.0, 0.0}, 0, {});
+  ASSERT_EQ(change.status, PlanStatus::feasible);
+  ASSERT_EQ(change.trajectory.end_lane, 0);
+  EXPECT_NEAR(change.cost_terms.lateral_time,
+              params_.trajectory.lat_time_weight * change.trajectory.lateral.duration_s, 1e-12);
+  EXPECT_GT(change.cost_terms.lateral_jerk, 0.0);
+  EXPECT_EQ(change.cost_terms.off_target_lane, 0.0);
+
+  // Behaviour's lane is taken: staying costs the lane weight for ending one lane away.
+  const std::vector<CarPrediction> alongside = {test::lane_car(0, 1001.0, 2.0, 20.0)};
+  const TrajectoryPlan stay = plan({1000.0, 20.0, 0.0, 6.0, 0.0, 0.0}, 0, alongside);
+  ASSERT_EQ(stay.status, PlanStatus::feasible);
+  ASSERT_EQ(stay.trajectory.end_lane, 1);
+  EXPECT_EQ(stay.cost_terms.off_target_lane, params_.trajectory.lane_weight);
+}
+
+TEST_F(PlanTest, BehindASlowCarTheProgressTermGrows) {
+  const FrenetState start{1000.0, 20.0, 0.0, 6.0, 0.0, 0.0};
+  const TrajectoryPlan free_road = plan(start, 1, {});
+  // A car at 12 m/s 40 m ahead in every lane: no way around it.
+  std::vector<CarPrediction> slow;
+  for (int l = 0; l < 3; ++l)
+    slow.push_back(test::lane_car(l, 1040.0, core::lane_center_d(l), 12.0));
+  const TrajectoryPlan behind = plan(start, 1, slow);
+  ASSERT_EQ(free_road.status, PlanStatus::feasible);
+  ASSERT_NE(behind.status, PlanStatus::fallback);
+  // Held to 12 m/s for most of the horizon: tens of metres short of the wanted speed's.
+  EXPECT_GT(behind.cost_terms.progress,
+            free_road.cost_terms.progress + 10.0 * params_.trajectory.progress_weight);
+  EXPECT_GT(behind.cost, free_road.cost);
+}
+
 /// Time a trajectory stays in a lane-line band from its start, added to `already_s`.
 double band_time(const Trajectory& t, double already_s, const ReferenceTrajectoryParams& p) {
   double band = already_s;

@@ -68,7 +68,7 @@ std::vector<LaneView> assess_lanes(const std::vector<CarPrediction>& cars, const
     for (std::size_t i = 0; i < cars.size(); ++i) {
       const CarPrediction& c = cars[i];
       if (!c.occupies(l)) continue;
-      const double centre_gap = (c.s_m - ego.s_m) * ego.metres_per_s;
+      const double centre_gap = (c.s_m - ego.s_m) * ego.m_per_unit_s;
       if (std::abs(centre_gap) < car_length_m + kAlongsideM && l != cur) v.alongside = true;
       if (centre_gap >= 0.0) {
         if (centre_gap < best_ahead && centre_gap < p.lookahead_m) {
@@ -131,12 +131,12 @@ double wanted_speed(const std::vector<CarPrediction>& cars, const EgoSnapshot& e
   double speed = p.cruise_speed_mps;
   for (const CarPrediction& c : cars) {
     if (std::abs(c.lane - cur) != 1 || c.target_lane != c.lane) continue;
-    const double gap = (c.s_m - ego.s_m) * ego.metres_per_s - car_length_m;
+    const double gap = (c.s_m - ego.s_m) * ego.m_per_unit_s - car_length_m;
     if (gap <= 0.0 || gap > kPassingRangeM) continue;
     bool held_up = false;
     for (const CarPrediction& o : cars) {
       if (&o == &c || !o.occupies(c.lane)) continue;
-      const double ahead = (o.s_m - c.s_m) * ego.metres_per_s - car_length_m;
+      const double ahead = (o.s_m - c.s_m) * ego.m_per_unit_s - car_length_m;
       if (ahead > -car_length_m && ahead < kHeldUpGapM) held_up = true;
     }
     if (held_up) speed = std::min(speed, c.speed_mps + p.passing_speed_mps);

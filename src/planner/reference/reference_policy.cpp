@@ -156,7 +156,7 @@ core::PlanResult ReferencePolicy::plan(const core::Telemetry& t) {
   ego.s_m = car.s_m;
   ego.d_m = car.d_m;
   ego.speed_mps = car.s_dot * at_car.along_scale;
-  ego.metres_per_s = at_car.along_scale;
+  ego.m_per_unit_s = at_car.along_scale;
   decision_ = decide(predictions_, ego, behaviour_, elapsed, car_.length_m, p_.behaviour, road_);
 
   TrajectoryRequest req;

@@ -39,7 +39,7 @@ struct EgoSnapshot {
   double s_m = 0.0;        ///< unwrapped, in the cars' frame
   double speed_mps = 0.0;  ///< along the road
   double d_m = 0.0;
-  double metres_per_s = 1.0;  ///< metres along the road per unit of s near the ego
+  double m_per_unit_s = 1.0;  ///< metres along the road per unit of s near the ego
 };
 
 /// One lane as seen from the ego.

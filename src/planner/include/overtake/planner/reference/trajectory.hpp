@@ -60,12 +60,37 @@ enum class PlanStatus {
   fallback,   ///< none passed: jerk-limited braking
 };
 
+/// Why a candidate costs what it costs: the terms of its cost, each already weighted
+/// (ReferenceTrajectoryParams names the weights). Lower is better; a term may be negative
+/// (progress, when the candidate goes farther than the wanted speed would).
+struct TrajectoryCost {
+  double lateral_jerk = 0.0;       ///< lat_jerk_weight x the lateral motion's jerk integral
+  double lateral_time = 0.0;       ///< lat_time_weight x its duration (s); 0 when holding the lane
+  double off_target_lane = 0.0;    ///< lane_weight x lanes between its end lane and behaviour's
+  double linger = 0.0;             ///< linger_weight x its longest lane-line stay beyond the budget
+  double progress = 0.0;           ///< progress_weight x metres short of the wanted speed's
+  double longitudinal_jerk = 0.0;  ///< lon_jerk_weight x the longitudinal jerk integral
+  double lane = 0.0;        ///< soft cost of the end lane's cars (RSS gap, rear room), full horizon
+  double early_lane = 0.0;  ///< when changing lanes: the start lane's soft cost, early window
+  /// The candidate's cost: the terms added as the planner adds them (lateral, then
+  /// longitudinal, then the lanes'), so that it equals TrajectoryPlan::cost exactly.
+  [[nodiscard]] double total() const {
+    double lateral = lateral_jerk + lateral_time + off_target_lane;
+    lateral += linger;
+    const double longitudinal = progress + longitudinal_jerk;
+    double c = lateral + longitudinal + lane;
+    c += early_lane;
+    return c;
+  }
+};
+
 /// The chosen trajectory and how it was found.
 struct TrajectoryPlan {
   Trajectory trajectory;
   PlanStatus status = PlanStatus::fallback;
-  double cost = 0.0;
-  int candidates = 0;  ///< combinations costed
+  double cost = 0.0;          ///< the chosen candidate's cost (0 for the braking fallback)
+  TrajectoryCost cost_terms;  ///< ... and its terms: why it won (all 0 for the fallback)
+  int candidates = 0;         ///< combinations costed
   int collision_checks = 0;
   int kinematic_checks = 0;
   int collision_failures = 0;    ///< candidates that failed the collision check
@@ -103,12 +128,12 @@ struct CollisionReport {
 };
 
 /// Checks `t` against the predicted cars (observed `start_delay_s` before t = 0) with the
-/// margins, every car of footprint `car`; `metres_per_s` converts s to metres along the road. Cars
-/// already following the ego in its lane are left to follow; a car the ego moves in front of must
-/// have room to stop closing (rear_room).
+/// margins, every car of footprint `car`; `m_per_unit_s` (metres of road per unit of s) converts
+/// s to metres along the road. Cars already following the ego in its lane are left to follow; a
+/// car the ego moves in front of must have room to stop closing (rear_room).
 [[nodiscard]] CollisionReport check_collisions(const Trajectory& t,
                                                const std::vector<CarPrediction>& cars,
-                                               double start_delay_s, double metres_per_s,
+                                               double start_delay_s, double m_per_unit_s,
                                                const ReferenceParams& p,
                                                const core::RoadParams& road,
                                                const core::CarFootprint& car);
