@@ -178,9 +178,9 @@ struct ReferenceTrajectoryParams {
   /// from behind may not see the ego at all).
   double ahead_collision_slack_s = 1.0;
   // cost weights
-  double progress_weight = 1.0;   ///< per metre short of cruising at the wanted speed
-  double lon_jerk_weight = 0.05;  ///< per (m/s^3)^2 s
-  double lat_jerk_weight = 0.2;
+  double progress_weight = 1.0;     ///< per metre short of cruising at the wanted speed
+  double lon_jerk_weight = 0.05;    ///< per unit of the squared jerk of s(t) integrated (s units)
+  double lat_jerk_weight = 0.2;     ///< per (m/s^3)^2 s of d(t)
   double lat_time_weight = 0.5;     ///< per second of lateral manoeuvre
   double lane_weight = 20.0;        ///< for ending away from the behaviour's lane
   double proximity_weight = 150.0;  ///< for being inside the RSS gap ahead
