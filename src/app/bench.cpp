@@ -81,14 +81,14 @@ json manifest_of(const BenchSpec& spec, const Track& track, const Config& config
     }
   }
   json m = {{"policies", spec.policies},
-          {"traffic", spec.traffic},
-          {"seeds", spec.seeds},
-          {"minutes", spec.minutes},
-          {"steps_per_call", spec.steps_per_call},
-          {"map", {{"path", track.map.source}, {"hash", core::hex64(track.map.content_hash)}}},
-          {"params_hash", config_hash(config)},
-          {"combinations", total},
-          {"shard", std::to_string(spec.shard_index) + "/" + std::to_string(spec.shard_count)}};
+            {"traffic", spec.traffic},
+            {"seeds", spec.seeds},
+            {"minutes", spec.minutes},
+            {"steps_per_call", spec.steps_per_call},
+            {"map", {{"path", track.map.source}, {"hash", core::hex64(track.map.content_hash)}}},
+            {"params_hash", config_hash(config)},
+            {"combinations", total},
+            {"shard", std::to_string(spec.shard_index) + "/" + std::to_string(spec.shard_count)}};
   if (!planners.empty()) m["planners"] = planners;
   return m;
 }

@@ -158,7 +158,8 @@ Subcommand register_bench(CLI::App& app) {
         BenchSpec spec = st->spec;
         spec.planners = catalog_from_flags(st->planners);
         const auto added = spec.planners->added_names();
-        if (st->policies_opt->count() > 0 || added.empty()) spec.policies = split_list(st->policies);
+        if (st->policies_opt->count() > 0 || added.empty())
+          spec.policies = split_list(st->policies);
         for (const auto& name : added) {  // every planner brought by a flag is benched
           if (std::find(spec.policies.begin(), spec.policies.end(), name) == spec.policies.end())
             spec.policies.push_back(name);

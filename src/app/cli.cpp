@@ -274,8 +274,7 @@ Subcommand register_drive(CLI::App& app) {
   return {cmd, [f, planners, policy] {
             const auto json_out = apply_run_flags(*f);
             f->opts.planners = catalog_from_flags(*planners);
-            f->opts.policy =
-                chosen_policy(*f->opts.planners, f->opts.policy, policy->count() > 0);
+            f->opts.policy = chosen_policy(*f->opts.planners, f->opts.policy, policy->count() > 0);
             return cmd_drive(f->opts, json_out, f->quiet);
           }};
 }

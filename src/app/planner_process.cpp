@@ -163,8 +163,7 @@ struct KeeperPlan {
     _exit(1);
   };
   if (p.isolated) {
-    if (::unshare(p.as_root ? CLONE_NEWNET : CLONE_NEWUSER | CLONE_NEWNET) != 0)
-      fail(kStepUnshare);
+    if (::unshare(p.as_root ? CLONE_NEWNET : CLONE_NEWUSER | CLONE_NEWNET) != 0) fail(kStepUnshare);
     if (!p.as_root) {
       if (!write_all("/proc/self/setgroups", "deny")) fail(kStepSetgroups);
       if (!write_all("/proc/self/uid_map", p.uid_map)) fail(kStepUidMap);
@@ -287,7 +286,8 @@ std::string status_text(int status) {
   if (WIFSIGNALED(status)) {
     const int sig = WTERMSIG(status);
     const char* name = ::strsignal(sig);
-    return "was killed by signal " + std::to_string(sig) + (name ? std::string(" (") + name + ")" : "");
+    return "was killed by signal " + std::to_string(sig) +
+           (name ? std::string(" (") + name + ")" : "");
   }
   return "ended (wait status " + std::to_string(status) + ")";
 }
@@ -316,8 +316,9 @@ std::string step_text(int step, int err) {
 }
 
 std::string namespace_advice(int err) {
-  return std::string("a network namespace of its own for each planner program needs unprivileged "
-                     "user namespaces, or root (unshare: ") +
+  return std::string(
+             "a network namespace of its own for each planner program needs unprivileged "
+             "user namespaces, or root (unshare: ") +
          std::strerror(err) +
          "). Allow them (sysctl user.max_user_namespaces=15000; on Debian before 11 "
          "kernel.unprivileged_userns_clone=1; on Ubuntu 24.04 "
@@ -392,9 +393,9 @@ PlannerProcess::PlannerProcess(const PlannerProcessOptions& o) {
   control_ = sv[0];
   Message m;
   if (!receive(control_, m, nullptr, kAnswerTimeout) || m.kind != kStarted) {
-    const std::string why = m.kind == kFailed ? (m.a == kStepUnshare ? namespace_advice(m.b)
-                                                                     : step_text(m.a, m.b))
-                                              : "the planner's keeper process did not start";
+    const std::string why =
+        m.kind == kFailed ? (m.a == kStepUnshare ? namespace_advice(m.b) : step_text(m.a, m.b))
+                          : "the planner's keeper process did not start";
     stop(0.0);
     throw std::runtime_error(why);
   }

@@ -100,8 +100,8 @@ sim::RunReport run_program(const PlannerEntry& entry, const std::filesystem::pat
       why = gave_up;
     } else if (why.find(" within ") != std::string::npos) {
       const std::size_t last = why.rfind(": ");
-      why = "the planner program did not listen on port " + std::to_string(spec.port) +
-            " within " + protocol::seconds_text(client.connect_timeout) +
+      why = "the planner program did not listen on port " + std::to_string(spec.port) + " within " +
+            protocol::seconds_text(client.connect_timeout) +
             (last == std::string::npos ? "" : " (the last attempt: " + why.substr(last + 2) + ")");
     }
     report = failed_at_start(world, run, why + see_log);
@@ -133,8 +133,7 @@ bool program_isolated(const PlannerEntry& entry) {
 ExternalPlanner program_planner(const PlannerEntry& entry, const std::filesystem::path& log) {
   ExternalPlanner ext;
   ext.name = entry.name;
-  ext.address = "ws://127.0.0.1:" + std::to_string(entry.program->port) + " (" + entry.source +
-                ")";
+  ext.address = "ws://127.0.0.1:" + std::to_string(entry.program->port) + " (" + entry.source + ")";
   ext.loop = [entry, log](sim::World& world, const sim::RunOptions& run) {
     return run_program(entry, log, world, run);
   };

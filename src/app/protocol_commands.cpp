@@ -18,12 +18,12 @@
 #include "overtake/app/commands.hpp"
 #include "overtake/app/interrupt.hpp"
 #include "overtake/app/io.hpp"
+#include "overtake/app/program_planner.hpp"
 #include "overtake/app/progress.hpp"
 #include "overtake/app/viewer.hpp"
 #include "overtake/core/hash.hpp"
 #include "overtake/core/units.hpp"
 #include "overtake/planner/policy.hpp"
-#include "overtake/app/program_planner.hpp"
 #include "overtake/protocol/client.hpp"
 #include "overtake/protocol/server.hpp"
 #include "overtake/sim/world.hpp"
@@ -143,8 +143,9 @@ int cmd_sim_program(SimArgs& a) {
   opts.planners = catalog;
   opts.policy = catalog->added_names().front();
   const PlannerEntry* entry = catalog->find(opts.policy);
-  opts.planner_log = a.planner_log.empty() ? std::filesystem::path("planner-" + opts.policy + ".log")
-                                           : std::filesystem::path(a.planner_log);
+  opts.planner_log = a.planner_log.empty()
+                         ? std::filesystem::path("planner-" + opts.policy + ".log")
+                         : std::filesystem::path(a.planner_log);
   (void)program_isolated(*entry);  // --planner-network isolated where it is impossible: now
   const DriveInputs inputs = load_drive_inputs(opts);
   const bool quiet = a.run.quiet;

@@ -71,7 +71,8 @@ class PlannerProgramTest : public ::testing::Test {
   void TearDown() override { fs::remove_all(root_); }
 
   // Runs the binary; returns its exit status, with its stdout and stderr in out_/err_.
-  int run(const std::vector<std::string>& args, std::chrono::seconds timeout = std::chrono::seconds(300)) {
+  int run(const std::vector<std::string>& args,
+          std::chrono::seconds timeout = std::chrono::seconds(300)) {
     const pid_t pid = test::start_overtake(args, root_ / "stdout", root_ / "stderr");
     const auto status = test::exit_status(pid, timeout);
     out_ = read_text(root_ / "stdout");
@@ -111,7 +112,8 @@ TEST(PlannerCatalogTest, NamesFromFlagsAndTheirErrors) {
 }
 
 TEST(PlannerProcessTest, OutputGoesToTheLogAndStopEndsTheWholeGroup) {
-  const fs::path log = fs::temp_directory_path() / ("overtake-keeper-" + std::to_string(::getpid()) + ".log");
+  const fs::path log =
+      fs::temp_directory_path() / ("overtake-keeper-" + std::to_string(::getpid()) + ".log");
   app::PlannerProcessOptions o;
   o.command = "echo started; sleep 30 & sleep 30";
   o.log = log;
@@ -127,7 +129,8 @@ TEST(PlannerProcessTest, OutputGoesToTheLogAndStopEndsTheWholeGroup) {
 }
 
 TEST(PlannerProcessTest, AProgramThatExitsSaysHow) {
-  const fs::path log = fs::temp_directory_path() / ("overtake-exit-" + std::to_string(::getpid()) + ".log");
+  const fs::path log =
+      fs::temp_directory_path() / ("overtake-exit-" + std::to_string(::getpid()) + ".log");
   app::PlannerProcessOptions o;
   o.command = "exit 7";
   o.log = log;
@@ -227,11 +230,31 @@ TEST_F(PlannerProgramTest, BenchRunsProgramsInParallelWithTheSameReportsAsInProc
 TEST_F(PlannerProgramTest, CrashesHangsAndSilentProgramsEndTheirRunsWithTheReason) {
   const std::string p = course_planner().string();
   const fs::path out = root_ / "bench";
-  ASSERT_EQ(run({"bench", "--planner-cmd", "crash=" + p + " --crash-after 30", "--planner-cmd",
-                 "hang=" + p + " --hang-after 30", "--planner-cmd", "silent=" + p + " --never-listen",
-                 "--planner-cmd", "quits=" + p + " --exit-at-start", "--planner-cmd", "good=" + p,
-                 "--planner-start-timeout", "1", "--planner-reply-timeout", "0.5", "--seeds", "1",
-                 "--minutes", "1", "--traffic", "faithful", "--jobs", "2", "--out", out.string(),
+  ASSERT_EQ(run({"bench",
+                 "--planner-cmd",
+                 "crash=" + p + " --crash-after 30",
+                 "--planner-cmd",
+                 "hang=" + p + " --hang-after 30",
+                 "--planner-cmd",
+                 "silent=" + p + " --never-listen",
+                 "--planner-cmd",
+                 "quits=" + p + " --exit-at-start",
+                 "--planner-cmd",
+                 "good=" + p,
+                 "--planner-start-timeout",
+                 "1",
+                 "--planner-reply-timeout",
+                 "0.5",
+                 "--seeds",
+                 "1",
+                 "--minutes",
+                 "1",
+                 "--traffic",
+                 "faithful",
+                 "--jobs",
+                 "2",
+                 "--out",
+                 out.string(),
                  "--quiet"}),
             0)
       << err_;
@@ -260,8 +283,8 @@ TEST_F(PlannerProgramTest, CrashesHangsAndSilentProgramsEndTheirRunsWithTheReaso
 TEST_F(PlannerProgramTest, SimStartsTheProgramDrivesItAndStopsIt) {
   const fs::path json_path = root_ / "run.json";
   const fs::path log = root_ / "planner.log";
-  ASSERT_EQ(run({"sim", "--planner-cmd", course_planner().string(), "--minutes", "1", "--seed",
-                 "2", "--json", json_path.string(), "--planner-log", log.string(), "--quiet"}),
+  ASSERT_EQ(run({"sim", "--planner-cmd", course_planner().string(), "--minutes", "1", "--seed", "2",
+                 "--json", json_path.string(), "--planner-log", log.string(), "--quiet"}),
             0)
       << err_;
   const json report = json::parse(read_text(json_path));
@@ -278,11 +301,11 @@ TEST_F(PlannerProgramTest, SimStartsTheProgramDrivesItAndStopsIt) {
 // On the host's network the runs take turns on the port, and still give the same reports.
 TEST_F(PlannerProgramTest, OnTheHostNetworkRunsTakeTurns) {
   const fs::path out = root_ / "bench";
-  ASSERT_EQ(run({"bench", "--planner-cmd", "course=" + course_planner().string() + " --port 45871",
-                 "--planner-port", "45871", "--planner-network", "host", "--seeds", "1-2",
-                 "--minutes", "0.5", "--traffic", "calm", "--jobs", "2", "--out", out.string(),
-                 "--quiet"}),
-            0)
+  ASSERT_EQ(
+      run({"bench", "--planner-cmd", "course=" + course_planner().string() + " --port 45871",
+           "--planner-port", "45871", "--planner-network", "host", "--seeds", "1-2", "--minutes",
+           "0.5", "--traffic", "calm", "--jobs", "2", "--out", out.string(), "--quiet"}),
+      0)
       << err_;
   const auto rows = read_rows(out / "runs.jsonl");
   ASSERT_EQ(rows.size(), 2u);

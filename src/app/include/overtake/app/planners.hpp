@@ -30,9 +30,9 @@ enum class PlannerKind {
 
 /// A planner program started for each run (`--planner-cmd`).
 struct ProgramSpec {
-  std::string command;        ///< run by /bin/sh -c
-  std::filesystem::path cwd;  ///< empty: the current directory
-  int port = 4567;            ///< where the program listens (the original's fixed port)
+  std::string command;            ///< run by /bin/sh -c
+  std::filesystem::path cwd;      ///< empty: the current directory
+  int port = 4567;                ///< where the program listens (the original's fixed port)
   double start_timeout_s = 20.0;  ///< to start listening
   double reply_timeout_s = 5.0;   ///< for each reply
   PlannerNetwork network = PlannerNetwork::automatic;
@@ -43,8 +43,8 @@ struct ProgramSpec {
 struct PlannerEntry {
   std::string name;
   PlannerKind kind = PlannerKind::builtin;
-  std::string source;            ///< the plugin's path, module:function, or the command
-  planner::PolicyFactory make;   ///< builtin, plugin and python
+  std::string source;           ///< the plugin's path, module:function, or the command
+  planner::PolicyFactory make;  ///< builtin, plugin and python
   std::optional<ProgramSpec> program;
   /// What the run's provenance records of it (kind, source, ...): a JSON object's text.
   [[nodiscard]] std::string describe() const;

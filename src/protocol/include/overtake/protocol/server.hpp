@@ -74,7 +74,8 @@ class PlannerSession {
 struct PlannerSetup {
   std::shared_ptr<const core::ReferenceLine> line;  ///< shared: sessions may outlive the caller
   planner::PlannerParams params;
-  std::string policy = "walkthrough";  ///< a name from planner::list_policies(), or the label of `factory`
+  std::string policy =
+      "walkthrough";  ///< a name from planner::list_policies(), or the label of `factory`
   /// When set, makes each connection's policy (a plugin's, a Python planner's) instead of the
   /// built-in policy named `policy`.
   planner::PolicyFactory factory;
