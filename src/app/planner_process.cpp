@@ -66,15 +66,25 @@ void send_message(int fd, char kind, int a = 0, int b = 0) {
   (void)::send(fd, buf, sizeof buf, MSG_NOSIGNAL);
 }
 
-void send_fd(int control, int fd) {
-  char kind = kFd;
-  iovec iov{&kind, 1};
+// A message of one buffer with room for one descriptor beside it.
+struct FdMessage {
+  iovec iov{};
   alignas(cmsghdr) char space[CMSG_SPACE(sizeof(int))] = {};
   msghdr msg{};
-  msg.msg_iov = &iov;
-  msg.msg_iovlen = 1;
-  msg.msg_control = space;
-  msg.msg_controllen = sizeof space;
+  FdMessage(void* data, std::size_t size) : iov{data, size} {
+    msg.msg_iov = &iov;
+    msg.msg_iovlen = 1;
+    msg.msg_control = space;
+    msg.msg_controllen = sizeof space;
+  }
+  FdMessage(const FdMessage&) = delete;
+  FdMessage& operator=(const FdMessage&) = delete;
+};
+
+void send_fd(int control, int fd) {
+  char kind = kFd;
+  FdMessage m(&kind, 1);
+  msghdr& msg = m.msg;
   cmsghdr* c = CMSG_FIRSTHDR(&msg);
   c->cmsg_level = SOL_SOCKET;
   c->cmsg_type = SCM_RIGHTS;
@@ -244,13 +254,8 @@ bool receive(int control, Message& m, int* fd, std::chrono::milliseconds timeout
     if (r < 0 && errno != EINTR) return false;
   }
   char buf[1 + 2 * sizeof(int)] = {};
-  iovec iov{buf, sizeof buf};
-  alignas(cmsghdr) char space[CMSG_SPACE(sizeof(int))] = {};
-  msghdr msg{};
-  msg.msg_iov = &iov;
-  msg.msg_iovlen = 1;
-  msg.msg_control = space;
-  msg.msg_controllen = sizeof space;
+  FdMessage fm(buf, sizeof buf);
+  msghdr& msg = fm.msg;
   const ssize_t n = ::recvmsg(control, &msg, MSG_CMSG_CLOEXEC);
   if (n <= 0) return false;
   m.kind = buf[0];

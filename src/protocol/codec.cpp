@@ -163,12 +163,7 @@ core::Telemetry telemetry_from_json(const json& o, const Limits& limits) {
       v[k] = finite_number(row[k], max, [&] { return where() + "[" + std::to_string(k) + "]"; });
     }
     if (v[0] != std::floor(v[0])) reject(where() + ": the id is not an integer");
-    core::CarObservation& c = t.cars[i];
-    c.id = static_cast<int>(v[0]);
-    c.position = {v[1], v[2]};
-    c.velocity_mps = {v[3], v[4]};
-    c.s_m = v[5];
-    c.d_m = v[6];
+    t.cars[i] = core::car_from_row(v);
   }
   return t;
 }

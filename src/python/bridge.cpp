@@ -196,12 +196,8 @@ core::Telemetry telemetry_from_dict(py::handle dict) {
                         " values, expected 7 [id,x,y,vx,vy,s,d]");
     }
     if (v[0] != std::floor(v[0])) throw PythonError(where + ": the id is not an integer");
-    core::CarObservation& c = t.cars[i];
-    c.id = static_cast<int>(v[0]);
-    c.position = {v[1], v[2]};
-    c.velocity_mps = {v[3], v[4]};
-    c.s_m = v[5];
-    c.d_m = v[6];
+    const double row[7] = {v[0], v[1], v[2], v[3], v[4], v[5], v[6]};
+    t.cars[i] = core::car_from_row(row);
   }
   return t;
 }

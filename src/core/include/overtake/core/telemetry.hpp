@@ -28,6 +28,18 @@ struct CarObservation {
   friend bool operator==(const CarObservation&, const CarObservation&) = default;
 };
 
+/// A sensor-fusion row `[id, x, y, vx, vy, s, d]` as a CarObservation (the id already checked
+/// to be a whole number).
+[[nodiscard]] inline CarObservation car_from_row(const double (&row)[7]) {
+  CarObservation c;
+  c.id = static_cast<int>(row[0]);
+  c.position = {row[1], row[2]};
+  c.velocity_mps = {row[3], row[4]};
+  c.s_m = row[5];
+  c.d_m = row[6];
+  return c;
+}
+
 /// Everything a planner is told at one cycle.
 struct Telemetry {
   EgoObservation ego;
