@@ -312,5 +312,25 @@ TEST_F(PlannerProgramTest, OnTheHostNetworkRunsTakeTurns) {
   for (const json& r : rows) EXPECT_EQ(r["end"], "completed") << r["ended_early"];
 }
 
+// The example program (examples/program) drives a few minutes in both kinds of traffic
+// without an incident.
+TEST_F(PlannerProgramTest, TheExampleProgramDrivesWithoutIncidents) {
+  const fs::path program = fs::path(OVERTAKE_BINARY_DIR) / "tests" / "overtake_example_program";
+  const std::string map = (fs::path(OVERTAKE_SOURCE_DIR) / "data/tracks/default.csv").string();
+  const fs::path out = root_ / "bench";
+  ASSERT_EQ(run({"bench", "--planner-cmd", "example=" + program.string() + " " + map, "--seeds",
+                 "1-2", "--minutes", "4", "--jobs", "2", "--out", out.string(), "--quiet"}),
+            0)
+      << err_;
+  const auto rows = read_rows(out / "runs.jsonl");
+  ASSERT_EQ(rows.size(), 4u);
+  for (const json& r : rows) {
+    EXPECT_EQ(r["end"], "completed") << r["ended_early"];
+    EXPECT_EQ(r["incident_counts"]["collision"], 0) << r["config"];
+    EXPECT_EQ(r["incidents"].size(), 0u) << r["incidents"];
+    EXPECT_GT(r["mean_speed_mph"].get<double>(), 40.0) << r["config"];
+  }
+}
+
 }  // namespace
 }  // namespace overtake
