@@ -37,10 +37,14 @@ constexpr double kGapGainPerS = 0.3;                 // m/s of closing speed per
 constexpr double kAnchorsM[] = {50.0, 85.0, 120.0};  // spline anchors ahead of the path's end
 constexpr double kHeldUpMps = 2.0;                   // slower than cruise by this: look around
 constexpr double kClearAheadM = 30.0;                // a lane change wants this much room ahead
-constexpr double kClearBehindM = 12.0;               // ... and behind, plus closing speed x:
-constexpr double kClosingLookS = 3.0;
+constexpr double kClearBehindM = 15.0;               // ... and behind, plus closing speed x:
+constexpr double kClosingLookS = 4.0;
 constexpr double kChangeDurationS = 3.0;  // checked over the manoeuvre's length
 constexpr int kChangeCooldownCycles = 60;
+constexpr double kMergeConflictM = 20.0;    // a car this near in the lane beyond ...
+constexpr double kLaneChangeRateMps = 0.1;  // ... moving over faster than this x offset / 1 m
+constexpr double kAbortBesideM = 10.0;      // a car this near beside in the target lane: abort
+constexpr double kAbortUntilM = 1.8;        // ... while this near the lane it started from
 // Closer than the standstill gap + this x speed: brake harder than comfort allows.
 constexpr double kEmergencyHeadwayS = 0.5;
 constexpr double kEmergencyAccelMps2 = 7.0;
@@ -132,6 +136,17 @@ class Road {
     out_x = x_(s) + d * nx;
     out_y = y_(s) + d * ny;
   }
+  // The road's unit normal at s (towards increasing d).
+  void normal(double s, double& nx, double& ny) const {
+    s = wrap(s);
+    nx = dx_(s);
+    ny = dy_(s);
+    const double len = std::hypot(nx, ny);
+    if (len > 0.0) {
+      nx /= len;
+      ny /= len;
+    }
+  }
   // Signed distance along the road from `from` to `to`, the shorter way round.
   double ahead(double from, double to) const {
     double g = std::fmod(to - from, max_s_);
@@ -154,7 +169,8 @@ class Road {
 struct Car {
   double s = 0.0;  // now
   double d = 0.0;
-  double speed = 0.0;  // m/s
+  double speed = 0.0;   // m/s
+  double d_rate = 0.0;  // m/s, sideways (towards increasing d)
 };
 
 }  // namespace
@@ -164,7 +180,8 @@ struct overtake_plugin_handle {
   int lanes = 3;
   double lane_width = 4.0;
   double dt = 0.02;
-  int lane = -1;  // the target lane; -1 until the first telemetry
+  int lane = -1;       // the target lane; -1 until the first telemetry
+  int from_lane = -1;  // during a lane change: the lane it started from
   int cooldown = 0;
   double accel = 0.0;
   // Speed and acceleration planned for each point of the last path sent.
@@ -179,8 +196,15 @@ struct overtake_plugin_handle {
   bool clear(const std::vector<Car>& cars, int l, double ego_s, double v, double lead_gap) const {
     double nearest_ahead = 1e9;
     for (const Car& c : cars) {
-      if (!in_lane(c, l)) continue;
       const double gap = road.ahead(ego_s, c.s);
+      // A car in the lane beyond, near and moving over into `l`, takes it too.
+      const double beyond = c.d - lane_center(l, lane_width);
+      if (std::abs(beyond) > 0.5 * lane_width && std::abs(beyond) < 1.5 * lane_width &&
+          std::abs(gap) < kMergeConflictM &&
+          beyond * c.d_rate < -kLaneChangeRateMps * std::abs(beyond)) {
+        return false;
+      }
+      if (!in_lane(c, l)) continue;
       if (gap >= 0.0) nearest_ahead = std::min(nearest_ahead, gap);
       for (double t = 0.0; t <= kChangeDurationS; t += 0.5) {  // now and over the manoeuvre
         const double g = gap + (c.speed - v) * t;
@@ -203,8 +227,11 @@ struct overtake_plugin_handle {
     cars.reserve(in.sensor_fusion_count);
     for (std::size_t i = 0; i < in.sensor_fusion_count; ++i) {
       const double* row = in.sensor_fusion[i];
+      double nx = 0.0, ny = 0.0;
+      road.normal(row[OVERTAKE_SF_S], nx, ny);
       cars.push_back({row[OVERTAKE_SF_S], row[OVERTAKE_SF_D],
-                      std::hypot(row[OVERTAKE_SF_VX], row[OVERTAKE_SF_VY])});
+                      std::hypot(row[OVERTAKE_SF_VX], row[OVERTAKE_SF_VY]),
+                      row[OVERTAKE_SF_VX] * nx + row[OVERTAKE_SF_VY] * ny});
     }
 
     // Keep the start of the previous path.
@@ -251,16 +278,17 @@ struct overtake_plugin_handle {
     }
     const double horizon_t = static_cast<double>(keep) * dt;
 
-    // The car ahead in the lanes the ego is in or going to.
-    const double ego_lane_d = in.d;
+    // The car ahead: in the target lane; in a lane the ego is still leaving, only when close.
     double lead_gap = 1e9, lead_speed = kCruiseMps;
-    for (const Car& c : cars) {
-      const bool ours = in_lane(c, lane) || std::abs(c.d - ego_lane_d) < 0.5 * lane_width + 0.6;
-      if (!ours) continue;
-      const double gap = road.ahead(ref_s, c.s + c.speed * horizon_t);
-      if (gap > 0.0 && gap < lead_gap) {
+    const double close_m = kStandstillGapM + kHeadwayS * v;
+    for (const Car& car : cars) {
+      const double gap = road.ahead(ref_s, car.s + car.speed * horizon_t);
+      if (!(gap > 0.0 && gap < lead_gap)) continue;
+      const bool target_lane = in_lane(car, lane);
+      const bool beside = std::abs(car.d - in.d) < 0.5 * lane_width + 0.6;
+      if (target_lane || (beside && gap < close_m)) {
         lead_gap = gap;
-        lead_speed = c.speed;
+        lead_speed = car.speed;
       }
     }
 
@@ -276,8 +304,23 @@ struct overtake_plugin_handle {
         }
       }
       if (best >= 0) {
+        from_lane = lane;
         lane = best;
         cooldown = kChangeCooldownCycles;
+      }
+    } else if (!settled && from_lane >= 0 && from_lane != lane) {
+      // Changing lanes, not yet across the line: back to where it came from when a car turns
+      // up beside it in the target lane (from behind, or moving over from the far side).
+      const bool across = std::abs(in.d - lane_center(from_lane, lane_width)) > kAbortUntilM;
+      for (const Car& car : cars) {
+        if (across) break;
+        if (in_lane(car, lane) && !in_lane(car, from_lane) &&
+            std::abs(road.ahead(in.s, car.s)) < kAbortBesideM) {
+          lane = from_lane;
+          from_lane = -1;
+          cooldown = kChangeCooldownCycles;
+          break;
+        }
       }
     }
 
