@@ -2,10 +2,11 @@
 //
 // It keeps to its lane at just under the speed limit, follows the car ahead at a time gap,
 // and moves one lane over when it is held up and the neighbouring lane is clear ahead and
-// behind. Each cycle it keeps the start of its previous path (so the car's motion
-// continues smoothly), and extends it along a cubic spline through the kept path's end and
-// three anchors on the target lane, spacing the new points so that the speed changes with
-// bounded acceleration and jerk.
+// behind (and gives the change up, while still in its lane, when a car moves in beside it).
+// Each cycle it keeps the start of its previous path (so the car's motion continues
+// smoothly) and extends it along a cubic spline through the kept path's end and three
+// anchors on the target lane, spacing the new points so that the speed changes with bounded
+// acceleration and jerk.
 //
 // Build (needs only the installed header):
 //   g++ -std=c++17 -O2 -shared -fPIC -I<prefix>/include keep_lane.cpp -o libkeep_lane.so
@@ -41,10 +42,10 @@ constexpr double kClearBehindM = 15.0;               // ... and behind, plus clo
 constexpr double kClosingLookS = 4.0;
 constexpr double kChangeDurationS = 3.0;  // checked over the manoeuvre's length
 constexpr int kChangeCooldownCycles = 60;
-constexpr double kMergeConflictM = 20.0;    // a car this near in the lane beyond ...
-constexpr double kLaneChangeRateMps = 0.1;  // ... moving over faster than this x offset / 1 m
-constexpr double kAbortBesideM = 10.0;      // a car this near beside in the target lane: abort
-constexpr double kAbortUntilM = 1.8;        // ... while this near the lane it started from
+constexpr double kMergeConflictM = 20.0;  // a car this near in the lane beyond ...
+constexpr double kMovingOverMps = 0.1;    // ... moving towards it faster than this
+constexpr double kAbortBesideM = 10.0;    // a car this near beside in the target lane: abort
+constexpr double kAbortUntilM = 1.8;      // ... while this near the lane it started from
 // Closer than the standstill gap + this x speed: brake harder than comfort allows.
 constexpr double kEmergencyHeadwayS = 0.5;
 constexpr double kEmergencyAccelMps2 = 7.0;
@@ -201,7 +202,7 @@ struct overtake_plugin_handle {
       const double beyond = c.d - lane_center(l, lane_width);
       if (std::abs(beyond) > 0.5 * lane_width && std::abs(beyond) < 1.5 * lane_width &&
           std::abs(gap) < kMergeConflictM &&
-          beyond * c.d_rate < -kLaneChangeRateMps * std::abs(beyond)) {
+          beyond * c.d_rate < -kMovingOverMps * std::abs(beyond)) {
         return false;
       }
       if (!in_lane(c, l)) continue;
