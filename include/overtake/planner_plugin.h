@@ -122,7 +122,8 @@ typedef struct overtake_telemetry {
 } overtake_telemetry;
 
 /* The path a planner answers: the points the ego drives through, one per step_time, in
- * driving order (the original's next_x, next_y). overtake provides the buffers. */
+ * driving order (the original's next_x, next_y). overtake provides the buffers: write into
+ * them (replacing the pointers fails the cycle). */
 typedef struct overtake_path {
   double* next_x;  /* in: a buffer of `capacity` doubles; out: x of the points, m */
   double* next_y;  /* in: a buffer of `capacity` doubles; out: y of the points, m */

@@ -89,9 +89,13 @@ class PluginPolicy final : public planner::Policy {
       fail("failed (status " + std::to_string(status) +
            "): " + text_or(out.error, "no reason given"));
     }
-    if (out.count > out.capacity) {
+    // Judged by this side's buffers: the plugin may have written over the struct's fields.
+    if (out.next_x != out_x_.data() || out.next_y != out_y_.data()) {
+      fail("replaced the path buffers instead of writing into them");
+    }
+    if (out.count > out_x_.size()) {
       fail("answered " + std::to_string(out.count) + " points, more than the buffers' " +
-           std::to_string(out.capacity));
+           std::to_string(out_x_.size()));
     }
     std::vector<core::Vec2> path;
     path.reserve(out.count);
