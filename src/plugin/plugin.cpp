@@ -1,9 +1,247 @@
 #include "overtake/plugin/plugin.hpp"
 
+#include <dlfcn.h>
+
+#include <cmath>
+#include <cstddef>
+#include <memory>
+#include <utility>
+#include <vector>
+
+#include "overtake/core/units.hpp"
+#include "overtake/core/wire_number.hpp"
+#include "overtake/planner/params.hpp"
+#include "overtake/planner_plugin.h"
+
 namespace overtake::plugin {
+namespace {
+
+using AbiVersionFn = int (*)();
+using InfoFn = const overtake_plugin_info_t* (*)();
+using CreateFn = overtake_plugin_handle* (*)(const overtake_plugin_setup*, const char**);
+using PlanFn = int (*)(overtake_plugin_handle*, const overtake_telemetry*, overtake_path*);
+using DestroyFn = void (*)(overtake_plugin_handle*);
+
+/// The text of a C string the plugin gave, or `fallback` when it gave none.
+std::string text_or(const char* s, const char* fallback) {
+  return s != nullptr && *s != '\0' ? std::string(s) : std::string(fallback);
+}
+
+/// An open library and its functions; dlclose when the last owner goes.
+struct Library {
+  void* dl = nullptr;
+  std::string label;  ///< "plugin NAME (PATH)", for messages
+  CreateFn create = nullptr;
+  PlanFn plan = nullptr;
+  DestroyFn destroy = nullptr;
+
+  Library() = default;
+  Library(const Library&) = delete;
+  Library& operator=(const Library&) = delete;
+  ~Library() {
+    if (dl != nullptr) ::dlclose(dl);
+  }
+};
+
+/// Looks up one required function; PluginError naming it and the file when it is missing.
+template <class Fn>
+Fn symbol(void* dl, const char* name, const std::string& path) {
+  ::dlerror();  // clear
+  void* p = ::dlsym(dl, name);
+  if (p == nullptr) {
+    throw PluginError(path + ": not a planner plugin: the function " + name +
+                      " is missing (see overtake/planner_plugin.h)");
+  }
+  return reinterpret_cast<Fn>(p);  // NOLINT(cppcoreguidelines-pro-type-reinterpret-cast): dlsym
+}
+
+/// How each call is checked and converted: one instance per run.
+class PluginPolicy final : public planner::Policy {
+ public:
+  PluginPolicy(std::shared_ptr<const Library> lib, overtake_plugin_handle* handle)
+      : lib_(std::move(lib)), handle_(handle), out_x_(kMaxPathPoints), out_y_(kMaxPathPoints) {}
+  PluginPolicy(const PluginPolicy&) = delete;
+  PluginPolicy& operator=(const PluginPolicy&) = delete;
+  ~PluginPolicy() override {
+    try {
+      lib_->destroy(handle_);
+    } catch (...) {  // NOLINT(bugprone-empty-catch): a destructor cannot report it
+    }
+  }
+
+  core::PlanResult plan(const core::Telemetry& t) override {
+    const overtake_telemetry in = to_c(t);
+    overtake_path out{};
+    out.next_x = out_x_.data();
+    out.next_y = out_y_.data();
+    out.capacity = out_x_.size();
+    out.count = 0;
+    out.error = nullptr;
+    int status = 0;
+    try {
+      status = lib_->plan(handle_, &in, &out);
+    } catch (const std::exception& e) {
+      fail(std::string("threw an exception: ") + e.what());
+    } catch (...) {
+      fail("threw an exception");
+    }
+    if (status != 0) {
+      fail("failed (status " + std::to_string(status) +
+           "): " + text_or(out.error, "no reason given"));
+    }
+    // Judged by this side's buffers: the plugin may have written over the struct's fields.
+    if (out.next_x != out_x_.data() || out.next_y != out_y_.data()) {
+      fail("replaced the path buffers instead of writing into them");
+    }
+    if (out.count > out_x_.size()) {
+      fail("answered " + std::to_string(out.count) + " points, more than the buffers' " +
+           std::to_string(out_x_.size()));
+    }
+    std::vector<core::Vec2> path;
+    path.reserve(out.count);
+    for (std::size_t i = 0; i < out.count; ++i) {
+      const core::Vec2 p{out_x_[i], out_y_[i]};
+      if (!std::isfinite(p.x) || !std::isfinite(p.y)) {
+        fail("answered a non-finite point (index " + std::to_string(i) + ")");
+      }
+      path.push_back(p);
+    }
+    return core::normal_plan(std::move(path));
+  }
+
+ private:
+  [[noreturn]] void fail(const std::string& what) const {
+    throw PluginError(lib_->label + ": " + what);
+  }
+
+  /// The telemetry in the original's units (yaw in degrees, speed in mph), rounded as the
+  /// original sends them; the arrays live in this policy until the next call.
+  overtake_telemetry to_c(const core::Telemetry& t) {
+    overtake_telemetry c{};
+    c.x = t.ego.position.x;
+    c.y = t.ego.position.y;
+    c.s = t.ego.s_m;
+    c.d = t.ego.d_m;
+    c.yaw = core::wire_round(core::rad_to_deg(t.ego.yaw_rad));
+    c.speed = core::wire_round(core::mps_to_mph(t.ego.speed_mps));
+    prev_x_.clear();
+    prev_y_.clear();
+    for (const core::Vec2& p : t.previous_path) {
+      prev_x_.push_back(p.x);
+      prev_y_.push_back(p.y);
+    }
+    c.previous_path_x = prev_x_.data();
+    c.previous_path_y = prev_y_.data();
+    c.previous_path_count = prev_x_.size();
+    c.end_path_s = t.end_path.s_m;
+    c.end_path_d = t.end_path.d_m;
+    cars_.clear();
+    for (const core::CarObservation& car : t.cars) {
+      cars_.insert(cars_.end(), {static_cast<double>(car.id), car.position.x, car.position.y,
+                                 car.velocity_mps.x, car.velocity_mps.y, car.s_m, car.d_m});
+    }
+    // Rows of OVERTAKE_SF_COLUMNS doubles, back to back: the C side's `double (*)[7]`.
+    c.sensor_fusion = reinterpret_cast<
+        const double(*)
+            [OVERTAKE_SF_COLUMNS]>(  // NOLINT(cppcoreguidelines-pro-type-reinterpret-cast)
+        cars_.data());
+    c.sensor_fusion_count = t.cars.size();
+    return c;
+  }
+
+  std::shared_ptr<const Library> lib_;
+  overtake_plugin_handle* handle_;
+  std::vector<double> prev_x_, prev_y_;
+  std::vector<double> cars_;  ///< sensor fusion rows, flat
+  std::vector<double> out_x_, out_y_;
+};
+
+/// A policy for a plugin whose create failed: every plan fails with the reason, so that the
+/// run ends as planner_failed (a bench goes on with its other runs).
+class FailedPolicy final : public planner::Policy {
+ public:
+  explicit FailedPolicy(std::string why) : why_(std::move(why)) {}
+  core::PlanResult plan(const core::Telemetry& /*telemetry*/) override { throw PluginError(why_); }
+
+ private:
+  std::string why_;
+};
+
+std::unique_ptr<planner::Policy> make_policy(const std::shared_ptr<const Library>& lib,
+                                             const core::ReferenceLine& line,
+                                             const planner::PlannerParams& params) {
+  std::vector<overtake_waypoint> waypoints;
+  for (const core::Waypoint& w : line.map().waypoints) {
+    waypoints.push_back({w.x_m, w.y_m, w.s_m, w.dx, w.dy});
+  }
+  overtake_plugin_setup setup{};
+  setup.waypoints = waypoints.data();
+  setup.waypoint_count = waypoints.size();
+  setup.max_s = line.map().loop_length_m;
+  setup.lane_count = params.road.lane_count;
+  setup.lane_width = params.road.lane_width_m;
+  setup.step_time = params.step_s;
+  setup.config_json = nullptr;
+  const char* error = nullptr;
+  overtake_plugin_handle* handle = nullptr;
+  try {
+    handle = lib->create(&setup, &error);
+  } catch (const std::exception& e) {
+    return std::make_unique<FailedPolicy>(lib->label + ": create threw an exception: " + e.what());
+  } catch (...) {
+    return std::make_unique<FailedPolicy>(lib->label + ": create threw an exception");
+  }
+  if (handle == nullptr) {
+    return std::make_unique<FailedPolicy>(lib->label +
+                                          ": create failed: " + text_or(error, "no reason given"));
+  }
+  return std::make_unique<PluginPolicy>(lib, handle);
+}
+
+}  // namespace
 
 LoadedPlugin load_plugin(const std::filesystem::path& path) {
-  throw PluginError(path.string() + ": plugins are not built yet");
+  const std::string file = path.string();
+  // A bare name would be searched on the library path: a plugin is always a file.
+  const std::string open_as = path.has_parent_path() ? file : "./" + file;
+  auto lib = std::make_shared<Library>();
+  lib->dl = ::dlopen(open_as.c_str(), RTLD_NOW | RTLD_LOCAL);
+  if (lib->dl == nullptr) {
+    const char* why = ::dlerror();
+    throw PluginError(file + ": cannot load: " + text_or(why, "unknown dlopen error"));
+  }
+  const auto version = symbol<AbiVersionFn>(lib->dl, "overtake_plugin_abi_version", file);
+  const auto info = symbol<InfoFn>(lib->dl, "overtake_plugin_info", file);
+  lib->create = symbol<CreateFn>(lib->dl, "overtake_plugin_create", file);
+  lib->plan = symbol<PlanFn>(lib->dl, "overtake_plugin_plan", file);
+  lib->destroy = symbol<DestroyFn>(lib->dl, "overtake_plugin_destroy", file);
+
+  LoadedPlugin loaded;
+  try {
+    const int v = version();
+    if (v != OVERTAKE_PLUGIN_ABI_VERSION) {
+      throw PluginError(file + ": built for plugin ABI version " + std::to_string(v) +
+                        ", but this overtake speaks version " +
+                        std::to_string(OVERTAKE_PLUGIN_ABI_VERSION) +
+                        " (rebuild it against this overtake's overtake/planner_plugin.h)");
+    }
+    const overtake_plugin_info_t* i = info();
+    if (i == nullptr || i->name == nullptr || *i->name == '\0') {
+      throw PluginError(file + ": overtake_plugin_info() gives no name");
+    }
+    loaded.name = i->name;
+    loaded.summary = i->summary != nullptr ? i->summary : "";
+  } catch (const PluginError&) {
+    throw;
+  } catch (...) {
+    throw PluginError(file + ": threw an exception while being loaded");
+  }
+  lib->label = "plugin " + loaded.name + " (" + file + ")";
+  std::shared_ptr<const Library> shared = std::move(lib);
+  loaded.make = [shared](const core::ReferenceLine& line, const planner::PlannerParams& params) {
+    return make_policy(shared, line, params);
+  };
+  return loaded;
 }
 
 }  // namespace overtake::plugin

@@ -2,6 +2,7 @@
 // C++ planner plugins: shared libraries built against the C ABI of
 // include/overtake/planner_plugin.h, loaded with dlopen and wrapped as planner::Policy.
 
+#include <cstddef>
 #include <filesystem>
 #include <stdexcept>
 #include <string>
@@ -9,6 +10,9 @@
 #include "overtake/planner/policy.hpp"
 
 namespace overtake::plugin {
+
+/// How many path points a plugin may answer per cycle (the capacity of its buffers).
+inline constexpr std::size_t kMaxPathPoints = 10'000;
 
 /// A plugin that cannot be loaded or used; the message names the file and what is wrong.
 class PluginError : public std::runtime_error {
@@ -25,6 +29,9 @@ struct LoadedPlugin {
 };
 
 /// Loads the plugin at `path` and checks its version and symbols. Throws PluginError.
+/// The policies it makes throw PluginError from plan() when the plugin fails (a nonzero
+/// status, an exception, a non-finite point, more points than its buffers hold), naming the
+/// plugin and the reason: the run then ends as planner_failed.
 [[nodiscard]] LoadedPlugin load_plugin(const std::filesystem::path& path);
 
 }  // namespace overtake::plugin
