@@ -22,6 +22,20 @@ def comparable(report):
     return r
 
 
+def path_onto_a_car_ahead(t, steps=40):
+    """A straight path from the ego to where the nearest car ahead on the road will be after
+    `steps` steps (the original drops path points behind the car, so the car must be ahead).
+    (car, (xs, ys)), or (None, None) while no car is ahead."""
+    ahead = [c for c in t["sensor_fusion"] if 0 < c[6] < 12 and 0 < c[5] - t["s"] < 200]
+    if not ahead:
+        return None, None
+    car = min(ahead, key=lambda c: c[5] - t["s"])
+    gx, gy = car[1] + car[3] * 0.02 * steps, car[2] + car[4] * 0.02 * steps
+    xs = [t["x"] + (gx - t["x"]) * (i + 1) / steps for i in range(steps)]
+    ys = [t["y"] + (gy - t["y"]) * (i + 1) / steps for i in range(steps)]
+    return car, (xs, ys)
+
+
 @pytest.fixture(scope="session")
 def binary():
     path = os.environ.get("OVERTAKE_BINARY")
