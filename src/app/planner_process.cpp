@@ -14,6 +14,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <chrono>
 #include <csignal>
@@ -133,12 +134,51 @@ double now_ms() {
   return static_cast<double>(ts.tv_sec) * 1e3 + static_cast<double>(ts.tv_nsec) / 1e6;
 }
 
+// The program's output: read from its pipe, written to the log up to a budget; past it the
+// rest is read and dropped (so that the program never blocks on a full pipe), after a line
+// that says so.
+struct LogSink {
+  int pipe = -1;  // read end, non-blocking; -1 once every writer has closed it
+  int file = -1;
+  long long left = 0;
+  bool cut_noted = false;
+};
+
+void drain(LogSink& sink) {
+  static char buf[65536];  // the keeper is single-threaded
+  while (sink.pipe >= 0) {
+    const ssize_t n = ::read(sink.pipe, buf, sizeof buf);
+    if (n == 0) {
+      ::close(sink.pipe);
+      sink.pipe = -1;
+      return;
+    }
+    if (n < 0) {
+      if (errno == EINTR) continue;
+      return;  // EAGAIN: nothing more for now
+    }
+    const long long keep = std::min<long long>(n, sink.left);
+    if (keep > 0) {
+      (void)::write(sink.file, buf, static_cast<std::size_t>(keep));
+      sink.left -= keep;
+    }
+    if (keep < n && !sink.cut_noted) {
+      const char note[] =
+          "\n[overtake: the log is cut here, at its size limit "
+          "(--planner-log-max-mb); the rest of the output was dropped]\n";
+      (void)::write(sink.file, note, sizeof note - 1);
+      sink.cut_noted = true;
+    }
+  }
+}
+
 // Stops the program's process group: SIGTERM, up to `grace_ms` for it to go, then SIGKILL.
 // Returns the program's wait status (kept in `status` when it had already been reaped).
-void stop_group(pid_t program, int grace_ms, bool& reaped, int& status) {
+void stop_group(pid_t program, int grace_ms, bool& reaped, int& status, LogSink& sink) {
   ::kill(-program, SIGTERM);
   const double until = now_ms() + grace_ms;
   while (!reaped && now_ms() < until) {
+    drain(sink);
     if (::waitpid(program, &status, WNOHANG) == program) {
       reaped = true;
       break;
@@ -147,11 +187,13 @@ void stop_group(pid_t program, int grace_ms, bool& reaped, int& status) {
   }
   ::kill(-program, SIGKILL);  // what is left of the group (children of the shell)
   if (!reaped && ::waitpid(program, &status, 0) == program) reaped = true;
+  drain(sink);  // what it wrote last
 }
 
 struct KeeperPlan {
   int control = -1;
   int log = -1;
+  long long log_max_bytes = 0;
   int devnull = -1;
   pid_t parent = 0;
   bool isolated = false;
@@ -181,6 +223,8 @@ struct KeeperPlan {
     }
     if (!loopback_up()) fail(kStepLoopback);
   }
+  int out[2] = {-1, -1};
+  if (::pipe2(out, O_CLOEXEC) != 0) fail(kStepFork);
   const pid_t program = ::fork();
   if (program < 0) fail(kStepFork);
   if (program == 0) {
@@ -188,8 +232,8 @@ struct KeeperPlan {
     ::prctl(PR_SET_PDEATHSIG, SIGKILL);
     ::signal(SIGINT, SIG_DFL);
     ::dup2(p.devnull, 0);
-    ::dup2(p.log, 1);
-    ::dup2(p.log, 2);
+    ::dup2(out[1], 1);
+    ::dup2(out[1], 2);
     if (p.cwd && ::chdir(p.cwd) != 0) {
       const char msg[] = "overtake: cannot enter the planner's working directory\n";
       (void)::write(2, msg, sizeof msg - 1);
@@ -201,21 +245,25 @@ struct KeeperPlan {
     _exit(127);
   }
   ::setpgid(program, program);  // also here: whichever runs first
-  ::close(p.log);
+  ::close(out[1]);
   ::close(p.devnull);
+  ::fcntl(out[0], F_SETFL, ::fcntl(out[0], F_GETFL) | O_NONBLOCK);
+  LogSink sink{out[0], p.log, p.log_max_bytes, false};
   send_message(p.control, kStarted, program);
 
   bool reaped = false;
   int status = 0;
   for (;;) {
     if (!reaped && ::waitpid(program, &status, WNOHANG) == program) reaped = true;
-    pollfd pfd{p.control, POLLIN, 0};
-    const int r = ::poll(&pfd, 1, 50);
+    pollfd pfd[2] = {{p.control, POLLIN, 0}, {sink.pipe, POLLIN, 0}};
+    const int r = ::poll(pfd, sink.pipe >= 0 ? 2 : 1, 50);
     if (r <= 0) continue;
+    if (sink.pipe >= 0 && (pfd[1].revents & (POLLIN | POLLHUP | POLLERR)) != 0) drain(sink);
+    if ((pfd[0].revents & (POLLIN | POLLHUP | POLLERR)) == 0) continue;
     char buf[16];
     const ssize_t n = ::recv(p.control, buf, sizeof buf, 0);
     if (n <= 0) {  // the parent closed its end (or is gone): stop at once
-      stop_group(program, 0, reaped, status);
+      stop_group(program, 0, reaped, status, sink);
       _exit(0);
     }
     if (buf[0] == kSocket) {
@@ -232,7 +280,7 @@ struct KeeperPlan {
     } else if (buf[0] == kStop) {
       int grace_ms = 0;
       if (n >= static_cast<ssize_t>(1 + sizeof(int))) std::memcpy(&grace_ms, buf + 1, sizeof(int));
-      stop_group(program, grace_ms, reaped, status);
+      stop_group(program, grace_ms, reaped, status, sink);
       send_message(p.control, kDone, status);
       _exit(0);
     }
@@ -371,6 +419,7 @@ PlannerProcess::PlannerProcess(const PlannerProcessOptions& o) {
   KeeperPlan plan;
   plan.control = sv[1];
   plan.log = log;
+  plan.log_max_bytes = o.log_max_bytes;
   plan.devnull = devnull;
   plan.parent = ::getpid();
   plan.isolated = o.isolated;

@@ -166,6 +166,11 @@ void add_planner_flags(CLI::App& cmd, PlannerFlags& f, PlannerFlagSet which) {
                  "(one run at a time); isolated: always its own (fail when impossible); host")
       ->check(CLI::IsMember({"auto", "isolated", "host"}))
       ->capture_default_str();
+  cmd.add_option("--planner-log-max-mb", f.log_max_mb,
+                 "Each run's log of a --planner-cmd program is cut at this size (MB); the rest\n"
+                 "of its output is dropped")
+      ->check(CLI::Range(0.0, 1e6))
+      ->capture_default_str();
   if (which == PlannerFlagSet::programs) return;  // sim: --connect-timeout, --reply-timeout
   cmd.add_option("--planner-start-timeout", f.start_timeout_s,
                  "Seconds a --planner-cmd program has to start listening")
@@ -227,6 +232,7 @@ std::shared_ptr<const PlannerCatalog> catalog_from_flags(const PlannerFlags& f) 
     p.start_timeout_s = f.start_timeout_s;
     p.reply_timeout_s = f.reply_timeout_s;
     p.realtime = f.realtime;
+    p.log_max_mb = f.log_max_mb;
     p.network = parse_planner_network(f.network).value_or(PlannerNetwork::automatic);
     e.program = p;
     catalog->add(std::move(e), "--planner-cmd");

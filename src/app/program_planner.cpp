@@ -71,6 +71,7 @@ sim::RunReport run_program(const PlannerEntry& entry, const std::filesystem::pat
   po.cwd = spec.cwd;
   po.log = log;
   po.isolated = isolated;
+  po.log_max_bytes = static_cast<long long>(spec.log_max_mb * 1024.0 * 1024.0);
   PlannerProcess process(po);
   const std::string see_log = " (its output: " + log.string() + ")";
 

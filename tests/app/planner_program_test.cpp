@@ -128,6 +128,29 @@ TEST(PlannerProcessTest, OutputGoesToTheLogAndStopEndsTheWholeGroup) {
   fs::remove(log);
 }
 
+TEST(PlannerProcessTest, ALogIsCutAtItsLimitAndTheProgramIsNotHeldUp) {
+  const fs::path log =
+      fs::temp_directory_path() / ("overtake-cut-" + std::to_string(::getpid()) + ".log");
+  app::PlannerProcessOptions o;
+  o.command = "head -c 3000000 /dev/zero | tr '\\0' x; echo done >&2; exit 4";
+  o.log = log;
+  o.isolated = false;
+  o.log_max_bytes = 1000;
+  app::PlannerProcess p(o);
+  std::string ended;
+  for (int i = 0; i < 1000 && ended.empty(); ++i) {  // it writes 3 MB: it must not block
+    ended = p.ended();
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  EXPECT_EQ(ended, "exited with status 4");
+  p.stop();
+  const std::string text = read_text(log);
+  EXPECT_EQ(text.substr(0, 1000), std::string(1000, 'x'));
+  EXPECT_NE(text.find("the log is cut here"), std::string::npos);
+  EXPECT_LT(text.size(), 1200u);
+  fs::remove(log);
+}
+
 TEST(PlannerProcessTest, AProgramThatExitsSaysHow) {
   const fs::path log =
       fs::temp_directory_path() / ("overtake-exit-" + std::to_string(::getpid()) + ".log");

@@ -7,7 +7,8 @@
 // (when asked), brings up their loopback, starts the program as its own child in a process
 // group of its own, and then serves the parent over a Unix socket pair: it makes TCP sockets
 // inside the namespace (the parent connects them: a socket stays in the namespace it was made
-// in), tells whether the program still runs, and stops it. The keeper dies with the parent
+// in), writes the program's output to the log up to its size limit, tells whether the program
+// still runs, and stops it. The keeper dies with the parent
 // (PR_SET_PDEATHSIG), and the program with the keeper, so a killed bench leaves nothing.
 
 #include <sys/types.h>
@@ -33,7 +34,9 @@ struct PlannerProcessOptions {
   std::string command;        ///< run by /bin/sh -c
   std::filesystem::path cwd;  ///< empty: the current directory
   std::filesystem::path log;  ///< standard output and error (created or truncated)
-  bool isolated = true;       ///< in user + network namespaces of its own
+  /// The log is cut at this size (a line says so); the rest of the output is dropped.
+  long long log_max_bytes = 64LL << 20;
+  bool isolated = true;  ///< in user + network namespaces of its own
 };
 
 /// A running planner program. Not copyable; the destructor stops it.

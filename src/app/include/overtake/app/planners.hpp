@@ -36,7 +36,8 @@ struct ProgramSpec {
   double start_timeout_s = 20.0;  ///< to start listening
   double reply_timeout_s = 5.0;   ///< for each reply
   PlannerNetwork network = PlannerNetwork::automatic;
-  bool realtime = false;  ///< drive it at real time (sim --realtime) instead of lock-step
+  double log_max_mb = 64.0;  ///< each run's log is cut at this size
+  bool realtime = false;     ///< drive it at real time (sim --realtime) instead of lock-step
 };
 
 /// One planner a run can be given.
@@ -84,6 +85,7 @@ struct PlannerFlags {
   double start_timeout_s = 20.0;
   double reply_timeout_s = 5.0;
   std::string network = "auto";
+  double log_max_mb = 64.0;
   bool realtime = false;  ///< not a flag of its own: `sim --realtime`
 };
 
