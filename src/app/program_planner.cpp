@@ -8,11 +8,14 @@
 #include <cmath>
 #include <map>
 #include <mutex>
+#include <thread>
 
 #include "overtake/protocol/client.hpp"
 
 namespace overtake::app {
 namespace {
+
+constexpr auto kPortFreeWait = std::chrono::seconds(3);
 
 std::chrono::milliseconds ms_of(double seconds) {
   return std::chrono::milliseconds(std::max<long long>(1, std::llround(seconds * 1000.0)));
@@ -58,6 +61,11 @@ sim::RunReport run_program(const PlannerEntry& entry, const std::filesystem::pat
   std::unique_lock<std::mutex> turn;
   if (!isolated) {
     turn = std::unique_lock(host_port_lock(spec.port));
+    // The program of the run before may still be going away (a killed process closes its
+    // sockets as it exits, a moment after the signal): a short wait before calling it taken.
+    const auto until = std::chrono::steady_clock::now() + kPortFreeWait;
+    while (port_taken(spec.port) && std::chrono::steady_clock::now() < until)
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
     if (port_taken(spec.port)) {
       return failed_at_start(
           world, run,
