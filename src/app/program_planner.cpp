@@ -16,6 +16,7 @@ namespace overtake::app {
 namespace {
 
 constexpr auto kPortFreeWait = std::chrono::seconds(3);
+constexpr auto kEndedWait = std::chrono::milliseconds(500);
 
 std::chrono::milliseconds ms_of(double seconds) {
   return std::chrono::milliseconds(std::max<long long>(1, std::llround(seconds * 1000.0)));
@@ -117,7 +118,14 @@ sim::RunReport run_program(const PlannerEntry& entry, const std::filesystem::pat
   }
   if (report.outcome.end == sim::RunEnd::planner_failed &&
       report.outcome.reason.find(see_log) == std::string::npos) {
-    const std::string ended = process.ended();
+    // A program that crashed drops the connection as it dies: give its keeper a moment to
+    // see it end, so that the reason can say how.
+    std::string ended = process.ended();
+    const auto until = std::chrono::steady_clock::now() + kEndedWait;
+    while (ended.empty() && std::chrono::steady_clock::now() < until) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(10));
+      ended = process.ended();
+    }
     if (!ended.empty() && report.outcome.reason.find("the planner program") == std::string::npos)
       report.outcome.reason += "; the planner program " + ended;
     report.outcome.reason += see_log;
