@@ -19,12 +19,10 @@
 #include <string>
 #include <vector>
 
-#include "overtake/app/commands.hpp"
-#include "overtake/app/config.hpp"
-#include "overtake/core/random.hpp"
 #include "overtake/planner/policy.hpp"
 #include "overtake/plugin/plugin.hpp"
 #include "overtake/sim/world.hpp"
+#include "recording.hpp"
 
 namespace {
 
@@ -33,33 +31,12 @@ using namespace overtake;
 constexpr double kRecordedS = 60.0;
 constexpr std::uint64_t kSeed = 1;
 
-const app::Track& track() {
-  static const auto t = app::load_track(std::nullopt);
-  return *t;
-}
-
-const app::Config& config() {
-  static const app::Config c = app::default_config();
-  return c;
-}
+using benchmarks::config;
+using benchmarks::track;
 
 const std::vector<core::Telemetry>& recording() {
-  static const std::vector<core::Telemetry> rec = [] {
-    std::vector<core::Telemetry> r;
-    sim::World world(track().map, track().line, config().world, sim::TrafficProfile::faithful,
-                     kSeed);
-    auto policy = planner::make_policy("walkthrough", track().line, config().planner);
-    core::Rng latency(kSeed);
-    const long steps = std::lround(kRecordedS / config().world.step_s);
-    while (world.steps() < steps) {
-      r.push_back(world.telemetry());
-      world.apply_path(policy->plan(r.back()).path);
-      const int k =
-          latency.uniform_int(config().world.min_steps_per_call, config().world.max_steps_per_call);
-      for (int i = 0; i < k; ++i) world.step();
-    }
-    return r;
-  }();
+  static const std::vector<core::Telemetry> rec = benchmarks::record_drive(
+      "walkthrough", sim::TrafficProfile::faithful, kSeed, kSeed, kRecordedS);
   return rec;
 }
 

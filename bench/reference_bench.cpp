@@ -23,6 +23,7 @@
 #include "overtake/planner/policy.hpp"
 #include "overtake/planner/reference/reference_policy.hpp"
 #include "overtake/sim/world.hpp"
+#include "recording.hpp"
 
 namespace {
 
@@ -32,31 +33,16 @@ constexpr double kRecordedS = 180.0;
 constexpr std::uint64_t kSeed = 1;
 constexpr std::uint64_t kLatencyStream = 20;  // as run_drive draws K
 
-const app::Track& track() {
-  static const auto t = app::load_track(std::nullopt);
-  return *t;
-}
-
-const app::Config& config() {
-  static const app::Config c = app::default_config();
-  return c;
-}
+using benchmarks::config;
+using benchmarks::track;
 
 /// The telemetry of every cycle of a recorded drive.
 const std::vector<core::Telemetry>& recording(sim::TrafficProfile profile) {
   static std::map<sim::TrafficProfile, std::vector<core::Telemetry>> cache;
   auto& rec = cache[profile];
-  if (!rec.empty()) return rec;
-  sim::World world(track().map, track().line, config().world, profile, kSeed);
-  auto policy = planner::make_policy("reference", track().line, config().planner);
-  core::Rng latency(core::derive_seed(kSeed, kLatencyStream));
-  const long steps = std::lround(kRecordedS / config().world.step_s);
-  while (world.steps() < steps) {
-    rec.push_back(world.telemetry());
-    world.apply_path(policy->plan(rec.back()).path);
-    const int k =
-        latency.uniform_int(config().world.min_steps_per_call, config().world.max_steps_per_call);
-    for (int i = 0; i < k; ++i) world.step();
+  if (rec.empty()) {
+    rec = benchmarks::record_drive("reference", profile, kSeed,
+                                   core::derive_seed(kSeed, kLatencyStream), kRecordedS);
   }
   return rec;
 }
