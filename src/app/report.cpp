@@ -1,5 +1,6 @@
 #include "overtake/app/report.hpp"
 
+#include <cmath>
 #include <cstdio>
 #include <sstream>
 
@@ -47,6 +48,43 @@ json plan_status_json(const sim::RunReport& r) {
       {"first_reason", r.first_plan_reason.empty() ? json(nullptr) : json(r.first_plan_reason)}};
 }
 
+// A figure that may never have been measured (infinity): null in JSON.
+json finite_or_null(double v) {
+  return std::isfinite(v) ? json(v) : json(nullptr);
+}
+
+json collisions_json(const sim::RunReport& r) {
+  json by_kind = json::object();
+  for (std::size_t k = 0; k < sim::kCollisionKindCount; ++k) {
+    by_kind[std::string(sim::to_string(static_cast<sim::CollisionKind>(k)))] = 0;
+  }
+  int total = 0, at_fault = 0;
+  for (const sim::Incident& i : r.incidents) {
+    if (i.type != sim::IncidentType::collision) continue;
+    ++total;
+    if (!i.collision) continue;
+    by_kind[std::string(sim::to_string(i.collision->kind))] =
+        by_kind[std::string(sim::to_string(i.collision->kind))].get<int>() + 1;
+    if (i.collision->at_fault) ++at_fault;
+  }
+  return {{"total", total}, {"at_fault", at_fault}, {"by_kind", by_kind}};
+}
+
+json safety_json(const sim::RunReport& r) {
+  const sim::SafetySummary& s = r.safety;
+  const double d = r.duration_s;
+  return {{"min_ttc_ahead_s", finite_or_null(s.min_ttc_ahead_s)},
+          {"min_ttc_entering_s", finite_or_null(s.min_ttc_entering_s)},
+          {"min_time_headway_s", finite_or_null(s.min_headway_s)},
+          {"time_ttc_below_s", s.ttc_below_s},
+          {"share_ttc_below", d > 0 ? s.ttc_below_s / d : 0.0},
+          {"time_headway_below_s", s.headway_below_s},
+          {"share_headway_below", d > 0 ? s.headway_below_s / d : 0.0},
+          {"near_miss_episodes", s.near_miss_episodes},
+          {"ttc_threshold_s", s.ttc_threshold_s},
+          {"headway_threshold_s", s.headway_threshold_s}};
+}
+
 std::string printf_string(const char* format, auto... args) {
   char buf[512];
   std::snprintf(buf, sizeof buf, format, args...);
@@ -56,12 +94,17 @@ std::string printf_string(const char* format, auto... args) {
 }  // namespace
 
 json incident_to_json(const sim::Incident& i) {
-  return {{"type", sim::to_string(i.type)},
-          {"t_s", i.t_s},
-          {"s_m", i.s_m},
-          {"lane", i.lane},
-          {"value", report_value(i)},
-          {"unit", value_unit(i.type)}};
+  json j = {{"type", sim::to_string(i.type)},
+            {"t_s", i.t_s},
+            {"s_m", i.s_m},
+            {"lane", i.lane},
+            {"value", report_value(i)},
+            {"unit", value_unit(i.type)}};
+  if (i.collision) {
+    j["kind"] = sim::to_string(i.collision->kind);
+    j["at_fault"] = i.collision->at_fault;
+  }
+  return j;
 }
 
 json report_to_json(const sim::RunReport& r, const RunProvenance& p) {
@@ -79,6 +122,8 @@ json report_to_json(const sim::RunReport& r, const RunProvenance& p) {
   json incidents = json::array();
   for (const sim::Incident& i : r.incidents) incidents.push_back(incident_to_json(i));
   j["incidents"] = incidents;
+  j["collisions"] = collisions_json(r);
+  j["safety"] = safety_json(r);
   j["peak"] = {{"speed_mph", core::mps_to_mph(r.peak.speed_mps)},
                {"acceleration_mps2", r.peak.acceleration_mps2},
                {"jerk_mps3", r.peak.jerk_mps3},
@@ -137,6 +182,33 @@ std::string format_scorecard(const sim::RunReport& r, const RunProvenance& p) {
        << r.incident_counts[i];
   }
   os << ")\n";
+  const json coll = collisions_json(r);
+  if (coll["total"].get<int>() > 0) {
+    os << "  collisions         " << coll["total"].get<int>() << ": at fault "
+       << coll["at_fault"].get<int>() << " (";
+    bool first = true;
+    for (const auto& [kind, n] : coll["by_kind"].items()) {
+      if (n.get<int>() == 0) continue;
+      os << (first ? "" : ", ") << kind << " " << n.get<int>();
+      first = false;
+    }
+    os << ")\n";
+  }
+  {
+    const sim::SafetySummary& s = r.safety;
+    const auto seconds = [](double v) {
+      return std::isfinite(v) ? printf_string("%.2f s", v) : std::string("none");
+    };
+    const double d = r.duration_s > 0 ? r.duration_s : 1.0;
+    os << "  near misses        least TTC ahead " << seconds(s.min_ttc_ahead_s)
+       << ", entering a lane " << seconds(s.min_ttc_entering_s) << ", least headway "
+       << seconds(s.min_headway_s) << "\n";
+    os << printf_string(
+        "                     TTC < %.1f s %.2f%% of the time, headway < %.1f s %.2f%%, %d "
+        "near-miss episode%s\n",
+        s.ttc_threshold_s, 100.0 * s.ttc_below_s / d, s.headway_threshold_s,
+        100.0 * s.headway_below_s / d, s.near_miss_episodes, s.near_miss_episodes == 1 ? "" : "s");
+  }
   if (r.exact_outside_lane !=
       r.incident_counts[static_cast<std::size_t>(sim::IncidentType::outside_lane)]) {
     os << "  outside of lane on the exact d (not the rubric's): " << r.exact_outside_lane << "\n";
@@ -181,9 +253,14 @@ std::string format_scorecard(const sim::RunReport& r, const RunProvenance& p) {
     os << "  first incidents:\n";
     for (std::size_t i = 0; i < r.incidents.size() && i < kShown; ++i) {
       const sim::Incident& inc = r.incidents[i];
-      os << printf_string("    t %8.2f s   s %8.1f m   lane %d   %-16s %.3f %s\n", inc.t_s, inc.s_m,
+      os << printf_string("    t %8.2f s   s %8.1f m   lane %d   %-16s %.3f %s", inc.t_s, inc.s_m,
                           inc.lane, std::string(sim::to_string(inc.type)).c_str(),
                           report_value(inc), value_unit(inc.type));
+      if (inc.collision) {
+        os << "   " << sim::to_string(inc.collision->kind)
+           << (inc.collision->at_fault ? " (at fault)" : " (not at fault)");
+      }
+      os << "\n";
     }
     if (r.incidents.size() > kShown) {
       os << "    ... and " << r.incidents.size() - kShown << " more (see --json)\n";

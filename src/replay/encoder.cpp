@@ -48,6 +48,9 @@ void ReplayEncoder::append_frame(const ReplayFrame& f, std::string& out) {
   for (std::size_t k = 0; k < next_.size(); ++k) put_delta(out, next_[k].at.y, base_[k].y);
   for (std::size_t k = 0; k < next_.size(); ++k) put_delta(out, next_[k].at.yaw, base_[k].yaw);
   for (std::size_t k = 0; k < next_.size(); ++k) put_delta(out, next_[k].at.speed, base_[k].speed);
+  put_u16(out, centiseconds(f.safety.ttc_ahead_s));
+  put_u16(out, centiseconds(f.safety.ttc_entering_s));
+  put_u16(out, centiseconds(f.safety.headway_s));
   cars_.swap(next_);
   end_record(out, at);
 }
@@ -63,6 +66,8 @@ void ReplayEncoder::append_incidents(std::span<const sim::Incident> incidents,
     put_u8(out, static_cast<std::uint8_t>(std::clamp(i.lane, 0, 255)));
     put_i32(out, ego_.x);  // where the ego is (this frame's)
     put_i32(out, ego_.y);
+    put_u8(out, i.collision ? static_cast<std::uint8_t>(i.collision->kind) : kNoCollisionKind);
+    put_u8(out, i.collision && i.collision->at_fault ? 1 : 0);
     end_record(out, iat);
   }
 }

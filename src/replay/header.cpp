@@ -39,6 +39,9 @@ ReplayHeader make_replay_header(const core::ReferenceLine& line, const sim::Worl
   }
   for (std::size_t i = 0; i < sim::kIncidentTypeCount; ++i)
     h.incident_types.push_back(incident_type_name(i));
+  for (std::size_t k = 0; k < sim::kCollisionKindCount; ++k) {
+    h.collision_kinds.emplace_back(sim::to_string(static_cast<sim::CollisionKind>(k)));
+  }
   h.provenance = std::move(provenance);
   return h;
 }
@@ -57,6 +60,7 @@ std::string replay_header_json(const ReplayHeader& h) {
   j["track_length_m"] = h.track_length_m;
   j["lane_lines"] = h.lane_lines;
   j["incident_types"] = h.incident_types;
+  j["collision_kinds"] = h.collision_kinds;
   j["provenance"] = {{"policy", p.policy},
                      {"traffic", p.traffic},
                      {"seed", p.seed},

@@ -73,6 +73,9 @@ ReplayHeader parse_header(const json& j) {
   h.track_length_m = header_value<double>(j, "track_length_m", "");
   h.lane_lines = header_value<std::vector<std::vector<double>>>(j, "lane_lines", "");
   h.incident_types = header_value<std::vector<std::string>>(j, "incident_types", "");
+  if (j.contains("collision_kinds")) {
+    h.collision_kinds = header_value<std::vector<std::string>>(j, "collision_kinds", "");
+  }
   const json& p = j.at("provenance");
   h.provenance.policy = header_value<std::string>(p, "policy", "provenance.");
   h.provenance.traffic = header_value<std::string>(p, "traffic", "provenance.");
@@ -171,6 +174,7 @@ class Decoder {
     }
     st_.step_s = h.step_s;
     incident_types_ = h.incident_types.size();
+    collision_kinds_ = std::min(h.collision_kinds.size(), sim::kCollisionKindCount);
     sink_.header(std::move(h), std::move(text));
   }
 
@@ -393,6 +397,13 @@ class Decoder {
                        c.at.yaw / kYawUnitsPerRad,
                        c.at.speed / kCmPerM};
         }
+        // Added within version 2: TTC ahead, TTC entering a lane, headway (older files: none).
+        f.safety = {};
+        if (r.remaining() >= kFrameSafetyBytes) {
+          f.safety.ttc_ahead_s = seconds_of(r.u16());
+          f.safety.ttc_entering_s = seconds_of(r.u16());
+          f.safety.headway_s = seconds_of(r.u16());
+        }
         ego_ = e;
         cars_.swap(next_);
         st_.last_step = f.step;
@@ -440,6 +451,19 @@ class Decoder {
         i.lane = r.u8();
         i.position.x = r.metres();
         i.position.y = r.metres();
+        if (r.remaining() >= kCollisionClassBytes) {  // added within version 2
+          const std::uint8_t k = r.u8();
+          const std::uint8_t fault = r.u8();
+          if (k != kNoCollisionKind) {
+            if (k >= collision_kinds_ || fault > 1) {
+              bad_record(kind, at,
+                         "collision kind " + std::to_string(k) + " (at fault " +
+                             std::to_string(fault) + ") is not one of the header's " +
+                             std::to_string(collision_kinds_) + " collision_kinds");
+            }
+            i.collision = sim::CollisionClass{static_cast<sim::CollisionKind>(k), fault == 1};
+          }
+        }
         sink_.incident(i);
         return;
       }
@@ -463,6 +487,7 @@ class Decoder {
   std::size_t body_start_ = 0;
   std::size_t inflated_base_ = 0;  // inflated offset of buf[0]
   std::size_t incident_types_ = 0;
+  std::size_t collision_kinds_ = 0;
   bool ended_ = false;
   ReplayFrame frame_;           // reused
   Fixed ego_;                   // the last frame's ego, as stored (zero before the first)

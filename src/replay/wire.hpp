@@ -8,6 +8,7 @@
 #include <climits>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -23,6 +24,11 @@ inline constexpr double kYawUnitsPerRad = 1e4;
 inline constexpr std::size_t kRecordHeadBytes = 5;   // u8 kind, u32 length
 inline constexpr std::size_t kFrameFloatBytes = 36;  // f32 s, d, 4 strict figures, 3 distances
 inline constexpr std::size_t kIncidentBytes = 18;
+// Added within version 2 at the ends of records (older readers skip them):
+inline constexpr std::size_t kFrameSafetyBytes = 6;     // u16 TTC ahead, TTC entering, headway
+inline constexpr std::size_t kCollisionClassBytes = 2;  // u8 collision kind, u8 at fault
+inline constexpr std::uint8_t kNoCollisionKind = 255;   // an incident that is not a collision
+inline constexpr std::uint16_t kNoSeconds = 65535;      // TTC or headway: none (or >= 655.35 s)
 inline constexpr std::size_t kMaxVarintBytes = 5;  // 35 bits: the zigzag of a difference of two i32
 inline constexpr std::size_t kIdCount = 65536;     // car ids are u16
 inline constexpr std::size_t kMaxCars = 255;
@@ -104,6 +110,14 @@ inline std::int16_t yaw_units(double rad) {
 }
 inline std::uint16_t speed_cmps(double mps) {
   return static_cast<std::uint16_t>(fixed(mps, kCmPerM, 0, 65535));
+}
+// A TTC or headway in 0.01 s; none (infinity) and anything from 655.35 s on: kNoSeconds.
+inline std::uint16_t centiseconds(double s) {
+  if (!(s < kNoSeconds / 100.0)) return kNoSeconds;
+  return static_cast<std::uint16_t>(fixed(s, 100.0, 0, kNoSeconds - 1));
+}
+inline double seconds_of(std::uint16_t cs) {
+  return cs == kNoSeconds ? std::numeric_limits<double>::infinity() : cs / 100.0;
 }
 
 // Starts a record; returns where its length goes.

@@ -120,6 +120,18 @@ std::vector<std::string> validate(const WorldParams& p) {
   c.in_range("world.referee.straddle_max_steps", r.straddle_max_steps, 1, 1000000);
   c.in_range("world.referee.latch_steps", r.latch_steps, 1, 1000000);
   c.in_range("world.referee.strict_window_steps", r.strict_window_steps, 1, 1000);
+
+  const auto& s = p.safety;
+  c.in_range("world.safety.stopped_speed_mps", s.stopped_speed_mps, 0.0, 10.0);
+  c.in_range("world.safety.hard_braking_mps2", s.hard_braking_mps2, 0.1, 100.0);
+  c.in_range("world.safety.braking_window_s", s.braking_window_s, p.step_s, 60.0);
+  c.in_range("world.safety.reaction_time_s", s.reaction_time_s, 0.0, 60.0);
+  c.in_range("world.safety.lane_change_window_s", s.lane_change_window_s, 0.0, 60.0);
+  c.in_range("world.safety.lane_overlap_m", s.lane_overlap_m, 0.0, p.road.lane_width_m);
+  c.in_range("world.safety.ttc_threshold_s", s.ttc_threshold_s, 0.0, 60.0);
+  c.in_range("world.safety.headway_threshold_s", s.headway_threshold_s, 0.0, 60.0);
+  c.in_range("world.safety.headway_min_speed_mps", s.headway_min_speed_mps, 0.0, 100.0);
+  c.in_range("world.safety.episode_gap_s", s.episode_gap_s, 0.0, 600.0);
   return out;
 }
 

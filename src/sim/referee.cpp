@@ -93,7 +93,8 @@ core::Vec2 Referee::recent(long back) const {
 void Referee::count(IncidentType type, const EgoFrame& f, double value) {
   const bool per_block = type == IncidentType::max_acceleration || type == IncidentType::max_jerk;
   if (!per_block && latched(type)) return;
-  incidents_.push_back({type, f.t_s, f.s_m, core::lane_of(f.d_m, road_), value});
+  incidents_.push_back({type, f.t_s, f.s_m, core::lane_of(f.d_m, road_), value,
+                        type == IncidentType::collision ? f.collision : std::nullopt});
   latch_until_step_[index_of(type)] = step_ + p_.latch_steps;
   ++counts_[index_of(type)];
   incident_free_m_ = 0.0;

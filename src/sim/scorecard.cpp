@@ -49,15 +49,23 @@ void LaneTracker::observe(double d_m, double dt_s) {
 
 Scorecard::Scorecard(const World& world)
     : referee_(world.params().referee, world.params().step_s, world.params().road),
+      safety_(world.params().safety, world.params().step_s, world.params().road, world.params().car,
+              world.chords().loop_length_m()),
       lanes_(world.params().road),
       step_s_(world.params().step_s) {
+  // The safety monitor's first look: the start, before any step.
+  (void)safety_.observe({world.ego().map_frenet, world.ego().speed_mps}, world.traffic().cars(),
+                        std::nullopt);
   // The rubric's first block compares against the speed before the first step (at rest,
   // unless a scenario starts the ego moving).
   referee_.set_initial_speed(world.ego().speed_mps);
 }
 
 void Scorecard::observe_step(const World& world) {
-  referee_.observe(world.ego_frame());
+  EgoFrame frame = world.ego_frame();
+  frame.collision = safety_.observe({world.ego().map_frenet, world.ego().speed_mps},
+                                    world.traffic().cars(), frame.collided_with);
+  referee_.observe(frame);
   lanes_.observe(world.ego().frenet.d_m, step_s_);
 }
 
@@ -79,6 +87,7 @@ void Scorecard::fill_frame(const World& world, Frame& f) const {
   f.s_m = ego.frenet.s_m;
   f.d_m = ego.frenet.d_m;
   f.strict = referee_.current_strict();
+  f.safety = safety_.current();
   f.distance_m = referee_.distance_m();
   f.incident_free_m = referee_.incident_free_m();
   f.best_incident_free_m = referee_.best_incident_free_m();
@@ -102,6 +111,7 @@ RunReport Scorecard::report(const World& world, RunOutcome outcome, CycleClock c
   r.incident_counts = referee_.counts();
   r.exact_outside_lane = referee_.exact_outside_lane_count();
   r.peak = referee_.peaks();
+  r.safety = safety_.summary();
   r.lane_changes = lanes_.lane_changes();
   r.time_in_lane_s = lanes_.time_in_lane_s();
   r.planner_cycles = static_cast<long>(cycle_us_.count());

@@ -138,7 +138,7 @@ void World::step() {
 
 EgoFrame World::ego_frame() const {
   return {time_s(),        ego_.position, ego_.speed_mps, ego_.map_frenet.s_m, ego_.map_frenet.d_m,
-          ego_.frenet.d_m, contact_};
+          ego_.frenet.d_m, contact_,      std::nullopt};
 }
 
 }  // namespace overtake::sim

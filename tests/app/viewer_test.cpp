@@ -148,6 +148,13 @@ TEST_F(ViewerTest, ARecordedScenarioWithACollisionHasItsIncidentRecord) {
       collision = true;
       EXPECT_FLOAT_EQ(static_cast<float>(replay.incidents[i].value),
                       static_cast<float>(want.value));
+      // Its class, as the report has it: the walkthrough drove into the braking car.
+      ASSERT_TRUE(replay.incidents[i].collision.has_value());
+      EXPECT_EQ(replay.incidents[i].collision, want.collision);
+      EXPECT_EQ(replay.incidents[i].collision->kind, sim::CollisionKind::ego_hit_car_ahead);
+      EXPECT_TRUE(replay.incidents[i].collision->at_fault);
+    } else {
+      EXPECT_FALSE(replay.incidents[i].collision.has_value());
     }
   }
   EXPECT_TRUE(collision);

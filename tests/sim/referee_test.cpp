@@ -50,7 +50,8 @@ struct StraightDriver {
     if (steps == 0 && !from_rest) referee.set_initial_speed(speed_mps);
     x_m += speed_mps * kDt;
     ++steps;
-    referee.observe({steps * kDt, {x_m, 0.0}, speed_mps, x_m, d_m, d_m, collided_with});
+    referee.observe(
+        {steps * kDt, {x_m, 0.0}, speed_mps, x_m, d_m, d_m, collided_with, std::nullopt});
   }
   void hold(double speed_mps, double seconds, double d_m = kLaneCentreD) {
     const long n = std::lround(seconds / kDt);
@@ -258,7 +259,8 @@ TEST(RefereeAcceleration, CircleGivesNormalAcceleration) {
   for (int i = 1; i <= 500; ++i) {
     const double angle = kSpeed * i * kDt / kRadius;
     const core::Vec2 p{kRadius * std::sin(angle), kRadius * (1.0 - std::cos(angle))};
-    r.observe({i * kDt, p, kSpeed, kRadius * angle, kLaneCentreD, kLaneCentreD, std::nullopt});
+    r.observe({i * kDt, p, kSpeed, kRadius * angle, kLaneCentreD, kLaneCentreD, std::nullopt,
+               std::nullopt});
   }
   const double expected = kSpeed * kSpeed / kRadius;  // 2.67 m/s^2
   EXPECT_NEAR(r.peaks().acceleration_mps2, expected, kCircleRelTol * expected);
@@ -296,7 +298,7 @@ TEST(RefereeAcceleration, SustainedHardAccelerationCountsEveryBlock) {
   for (int i = 1; i <= 150; ++i) {  // 3 s at 12 m/s^2
     v += 12.0 * kDt;
     x += v * kDt;
-    r.observe({i * kDt, {x, 0.0}, v, x, kLaneCentreD, kLaneCentreD, std::nullopt});
+    r.observe({i * kDt, {x, 0.0}, v, x, kLaneCentreD, kLaneCentreD, std::nullopt, std::nullopt});
   }
   // Not latched: every block at or over the limit counts. The first block (to 0.2 s)
   // compares its mean speed, 1.32 m/s, with rest: 6.6 m/s^2; the 14 others read 12.
@@ -318,7 +320,7 @@ Referee ramp(double jerk) {
     a += jerk * kDt;
     v += a * kDt;
     x += v * kDt;
-    r.observe({i * kDt, {x, 0.0}, v, x, kLaneCentreD, kLaneCentreD, std::nullopt});
+    r.observe({i * kDt, {x, 0.0}, v, x, kLaneCentreD, kLaneCentreD, std::nullopt, std::nullopt});
   }
   return r;
 }
@@ -442,6 +444,7 @@ TEST(RefereeStrictNow, OnACircleItIsNormal) {
                0.0,
                kLaneCentreD,
                kLaneCentreD,
+               {},
                {}});
   }
   const StrictFigures f = r.current_strict();
@@ -460,7 +463,7 @@ TEST(RefereeAcceleration, BlockCurvatureIsUnsignedLikeTheOriginals) {
   r.set_initial_speed(20.0);
   for (int i = 1; i <= 20; ++i) {
     const core::Vec2 at{0.4 * i, (i % 2 == 0) ? 0.0 : 0.01};
-    r.observe({i * kDt, at, 20.0, at.x, kLaneCentreD, kLaneCentreD, std::nullopt});
+    r.observe({i * kDt, at, 20.0, at.x, kLaneCentreD, kLaneCentreD, std::nullopt, std::nullopt});
   }
   EXPECT_GT(r.peaks().acceleration_mps2, 20.0);
 }
@@ -481,7 +484,7 @@ TEST(RefereeOutsideLane, TheExactDIsCountedBesideTheRubric) {
   for (int i = 1; i <= 100; ++i) {
     x += 20.0 * kDt;
     // The original's d (on the chords) stays in the lane; the exact d crosses the edge.
-    r.observe({i * kDt, {x, 0.0}, 20.0, x, 10.9, 11.4, std::nullopt});
+    r.observe({i * kDt, {x, 0.0}, 20.0, x, 10.9, 11.4, std::nullopt, std::nullopt});
   }
   EXPECT_EQ(count_of(r, IncidentType::outside_lane), 0);
   EXPECT_EQ(r.exact_outside_lane_count(), 2);  // latched like the rubric: steps 1 and 51

@@ -12,6 +12,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <memory>
+#include <optional>
 #include <span>
 #include <stdexcept>
 #include <string>
@@ -73,6 +74,9 @@ struct ReplayHeader {
   /// the last point repeats the first.
   std::vector<std::vector<double>> lane_lines;
   std::vector<std::string> incident_types;  ///< names, indexed by the incident records' type
+  /// Names of the collision kinds, indexed by a collision record's kind (empty in files
+  /// written before collisions were classified).
+  std::vector<std::string> collision_kinds;
   ReplayProvenance provenance;
 };
 
@@ -172,6 +176,8 @@ struct ReplayIncident {
   double s_m = 0.0;
   int lane = 0;
   core::Vec2 position;  ///< where the ego was
+  /// A collision's class (none in files written before collisions were classified).
+  std::optional<sim::CollisionClass> collision;
 };
 
 /// A whole replay, decoded.

@@ -7,6 +7,7 @@
 
 #include "overtake/core/geometry.hpp"
 #include "overtake/sim/referee.hpp"
+#include "overtake/sim/safety.hpp"
 
 namespace overtake::sim {
 
@@ -28,6 +29,7 @@ struct Frame {
   double s_m = 0.0;  ///< on the reference line
   double d_m = 0.0;
   StrictFigures strict;  ///< the referee's strict figures at this step
+  SafetyFigures safety;  ///< TTC and headway at this step (infinity: none)
   double distance_m = 0.0;
   double incident_free_m = 0.0;
   double best_incident_free_m = 0.0;

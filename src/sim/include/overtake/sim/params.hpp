@@ -9,6 +9,7 @@
 #include "overtake/core/road.hpp"
 #include "overtake/core/step.hpp"
 #include "overtake/core/units.hpp"
+#include "overtake/sim/safety.hpp"
 
 namespace overtake::sim {
 
@@ -151,6 +152,7 @@ struct WorldParams {
   EgoParams ego;
   TrafficParams traffic;
   RefereeParams referee;
+  SafetyParams safety;  ///< whose fault a collision was, near misses (safety.hpp)
   /// Round what the planner sees and what it sends as the original's wire format does.
   bool wire_rounding = true;
   int min_steps_per_call = 1;  ///< (ours) lock-step latency K drawn from [min, max]
@@ -283,6 +285,20 @@ void describe(V& v, RefereeParams& p) {
 }
 
 template <class V>
+void describe(V& v, SafetyParams& p) {
+  v("stopped_speed_mps", p.stopped_speed_mps);
+  v("hard_braking_mps2", p.hard_braking_mps2);
+  v("braking_window_s", p.braking_window_s);
+  v("reaction_time_s", p.reaction_time_s);
+  v("lane_change_window_s", p.lane_change_window_s);
+  v("lane_overlap_m", p.lane_overlap_m);
+  v("ttc_threshold_s", p.ttc_threshold_s);
+  v("headway_threshold_s", p.headway_threshold_s);
+  v("headway_min_speed_mps", p.headway_min_speed_mps);
+  v("episode_gap_s", p.episode_gap_s);
+}
+
+template <class V>
 void describe(V& v, WorldParams& p) {
   v("step_s", p.step_s);
   v("wire_rounding", p.wire_rounding);
@@ -291,6 +307,7 @@ void describe(V& v, WorldParams& p) {
   v.section("ego", p.ego);
   v.section("traffic", p.traffic);
   v.section("referee", p.referee);
+  v.section("safety", p.safety);
 }
 
 }  // namespace overtake::sim

@@ -10,6 +10,7 @@
 #include "overtake/core/geometry.hpp"
 #include "overtake/core/road.hpp"
 #include "overtake/sim/params.hpp"
+#include "overtake/sim/safety.hpp"
 
 namespace overtake::sim {
 
@@ -28,6 +29,8 @@ struct Incident {
   /// What crossed the limit: speed (m/s), acceleration (m/s^2), jerk (m/s^3), d (m; for a
   /// straddle, the d at the moment it counted), or for a collision the other car's id.
   double value = 0.0;
+  /// For a collision: its class, decided at the contact's first step (safety.hpp).
+  std::optional<CollisionClass> collision;
   friend bool operator==(const Incident&, const Incident&) = default;
 };
 
@@ -41,6 +44,8 @@ struct EgoFrame {
   double exact_d_m = 0.0;  ///< on the reference line: the extra figure
   /// Id of a car whose body touched the ego's this step, if any.
   std::optional<int> collided_with;
+  /// The class of that contact (the scorecard's safety monitor decides it).
+  std::optional<CollisionClass> collision;
 };
 
 /// Peaks under both rule sets (SI).

@@ -14,6 +14,7 @@
 #include "overtake/core/road.hpp"
 #include "overtake/sim/frame.hpp"
 #include "overtake/sim/referee.hpp"
+#include "overtake/sim/safety.hpp"
 
 namespace overtake::sim {
 
@@ -81,6 +82,8 @@ struct RunReport {
   Peaks peak;
   int lane_changes = 0;
   std::vector<double> time_in_lane_s;  ///< index = lane
+  /// Near misses: least TTC and headway, time below their thresholds, episodes.
+  SafetySummary safety;
   PlannerTiming timing;
   long planner_cycles = 0;
   /// Cycles by how the planner found its path (indexed by core::PlanStatus), and the reason
@@ -113,12 +116,14 @@ class Scorecard {
  public:
   explicit Scorecard(const World& world);
 
-  /// After each world step: the referee and the lane tracker see the ego.
+  /// After each world step: the safety monitor sees the ego and the cars (and classifies a
+  /// contact), then the referee and the lane tracker see the ego.
   void observe_step(const World& world);
   /// After each planner cycle: its status, its time on the run's clock and on the wall clock.
   void count_cycle(const core::PlanResult& plan, double cycle_us, double wall_us);
 
   [[nodiscard]] const Referee& referee() const { return referee_; }
+  [[nodiscard]] const SafetyMonitor& safety() const { return safety_; }
   /// The world's state and the running figures, as a frame for those who watch (`out` is
   /// reused, so that a long run does not allocate per step).
   void fill_frame(const World& world, Frame& out) const;
@@ -127,6 +132,7 @@ class Scorecard {
 
  private:
   Referee referee_;
+  SafetyMonitor safety_;
   LaneTracker lanes_;
   double step_s_;
   // Timing in fixed memory: a 7-day run has 15 million cycles.
