@@ -6,6 +6,8 @@
 - ``drive``: a whole drive in C++ with a Python callable (or a built-in policy) as the planner;
   returns the report ``overtake drive --json`` writes.
 - ``builtin_policy``: a built-in policy as a Python callable (telemetry dict in, path out).
+- ``compare``: two ``overtake bench`` output folders compared run for run (``overtake
+  compare``); ``bench_summary``: a bench folder's figures with their intervals.
 
 The telemetry is a dict with the original simulator's fields and units: x, y, s, d (m), yaw
 (degrees), speed (mph), previous_path_x/_y, end_path_s/_d, sensor_fusion (rows [id, x, y,
@@ -17,9 +19,12 @@ import os
 
 from ._overtake import BuiltinPolicy, policies
 from ._overtake import World as _World
+from ._overtake import bench_summary as _bench_summary
+from ._overtake import compare as _compare
 from ._overtake import drive as _drive
 
-__all__ = ["World", "Env", "drive", "builtin_policy", "policies", "BuiltinPolicy", "STEP_S"]
+__all__ = ["World", "Env", "drive", "builtin_policy", "policies", "BuiltinPolicy", "compare",
+           "bench_summary", "STEP_S"]
 
 STEP_S = 0.02
 """The simulator's step time, seconds."""
@@ -67,6 +72,33 @@ def drive(policy, map=None, seed=1, traffic="faithful", minutes=30.0, config=Non
     """
     return _drive(policy, map=_path(map), seed=seed, traffic=traffic, minutes=float(minutes),
                   config=_path(config), steps_per_call=steps_per_call, name=name)
+
+
+def compare(before, after, pairs=None, figures=None):
+    """Compares two ``overtake bench --out`` folders as ``overtake compare`` does and returns
+    the result as a dict: "comparisons" (per policy and traffic profile: "seeds" paired and
+    "figures", each with "base", "candidate", "difference", "ci" [lo, hi],
+    "probability_of_improvement" and "verdict": "better", "worse" or "no difference"),
+    "worse" (the figures that got significantly worse) and "notes".
+
+    pairs: {old: new} or ["OLD=NEW", ...] to compare policies of other names (default: every
+    policy both ran, by name). figures: names to compare, e.g. ["mean_speed_mph",
+    "at_fault_collisions_per_100mi"] (default: all). A bad pair or figure raises ValueError;
+    a folder without a bench, or runs that are not pairs (another map), RuntimeError.
+    """
+    if isinstance(pairs, dict):
+        pairs = [f"{old}={new}" for old, new in pairs.items()]
+    if figures is not None and not isinstance(figures, str):
+        figures = ",".join(figures)
+    return _compare(os.fspath(before), os.fspath(after), list(pairs or []), figures)
+
+
+def bench_summary(folder):
+    """A bench output folder's evaluation, as summary.json holds it: "rows" (per policy and
+    traffic profile, figures with 95% intervals, collisions by kind and at fault, near
+    misses, seeds to halve each interval) and "pairs" (every two policies on the same
+    seeds), computed anew from its runs.jsonl."""
+    return _bench_summary(os.fspath(folder))
 
 
 def builtin_policy(name, map=None, config=None):

@@ -80,9 +80,10 @@ Subcommand register_bench(CLI::App& app) {
   st->spec.jobs = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   auto* cmd = app.add_subcommand(
       "bench",
-      "Run every combination of policies x traffic profiles x seeds in parallel and summarise "
-      "them\n"
-      "(runs.jsonl, summary.csv, summary.md in --out). `overtake bench merge` joins shards.");
+      "Run every combination of policies x traffic profiles x seeds in parallel and summarise\n"
+      "them with 95% intervals, at-fault collisions, near misses and paired comparisons of\n"
+      "the policies (runs.jsonl, summary.md, summary.csv, summary.json, pairs.csv in --out).\n"
+      "`overtake bench merge` joins shards; `overtake compare` compares two benches.");
   st->policies_opt = cmd->add_option("--policies", st->policies,
                                      "Comma-separated policies (built-in ones, and the names of\n"
                                      "planners brought by the flags below). Default: every\n"
@@ -215,7 +216,7 @@ Subcommand register_bench(CLI::App& app) {
               "minute\n",
               o.runs_done, o.runs_new, o.wall_s, spec.jobs, hours_per_minute);
           std::cout << "written: " << spec.out.string()
-                    << "/{runs.jsonl,summary.csv,summary.md,bench.json}\n";
+                    << "/{runs.jsonl,summary.md,summary.csv,summary.json,pairs.csv,bench.json}\n";
           for (const auto& r : o.replays) std::cout << "replay: " << r.string() << "\n";
         }
         if (!st->html.empty()) {

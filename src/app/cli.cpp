@@ -340,8 +340,9 @@ int run_cli(int argc, const char* const* argv) {
   app.require_subcommand(1);
   app.set_version_flag("--version", "overtake " + overtake_version());
   const std::vector<Subcommand> commands{
-      register_drive(app), register_track(app), register_config(app), register_bench(app),
-      register_serve(app), register_sim(app),   register_view(app),   register_calibrate(app)};
+      register_drive(app), register_track(app),   register_config(app),
+      register_bench(app), register_compare(app), register_serve(app),
+      register_sim(app),   register_view(app),    register_calibrate(app)};
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -123,8 +123,11 @@ json bench_report_object(const fs::path& bench_out, const fs::path& html_dir) {
     with_links.push_back(std::move(r));
   }
   out["runs"] = std::move(with_links);
-  out["summary"] = summarize_bench(runs, out.at("policies").get<std::vector<std::string>>(),
-                                   out.at("traffic").get<std::vector<std::string>>());
+  BenchSummary summary = summarize_bench(runs, out.at("policies").get<std::vector<std::string>>(),
+                                         out.at("traffic").get<std::vector<std::string>>(),
+                                         (bench_out / "runs.jsonl").string());
+  out["summary"] = std::move(summary.rows);
+  out["pairs"] = std::move(summary.pairs);
   return out;
 }
 

@@ -1,6 +1,7 @@
 // The Python module `overtake._overtake` (wrapped by python/overtake/__init__.py): the world
 // stepped from Python (World), whole drives with a Python callable as the planner (drive),
-// and the built-in policies as callables (builtin_policy). An edge like the command line: it
+// the built-in policies as callables (builtin_policy), and a bench folder's evaluation
+// (bench_summary, compare). An edge like the command line: it
 // drives the world through the same stepper and the same drive as `overtake drive`.
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
@@ -12,10 +13,12 @@
 #include <optional>
 #include <string>
 
+#include "overtake/app/bench.hpp"
 #include "overtake/app/commands.hpp"
 #include "overtake/app/config.hpp"
 #include "overtake/app/report.hpp"
 #include "overtake/core/map.hpp"
+#include "overtake/eval/summary.hpp"
 #include "overtake/planner/policy.hpp"
 #include "overtake/python/bridge.hpp"
 #include "overtake/python/python_policy.hpp"
@@ -340,6 +343,43 @@ PYBIND11_MODULE(_overtake, m) {
   m.def("drive", &drive, py::arg("policy"), py::arg("map") = py::none(), py::arg("seed") = 1,
         py::arg("traffic") = "faithful", py::arg("minutes") = 30.0, py::arg("config") = py::none(),
         py::arg("steps_per_call") = py::none(), py::arg("name") = py::none());
+
+  // A usage error (a --pair naming no policy, an unknown figure) is a ValueError; a folder
+  // that holds no bench, or benches whose runs are not pairs, a RuntimeError.
+  m.def(
+      "compare",
+      [](const std::string& before, const std::string& after, const std::vector<std::string>& pairs,
+         const std::optional<std::string>& figures) {
+        eval::CompareOptions o;
+        try {
+          for (const auto& p : pairs) o.pairs.push_back(app::parse_policy_pair(p));
+          if (figures) o.metrics = app::parse_metric_list(*figures);
+          return to_python(app::compare_bench_folders(before, after, o));
+        } catch (const app::UsageError& e) {
+          throw py::value_error(e.what());
+        }
+      },
+      py::arg("before"), py::arg("after"), py::arg("pairs") = std::vector<std::string>{},
+      py::arg("figures") = py::none());
+
+  m.def(
+      "bench_summary",
+      [](const std::string& folder) {
+        std::vector<std::string> notes;
+        const eval::BenchData b = app::load_bench_for_compare(folder, notes);
+        std::vector<std::string> traffic;
+        if (b.manifest.contains("traffic") && b.manifest["traffic"].is_array()) {
+          for (const auto& t : b.manifest["traffic"]) traffic.push_back(t.get<std::string>());
+        }
+        std::vector<std::string> policies;
+        if (b.manifest.contains("policies") && b.manifest["policies"].is_array()) {
+          for (const auto& p : b.manifest["policies"]) policies.push_back(p.get<std::string>());
+        }
+        const nlohmann::json rows = eval::summarize(b.runs, policies, traffic);
+        const nlohmann::json pairs = eval::pair_policies(b.runs, policies, traffic);
+        return to_python(nlohmann::json{{"rows", rows}, {"pairs", pairs}, {"notes", notes}});
+      },
+      py::arg("folder"));
 
   m.def("policies", [] {
     py::dict d;

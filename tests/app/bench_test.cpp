@@ -9,7 +9,10 @@
 
 #include "overtake/app/bench.hpp"
 #include "overtake/app/commands.hpp"
+#include "overtake/app/config.hpp"
 #include "overtake/app/io.hpp"
+#include "overtake/eval/summary.hpp"
+#include "process_support.hpp"
 
 namespace overtake::app {
 namespace {
@@ -63,7 +66,7 @@ class BenchTest : public ::testing::Test {
     std::ifstream in(dir / "runs.jsonl");
     std::string line;
     while (std::getline(in, line)) runs.push_back(json::parse(line));
-    json rows = summarize_bench(runs, {"walkthrough", "seed001"}, {"faithful"});
+    json rows = summarize_bench(runs, {"walkthrough", "seed001"}, {"faithful"}, "runs").rows;
     for (auto& r : rows) r.erase("timing");
     return rows;
   }
@@ -87,6 +90,76 @@ TEST_F(BenchTest, SameRunsTwiceAndWithOneOrTwoJobs) {
   EXPECT_TRUE(fs::exists(a.out / "summary.csv"));
   EXPECT_TRUE(fs::exists(a.out / "summary.md"));
   EXPECT_THAT(read_file(a.out / "summary.md"), HasSubstr("| seed001 | faithful | 2 |"));
+  // The evaluation, intervals and pairs included, is the same whatever the order in which the
+  // runs finished (apart from the planners' timing).
+  EXPECT_EQ(read_file(a.out / "pairs.csv"), read_file(b.out / "pairs.csv"));
+  EXPECT_EQ(read_file(a.out / "pairs.csv"), read_file(c.out / "pairs.csv"));
+  const auto untimed = [](const fs::path& dir) {
+    json s = json::parse(read_file(dir / "summary.json"));
+    for (auto& r : s["rows"]) r.erase("timing");
+    return s.dump();
+  };
+  EXPECT_EQ(untimed(a.out), untimed(b.out));
+  EXPECT_EQ(untimed(a.out), untimed(c.out));
+  const json pairs = json::parse(read_file(a.out / "summary.json"))["pairs"];
+  ASSERT_EQ(pairs.size(), 1u);
+  EXPECT_EQ(pairs[0]["policy"], "walkthrough");
+  EXPECT_EQ(pairs[0]["versus"], "seed001");
+  EXPECT_EQ(pairs[0]["seeds"], 2);
+}
+
+// `overtake compare`: a second identical bench is no difference (exit 0 even with
+// --fail-if-worse); a slower planner fails --fail-if-worse; folders that are not benches, or
+// benches that cannot be paired, fail with a message; bad flags are usage errors.
+TEST_F(BenchTest, CompareTellsNoDifferenceFromWorse) {
+  BenchSpec a = spec("a");
+  a.policies = {"reference"};
+  a.seeds = {1, 2, 3, 4, 5};
+  BenchSpec b = a;
+  b.out = root_ / "b";
+  BenchSpec slow = a;
+  slow.out = root_ / "slow";
+  json config = config_to_json(default_config());
+  config["planner"]["reference"]["behaviour"]["cruise_speed_mps"] = 17.0;
+  write_file_atomic(root_ / "slow.json", config.dump());
+  slow.config = root_ / "slow.json";
+  BenchSpec other_map = a;
+  other_map.out = root_ / "other";
+  other_map.minutes = 0.5;
+  for (const BenchSpec* s : {&a, &b, &slow, &other_map}) (void)run_bench(*s, nullptr, {});
+
+  const auto compare = [&](std::vector<std::string> args) {
+    args.insert(args.begin(), "compare");
+    const pid_t pid = test::start_overtake(args, root_ / "out.txt", root_ / "err.txt");
+    const auto status = test::exit_status(pid, std::chrono::minutes(2));
+    return std::make_pair(status.value_or(-1),
+                          read_file(root_ / "out.txt") + read_file(root_ / "err.txt"));
+  };
+  auto [same, same_text] = compare({a.out, b.out, "--fail-if-worse"});
+  EXPECT_EQ(same, 0) << same_text;
+  EXPECT_THAT(same_text, HasSubstr("No figure got significantly worse."));
+  EXPECT_THAT(same_text, HasSubstr("no difference"));
+  EXPECT_THAT(same_text, ::testing::Not(HasSubstr(" worse\n")));
+
+  auto [worse, worse_text] =
+      compare({a.out, slow.out, "--fail-if-worse", "--json", root_ / "cmp.json"});
+  EXPECT_EQ(worse, 1) << worse_text;
+  EXPECT_THAT(worse_text, HasSubstr("reference / faithful: mean_speed_mph"));
+  const json cmp = json::parse(read_file(root_ / "cmp.json"));
+  EXPECT_EQ(cmp["comparisons"][0]["figures"]["mean_speed_mph"]["verdict"], "worse");
+  EXPECT_EQ(compare({a.out, slow.out}).first, 0);  // reported, not failed, without the flag
+
+  auto [unpaired, unpaired_text] = compare({a.out, other_map.out});
+  EXPECT_EQ(unpaired, 1);
+  EXPECT_THAT(unpaired_text, HasSubstr("different durations (minutes)"));
+  auto [missing, missing_text] = compare({a.out, root_ / "nothing"});
+  EXPECT_EQ(missing, 1);
+  EXPECT_THAT(missing_text, HasSubstr("no such folder"));
+  EXPECT_EQ(compare({a.out, b.out, "--pair", "reference"}).first, 2);
+  EXPECT_EQ(compare({a.out, b.out, "--pair", "reference=other"}).first, 2);
+  auto [figures, figures_text] = compare({a.out, b.out, "--figures", "speed"});
+  EXPECT_EQ(figures, 2);
+  EXPECT_THAT(figures_text, HasSubstr("unknown figure 'speed' (known: mean_speed_mph"));
 }
 
 TEST_F(BenchTest, EachLineCarriesProvenance) {
@@ -297,16 +370,22 @@ TEST(BenchSummary, PlanStatusesAndEarlyEndsAreSummed) {
   json old = with;
   old.erase("plan_status");
   old["ended_early"] = "planner failed at t = 1.000000 s: gone";
-  const json rows = summarize_bench({with, old}, {"walkthrough"}, {"faithful"});
+  // The old row also predates collision classes and near misses.
+  old.erase("collisions");
+  old.erase("safety");
+  const json rows = summarize_bench({with, old}, {"walkthrough"}, {"faithful"}, "runs").rows;
   ASSERT_EQ(rows.size(), 1u);
   const json& share = rows[0]["plan_status_share"];
   EXPECT_DOUBLE_EQ(share["fallback"].get<double>(), 0.1);  // 200 of 2000 cycles
   EXPECT_EQ(share["least_bad"].get<double>(), 0.0);
   EXPECT_NEAR(share["normal"].get<double>(), 1.0 - share["fallback"].get<double>(), 1e-12);
   EXPECT_EQ(rows[0]["runs_ended_early"], 1);
-  EXPECT_THAT(summary_markdown(rows), HasSubstr("| 0.0% / 10.0% | 1 |"));
-  EXPECT_THAT(summary_csv(rows),
+  EXPECT_THAT(eval::summary_markdown(rows, json::array()), HasSubstr("| 0.0% / 10.0% | 1 |"));
+  EXPECT_THAT(eval::summary_csv(rows),
               HasSubstr("least_bad_cycle_share,fallback_cycle_share,runs_ended_early"));
+  // Without classes in every row there are no at-fault figures, nor near misses.
+  EXPECT_TRUE(rows[0]["collisions"]["at_fault"].is_null());
+  EXPECT_TRUE(rows[0]["near_misses"].is_null());
 }
 
 }  // namespace

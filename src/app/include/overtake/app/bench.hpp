@@ -1,7 +1,9 @@
 #pragma once
 // `overtake bench`: every combination of policies x traffic profiles x seeds, in parallel,
 // each run independent and deterministic; results kept run by run (runs.jsonl), summarised
-// per policy and profile (summary.csv, summary.md). Shards split a sweep across machines;
+// per policy and profile with intervals, and paired between policies (summary.md,
+// summary.csv, summary.json, pairs.csv; the figures are overtake::eval's). Shards split a
+// sweep across machines;
 // `merge` joins them into the same summary as one unsharded run.
 
 #include <atomic>
@@ -16,6 +18,7 @@
 #include <nlohmann/json.hpp>
 
 #include "overtake/app/planners.hpp"
+#include "overtake/eval/compare.hpp"
 
 namespace overtake::app {
 
@@ -65,6 +68,13 @@ struct BenchProgress {
   double wall_s = 0.0;
 };
 
+/// A bench's evaluation: the summary rows (one per policy and traffic profile, in sweep
+/// order, with intervals) and the paired comparisons of every two policies.
+struct BenchSummary {
+  nlohmann::json rows;
+  nlohmann::json pairs;
+};
+
 /// What a bench produced.
 struct BenchOutcome {
   std::size_t runs_done = 0;  ///< runs in runs.jsonl (including resumed ones)
@@ -73,14 +83,15 @@ struct BenchOutcome {
   double wall_s = 0.0;
   double simulated_s = 0.0;                    ///< simulated by this call
   std::string summary_markdown;                ///< also written to summary.md
+  BenchSummary summary;                        ///< also written to summary.json, .csv, pairs.csv
   std::vector<std::filesystem::path> replays;  ///< recorded by record_worst (merge: copied)
 };
 
 /// Checks everything before any run starts (UsageError / ConfigError / MapError), then runs
 /// the spec's shard on `jobs` threads, writing out/runs.jsonl as runs finish (so an
 /// interrupted bench keeps every finished run) and, at the end, runs.jsonl in sweep order,
-/// summary.csv, summary.md and bench.json. `stop` (may be null) is polled: when set, runs in
-/// progress are abandoned and the finished ones kept.
+/// summary.md, summary.csv, summary.json, pairs.csv and bench.json. `stop` (may be null) is polled:
+/// when set, runs in progress are abandoned and the finished ones kept.
 [[nodiscard]] BenchOutcome run_bench(const BenchSpec& spec, const std::atomic<bool>* stop,
                                      const std::function<void(const BenchProgress&)>& progress);
 
@@ -92,14 +103,32 @@ struct BenchOutcome {
                                        const std::filesystem::path& out);
 
 /// The runs of a bench output folder (runs.jsonl), in sweep order; unreadable lines are
-/// dropped.
-[[nodiscard]] std::vector<nlohmann::json> load_bench_runs(const std::filesystem::path& dir);
+/// dropped (counted in `dropped` when given).
+[[nodiscard]] std::vector<nlohmann::json> load_bench_runs(const std::filesystem::path& dir,
+                                                          std::size_t* dropped = nullptr);
 
-/// The summary rows (one per policy and traffic profile, in sweep order) of a set of runs.
-[[nodiscard]] nlohmann::json summarize_bench(const std::vector<nlohmann::json>& runs,
-                                             const std::vector<std::string>& policies,
-                                             const std::vector<std::string>& traffic);
-[[nodiscard]] std::string summary_csv(const nlohmann::json& rows);
-[[nodiscard]] std::string summary_markdown(const nlohmann::json& rows);
+/// The evaluation of a set of runs (rows of runs.jsonl; sorted into sweep order here). Throws
+/// UsageError naming `where` and the key when a row lacks what the summary needs.
+[[nodiscard]] BenchSummary summarize_bench(std::vector<nlohmann::json> runs,
+                                           const std::vector<std::string>& policies,
+                                           const std::vector<std::string>& traffic,
+                                           const std::string& where);
+
+/// A bench output folder read for `overtake compare`: its manifest and runs. Throws
+/// std::runtime_error naming the folder when it holds no bench (no bench.json or runs.jsonl)
+/// or a row cannot be read; `notes` gets what the comparison should say (an unfinished bench, lines
+/// dropped).
+[[nodiscard]] eval::BenchData load_bench_for_compare(const std::filesystem::path& dir,
+                                                     std::vector<std::string>& notes);
+
+/// `overtake compare`: the benches in two output folders compared (eval::compare_benches),
+/// with the notes of loading them added to the result's "notes".
+[[nodiscard]] nlohmann::json compare_bench_folders(const std::filesystem::path& base,
+                                                   const std::filesystem::path& candidate,
+                                                   const eval::CompareOptions& options);
+/// Parses "OLD=NEW" (a --pair). Throws UsageError naming --pair.
+[[nodiscard]] eval::PolicyPair parse_policy_pair(const std::string& text);
+/// Parses a comma-separated list of metric names (--figures). Throws UsageError naming them.
+[[nodiscard]] std::vector<eval::Metric> parse_metric_list(const std::string& text);
 
 }  // namespace overtake::app

@@ -1,0 +1,113 @@
+// `overtake compare BEFORE AFTER`: two bench output folders compared, run for run on the same
+// seeds, with every figure's change, its 95% interval and whether it is beyond noise;
+// `--fail-if-worse` turns a significant worsening into exit status 1 for a planner's CI.
+
+#include <iostream>
+#include <set>
+#include <sstream>
+
+#include "overtake/app/bench.hpp"
+#include "overtake/app/cli.hpp"
+#include "overtake/app/commands.hpp"
+#include "overtake/app/io.hpp"
+
+namespace overtake::app {
+
+eval::PolicyPair parse_policy_pair(const std::string& text) {
+  const auto eq = text.find('=');
+  if (eq == std::string::npos || eq == 0 || eq + 1 == text.size() ||
+      text.find('=', eq + 1) != std::string::npos) {
+    throw UsageError("--pair: '" + text +
+                     "' is not OLD=NEW (a policy of the first bench = one of the second)");
+  }
+  return {text.substr(0, eq), text.substr(eq + 1)};
+}
+
+std::vector<eval::Metric> parse_metric_list(const std::string& text) {
+  std::vector<eval::Metric> out;
+  std::stringstream ss(text);
+  std::string name;
+  while (std::getline(ss, name, ',')) {
+    if (name.empty()) continue;
+    const auto m = eval::parse_metric(name);
+    if (!m) {
+      std::string known;
+      for (const eval::Metric k : eval::all_metrics()) {
+        known += (known.empty() ? "" : ", ") + std::string(eval::info(k).name);
+      }
+      throw UsageError("--figures: unknown figure '" + name + "' (known: " + known + ")");
+    }
+    if (std::find(out.begin(), out.end(), *m) == out.end()) out.push_back(*m);
+  }
+  if (out.empty()) throw UsageError("--figures: no figure given");
+  return out;
+}
+
+nlohmann::json compare_bench_folders(const std::filesystem::path& base,
+                                     const std::filesystem::path& candidate,
+                                     const eval::CompareOptions& options) {
+  std::vector<std::string> notes;
+  const eval::BenchData a = load_bench_for_compare(base, notes);
+  const eval::BenchData b = load_bench_for_compare(candidate, notes);
+  nlohmann::json result;
+  try {
+    result = eval::compare_benches(a, b, options);
+  } catch (const eval::NotComparable& e) {
+    throw std::runtime_error(e.what());
+  } catch (const std::invalid_argument& e) {
+    throw UsageError(std::string("--pair: ") + e.what());
+  }
+  for (auto it = notes.rbegin(); it != notes.rend(); ++it) {
+    result["notes"].insert(result["notes"].begin(), *it);
+  }
+  return result;
+}
+
+Subcommand register_compare(CLI::App& app) {
+  struct State {
+    std::string before, after, figures, json;
+    std::vector<std::string> pairs;
+    bool fail_if_worse = false;
+    bool quiet = false;
+  };
+  auto st = std::make_shared<State>();
+  auto* cmd = app.add_subcommand(
+      "compare",
+      "Compare two bench output folders (before and after a change to a planner): the runs\n"
+      "of a policy on the same traffic profile and seed are pairs; for each figure, the change\n"
+      "with its 95% bootstrap interval over the seeds, the share of seeds on which the second\n"
+      "did better, and whether the change is beyond noise (docs/evaluation.md).\n"
+      "Exit status: 0, or 1 when a figure got significantly worse and --fail-if-worse is given\n"
+      "(also 1 when a folder cannot be read or its runs cannot be paired; 2 for bad flags).");
+  cmd->add_option("before", st->before, "The first bench's --out folder (the base)")->required();
+  cmd->add_option("after", st->after, "The second bench's --out folder (the candidate)")
+      ->required();
+  cmd->add_option("--pair", st->pairs,
+                  "OLD=NEW: compare policy OLD of the first bench with NEW of the second\n"
+                  "(repeatable; default: every policy both benches ran, by name)");
+  cmd->add_option("--figures", st->figures,
+                  "Comma-separated figures to compare (default: all): mean_speed_mph,\n"
+                  "incidents_per_100mi, collisions_per_100mi, at_fault_collisions_per_100mi,\n"
+                  "near_misses_per_100mi");
+  cmd->add_flag("--fail-if-worse", st->fail_if_worse,
+                "Exit with status 1 when any compared figure got significantly worse");
+  cmd->add_option("--json", st->json, "Also write the comparison as JSON to this file");
+  cmd->add_flag("--quiet,-q", st->quiet, "Print nothing (the exit status and --json say it)");
+  return {cmd, [st] {
+            eval::CompareOptions o;
+            std::set<std::string> seen;
+            for (const auto& p : st->pairs) {
+              o.pairs.push_back(parse_policy_pair(p));
+              if (!seen.insert(o.pairs.back().base + "=" + o.pairs.back().candidate).second) {
+                throw UsageError("--pair: '" + p + "' is given twice");
+              }
+            }
+            if (!st->figures.empty()) o.metrics = parse_metric_list(st->figures);
+            const nlohmann::json result = compare_bench_folders(st->before, st->after, o);
+            if (!st->json.empty()) write_file_atomic(st->json, result.dump(2) + "\n");
+            if (!st->quiet) std::cout << eval::compare_text(result);
+            return st->fail_if_worse && !result["worse"].empty() ? kExitFailure : kExitOk;
+          }};
+}
+
+}  // namespace overtake::app

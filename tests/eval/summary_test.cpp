@@ -1,0 +1,280 @@
+// Summaries, pairs and comparisons on benches with known figures: run rows made by hand, so
+// that every number the evaluation prints can be checked against what it should be.
+
+#include "overtake/eval/summary.hpp"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include "overtake/core/random.hpp"
+#include "overtake/eval/compare.hpp"
+#include "overtake/eval/stats.hpp"
+
+namespace overtake::eval {
+namespace {
+
+using nlohmann::json;
+using ::testing::HasSubstr;
+
+/// A run's row as runs.jsonl holds it: `mph` for `minutes`, with collisions (the first
+/// `at_fault` of them the ego's) and near misses.
+json row(const std::string& policy, const std::string& traffic, std::uint64_t seed, double mph,
+         int collisions = 0, int at_fault = 0, int near_misses = 0, double minutes = 30.0) {
+  const double seconds = 60.0 * minutes;
+  json by_kind = {{"ego_hit_car_ahead", at_fault},
+                  {"hit_from_behind", collisions - at_fault},
+                  {"hit_from_behind_braking", 0},
+                  {"ego_lane_change", 0},
+                  {"car_cut_in", 0},
+                  {"side_contact", 0},
+                  {"ego_stopped", 0},
+                  {"car_stopped", 0}};
+  return {{"index", seed},
+          {"config",
+           {{"policy", policy}, {"traffic", traffic}, {"seed", seed}, {"map", {{"hash", "abc"}}}}},
+          {"distance_miles", mph * seconds / 3600.0},
+          {"duration_s", seconds},
+          {"best_incident_free_miles", mph * seconds / 3600.0 / (collisions + 1)},
+          {"incident_counts",
+           {{"collision", collisions},
+            {"speeding", 0},
+            {"max_acceleration", 0},
+            {"max_jerk", 0},
+            {"outside_lane", 0}}},
+          {"collisions", {{"total", collisions}, {"at_fault", at_fault}, {"by_kind", by_kind}}},
+          {"safety",
+           {{"min_ttc_ahead_s", near_misses ? json(1.0) : json(nullptr)},
+            {"min_ttc_entering_s", nullptr},
+            {"min_time_headway_s", 0.8},
+            {"time_ttc_below_s", 0.5 * near_misses},
+            {"time_headway_below_s", 30.0},
+            {"near_miss_episodes", near_misses},
+            {"ttc_threshold_s", 1.5},
+            {"headway_threshold_s", 1.0}}},
+          {"peak",
+           {{"acceleration_mps2", 5.0},
+            {"jerk_mps3", 3.0},
+            {"strict_acceleration_mps2", 6.0},
+            {"strict_jerk_mps3", 8.0}}},
+          {"timing", {{"p50_us", 50.0}, {"p99_us", 150.0}}},
+          {"planner_cycles", 30000},
+          {"ended_early", nullptr}};
+}
+
+std::vector<RunRow> rows_of(const std::vector<json>& rows) {
+  std::vector<RunRow> out;
+  for (const json& r : rows) out.push_back(read_run_row(r, "test"));
+  return out;
+}
+
+TEST(RunRows, AreReadAndBadRowsNamed) {
+  const RunRow r = read_run_row(row("reference", "faithful", 3, 44.0, 2, 1, 4), "x");
+  EXPECT_EQ(r.policy, "reference");
+  EXPECT_EQ(r.seed, 3u);
+  EXPECT_DOUBLE_EQ(r.miles, 22.0);
+  EXPECT_TRUE(r.classified);
+  EXPECT_EQ(r.at_fault_collisions, 1.0);
+  EXPECT_TRUE(r.has_safety);
+  EXPECT_EQ(r.min_ttc_ahead_s, 1.0);
+  EXPECT_TRUE(std::isinf(r.min_ttc_entering_s));  // null: never measured
+  json bad = row("reference", "faithful", 3, 44.0);
+  bad.erase("distance_miles");
+  EXPECT_THAT([&] { (void)read_run_row(bad, "b/runs.jsonl, run 3"); },
+              ::testing::ThrowsMessage<std::invalid_argument>(
+                  HasSubstr("b/runs.jsonl, run 3: 'distance_miles' is missing")));
+  bad = row("reference", "faithful", 3, 44.0);
+  bad["safety"]["near_miss_episodes"] = "many";
+  EXPECT_THAT([&] { (void)read_run_row(bad, "r"); },
+              ::testing::ThrowsMessage<std::invalid_argument>(
+                  HasSubstr("'safety.near_miss_episodes' is not a number")));
+}
+
+TEST(Summary, FiguresAndTheirIntervals) {
+  // 20 runs at 40-49.5 mph (30 minutes each), 2 collisions (1 at fault), 3 near misses.
+  std::vector<json> rows;
+  for (std::uint64_t s = 1; s <= 20; ++s) {
+    rows.push_back(row("reference", "faithful", s, 40.0 + 0.5 * static_cast<double>(s - 1),
+                       s == 4 ? 2 : 0, s == 4 ? 1 : 0, s % 7 == 0 ? 1 : 0));
+  }
+  const json summary = summarize(rows_of(rows), {"reference"}, {"faithful"});
+  ASSERT_EQ(summary.size(), 1u);
+  const json& r = summary[0];
+  const double miles = r["total_miles"].get<double>();
+  EXPECT_NEAR(miles, 447.5, 1e-9);  // mean of 44.75 mph, 10 hours
+  EXPECT_NEAR(r["mean_speed_mph"].get<double>(), 44.75, 1e-6);
+  const auto ci = r["mean_speed_mph_ci"];
+  EXPECT_LT(ci[0].get<double>(), 44.75);
+  EXPECT_GT(ci[1].get<double>(), 44.75);
+  EXPECT_NEAR(ci[1].get<double>() - ci[0].get<double>(), 2 * 1.96 * 2.96 / std::sqrt(20.0), 0.5);
+  // Exact Poisson: 2 collisions, 1 at fault, in 447.5 miles.
+  const json& c = r["collisions"];
+  EXPECT_EQ(c["total"], 2.0);
+  EXPECT_EQ(c["at_fault"], 1.0);
+  EXPECT_NEAR(c["at_fault_per_100mi"].get<double>(), 100.0 / miles, 1e-12);
+  EXPECT_NEAR(c["at_fault_per_100mi_ci"][0].get<double>(), 100.0 * 0.0253 / miles, 1e-4);
+  EXPECT_NEAR(c["at_fault_per_100mi_ci"][1].get<double>(), 100.0 * 5.5716 / miles, 1e-4);
+  EXPECT_EQ(c["by_kind"]["ego_hit_car_ahead"], 1.0);
+  EXPECT_EQ(c["by_kind"]["hit_from_behind"], 1.0);
+  // Near misses: 2 episodes (seeds 7 and 14), least TTC 1 s, headway 0.8 s.
+  const json& nm = r["near_misses"];
+  EXPECT_EQ(nm["episodes"], 2.0);
+  EXPECT_EQ(nm["min_ttc_ahead_s"], 1.0);
+  EXPECT_TRUE(nm["min_ttc_entering_s"].is_null());
+  EXPECT_NEAR(nm["share_headway_below"].get<double>(), 30.0 / 1800.0, 1e-12);
+  // How many seeds: 4x for speed; for a rate, between 2x and 4x.
+  EXPECT_EQ(r["precision"]["mean_speed_mph"]["seeds_to_halve"], 80);
+  const auto halve = r["precision"]["at_fault_collisions_per_100mi"]["seeds_to_halve"].get<int>();
+  EXPECT_GT(halve, 40);
+  EXPECT_LT(halve, 80);
+
+  const std::string md = summary_markdown(summary, json::array());
+  EXPECT_THAT(md, HasSubstr("| reference | faithful | 20 | 447.5 | 44.75 ("));
+  EXPECT_THAT(md, HasSubstr("| 0.22 (0.01–1.25) |"));  // at fault per 100 mi, its interval
+  EXPECT_THAT(md, HasSubstr("| reference | faithful | 2 | 1 | 1 | 1 |"));
+  const std::string csv = summary_csv(summary);
+  EXPECT_THAT(csv, HasSubstr("at_fault_collisions_per_100mi_lo"));
+  EXPECT_THAT(csv, HasSubstr(",80,"));  // seeds to halve the speed's interval
+}
+
+TEST(Summary, ZeroIncidentsHaveAnUpperBound) {
+  std::vector<json> rows;
+  for (std::uint64_t s = 1; s <= 20; ++s) rows.push_back(row("reference", "calm", s, 44.0));
+  const json r = summarize(rows_of(rows), {"reference"}, {"calm"})[0];
+  EXPECT_EQ(r["incidents_per_100mi"], 0.0);
+  EXPECT_EQ(r["incidents_per_100mi_ci"][0], 0.0);
+  EXPECT_NEAR(r["incidents_per_100mi_ci"][1].get<double>(), 100.0 * 3.6889 / 440.0, 1e-3);
+  EXPECT_THAT(summary_markdown(json::array({r}), json::array()), HasSubstr("| 0.00 (0.00–0.84) |"));
+}
+
+TEST(Summary, TheSameRunsGiveTheSameBytes) {
+  std::vector<json> rows;
+  for (std::uint64_t s = 1; s <= 10; ++s) {
+    rows.push_back(row("a", "faithful", s, 40.0 + static_cast<double>(s % 3), s % 4 == 0 ? 1 : 0));
+    rows.push_back(row("b", "faithful", s, 41.0 + static_cast<double>(s % 5)));
+  }
+  const auto runs = rows_of(rows);
+  const json s1 = summarize(runs, {"a", "b"}, {"faithful"});
+  const json p1 = pair_policies(runs, {"a", "b"}, {"faithful"});
+  EXPECT_EQ(s1.dump(), summarize(runs, {"a", "b"}, {"faithful"}).dump());
+  EXPECT_EQ(summary_markdown(s1, p1),
+            summary_markdown(summarize(runs, {"a", "b"}, {"faithful"}),
+                             pair_policies(runs, {"a", "b"}, {"faithful"})));
+}
+
+/// 20 seeds of two policies: b's speed on each seed is a's plus `delta` plus noise of `sd`.
+std::vector<RunRow> two_policies(double delta, double sd, int a_collisions_every = 0) {
+  core::Rng rng(3);
+  std::vector<json> rows;
+  for (std::uint64_t s = 1; s <= 20; ++s) {
+    const double seed_speed = 40.0 + 6.0 * rng.uniform01();  // the seed's traffic
+    const int coll = a_collisions_every && s % a_collisions_every == 0 ? 1 : 0;
+    rows.push_back(row("a", "faithful", s, seed_speed, coll, coll));
+    rows.push_back(row("b", "faithful", s, seed_speed + delta + sd * (rng.uniform01() - 0.5)));
+  }
+  return rows_of(rows);
+}
+
+TEST(Pairs, AKnownDifferenceIsFoundAndNoDifferenceIsNot) {
+  // b is 0.5 mph faster on every seed, give or take 0.05: beyond noise, on every seed.
+  const json faster = pair_policies(two_policies(0.5, 0.1), {"a", "b"}, {"faithful"});
+  ASSERT_EQ(faster.size(), 1u);
+  EXPECT_EQ(faster[0]["policy"], "a");
+  EXPECT_EQ(faster[0]["versus"], "b");
+  EXPECT_EQ(faster[0]["seeds"], 20);
+  const json& speed = faster[0]["figures"]["mean_speed_mph"];
+  EXPECT_NEAR(speed["difference"].get<double>(), -0.5, 0.05);  // a - b
+  EXPECT_LT(speed["ci"][1].get<double>(), 0.0);
+  EXPECT_EQ(speed["verdict"], "worse");
+  EXPECT_EQ(speed["probability_of_improvement"], 0.0);
+  // The same policy twice: no difference in anything.
+  const json same = pair_policies(two_policies(0.0, 0.0), {"a", "b"}, {"faithful"});
+  for (const auto& [name, f] : same[0]["figures"].items()) {
+    EXPECT_EQ(f["verdict"], "no difference") << name;
+    EXPECT_EQ(f["difference"], 0.0) << name;
+  }
+  // Noise of 2 mph around no difference: within noise.
+  const json noisy = pair_policies(two_policies(0.0, 2.0), {"a", "b"}, {"faithful"});
+  const json& ns = noisy[0]["figures"]["mean_speed_mph"];
+  EXPECT_LT(ns["ci"][0].get<double>(), 0.0);
+  EXPECT_GT(ns["ci"][1].get<double>(), 0.0);
+  EXPECT_EQ(ns["verdict"], "no difference");
+  // a's at-fault collisions on every second seed: worse beyond noise.
+  const json crashes = pair_policies(two_policies(0.0, 0.0, 2), {"a", "b"}, {"faithful"});
+  const json& af = crashes[0]["figures"]["at_fault_collisions_per_100mi"];
+  EXPECT_GT(af["difference"].get<double>(), 0.0);
+  EXPECT_EQ(af["verdict"], "worse");
+  EXPECT_EQ(af["probability_of_improvement"], 0.25);  // 10 losses, 10 ties
+}
+
+BenchData bench(const std::string& name, std::vector<RunRow> runs, const std::string& map = "abc") {
+  BenchData b;
+  b.name = name;
+  b.manifest = {{"policies", json::array({"a", "b"})},
+                {"minutes", 30.0},
+                {"steps_per_call", 0},
+                {"map", {{"hash", map}}},
+                {"params_hash", "p1"}};
+  b.runs = std::move(runs);
+  return b;
+}
+
+TEST(Compare, AnIdenticalBenchIsNoDifference) {
+  const auto runs = two_policies(0.3, 1.0, 5);
+  const json r = compare_benches(bench("before", runs), bench("after", runs), {});
+  ASSERT_EQ(r["comparisons"].size(), 2u);  // a and b, matched by name
+  EXPECT_TRUE(r["worse"].empty());
+  for (const json& c : r["comparisons"]) {
+    for (const auto& [name, f] : c["figures"].items()) {
+      EXPECT_EQ(f["verdict"], "no difference") << name;
+    }
+  }
+  EXPECT_THAT(compare_text(r), HasSubstr("No figure got significantly worse."));
+}
+
+TEST(Compare, AWorseCandidateIsFoundAndPairsCanBeNamed) {
+  // Before: a; after: b, slower by 0.5 mph on every seed (as `--pair a=b`).
+  CompareOptions o;
+  o.pairs = {{"b", "a"}};
+  const auto runs = two_policies(0.5, 0.1);
+  const json r = compare_benches(bench("before", runs), bench("after", runs), o);
+  ASSERT_EQ(r["comparisons"].size(), 1u);
+  EXPECT_EQ(r["comparisons"][0]["figures"]["mean_speed_mph"]["verdict"], "worse");
+  ASSERT_EQ(r["worse"].size(), 1u);
+  EXPECT_EQ(r["worse"][0], "a / faithful: mean_speed_mph");
+  EXPECT_THAT(compare_text(r), HasSubstr("b -> a (faithful, 20 seeds paired)"));
+  // Only some figures.
+  o.metrics = {Metric::at_fault_collisions_per_100mi};
+  const json only = compare_benches(bench("before", runs), bench("after", runs), o);
+  EXPECT_EQ(only["comparisons"][0]["figures"].size(), 1u);
+  EXPECT_TRUE(only["worse"].empty());
+}
+
+TEST(Compare, RunsThatAreNotPairsAreRefused) {
+  const auto runs = two_policies(0.0, 1.0);
+  EXPECT_THAT(
+      [&] { (void)compare_benches(bench("x", runs), bench("y", runs, "def"), {}); },
+      ::testing::ThrowsMessage<NotComparable>(HasSubstr("different maps (x: abc, y: def)")));
+  CompareOptions o;
+  o.pairs = {{"a", "nope"}};
+  EXPECT_THAT([&] { (void)compare_benches(bench("x", runs), bench("y", runs), o); },
+              ::testing::ThrowsMessage<std::invalid_argument>(
+                  HasSubstr("y has no runs of policy 'nope' (it has a, b)")));
+  BenchData other = bench("y", {});
+  other.runs = rows_of({row("c", "faithful", 1, 40.0)});
+  other.manifest["policies"] = json::array({"c"});
+  EXPECT_THAT([&] { (void)compare_benches(bench("x", runs), other, {}); },
+              ::testing::ThrowsMessage<NotComparable>(HasSubstr("no policy is in both benches")));
+  // Other parameters: compared, with a note.
+  BenchData tuned = bench("y", runs);
+  tuned.manifest["params_hash"] = "p2";
+  const json r = compare_benches(bench("x", runs), tuned, {});
+  ASSERT_EQ(r["notes"].size(), 1u);
+  EXPECT_THAT(r["notes"][0].get<std::string>(), HasSubstr("the parameters differ"));
+}
+
+}  // namespace
+}  // namespace overtake::eval
