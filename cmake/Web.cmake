@@ -52,7 +52,7 @@ function(overtake_web_tests)
     return()
   endif()
   add_test(NAME web.replay_decoder
-           COMMAND "${OVERTAKE_NODE}" --test test/replay.test.mjs
+           COMMAND "${OVERTAKE_NODE}" --test test/replay.test.mjs test/report.test.mjs
            WORKING_DIRECTORY "${OVERTAKE_WEB_SOURCE_DIR}")
   set_tests_properties(web.replay_decoder PROPERTIES LABELS "web" TIMEOUT 120)
   if(NOT OVERTAKE_SANITIZE)

@@ -17,6 +17,12 @@ const CM = 0.01; // metres per centimetre
 const YAW_UNIT = 1e-4; // radians per yaw unit
 const FRAME_FLOATS_BYTES = 4 * 2 + 4 * 4 + 4 * 3; // s, d, strict figures, distances: 36
 const INCIDENT_BYTES = 1 + 4 + 4 + 1 + 4 + 4; // 18
+// Added within version 2 at the ends of records; a record of an older writer lacks them.
+const FRAME_SAFETY_BYTES = 3 * 2; // u16 TTC ahead, TTC entering a lane, headway (0.01 s)
+const COLLISION_CLASS_BYTES = 2; // u8 collision kind, u8 at fault
+const NO_SECONDS = 65535; // a TTC or headway that is none (or 655.35 s and more)
+/// An incident's collision kind when it has none (not a collision, or an older file).
+export const NO_COLLISION_KIND = 255;
 const MAX_CARS = 255;
 const I32_MIN = -2147483648;
 const I32_MAX = 2147483647;
@@ -47,6 +53,9 @@ function readUvarint(bytes, end) {
   overlong = true;
   return -1;
 }
+
+/// A TTC or headway stored in 0.01 s, in seconds (Infinity for none).
+const seconds = (cs) => (cs === NO_SECONDS ? Infinity : cs * 0.01);
 
 /// A zigzag varint (a signed difference); NaN when it runs past `end` or is too long.
 function readDelta(bytes, end) {
@@ -81,12 +90,14 @@ export class Replay {
     this.limits = header.limits || {};
     this.car = header.car || { length_m: 4.7, width_m: 1.9 };
     this.incidentTypes = header.incident_types || [];
+    this.collisionKinds = Array.isArray(header.collision_kinds) ? header.collision_kinds : [];
     this.laneLines = (header.lane_lines || []).map((l) => Float64Array.from(l));
     this.frames = 0;
     this.cars = 0; // car entries over all frames
     this.paths = 0;
     this.pathPoints = 0;
     this.incidents = 0;
+    this.safetyFrames = 0; // frames that carry TTC and headway (none in an older file)
     this.report = null; // the end record's JSON
     this.ended = false;
     this.problem = null; // why the replay is incomplete (truncated, corrupt), or null
@@ -123,6 +134,10 @@ export class Replay {
     this.distance = f32(frames);
     this.distanceSince = f32(frames);
     this.bestFree = f32(frames);
+    // seconds; Infinity when there is none (no such car, not closing, or not recorded)
+    this.ttcAhead = f32(frames);
+    this.ttcEntering = f32(frames);
+    this.headway = f32(frames);
     this.time = new Float64Array(frames); // seconds, for the charts
     this.carStart = new Uint32Array(frames + 1);
     this.framePath = new Int32Array(frames); // latest path at or before the frame, or -1
@@ -142,12 +157,15 @@ export class Replay {
     this.incLane = new Uint8Array(incidents);
     this.incX = f32(incidents);
     this.incY = f32(incidents);
+    this.incKind = new Uint8Array(incidents); // index into collisionKinds, or NO_COLLISION_KIND
+    this.incAtFault = new Uint8Array(incidents);
   }
 
   _growFrames(need, exact = false) {
     if (need <= this.step.length) return;
     for (const k of ['step', 'egoX', 'egoY', 'egoYaw', 'egoSpeed', 'egoS', 'egoD', 'accT', 'accN',
-      'accTotal', 'jerk', 'distance', 'distanceSince', 'bestFree', 'time', 'framePath']) {
+      'accTotal', 'jerk', 'distance', 'distanceSince', 'bestFree', 'ttcAhead', 'ttcEntering', 'headway', 'time',
+      'framePath']) {
       this[k] = grow(this[k], need, exact);
     }
     this.carStart = grow(this.carStart, need + 1, exact);
@@ -169,7 +187,7 @@ export class Replay {
 
   _growIncidents(need, exact = false) {
     if (need <= this.incFrame.length) return;
-    for (const k of ['incFrame', 'incType', 'incValue', 'incS', 'incLane', 'incX', 'incY']) {
+    for (const k of ['incFrame', 'incType', 'incValue', 'incS', 'incLane', 'incX', 'incY', 'incKind', 'incAtFault']) {
       this[k] = grow(this[k], need, exact);
     }
   }
@@ -304,6 +322,18 @@ export class Replay {
         at += FRAME_FLOATS_BYTES + 1;
         const why = this._cars(bytes, end, c, n);
         if (why) return why;
+        // TTC and headway, after the cars (added within version 2): an older frame has none,
+        // and bytes beyond them are for later additions
+        if (end - at >= FRAME_SAFETY_BYTES) {
+          this.ttcAhead[i] = seconds(v.getUint16(at, true));
+          this.ttcEntering[i] = seconds(v.getUint16(at + 2, true));
+          this.headway[i] = seconds(v.getUint16(at + 4, true));
+          this.safetyFrames += 1;
+        } else {
+          this.ttcAhead[i] = Infinity;
+          this.ttcEntering[i] = Infinity;
+          this.headway[i] = Infinity;
+        }
         this.framePath[i] = this.paths - 1;
         eg[0] = ex;
         eg[1] = ey;
@@ -363,8 +393,22 @@ export class Replay {
         return null;
       }
       case RECORD.incident: {
-        if (n !== INCIDENT_BYTES) return `an incident needs ${INCIDENT_BYTES} bytes, has ${n}`;
+        if (n < INCIDENT_BYTES) return `an incident needs ${INCIDENT_BYTES} bytes, has ${n}`;
         if (this.frames === 0) return 'an incident before the first frame';
+        // the collision's class (added within version 2; an 18-byte incident has none)
+        let kind = NO_COLLISION_KIND;
+        let atFault = 0;
+        if (n >= INCIDENT_BYTES + COLLISION_CLASS_BYTES) {
+          kind = bytes[p + INCIDENT_BYTES];
+          atFault = bytes[p + INCIDENT_BYTES + 1];
+          if (kind === NO_COLLISION_KIND) {
+            atFault = 0; // not a collision: its fault byte says nothing
+          } else if (kind >= this.collisionKinds.length) {
+            return `collision kind ${kind} is not one of the header's ${this.collisionKinds.length} collision_kinds`;
+          } else if (atFault > 1) {
+            return `its at-fault byte is ${atFault}, not 0 or 1`;
+          }
+        }
         const k = this.incidents;
         this._growIncidents(k + 1);
         this.incFrame[k] = this.frames - 1;
@@ -374,6 +418,8 @@ export class Replay {
         this.incLane[k] = bytes[p + 9];
         this.incX[k] = v.getInt32(p + 10, true) * CM;
         this.incY[k] = v.getInt32(p + 14, true) * CM;
+        this.incKind[k] = kind;
+        this.incAtFault[k] = atFault;
         this.incidents = k + 1;
         return null;
       }
@@ -513,6 +559,14 @@ export class Replay {
   /// The name of an incident type index.
   incidentTypeName(t) {
     return this.incidentTypes[t] || `type ${t}`;
+  }
+
+  /// Incident k's collision class, {kind (its name), atFault}, or null when it has none (not
+  /// a collision, or a file written before collisions were classified).
+  incidentClass(k) {
+    const kind = this.incKind[k];
+    if (kind === NO_COLLISION_KIND) return null;
+    return { kind: this.collisionKinds[kind] || `kind ${kind}`, atFault: this.incAtFault[k] === 1 };
   }
 
   /// A sentence on how much was read, for warnings.

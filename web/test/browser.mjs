@@ -4,12 +4,13 @@
 //       what CTest runs: records two short drives with BIN (a scenario with incidents and a
 //       clean drive), writes their pages with `BIN view FILE --html`, runs a small bench
 //       with --record-worst and --html, and opens all of them
-//   node test/browser.mjs --page PAGE.html --replay FILE.otr [--expect-incident] [--name NAME]
-//                         [--artifacts DIR] [--screenshot-copy PNG]
+//   node test/browser.mjs --page PAGE.html --replay FILE.otr [--expect-incident]
+//                         [--expect-collision TEXT] [--name NAME] [--artifacts DIR]
+//                         [--screenshot-copy PNG]
 //       opens a page written by `overtake view FILE --html PAGE.html` for the replay FILE
 //   node test/browser.mjs --synthetic --viewer viewer.html [--artifacts DIR]
 //       fills the viewer template with replays made by test/encode.mjs (a drive with
-//       incidents and a clean one) and opens those
+//       incidents, a clean one, and one as an older writer wrote it) and opens those
 //   node test/browser.mjs --report REPORT.html [--runs N] [--replays N]
 //       opens a bench report page (`overtake bench ... --html REPORT.html`); or, with
 //       --bench-dir DIR --report-template report.html, fills the template from DIR's
@@ -20,8 +21,13 @@
 // road and the cars are drawn (pixels differ from the background); after seek(step) the HUD
 // speed equals the speed recorded at that step (read from the replay with the page's own
 // decoder, here in Node); an incident marker exists when the run has incidents, and clicking
-// it seeks there; a truncated copy of the replay shows the warning banner and what could be
-// read. Saves a screenshot per page into the artifacts folder.
+// it seeks there; a collision's marker and banner name its kind and fault; the near-miss
+// chart shows every TTC and headway the replay holds, the HUD the TTC at a step, the status
+// line the report's collisions and near misses; a truncated copy of the replay shows the
+// warning banner and what could be read. The bench report shows the intervals, error bars,
+// precision and paired comparisons its data holds, and so do copies of it with the data of
+// today's bench filled in, with an older bench's data, and with no summary. Saves a
+// screenshot per page into the artifacts folder.
 import { execFileSync, spawn } from 'node:child_process';
 import { copyFileSync, existsSync, mkdirSync, mkdtempSync, readFileSync, rmSync, writeFileSync } from 'node:fs';
 import { tmpdir } from 'node:os';
@@ -31,6 +37,7 @@ import { pathToFileURL } from 'node:url';
 import { chromium } from 'playwright-core';
 
 import { decodeReplay } from '../src/replay.js';
+import { incidentText, safetyStatusText } from '../src/viewer/format.js';
 import { syntheticDrive } from './encode.mjs';
 
 const MPH_PER_MPS = 2.2369362920544025;
@@ -51,6 +58,7 @@ function parseArgs(argv) {
     if (k === '--page') a.pages.push((current = { page: resolve(next()), incident: false }));
     else if (k === '--replay') current.replay = resolve(next());
     else if (k === '--expect-incident') current.incident = true;
+    else if (k === '--expect-collision') current.collision = next();
     else if (k === '--name') current.name = next();
     else if (k === '--synthetic') a.synthetic = true;
     else if (k === '--viewer') a.viewer = resolve(next());
@@ -194,6 +202,8 @@ async function testPage(context, spec, artifacts) {
   } else {
     check(markers === replay.incidents, `no marker without incidents (${markers} markers, ${replay.incidents} incidents)`);
   }
+  await testCollisionMarks(page, replay, spec);
+  await testNearMisses(page, replay, name, artifacts);
 
   // a chart click seeks
   const box = await page.locator('#chart-speed .u-over').boundingBox();
@@ -244,6 +254,73 @@ async function testPage(context, spec, artifacts) {
   return { shot, loadMs };
 }
 
+// A collision's marker and banner name its kind and whether it was the ego's fault (a file
+// from before collisions were classified: neither); an at-fault mark is filled, another
+// outlined. `spec.collision` is a text the first collision must say.
+async function testCollisionMarks(page, replay, spec) {
+  let k = -1;
+  for (let j = 0; j < replay.incidents && k < 0; ++j) if (replay.incidentTypeName(replay.incType[j]) === 'collision') k = j;
+  if (k < 0) {
+    if (spec.collision) check(false, `the replay has a collision (expected: ${spec.collision})`);
+    return;
+  }
+  const cls = replay.incidentClass(k);
+  const want = incidentText('collision', replay.incValue[k], cls);
+  const step = replay.step[replay.incFrame[k]];
+  const mark = page.locator(`#incident-markers .marker[data-type="collision"][data-step="${step}"]`).first();
+  const seen = await mark.evaluate((m) => ({
+    title: m.title, fault: m.dataset.atFault ?? null, kind: m.dataset.kind ?? null,
+    fill: getComputedStyle(m).backgroundColor, border: getComputedStyle(m).borderTopWidth,
+  }));
+  check(seen.title.endsWith(want) || seen.title.includes(`${want} (and`), `the collision's marker says "${want}" (${seen.title})`);
+  if (spec.collision) check(seen.title.includes(spec.collision), `the first collision is "${spec.collision}"`);
+  if (cls) {
+    check(seen.kind === cls.kind && seen.fault === String(cls.atFault), `the marker carries the kind and fault (${seen.kind}, ${seen.fault})`);
+    check(cls.atFault ? seen.border === '0px' : seen.border !== '0px',
+      `${cls.atFault ? 'an at-fault collision\'s marker is filled' : 'a collision not at fault has an outlined marker'} (border ${seen.border}, fill ${seen.fill})`);
+  } else {
+    check(seen.kind === null && seen.fault === null && !/at fault/.test(seen.title), `an unclassified collision's marker says no fault (${seen.title})`);
+  }
+  await mark.evaluate((m) => m.click()); // as a click on it, wherever other marks lie
+  const banners = await page.locator('#incident-banners .banner[data-type="collision"]').allTextContents();
+  check(banners.includes(want), `the banner says "${want}" (${banners.join(' | ')})`);
+}
+
+// The near-miss chart holds every TTC and headway of the replay (none is a gap), the HUD
+// shows them, and the status line what the report says of collisions and near misses.
+async function testNearMisses(page, replay, name, artifacts) {
+  let finite = 0;
+  let probe = -1;
+  for (let i = 0; i < replay.frames; ++i) {
+    for (const col of [replay.ttcAhead, replay.ttcEntering, replay.headway]) if (Number.isFinite(col[i])) finite += 1;
+    if (probe < 0 && Number.isFinite(replay.ttcAhead[i]) && i > replay.frames / 4) probe = i;
+  }
+  const chart = await page.evaluate(() => {
+    const el = document.getElementById('chart-safety');
+    return el ? { canvases: el.querySelectorAll('canvas').length, points: Number(el.dataset.points), title: el.querySelector('.u-title')?.textContent } : null;
+  });
+  check(chart && chart.canvases > 0 && chart.points === finite,
+    `the near-miss chart shows the ${finite} TTC and headway values (${chart ? `${chart.points} points: ${chart.title}` : 'no chart'})`);
+  if (replay.safetyFrames > 0) {
+    check(finite > 0, `the replay records TTC or headway (${replay.safetyFrames} frames carry them, ${finite} values)`);
+  } else {
+    check(/not in this replay/.test(chart?.title || ''), `a replay without TTC says so on the chart (${chart?.title})`);
+  }
+  if (probe >= 0) {
+    const hud = await page.evaluate((s) => {
+      window.overtakeViewer.seek(s);
+      return { ttc: document.getElementById('hud-ttc').textContent, headway: document.getElementById('hud-headway').textContent };
+    }, replay.step[probe]);
+    const wantHeadway = Number.isFinite(replay.headway[probe]) ? replay.headway[probe].toFixed(2) : '–';
+    check(hud.ttc === replay.ttcAhead[probe].toFixed(2) && hud.headway === wantHeadway,
+      `after seek(${replay.step[probe]}) the HUD shows TTC ${hud.ttc} s, headway ${hud.headway} s (recorded ${replay.ttcAhead[probe].toFixed(2)}, ${wantHeadway})`);
+    await page.locator('#chart-safety').screenshot({ path: join(artifacts, `${name}-near-misses.png`) });
+  }
+  const status = await page.textContent('#status');
+  const want = safetyStatusText(replay.report);
+  check(want === '' ? !/near miss|at fault/.test(status) : status.includes(want), `the status line says "${want || 'nothing of near misses'}" (${status})`);
+}
+
 // The bench report object (docs/replay.md) from a bench --out folder.
 function benchObject(dir) {
   const bench = JSON.parse(readFileSync(join(dir, 'bench.json'), 'utf8'));
@@ -252,8 +329,163 @@ function benchObject(dir) {
   return bench;
 }
 
+// The report page's data element, and a copy of the page with other data in it.
+const BENCH_ELEMENT = /(<script id="overtake-bench" type="application\/json">)([\s\S]*?)(<\/script>)/;
+const benchOfPage = (html) => JSON.parse(html.match(BENCH_ELEMENT)[2]);
+const pageWithBench = (html, bench) => html.replace(BENCH_ELEMENT, (m, open, _, close) => `${open}${JSON.stringify(bench).replace(/</g, '\\u003c')}${close}`);
+
+// The keys a summary row had before intervals, collision classes and near misses.
+const OLDER_ROW_KEYS = ['policy', 'traffic', 'runs', 'total_miles', 'mean_speed_mph', 'incidents', 'incidents_per_100mi',
+  'incidents_per_100mi_by_type', 'incident_free_miles_median', 'incident_free_miles_worst', 'peak_acceleration_mps2',
+  'peak_jerk_mps3', 'peak_strict_acceleration_mps2', 'peak_strict_jerk_mps3', 'timing'];
+
+// The verdict of A's difference from B with its interval (docs: better when it leaves out 0
+// on A's side).
+const verdictOf = (d, ci, higherIsBetter) => (ci[0] > 0 || ci[1] < 0 ? ((d > 0) === higherIsBetter ? 'better' : 'worse') : 'no difference');
+
+// The bench data with every key of today's bench that it lacks made up (plausible, not
+// computed: the page only shows them): intervals, collisions, near misses, precision; and, in
+// place of its pairs (the page's own are checked on the page itself), a pair per two policies
+// on each traffic profile with every verdict, one of whose figures has no data.
+function withTodaysKeys(bench) {
+  const b = structuredClone(bench);
+  const rows = b.summary;
+  for (const r of rows) {
+    const rate = (v) => [v * 0.6, v * 1.5 + 2.5];
+    r.mean_speed_mph_ci ??= [r.mean_speed_mph - 0.8, r.mean_speed_mph + 0.6];
+    r.incidents_per_100mi_ci ??= rate(r.incidents_per_100mi);
+    r.incidents_per_100mi_by_type_ci ??= Object.fromEntries(Object.entries(r.incidents_per_100mi_by_type || {}).map(([k, v]) => [k, rate(v)]));
+    r.incident_free_miles_median_ci ??= [r.incident_free_miles_median * 0.9, r.incident_free_miles_median * 1.05];
+    const per = 100 / Math.max(1e-9, r.total_miles);
+    r.collisions ??= { total: 1, per_100mi: per, per_100mi_ci: rate(per), at_fault: 1, at_fault_per_100mi: per, at_fault_per_100mi_ci: rate(per), by_kind: { ego_hit_car_ahead: 1 } };
+    r.near_misses ??= { episodes: 2, per_100mi: 2 * per, per_100mi_ci: rate(2 * per), min_ttc_ahead_s: 0.9, min_ttc_entering_s: null, min_time_headway_s: 0.4,
+      share_ttc_below: 0.012, share_headway_below: 0.2, ttc_threshold_s: 1.5, headway_threshold_s: 1.0 };
+    r.precision ??= { mean_speed_mph: { half_width: 0.7, seeds_to_halve: 4 * r.runs }, incidents_per_100mi: { half_width: 3.1, seeds_to_halve: 4 * r.runs + 1 },
+      at_fault_collisions_per_100mi: null };
+  }
+  b.pairs = [];
+  const fig = (ca, cb, spread, higher) => {
+    const d = ca - cb;
+    const ci = [d - spread, d + spread];
+    return { candidate: ca, base: cb, difference: d, ci, probability_of_improvement: 0.5 + Math.sign(higher ? d : -d) * 0.4, verdict: verdictOf(d, ci, higher) };
+  };
+  for (const t of [...new Set(rows.map((r) => r.traffic))]) {
+    const mine = rows.filter((r) => r.traffic === t);
+    for (let i = 0; i < mine.length; ++i) {
+      for (let j = i + 1; j < mine.length; ++j) {
+        const a = mine[i];
+        b.pairs.push({ traffic: t, policy: a.policy, versus: mine[j].policy, seeds: a.runs, figures: {
+          mean_speed_mph: fig(a.mean_speed_mph, a.mean_speed_mph + 3, 1, true), // worse
+          incidents_per_100mi: fig(a.incidents_per_100mi, a.incidents_per_100mi + 5, 1, false), // better
+          collisions_per_100mi: fig(1, 1, 1, false), // no difference
+          at_fault_collisions_per_100mi: fig(1, 0.5, 1, false),
+          near_misses_per_100mi: null,
+        } });
+      }
+    }
+  }
+  return b;
+}
+
+// The bench data as an older build wrote it: summary rows of the older keys, no pairs, runs
+// without collisions at fault or near misses.
+function asOlderBench(bench) {
+  const b = structuredClone(bench);
+  b.summary = b.summary.map((r) => Object.fromEntries(OLDER_ROW_KEYS.filter((k) => k in r).map((k) => [k, r[k]])));
+  delete b.pairs;
+  for (const r of b.runs) {
+    delete r.collisions;
+    delete r.safety;
+    for (const i of r.incidents || []) {
+      delete i.kind;
+      delete i.at_fault;
+    }
+  }
+  return b;
+}
+
+// Copies of the report page beside it: with today's keys, as an older bench's, and without a
+// summary (the page summarizes the runs itself). Returns [{path, name, expect}].
+function reportVariants(path) {
+  const html = readFileSync(path, 'utf8');
+  const bench = benchOfPage(html);
+  const noSummary = structuredClone(bench);
+  delete noSummary.summary;
+  delete noSummary.pairs;
+  return [
+    { name: 'today', expect: 'today', bench: withTodaysKeys(bench) },
+    { name: 'older', expect: 'older', bench: asOlderBench(bench) },
+    { name: 'no-summary', expect: 'no-summary', bench: noSummary },
+  ].map((v) => {
+    const out = join(dirname(path), `report-${v.name}.html`);
+    writeFileSync(out, pageWithBench(html, v.bench));
+    return { path: out, name: v.name, expect: v.expect };
+  });
+}
+
+// What the report page shows of intervals, error bars, precision and pairs, against what its
+// data holds: each is shown when (and only when) the data has it.
+async function testReportFigures(page, expect) {
+  const got = await page.evaluate(() => {
+    const rep = window.overtakeReport || {};
+    const rows = rep.rows || [];
+    const bench = rep.bench || {};
+    const isCI = (c) => Array.isArray(c) && c.length === 2 && c.every((x) => typeof x === 'number');
+    const visible = (id) => Boolean(document.getElementById(id)) && !document.getElementById(id).hidden;
+    const bars = (id) => Number(document.getElementById(id)?.dataset.errorBars || 0);
+    const cells = (sel) => [...document.querySelectorAll(sel)];
+    return {
+      rows: rows.length,
+      speedCI: rows.filter((r) => isCI(r.mean_speed_mph_ci)).length,
+      incidentsCI: rows.filter((r) => isCI(r.incidents_per_100mi_ci)).length,
+      fault: rows.filter((r) => typeof (r.collisions || {}).at_fault_per_100mi === 'number').length,
+      faultCI: rows.filter((r) => isCI((r.collisions || {}).at_fault_per_100mi_ci)).length,
+      precision: rows.filter((r) => r.precision && typeof r.precision === 'object' && Object.keys(r.precision).length).length,
+      pairs: Array.isArray(bench.pairs) ? bench.pairs.length : 0,
+      intervalCells: cells('#summary tbody td').filter((td) => /\d \(\d[\d.]*–\d[\d.]*\)/.test(td.textContent)).length,
+      summaryText: cells('#summary tbody tr:first-child td').map((td) => td.textContent).join(' | '),
+      bars: { speed: bars('chart-speed'), incidents: bars('chart-incidents'), fault: bars('chart-fault') },
+      faultChart: visible('chart-fault') && document.querySelectorAll('#chart-fault canvas').length > 0,
+      precisionShown: visible('precision-section') ? document.querySelectorAll('#precision tbody tr').length : 0,
+      pairsShown: visible('pairs-section') ? document.querySelectorAll('#pairs tbody tr').length : 0,
+      pairText: cells('#pairs tbody tr:first-child td').map((td) => td.textContent).join(' | '),
+      verdicts: cells('#pairs td.verdict').map((td) => ({ text: td.textContent, cls: td.className })),
+    };
+  });
+  console.log(`  summary: ${got.summaryText}`);
+  if (got.speedCI > 0) {
+    check(got.intervalCells >= got.speedCI, `the summary shows intervals (${got.intervalCells} cells with one)`);
+  } else {
+    check(got.intervalCells === 0, `no intervals in the data, none shown (${got.intervalCells})`);
+  }
+  check(got.bars.speed === got.speedCI && got.bars.incidents === got.incidentsCI,
+    `the mean speed and incidents charts have an error bar per interval (${got.bars.speed} of ${got.speedCI}, ${got.bars.incidents} of ${got.incidentsCI})`);
+  check(got.faultChart === got.fault > 0 && got.bars.fault === got.faultCI,
+    `the at-fault collisions chart is drawn when the data has them (${got.faultChart}, ${got.fault} rows, ${got.bars.fault} error bars of ${got.faultCI})`);
+  check(got.precisionShown === (got.precision > 0 ? got.rows : 0), `the precision table has a row per group when the data has precision (${got.precisionShown})`);
+  if (got.pairs > 0) {
+    console.log(`  pairs: ${got.pairText}`);
+    check(got.pairsShown === got.pairs, `the paired comparisons table has a row per pair (${got.pairsShown} of ${got.pairs})`);
+    const known = got.verdicts.every((v) => ['better', 'worse', 'no difference', '–'].includes(v.text)
+      && v.cls === (v.text === 'better' || v.text === 'worse' ? `verdict ${v.text}` : 'verdict'));
+    check(got.verdicts.length > 0 && known, `the verdicts are shown, better and worse coloured (${got.verdicts.map((v) => v.text).join(', ')})`);
+  } else {
+    check(got.pairsShown === 0, 'no pairs in the data, no paired table');
+  }
+  if (expect === 'today') {
+    check(got.speedCI === got.rows && got.pairs > 0 && got.precision > 0 && got.fault > 0, 'the data of today\'s bench has intervals, pairs, precision and at-fault rates');
+    check(got.verdicts.some((v) => v.text === 'better') && got.verdicts.some((v) => v.text === 'worse') && got.verdicts.some((v) => v.text === 'no difference'),
+      'its pairs have each verdict');
+  } else if (expect === 'older') {
+    check(got.speedCI === 0 && got.pairs === 0 && got.precision === 0 && got.fault === 0, 'the older data has no interval, pair, precision or at-fault rate');
+    check(/–/.test(got.summaryText), 'the older data\'s missing figures are dashes');
+  } else if (expect === 'no-summary') {
+    check(got.rows > 0 && got.speedCI === 0, `the page summarizes the runs itself, without intervals (${got.rows} rows)`);
+  }
+}
+
 async function testReport(context, path, artifacts, opts = {}) {
-  console.log(`report: ${path}`);
+  console.log(`report${opts.name ? ` (${opts.name})` : ''}: ${path}`);
   const page = await context.newPage();
   const { errors, requests } = watchPage(page);
   await page.setViewportSize({ width: 1400, height: 1000 });
@@ -281,9 +513,10 @@ async function testReport(context, path, artifacts, opts = {}) {
     check(info.links.length > 0 && missing.length === 0, `the replay links lead to pages (${info.links.join(', ')}${missing.length ? `; missing ${missing.join(', ')}` : ''})`);
   }
   check(info.charts >= 3, `the charts are drawn (${info.charts} canvases)`);
+  await testReportFigures(page, opts.expect);
   check(errors.length === 0, `no console errors${errors.length ? `: ${errors.join(' | ')}` : ''}`);
   check(requests.length === 0, `no network requests${requests.length ? `: ${requests.join(', ')}` : ''}`);
-  const shot = join(artifacts, 'report.png');
+  const shot = join(artifacts, opts.name ? `report-${opts.name}.png` : 'report.png');
   await page.screenshot({ path: shot, fullPage: true });
   console.log(`  screenshot ${shot}`);
   await page.close();
@@ -431,7 +664,7 @@ function recordWithOvertake(args) {
   const w = args.artifacts;
   if (!args.sourceDir) throw new Error('--overtake needs --source-dir (the source tree, for its scenarios)');
   const drives = [
-    { name: 'incident', incident: true,
+    { name: 'incident', incident: true, collision: 'ego hit car ahead (at fault)',
       flags: ['--scenario', join(args.sourceDir, 'tests/scenarios/hard_brake_ahead.json'), '--policy', 'walkthrough'] },
     { name: 'clean', incident: false, flags: ['--policy', 'reference', '--seed', '1'] },
   ];
@@ -442,7 +675,7 @@ function recordWithOvertake(args) {
     rmSync(html, { force: true });
     run(bin, ['drive', ...d.flags, '--minutes', '0.5', '--record', otr, '--quiet']);
     run(bin, ['view', otr, '--html', html, '--quiet']);
-    args.pages.push({ page: html, replay: otr, incident: d.incident, name: d.name });
+    args.pages.push({ page: html, replay: otr, incident: d.incident, collision: d.collision, name: d.name });
   }
   const bench = join(w, 'bench');
   rmSync(bench, { recursive: true, force: true });
@@ -460,15 +693,18 @@ async function main() {
     if (!args.viewer) throw new Error('--synthetic needs --viewer viewer.html');
     const template = readFileSync(args.viewer, 'utf8');
     const drives = [
-      { name: 'synthetic-incidents', incident: true, drive: syntheticDrive({ seconds: 30, incidents: [{ step: 400, type: 'collision', value: 4 }, { step: 900, type: 'max_jerk', value: 14.2 }] }) },
+      { name: 'synthetic-incidents', incident: true, collision: 'hit from behind (not at fault)',
+        drive: syntheticDrive({ seconds: 30, incidents: [{ step: 400, type: 'collision', value: 4, kind: 'hit_from_behind' }, { step: 900, type: 'max_jerk', value: 14.2 },
+          { step: 1200, type: 'collision', value: 6, kind: 'ego_lane_change', atFault: true }] }) },
       { name: 'synthetic-clean', incident: false, drive: syntheticDrive({ seconds: 20 }) },
+      { name: 'synthetic-legacy', incident: true, drive: syntheticDrive({ seconds: 20, legacy: true, incidents: [{ step: 300, type: 'collision', value: 2 }] }) },
     ];
     for (const d of drives) {
       const replayPath = join(args.artifacts, `${d.name}.otr`);
       const pagePath = join(args.artifacts, `${d.name}.html`);
       writeFileSync(replayPath, d.drive.bytes);
       writeFileSync(pagePath, fillViewer(template, d.drive.bytes));
-      args.pages.push({ page: pagePath, replay: replayPath, incident: d.incident, name: d.name });
+      args.pages.push({ page: pagePath, replay: replayPath, incident: d.incident, collision: d.collision, name: d.name });
     }
   }
   if (args.benchDir) {
@@ -491,7 +727,10 @@ async function main() {
   const shots = [];
   try {
     for (const p of args.pages) shots.push(await testPage(context, p, args.artifacts));
-    if (args.report) await testReport(context, args.report, args.artifacts, { linksExist: args.reportLinksExist });
+    if (args.report) {
+      await testReport(context, args.report, args.artifacts, { linksExist: args.reportLinksExist });
+      for (const v of reportVariants(args.report)) await testReport(context, v.path, args.artifacts, { name: v.name, expect: v.expect });
+    }
     if (args.overtake) {
       await testServed(context, args.overtake, args.pages[0].replay);
       await testLive(context, args.overtake, args.artifacts);

@@ -21,6 +21,8 @@ export const yawUnits = (rad) => {
   return Math.max(-31415, Math.min(31415, Math.round(a * 1e4)));
 };
 export const speedUnits = (mps) => Math.max(0, Math.min(65535, Math.round(mps * 100)));
+/// A TTC or headway in 0.01 s: 65535 for none (null, Infinity) and from 655.35 s on.
+export const centiseconds = (s) => (s == null || !(s < 655.35) ? 65535 : Math.max(0, Math.min(65534, Math.round(s * 100))));
 
 // A growing payload: little-endian fields and LEB128 varints.
 class Bytes {
@@ -65,7 +67,9 @@ export class RecordWriter {
     this.cars = new Map(); // the last frame's cars: id -> [x, y, yaw, speed]
   }
 
-  /// kind 1: one world step. `f.cars` holds {id, x, y, yaw, speed} with unique ids.
+  /// kind 1: one world step. `f.cars` holds {id, x, y, yaw, speed} with unique ids;
+  /// `f.safety` {ttcAhead, ttcEntering, headway} in seconds (null or Infinity: none) adds the
+  /// fields added within version 2 (without it, the frame is an older writer's).
   frame(f) {
     const b = new Bytes();
     b.u32(f.step);
@@ -81,6 +85,7 @@ export class RecordWriter {
       cars.forEach((c, k) => b.delta(now[k][j] - (this.cars.has(c.id) ? this.cars.get(c.id)[j] : 0)));
     }
     this.cars = new Map(cars.map((c, k) => [c.id, now[k]]));
+    if (f.safety) for (const k of ['ttcAhead', 'ttcEntering', 'headway']) b.u16(centiseconds(f.safety[k]));
     return record(1, b.bytes());
   }
 
@@ -99,9 +104,12 @@ export class RecordWriter {
   }
 }
 
-/// kind 3: an incident at the preceding frame.
+/// kind 3: an incident at the preceding frame. With `inc.kind` (an index into the header's
+/// collision_kinds, or 255 for none) and `inc.atFault`, the 20-byte record of version 2's
+/// later writers; without, an older writer's 18 bytes.
 export function incidentRecord(inc) {
-  const buf = new Uint8Array(18);
+  const classified = inc.kind !== undefined;
+  const buf = new Uint8Array(classified ? 20 : 18);
   const v = new DataView(buf.buffer);
   v.setUint8(0, inc.type);
   v.setFloat32(1, inc.value, true);
@@ -109,6 +117,10 @@ export function incidentRecord(inc) {
   v.setUint8(9, inc.lane);
   v.setInt32(10, cm(inc.x), true);
   v.setInt32(14, cm(inc.y), true);
+  if (classified) {
+    v.setUint8(18, inc.kind);
+    v.setUint8(19, inc.atFault ? 1 : 0);
+  }
   return record(3, buf);
 }
 
@@ -140,13 +152,30 @@ export function encodeReplay(header, records, version = 2) {
 }
 
 const INCIDENT_TYPES = ['collision', 'speeding', 'max_acceleration', 'max_jerk', 'outside_lane'];
+export const COLLISION_KINDS = ['ego_hit_car_ahead', 'hit_from_behind', 'hit_from_behind_braking', 'ego_lane_change',
+  'car_cut_in', 'side_contact', 'ego_stopped', 'car_stopped'];
+
+/// The synthetic drive's TTC and headway at a step (seconds; Infinity for none): a car ahead
+/// that closes in and falls back, a lane change now and then, and stretches with nobody ahead.
+export function syntheticSafety(step) {
+  const phase = step % 500;
+  const ahead = phase < 350;
+  return {
+    ttcAhead: ahead && phase > 50 ? 0.8 + (phase - 50) * 0.013 : Infinity,
+    ttcEntering: step % 700 > 600 ? 2.5 - (step % 700 - 600) * 0.02 : Infinity,
+    headway: ahead ? 0.6 + phase * 0.00437 : Infinity,
+  };
+}
 
 /// A drive on a circular track of `trackLength` metres: the ego accelerates in lane 1 among
 /// `carCount` cars; `incidents` is a list of {step, type} to record. With `churn`, the cars
 /// come and go: each leaves for 6 steps in every 90, the order of the list flips every 37
 /// steps, and a car with the id 65535 jumps between two far ends of the i32 range (5-byte
-/// differences). Returns the file bytes and the frames as plain objects for the assertions.
-export function syntheticDrive({ seconds = 20, carCount = 12, incidents = [], trackLength = 6945.554, end = true, churn = false } = {}) {
+/// differences). `legacy` writes as a writer from before TTC, headway and collision classes
+/// (no collision_kinds, frames without their last six bytes, 18-byte incidents); otherwise an
+/// incident may give `kind` (a collision kind's name) and `atFault`. Returns the file bytes
+/// and the frames as plain objects for the assertions.
+export function syntheticDrive({ seconds = 20, carCount = 12, incidents = [], trackLength = 6945.554, end = true, churn = false, legacy = false } = {}) {
   const stepS = 0.02;
   const R = trackLength / (2 * Math.PI);
   const at = (s, d) => {
@@ -170,6 +199,7 @@ export function syntheticDrive({ seconds = 20, carCount = 12, incidents = [], tr
     track_length_m: trackLength,
     lane_lines: laneLines,
     incident_types: INCIDENT_TYPES,
+    ...(legacy ? {} : { collision_kinds: COLLISION_KINDS }),
     provenance: { policy: 'synthetic', traffic: 'faithful', seed: 1, track: 'circle', duration_s: seconds },
   };
   const writer = new RecordWriter();
@@ -212,6 +242,7 @@ export function syntheticDrive({ seconds = 20, carCount = 12, incidents = [], tr
       step, x: p.x, y: p.y, yaw: p.yaw, speed: v, s: s % trackLength, d,
       accT: acc, accN: (v * v) / R, accTotal: Math.hypot(acc, (v * v) / R), jerk: step % 50 === 0 ? 3 : 0.5,
       distance: dist, distanceSince: since, bestFree: best, cars,
+      safety: legacy ? undefined : syntheticSafety(step),
     };
     frames.push(f);
     records.push(writer.frame(f));
@@ -228,6 +259,10 @@ export function syntheticDrive({ seconds = 20, carCount = 12, incidents = [], tr
     if (inc) {
       const type = INCIDENT_TYPES.indexOf(inc.type);
       const rec = { step, type, value: inc.value ?? 1, s: s % trackLength, lane: 1, x: p.x, y: p.y };
+      if (!legacy) {
+        rec.kind = inc.kind === undefined ? 255 : COLLISION_KINDS.indexOf(inc.kind);
+        rec.atFault = Boolean(inc.atFault);
+      }
       recorded.push(rec);
       records.push(incidentRecord(rec));
       since = 0;
@@ -236,8 +271,23 @@ export function syntheticDrive({ seconds = 20, carCount = 12, incidents = [], tr
   const report = {
     distance_miles: dist / 1609.344, duration_s: seconds, mean_speed_mph: (dist / seconds) * 2.23694,
     best_incident_free_miles: best / 1609.344, incident_counts: {},
-    incidents: recorded.map((r) => ({ type: INCIDENT_TYPES[r.type], t_s: r.step * stepS, s_m: r.s, lane: 1, value: r.value, unit: '' })),
+    incidents: recorded.map((r) => ({
+      type: INCIDENT_TYPES[r.type], t_s: r.step * stepS, s_m: r.s, lane: 1, value: r.value, unit: '',
+      ...(r.kind !== undefined && r.kind !== 255 ? { kind: COLLISION_KINDS[r.kind], at_fault: r.atFault } : {}),
+    })),
   };
+  if (!legacy) {
+    const collisions = recorded.filter((r) => INCIDENT_TYPES[r.type] === 'collision');
+    report.collisions = {
+      total: collisions.length,
+      at_fault: collisions.filter((r) => r.atFault).length,
+      by_kind: Object.fromEntries(COLLISION_KINDS.map((k, j) => [k, collisions.filter((r) => r.kind === j).length])),
+    };
+    report.safety = {
+      min_ttc_ahead_s: 0.8, min_ttc_entering_s: 0.5, min_time_headway_s: 0.6, time_ttc_below_s: 1, share_ttc_below: 1 / seconds,
+      time_headway_below_s: 2, share_headway_below: 2 / seconds, near_miss_episodes: 2, ttc_threshold_s: 1.5, headway_threshold_s: 1.0,
+    };
+  }
   if (end) records.push(endRecord(report));
   return { bytes: encodeReplay(header, records), header, frames, paths, incidents: recorded, records };
 }

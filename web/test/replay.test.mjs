@@ -1,10 +1,13 @@
 // The decoder against the test writer (docs/replay.md): round trip, truncation, corruption,
-// live records split over messages.
+// live records split over messages, the fields added within version 2 (TTC and headway,
+// collision classes) and files from before them.
 import assert from 'node:assert/strict';
 import { test } from 'node:test';
 
-import { adler32, base64ToBytes, decodeReplay, decodeReplayAsync, parseHeader, Replay, ReplayError } from '../src/replay.js';
-import { cm, concat, encodeReplay, RecordWriter, speedUnits, syntheticDrive, yawUnits } from './encode.mjs';
+import { adler32, base64ToBytes, decodeReplay, decodeReplayAsync, NO_COLLISION_KIND, parseHeader, Replay, ReplayError } from '../src/replay.js';
+import {
+  centiseconds, cm, COLLISION_KINDS, concat, encodeReplay, incidentRecord, RecordWriter, speedUnits, syntheticDrive, syntheticSafety, yawUnits,
+} from './encode.mjs';
 
 const close = (a, b, tol, what) => assert.ok(Math.abs(a - b) <= tol, `${what}: ${a} vs ${b}`);
 
@@ -280,4 +283,159 @@ test('plan statuses: a run that left normal planning says so, a clean one says n
     planStatusText({ planner_cycles: 200, plan_status: { cycles: { normal: 158, least_bad: 2, fallback: 40 } } }),
     'planner: least-bad 1.0%, fallback 20.0% of cycles',
   );
+});
+
+test('TTC, headway and collision classes come back; 65535 is none', () => {
+  const drive = syntheticDrive({
+    seconds: 12,
+    incidents: [
+      { step: 120, type: 'collision', value: 5, kind: 'hit_from_behind', atFault: false },
+      { step: 200, type: 'max_jerk', value: 12.5 },
+      { step: 300, type: 'collision', value: 7, kind: 'ego_lane_change', atFault: true },
+    ],
+  });
+  const r = decodeReplay(drive.bytes);
+  assert.equal(r.problem, null);
+  assert.deepEqual(r.collisionKinds, COLLISION_KINDS);
+  assert.equal(r.safetyFrames, r.frames);
+  let none = 0;
+  for (let i = 0; i < r.frames; ++i) {
+    const want = syntheticSafety(drive.frames[i].step);
+    for (const [col, key] of [['ttcAhead', 'ttcAhead'], ['ttcEntering', 'ttcEntering'], ['headway', 'headway']]) {
+      const w = centiseconds(want[key]);
+      if (w === 65535) {
+        assert.equal(r[col][i], Infinity, `${key} at ${i} is none`);
+        none += 1;
+      } else {
+        assert.equal(r[col][i], Math.fround(w * 0.01), `${key} at ${i}`);
+      }
+    }
+  }
+  assert.ok(none > 0 && none < 3 * r.frames, `some figures are none (${none})`);
+  assert.deepEqual(r.incidentClass(0), { kind: 'hit_from_behind', atFault: false });
+  assert.equal(r.incidentClass(1), null, 'a jerk incident has no class');
+  assert.deepEqual(r.incidentClass(2), { kind: 'ego_lane_change', atFault: true });
+  assert.equal(r.incKind[1], NO_COLLISION_KIND);
+  assert.equal(r.report.collisions.at_fault, 1);
+});
+
+test('a TTC of 655.35 s or more, or none, is stored as 65535 and read as none', () => {
+  assert.equal(centiseconds(655.34), 65534);
+  assert.equal(centiseconds(655.35), 65535);
+  assert.equal(centiseconds(Infinity), 65535);
+  assert.equal(centiseconds(null), 65535);
+  const w = new RecordWriter();
+  const r = new Replay({ step_s: 0.02 });
+  r.appendRecords(concat([
+    w.frame({ ...STILL, safety: { ttcAhead: 700, ttcEntering: 0, headway: 655.34 } }),
+    w.frame({ ...STILL, step: 1, safety: { ttcAhead: 1.234, ttcEntering: null, headway: 1.5 } }),
+  ]));
+  assert.equal(r.problem, null);
+  assert.deepEqual([r.ttcAhead[0], r.ttcEntering[0], r.headway[0]], [Infinity, 0, Math.fround(655.34)]);
+  assert.deepEqual([r.ttcAhead[1], r.ttcEntering[1], r.headway[1]], [Math.fround(1.23), Infinity, 1.5]);
+});
+
+test('an older file (no collision_kinds, no TTC, 18-byte incidents) reads as before, without them', () => {
+  const drive = syntheticDrive({ seconds: 6, legacy: true, incidents: [{ step: 120, type: 'collision', value: 3 }] });
+  assert.equal(drive.header.collision_kinds, undefined);
+  const r = decodeReplay(drive.bytes, 'old.otr');
+  assert.equal(r.problem, null);
+  assert.deepEqual(r.collisionKinds, []);
+  assert.equal(r.frames, drive.frames.length);
+  assert.equal(r.safetyFrames, 0);
+  assert.equal(r.ttcAhead[10], Infinity);
+  assert.equal(r.headway[r.frames - 1], Infinity);
+  assert.equal(r.incidents, 1);
+  assert.equal(r.incidentTypeName(r.incType[0]), 'collision');
+  assert.equal(r.incidentClass(0), null);
+  close(r.incValue[0], 3, 0, 'the other car');
+  // the same records, each frame and incident of the newer length: the same positions
+  const now = decodeReplay(syntheticDrive({ seconds: 6, incidents: [{ step: 120, type: 'collision', value: 3, kind: 'car_cut_in' }] }).bytes);
+  assert.deepEqual(now.egoX.subarray(0, now.frames), r.egoX.subarray(0, r.frames));
+  assert.deepEqual(now.carX.subarray(0, now.cars), r.carX.subarray(0, r.cars));
+  assert.equal(now.incidentClass(0).kind, 'car_cut_in');
+});
+
+test('bytes after the known fields of a frame or incident are ignored; a cut TTC is none', () => {
+  const w = new RecordWriter();
+  const frame = w.frame({ ...STILL, cars: [{ id: 3, x: 1, y: 2, yaw: 0, speed: 4 }], safety: { ttcAhead: 2, ttcEntering: 3, headway: 4 } });
+  const inc = incidentRecord({ type: 0, value: 3, s: 1, lane: 1, x: 0, y: 0, kind: 1, atFault: true });
+  // a later writer's record: three more bytes at the end of each
+  const longer = (rec) => {
+    const out = new Uint8Array(rec.length + 3);
+    out.set(rec);
+    out.set([9, 9, 9], rec.length);
+    new DataView(out.buffer).setUint32(1, rec.length - 5 + 3, true);
+    return out;
+  };
+  let r = new Replay({ step_s: 0.02, collision_kinds: COLLISION_KINDS });
+  r.appendRecords(concat([longer(frame), longer(inc)]));
+  assert.equal(r.problem, null);
+  assert.deepEqual([r.ttcAhead[0], r.ttcEntering[0], r.headway[0]], [2, 3, 4]);
+  assert.deepEqual(r.incidentClass(0), { kind: 'hit_from_behind', atFault: true });
+  assert.equal(r.carSpeed[0], 4);
+  // a frame cut inside its TTC and headway (fewer than six bytes of them) has none, as an
+  // older one; its cars are whole
+  for (let cut = 1; cut <= 6; ++cut) {
+    const bad = frame.slice(0, frame.length - cut);
+    new DataView(bad.buffer).setUint32(1, bad.length - 5, true);
+    r = new Replay({ step_s: 0.02 });
+    r.appendRecords(bad);
+    assert.equal(r.problem, null, `cut ${cut}`);
+    assert.equal(r.ttcAhead[0], Infinity);
+    assert.equal(r.carSpeed[0], 4);
+  }
+  // an incident of 19 bytes: no class
+  const odd = concat([inc.subarray(0, 5), inc.subarray(5, 5 + 19)]);
+  new DataView(odd.buffer).setUint32(1, 19, true);
+  r = new Replay({ step_s: 0.02, collision_kinds: COLLISION_KINDS });
+  r.appendRecords(concat([frame, odd]));
+  assert.equal(r.problem, null);
+  assert.equal(r.incidentClass(0), null);
+});
+
+test('an incident shorter than 18 bytes, a collision kind beyond collision_kinds, or at fault above 1 is malformed', () => {
+  const w = new RecordWriter();
+  const frame = w.frame(STILL);
+  const inc = (over) => incidentRecord({ type: 0, value: 3, s: 1, lane: 1, x: 0, y: 0, kind: 0, atFault: false, ...over });
+  const read = (header, ...records) => {
+    const r = new Replay({ step_s: 0.02, ...header });
+    r.appendRecords(concat([frame, ...records]));
+    return r;
+  };
+  let r = read({ collision_kinds: COLLISION_KINDS }, inc({ kind: 8 }));
+  assert.match(r.problem, /record 2 \(incident\) at byte \d+ of the data is malformed: collision kind 8 is not one of the header's 8 collision_kinds/);
+  assert.equal(r.incidents, 0);
+  assert.equal(r.frames, 1);
+  // a file without collision_kinds has no kind to name
+  r = read({}, inc({ kind: 0 }));
+  assert.match(r.problem, /collision kind 0 is not one of the header's 0 collision_kinds/);
+  const fault = inc({ kind: 2 });
+  fault[fault.length - 1] = 2;
+  r = read({ collision_kinds: COLLISION_KINDS }, fault);
+  assert.match(r.problem, /record 2 \(incident\) .* is malformed: its at-fault byte is 2, not 0 or 1/);
+  // 255: not a collision, whatever its fault byte
+  const none = inc({ kind: 255 });
+  none[none.length - 1] = 7;
+  r = read({ collision_kinds: COLLISION_KINDS }, none);
+  assert.equal(r.problem, null);
+  assert.equal(r.incidentClass(0), null);
+  const short = concat([inc().subarray(0, 5), inc().subarray(5, 5 + 17)]);
+  new DataView(short.buffer).setUint32(1, 17, true);
+  r = read({ collision_kinds: COLLISION_KINDS }, short);
+  assert.match(r.problem, /malformed: an incident needs 18 bytes, has 17/);
+});
+
+test('incident and status texts name the collision kind and fault', async () => {
+  const { incidentText, safetyStatusText } = await import('../src/viewer/format.js');
+  assert.equal(incidentText('collision', 5, { kind: 'hit_from_behind', atFault: false }), 'Collision with car 5 — hit from behind (not at fault)');
+  assert.equal(incidentText('collision', 5, { kind: 'ego_lane_change', atFault: true }), 'Collision with car 5 — ego lane change (at fault)');
+  assert.equal(incidentText('collision', 5), 'Collision with car 5');
+  assert.equal(incidentText('collision', 5, null), 'Collision with car 5');
+  assert.equal(incidentText('max_jerk', 12.5, null), 'Max jerk exceeded: 12.5 m/s³');
+  assert.equal(safetyStatusText(null), '');
+  assert.equal(safetyStatusText({ incidents: [] }), ''); // a report from before
+  assert.equal(safetyStatusText({ collisions: { total: 2, at_fault: 1 }, safety: { near_miss_episodes: 3 } }), '2 collisions (1 at fault) · 3 near misses');
+  assert.equal(safetyStatusText({ collisions: { total: 0, at_fault: 0 }, safety: { near_miss_episodes: 1 } }), '1 near miss');
+  assert.equal(safetyStatusText({ collisions: { total: 1, at_fault: 0 } }), '1 collision (0 at fault)');
 });

@@ -1,13 +1,18 @@
-// The bench report: the summary table, charts per policy and traffic profile, and every run
-// with a link to its replay. Data: the bench object (docs/replay.md) in #overtake-bench.
+// The bench report: the summary table with its intervals, how precise they are, the paired
+// comparisons of the policies, charts per policy and traffic profile (with error bars), and
+// every run with a link to its replay. Data: the bench object (docs/replay.md) in
+// #overtake-bench; any key may be missing in a bench from an older build.
 import uPlot from 'uplot';
 import 'uplot/dist/uPlot.min.css';
 
 import './report.css';
 import { groupOf, INCIDENT_TYPES, summarize } from './summary.js';
+import {
+  ciOf, fix, groupsOf, hasPrecision, pairColumns, pairsOf, precisionColumns, summaryColumns, TYPE_LABELS, withCI,
+} from './tables.js';
 
 const BENCH_PLACEHOLDER = ['__OVERTAKE', 'BENCH__'].join('_');
-const TYPE_LABELS = { collision: 'collision', speeding: 'speeding', max_acceleration: 'max acc', max_jerk: 'max jerk', outside_lane: 'outside lane' };
+const ERROR_BAR_COLOR = '#e8ecf1';
 const TYPE_COLORS = { collision: '#ff4d4f', speeding: '#ff8c1a', max_acceleration: '#ffd000', max_jerk: '#d36bff', outside_lane: '#32c5ff' };
 const GROUP_COLORS = ['#4fb3ff', '#3ddc84', '#f5a623', '#ff5ce1', '#b28dff', '#32c5ff', '#ff8c1a', '#9be15d', '#ff6b6b', '#c0c0c0'];
 const AXIS = { stroke: '#8a94a3', grid: { stroke: '#2a3038', width: 1 }, ticks: { stroke: '#2a3038', width: 1 } };
@@ -25,8 +30,6 @@ function el(tag, attrs = {}, ...children) {
   for (const c of children) e.append(c instanceof Node ? c : document.createTextNode(String(c)));
   return e;
 }
-
-const fix = (x, d) => (typeof x === 'number' && Number.isFinite(x) ? x.toFixed(d) : '–');
 
 function readBench() {
   const node = $('overtake-bench');
@@ -72,28 +75,41 @@ function renderMeta(bench, runs) {
   for (const [k, v] of items) dl.append(el('dt', {}, k), el('dd', {}, String(v)));
 }
 
-function renderSummary(rows) {
-  const head = ['policy', 'traffic', 'runs', 'miles', 'mean mph', 'incidents /100 mi',
-    ...INCIDENT_TYPES.map((t) => TYPE_LABELS[t]), 'incident-free mi median / worst',
-    'peak acc / jerk (rubric)', 'peak acc / jerk (strict)', 'planner µs p50 / p99'];
-  const table = $('summary');
+// Fills `table` with `items` as `columns` (tables.js) say: a row of group headers when any
+// column has a group, then the headers, then one row per item (with `dataset(item)`).
+function renderTable(table, columns, items, dataset) {
   table.textContent = '';
-  table.append(el('thead', {}, el('tr', {}, ...head.map((h) => el('th', {}, h)))));
+  const head = el('thead');
+  if (columns.some((c) => c.group)) {
+    head.append(el('tr', {}, ...groupsOf(columns).map((g) => el('th', { colspan: g.span, class: 'group' }, g.label))));
+  }
+  head.append(el('tr', {}, ...columns.map((c) => el('th', {}, c.label))));
+  table.append(head);
   const body = el('tbody');
-  for (const r of rows) {
-    const by = r.incidents_per_100mi_by_type || {};
-    const t = r.timing || {};
-    body.append(el('tr', { dataset: { policy: r.policy, traffic: r.traffic } },
-      el('td', {}, r.policy), el('td', {}, r.traffic), el('td', { class: 'num' }, r.runs),
-      el('td', { class: 'num' }, fix(r.total_miles, 1)), el('td', { class: 'num' }, fix(r.mean_speed_mph, 2)),
-      el('td', { class: `num${r.incidents_per_100mi > 0 ? ' bad' : ''}` }, fix(r.incidents_per_100mi, 1)),
-      ...INCIDENT_TYPES.map((k) => el('td', { class: `num${by[k] > 0 ? ' bad' : ''}` }, fix(by[k], 1))),
-      el('td', { class: 'num' }, `${fix(r.incident_free_miles_median, 2)} / ${fix(r.incident_free_miles_worst, 2)}`),
-      el('td', { class: 'num' }, `${fix(r.peak_acceleration_mps2, 1)} / ${fix(r.peak_jerk_mps3, 1)}`),
-      el('td', { class: 'num' }, `${fix(r.peak_strict_acceleration_mps2, 1)} / ${fix(r.peak_strict_jerk_mps3, 1)}`),
-      el('td', { class: 'num' }, `${fix(t.planner_p50_us_median, 0)} / ${fix(t.planner_p99_us_worst, 0)}`)));
+  for (const item of items) {
+    body.append(el('tr', { dataset: dataset(item) }, ...columns.map((c) => {
+      const v = c.cell(item);
+      return el('td', { class: v.cls || undefined, title: v.title }, v.text);
+    })));
   }
   table.append(body);
+}
+
+function renderSummary(rows) {
+  renderTable($('summary'), summaryColumns(rows), rows, (r) => ({ policy: r.policy, traffic: r.traffic }));
+  $('summary-note').hidden = !rows.some((r) => ciOf(r.mean_speed_mph_ci) || ciOf(r.incidents_per_100mi_ci));
+  const precise = hasPrecision(rows);
+  $('precision-section').hidden = !precise;
+  if (precise) renderTable($('precision'), precisionColumns(), rows, (r) => ({ policy: r.policy, traffic: r.traffic }));
+}
+
+// The paired comparisons, grouped by traffic profile (in the order the data gives them).
+function renderPairs(pairs) {
+  $('pairs-section').hidden = pairs.length === 0;
+  if (!pairs.length) return;
+  const order = [...new Set(pairs.map((p) => String(p.traffic)))];
+  const sorted = order.flatMap((t) => pairs.filter((p) => String(p.traffic) === t));
+  renderTable($('pairs'), pairColumns(pairs), sorted, (p) => ({ traffic: p.traffic, policy: p.policy, versus: p.versus }));
 }
 
 // A categorical x axis: one slot per summary row.
@@ -111,14 +127,53 @@ function chartWidth(node) {
   return Math.max(300, Math.floor(node.clientWidth || 600));
 }
 
-function barChart(node, title, labels, series, yLabel) {
+// Error bars: for each slot i with an interval errors[i] = [lo, hi], a vertical line from lo
+// to hi with caps, over the bars (a draw hook: uPlot has none of its own). The chart's node
+// counts them in data-error-bars.
+function errorBars(errors) {
+  return (u) => {
+    const ctx = u.ctx;
+    const px = devicePixelRatio || 1;
+    const cap = 5 * px;
+    let drawn = 0;
+    ctx.save();
+    ctx.beginPath();
+    ctx.rect(u.bbox.left, u.bbox.top, u.bbox.width, u.bbox.height);
+    ctx.clip();
+    ctx.strokeStyle = ERROR_BAR_COLOR;
+    ctx.lineWidth = 1.5 * px;
+    ctx.beginPath();
+    errors.forEach((ci, i) => {
+      const c = ciOf(ci);
+      if (!c) return;
+      const x = Math.round(u.valToPos(i, 'x', true)) + 0.5;
+      const lo = u.valToPos(c[0], 'y', true);
+      const hi = u.valToPos(c[1], 'y', true);
+      ctx.moveTo(x, lo);
+      ctx.lineTo(x, hi);
+      ctx.moveTo(x - cap, lo);
+      ctx.lineTo(x + cap, lo);
+      ctx.moveTo(x - cap, hi);
+      ctx.lineTo(x + cap, hi);
+      drawn += 1;
+    });
+    ctx.stroke();
+    ctx.restore();
+    u.root.parentElement.dataset.errorBars = String(drawn);
+  };
+}
+
+/// A bar per label; `errors` (optional) holds an interval per label, drawn as error bars, and
+/// the y axis reaches their tops.
+function barChart(node, title, labels, series, yLabel, errors = null) {
   const x = labels.map((_, i) => i);
   const bars = uPlot.paths.bars({ size: [0.6, 80], align: 0 });
+  const top = Math.max(0, ...(errors || []).map((c) => (ciOf(c) ? c[1] : 0)));
   const opts = {
     title,
     width: chartWidth(node),
     height: 240,
-    scales: { x: { time: false, range: [-0.6, labels.length - 0.4] }, y: { range: (u, lo, hi) => [0, Math.max(1e-9, hi) * 1.1] } },
+    scales: { x: { time: false, range: [-0.6, labels.length - 0.4] }, y: { range: (u, lo, hi) => [0, Math.max(1e-9, hi, top) * 1.1] } },
     axes: [categoryAxis(labels.map((l) => l.replace(' / ', '\n'))), { ...AXIS, label: yLabel, size: 56 }],
     series: [{ label: 'group', value: (u, v) => (v == null ? '–' : labels[v]) }, ...series.map((s) => ({
       label: s.label, stroke: s.color, fill: `${s.color}cc`, width: 1, paths: bars, points: { show: false },
@@ -126,9 +181,13 @@ function barChart(node, title, labels, series, yLabel) {
     }))],
     cursor: { drag: { x: false, y: false }, points: { show: false } },
     legend: { show: true },
+    hooks: errors ? { draw: [errorBars(errors)] } : {},
   };
   return new uPlot(opts, [x, ...series.map((s) => s.data)], node);
 }
+
+// A rate per 100 miles with its interval in a legend: "1.23 (0.4–2.9)".
+const rateValue = (values, cis, d) => (u, v, si, idx) => (idx == null ? '–' : withCI(values[idx], cis[idx], d));
 
 function renderCharts(rows, runs) {
   const labels = rows.map((r) => `${r.policy} / ${r.traffic}`);
@@ -138,8 +197,11 @@ function renderCharts(rows, runs) {
     n.textContent = '';
     return n;
   };
-  plots.push(barChart(box('chart-speed'), 'Mean speed (mph)', labels,
-    [{ label: 'mean speed', color: '#4fb3ff', data: rows.map((r) => r.mean_speed_mph), value: (u, v) => `${fix(v, 2)} mph` }], 'mph'));
+  const speedCI = rows.map((r) => r.mean_speed_mph_ci);
+  const speed = rows.map((r) => r.mean_speed_mph);
+  plots.push(barChart(box('chart-speed'), 'Mean speed (mph), with 95% intervals', labels,
+    [{ label: 'mean speed', color: '#4fb3ff', data: speed, value: (u, v, si, idx) => (idx == null ? '–' : `${withCI(speed[idx], speedCI[idx], 2)} mph`) }],
+    'mph', speedCI));
 
   // incidents per 100 miles by type, stacked: each series is drawn up to its cumulative sum
   const per = INCIDENT_TYPES.map((k) => rows.map((r) => (r.incidents_per_100mi_by_type || {})[k] || 0));
@@ -153,7 +215,26 @@ function renderCharts(rows, runs) {
     label: TYPE_LABELS[k], color: TYPE_COLORS[k], data: cum[j],
     value: (u, v, si, idx) => (idx == null ? '–' : fix(per[j][idx], 1)),
   })).reverse();
-  plots.push(barChart(box('chart-incidents'), 'Incidents per 100 miles, by type', labels, stacked, 'per 100 mi'));
+  // the interval is of all incidents: its bar stands on the top of the stack
+  plots.push(barChart(box('chart-incidents'), 'Incidents per 100 miles, by type (95% interval of all)', labels, stacked, 'per 100 mi',
+    rows.map((r) => r.incidents_per_100mi_ci)));
+
+  // at-fault collisions and near misses per 100 miles, when the rows have them (a bench from
+  // before collisions were classified, or near misses measured, has not)
+  const rate = (id, title, color, values, cis, d) => {
+    const node = $(id);
+    node.hidden = !values.some((v) => typeof v === 'number');
+    if (node.hidden) return;
+    node.textContent = '';
+    plots.push(barChart(node, title, labels, [{ label: 'per 100 mi', color, data: values.map((v) => v ?? null), value: rateValue(values, cis, d) }],
+      'per 100 mi', cis));
+  };
+  const coll = rows.map((r) => r.collisions || {});
+  rate('chart-fault', 'At-fault collisions per 100 miles, with 95% intervals', TYPE_COLORS.collision,
+    coll.map((c) => c.at_fault_per_100mi), coll.map((c) => c.at_fault_per_100mi_ci), 2);
+  const near = rows.map((r) => r.near_misses || {});
+  rate('chart-near', 'Near misses per 100 miles, with 95% intervals', '#ff5ce1',
+    near.map((n) => n.per_100mi), near.map((n) => n.per_100mi_ci), 1);
 
   // incident-free distance: the share of runs whose best incident-free distance is at most x
   const groups = rows.map((r) => runs.filter((run) => {
@@ -207,8 +288,13 @@ const COLUMNS = [
   { key: 'acc', label: 'peak acc (strict)', num: true, get: (r) => (r.peak || {}).strict_acceleration_mps2, fmt: (v) => fix(v, 1) },
   { key: 'jerk', label: 'peak jerk (strict)', num: true, get: (r) => (r.peak || {}).strict_jerk_mps3, fmt: (v) => fix(v, 1) },
   { key: 'fallback', label: 'least-bad + fallback cycles', num: true, get: (r) => unusualShare(r), fmt: (v) => `${fix(100 * v, 1)}%` },
+  { key: 'fault', label: 'at-fault collisions', num: true, get: (r) => (r.collisions || {}).at_fault, fmt: (v) => fix(v, 0) },
+  // a least TTC of null: the run measured none (no car ahead closed in); '–': not measured
+  { key: 'ttc', label: 'least TTC ahead s', num: true, get: (r) => (r.safety || {}).min_ttc_ahead_s,
+    fmt: (v, r) => (typeof v === 'number' ? fix(v, 2) : r.safety ? 'none' : '–'), absent: Infinity },
   { key: 'ended', label: 'ended early', get: (r) => r.ended_early || '' },
 ];
+const column = (key) => COLUMNS.find((c) => c.key === key);
 
 function renderRuns(runs) {
   const table = $('runs');
@@ -221,7 +307,7 @@ function renderRuns(runs) {
     rows.sort((a, b) => {
       const x = col.get(a);
       const y = col.get(b);
-      const c = col.num ? (x ?? 0) - (y ?? 0) : String(x).localeCompare(String(y));
+      const c = col.num ? (x ?? col.absent ?? 0) - (y ?? col.absent ?? 0) || 0 : String(x).localeCompare(String(y));
       if (c !== 0) return c * state.dir;
       return ((a.config || {}).seed ?? 0) - ((b.config || {}).seed ?? 0);
     });
@@ -238,10 +324,11 @@ function renderRuns(runs) {
     table.append(el('thead', {}, head));
     const body = el('tbody');
     for (const r of rows) {
-      const incidents = COLUMNS[5].get(r);
-      const tr = el('tr', { dataset: { seed: COLUMNS[2].get(r) } }, ...COLUMNS.map((c) => {
+      const incidents = column('incidents').get(r);
+      const tr = el('tr', { dataset: { seed: column('seed').get(r) } }, ...COLUMNS.map((c) => {
         const v = c.get(r);
-        const td = el('td', { class: `${c.num ? 'num' : ''}${c.key === 'incidents' && v > 0 ? ' bad' : ''}` }, c.fmt ? c.fmt(v) : v ?? '–');
+        const bad = (c.key === 'incidents' || c.key === 'fault') && v > 0;
+        const td = el('td', { class: `${c.num ? 'num' : ''}${bad ? ' bad' : ''}` }, c.fmt ? c.fmt(v, r) : v ?? '–');
         if (c.key === 'incidents' && v > 0) {
           td.title = INCIDENT_TYPES.map((k) => `${TYPE_LABELS[k]}: ${(r.incident_counts || {})[k] || 0}`).join(', ');
         }
@@ -281,8 +368,10 @@ function main() {
   const bench = parsed.bench;
   const runs = Array.isArray(bench.runs) ? bench.runs : [];
   const rows = Array.isArray(bench.summary) && bench.summary.length ? bench.summary : summarize(runs, bench.policies, bench.traffic);
+  const pairs = pairsOf(bench);
   renderMeta(bench, runs);
   renderSummary(rows);
+  renderPairs(pairs);
   let plots = [];
   if (rows.length) plots = renderCharts(rows, runs);
   renderRuns(runs);
@@ -292,7 +381,7 @@ function main() {
   window.addEventListener('resize', resize);
   root.dataset.state = 'ready';
   root.dataset.runs = String(runs.length);
-  window.overtakeReport = { bench, rows, runs };
+  window.overtakeReport = { bench, rows, runs, pairs };
 }
 
 main();

@@ -1,5 +1,7 @@
-// The bench summary rows, computed from the runs as src/app/bench.cpp's summarize_bench does,
-// for a report object that carries runs but no "summary".
+// The bench summary rows, computed from the runs as the bench's summary does, for a report
+// object that carries runs but no "summary": the figures without their intervals (those, and
+// how precise they are, come only from the bench), collisions at fault and near misses when
+// every run has them (else null, as the bench writes for older runs).
 export const INCIDENT_TYPES = ['collision', 'speeding', 'max_acceleration', 'max_jerk', 'outside_lane'];
 const METRES_PER_MILE = 1609.344;
 const MPH_PER_MPS = 2.2369362920544025;
@@ -12,6 +14,49 @@ function median(values) {
 }
 
 const num = (x) => (typeof x === 'number' && Number.isFinite(x) ? x : 0);
+const isNum = (x) => typeof x === 'number' && Number.isFinite(x);
+const per100 = (n, miles) => (miles > 0 ? (100 * n) / miles : 0);
+
+// Collisions of runs: the total from the incident counts; at fault and by kind only when
+// every run classified its collisions.
+function collisionsOf(runs, miles) {
+  const total = runs.reduce((a, r) => a + num((r.incident_counts || {}).collision), 0);
+  const classified = runs.every((r) => r.collisions && isNum(r.collisions.at_fault));
+  const out = { total, per_100mi: per100(total, miles), per_100mi_ci: null, at_fault: null, at_fault_per_100mi: null, at_fault_per_100mi_ci: null, by_kind: null };
+  if (!classified) return out;
+  out.at_fault = runs.reduce((a, r) => a + r.collisions.at_fault, 0);
+  out.at_fault_per_100mi = per100(out.at_fault, miles);
+  out.by_kind = {};
+  for (const r of runs) {
+    for (const [k, n] of Object.entries(r.collisions.by_kind || {})) out.by_kind[k] = (out.by_kind[k] || 0) + num(n);
+  }
+  return out;
+}
+
+// Near misses of runs (null unless every run measured them): episodes per 100 miles, the
+// least TTC and headway (null when never measured), and the shares of time below the
+// thresholds, over all the runs' time.
+function nearMissesOf(runs, miles, seconds) {
+  if (!runs.every((r) => r.safety && typeof r.safety === 'object')) return null;
+  const least = (key) => {
+    const v = runs.map((r) => r.safety[key]).filter(isNum);
+    return v.length ? Math.min(...v) : null;
+  };
+  const episodes = runs.reduce((a, r) => a + num(r.safety.near_miss_episodes), 0);
+  const s0 = runs[0].safety;
+  return {
+    episodes,
+    per_100mi: per100(episodes, miles),
+    per_100mi_ci: null,
+    min_ttc_ahead_s: least('min_ttc_ahead_s'),
+    min_ttc_entering_s: least('min_ttc_entering_s'),
+    min_time_headway_s: least('min_time_headway_s'),
+    share_ttc_below: seconds > 0 ? runs.reduce((a, r) => a + num(r.safety.time_ttc_below_s), 0) / seconds : 0,
+    share_headway_below: seconds > 0 ? runs.reduce((a, r) => a + num(r.safety.time_headway_below_s), 0) / seconds : 0,
+    ttc_threshold_s: isNum(s0.ttc_threshold_s) ? s0.ttc_threshold_s : 1.5,
+    headway_threshold_s: isNum(s0.headway_threshold_s) ? s0.headway_threshold_s : 1.0,
+  };
+}
 
 /// The run's policy and traffic profile.
 export function groupOf(run) {
@@ -71,7 +116,7 @@ export function summarize(runs, policies = [], traffic = []) {
       mean_speed_mph: seconds > 0 ? ((miles * METRES_PER_MILE) / seconds) * MPH_PER_MPS : 0,
       incidents: total,
       incidents_per_100mi: miles > 0 ? (100 * total) / miles : 0,
-      incidents_per_100mi_by_type: Object.fromEntries(INCIDENT_TYPES.map((k) => [k, miles > 0 ? (100 * counts[k]) / miles : 0])),
+      incidents_per_100mi_by_type: Object.fromEntries(INCIDENT_TYPES.map((k) => [k, per100(counts[k], miles)])),
       incident_free_miles_median: median(free),
       incident_free_miles_worst: Math.min(...free),
       peak_acceleration_mps2: peak.acc,
@@ -79,6 +124,9 @@ export function summarize(runs, policies = [], traffic = []) {
       peak_strict_acceleration_mps2: peak.sacc,
       peak_strict_jerk_mps3: peak.sjerk,
       timing: { planner_p50_us_median: median(p50s), planner_p99_us_worst: peak.p99 },
+      collisions: collisionsOf(mine, miles),
+      near_misses: nearMissesOf(mine, miles, seconds),
+      precision: null,
     });
   }
   return rows;

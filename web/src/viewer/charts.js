@@ -1,12 +1,22 @@
-// Speed, total acceleration and jerk against time (uPlot), with the limits drawn, a playhead
-// linked to the timeline, and click-to-seek.
+// Speed, total acceleration, jerk, and the near-miss figures (TTC, headway) against time
+// (uPlot), with the limits and thresholds drawn, a playhead linked to the timeline, and
+// click-to-seek.
 import uPlot from 'uplot';
 import 'uplot/dist/uPlot.min.css';
 
-import { clock, MPH_PER_MPS } from './format.js';
+import { clock, MPH_PER_MPS, safetyThresholds } from './format.js';
 
 const AXIS = { stroke: '#8a94a3', grid: { stroke: '#2a3038', width: 1 }, ticks: { stroke: '#2a3038', width: 1 } };
 const LIMIT_COLOR = '#ff4d4f';
+const HEADWAY_COLOR = '#f5a623';
+// The near-miss chart's y axis: TTC and headway that matter are a few seconds; larger ones
+// run off the top, and none (Infinity) is a gap, not a huge value.
+const SAFETY_TOP_S = 6;
+const SAFETY_SERIES = [
+  { key: 'ttcAhead', label: 'TTC ahead', color: '#ff5ce1' },
+  { key: 'ttcEntering', label: 'TTC entering', color: '#b28dff' },
+  { key: 'headway', label: 'headway', color: '#32c5ff' },
+];
 
 // Axis ticks: "m:ss", or "h:mm:ss" from an hour on.
 function shortClock(v) {
@@ -17,23 +27,44 @@ function shortClock(v) {
   return h ? `${h}:${String(m).padStart(2, '0')}:${sec}` : `${m}:${sec}`;
 }
 
+// A dashed horizontal line at `limit`, named by `text` (if any) at its right end.
+function drawLimit(u, limit, color, text) {
+  if (!(limit > 0)) return;
+  const ctx = u.ctx;
+  const px = devicePixelRatio || 1;
+  const y = Math.round(u.valToPos(limit, 'y', true)) + 0.5;
+  if (y < u.bbox.top || y > u.bbox.top + u.bbox.height) return;
+  ctx.save();
+  ctx.strokeStyle = color;
+  ctx.lineWidth = Math.max(1, px);
+  ctx.setLineDash([6 * px, 4 * px]);
+  ctx.beginPath();
+  ctx.moveTo(u.bbox.left, y);
+  ctx.lineTo(u.bbox.left + u.bbox.width, y);
+  ctx.stroke();
+  if (text) {
+    ctx.fillStyle = color;
+    ctx.font = `${Math.round(10 * px)}px sans-serif`;
+    ctx.textAlign = 'right';
+    ctx.textBaseline = 'bottom';
+    ctx.fillText(text, u.bbox.left + u.bbox.width - 4 * px, y - 2 * px);
+  }
+  ctx.restore();
+}
+
 function limitLine(limit) {
+  return (u) => drawLimit(u, limit, LIMIT_COLOR, '');
+}
+
+// The near-miss thresholds: TTC (for both TTCs) and headway.
+function thresholdLines(th) {
   return (u) => {
-    if (!(limit > 0)) return;
-    const ctx = u.ctx;
-    const y = Math.round(u.valToPos(limit, 'y', true)) + 0.5;
-    if (y < u.bbox.top || y > u.bbox.top + u.bbox.height) return;
-    ctx.save();
-    ctx.strokeStyle = LIMIT_COLOR;
-    ctx.lineWidth = Math.max(1, devicePixelRatio || 1);
-    ctx.setLineDash([6 * (devicePixelRatio || 1), 4 * (devicePixelRatio || 1)]);
-    ctx.beginPath();
-    ctx.moveTo(u.bbox.left, y);
-    ctx.lineTo(u.bbox.left + u.bbox.width, y);
-    ctx.stroke();
-    ctx.restore();
+    drawLimit(u, th.ttc, LIMIT_COLOR, `TTC ${th.ttc} s`);
+    drawLimit(u, th.headway, HEADWAY_COLOR, `headway ${th.headway} s`);
   };
 }
+
+const secondsValue = (u, v) => (v == null ? '–' : `${v.toFixed(2)} s`);
 
 // A y range that shows the limit with some room, and clips rare spikes at a few times it.
 function rangeFor(limit) {
@@ -45,7 +76,7 @@ function rangeFor(limit) {
   };
 }
 
-/// The three charts. `onSeek(t_s)` is called when a chart is clicked.
+/// The four charts. `onSeek(t_s)` is called when a chart is clicked.
 export class Charts {
   constructor(root, replay, onSeek) {
     this.root = root;
@@ -62,36 +93,52 @@ export class Charts {
     for (const p of this.plots) p.destroy();
     this.plots = [];
     this.playheads = [];
+    this.labels = [];
     this.replay = replay;
     this.speedMph = new Float32Array(0);
+    this.safety = SAFETY_SERIES.map(() => []); // seconds, null where there is none
+    this.safetyPoints = 0; // values that are not none
     this.filled = 0;
     const lim = replay.limits || {};
+    const line = (label, unit, color) => ({
+      label, stroke: color, width: 1, points: { show: false }, value: (u, v) => (v == null ? '–' : `${v.toFixed(2)} ${unit}`),
+    });
+    const th = safetyThresholds(replay.report);
     const specs = [
-      { el: 'chart-speed', title: `Speed (mph), limit ${((lim.speed_mps || 0) * MPH_PER_MPS).toFixed(0)}`, label: 'speed', unit: 'mph', color: '#4fb3ff', limit: (lim.speed_mps || 0) * MPH_PER_MPS },
-      { el: 'chart-acc', title: `Total acceleration (m/s²), limit ${lim.acceleration_mps2 ?? '–'}`, label: 'acceleration', unit: 'm/s²', color: '#3ddc84', limit: lim.acceleration_mps2 || 0 },
-      { el: 'chart-jerk', title: `Jerk (m/s³), limit ${lim.jerk_mps3 ?? '–'}`, label: 'jerk', unit: 'm/s³', color: '#f5a623', limit: lim.jerk_mps3 || 0 },
+      { el: 'chart-speed', title: `Speed (mph), limit ${((lim.speed_mps || 0) * MPH_PER_MPS).toFixed(0)}`, label: 'speed',
+        series: [line('speed', 'mph', '#4fb3ff')], range: rangeFor((lim.speed_mps || 0) * MPH_PER_MPS), draw: limitLine((lim.speed_mps || 0) * MPH_PER_MPS) },
+      { el: 'chart-acc', title: `Total acceleration (m/s²), limit ${lim.acceleration_mps2 ?? '–'}`, label: 'acceleration',
+        series: [line('acceleration', 'm/s²', '#3ddc84')], range: rangeFor(lim.acceleration_mps2 || 0), draw: limitLine(lim.acceleration_mps2 || 0) },
+      { el: 'chart-jerk', title: `Jerk (m/s³), limit ${lim.jerk_mps3 ?? '–'}`, label: 'jerk',
+        series: [line('jerk', 'm/s³', '#f5a623')], range: rangeFor(lim.jerk_mps3 || 0), draw: limitLine(lim.jerk_mps3 || 0) },
+      { el: 'chart-safety', label: 'safety',
+        // a replay from before TTC and headway were recorded has none: say so in the title
+        title: replay.safetyFrames === 0 && replay.frames > 0 ? 'TTC and headway: not in this replay' : 'TTC and headway (s)',
+        series: SAFETY_SERIES.map((s) => ({ label: s.label, stroke: s.color, width: 1, points: { show: false }, value: secondsValue })),
+        range: [0, SAFETY_TOP_S], draw: thresholdLines(th) },
     ];
     const width = this._width();
     for (const s of specs) {
       const el = this.root.querySelector(`#${s.el}`);
+      if (!el) continue;
       el.textContent = '';
       const opts = {
         title: s.title,
         width,
         height: 150,
         pxAlign: 0,
-        scales: { x: { time: false }, y: { range: rangeFor(s.limit) } },
+        scales: { x: { time: false }, y: { range: s.range } },
         axes: [
           { ...AXIS, size: 28, values: (u, vals) => vals.map((v) => shortClock(v)) },
           { ...AXIS, size: 44 },
         ],
         series: [
           { label: 't', value: (u, v) => (v == null ? '–' : clock(v)) },
-          { label: s.label, stroke: s.color, width: 1, points: { show: false }, value: (u, v) => (v == null ? '–' : `${v.toFixed(2)} ${s.unit}`) },
+          ...s.series,
         ],
         cursor: { sync: { key: 'overtake-charts' }, drag: { x: false, y: false, setScale: false }, points: { size: 5 } },
         legend: { show: true, live: true },
-        hooks: { draw: [limitLine(s.limit)], setScale: [() => this._placeHeads()] },
+        hooks: { draw: [s.draw], setScale: [() => this._placeHeads()] },
       };
       const plot = new uPlot(opts, this._data(s.label), el);
       const head = document.createElement('div');
@@ -103,7 +150,15 @@ export class Charts {
       });
       this.plots.push(plot);
       this.playheads.push(head);
+      this.labels.push(s.label);
     }
+    this._markSafety();
+  }
+
+  // The near-miss chart's element says how many values it shows (for tests and the console).
+  _markSafety() {
+    const el = this.root.querySelector('#chart-safety');
+    if (el) el.dataset.points = String(this.safetyPoints);
   }
 
   _width() {
@@ -118,6 +173,20 @@ export class Charts {
       this.speedMph = next;
     }
     for (let i = this.filled; i < r.frames; ++i) this.speedMph[i] = r.egoSpeed[i] * MPH_PER_MPS;
+    // uPlot leaves a gap at null (not at NaN or Infinity): plain arrays with null for none
+    SAFETY_SERIES.forEach((s, j) => {
+      const col = r[s.key];
+      const out = this.safety[j];
+      for (let i = this.filled; i < r.frames; ++i) {
+        const v = col[i];
+        if (Number.isFinite(v)) {
+          out.push(v);
+          this.safetyPoints += 1;
+        } else {
+          out.push(null);
+        }
+      }
+    });
     this.filled = r.frames;
   }
 
@@ -128,13 +197,14 @@ export class Charts {
     const x = r.time.subarray(0, n);
     if (label === 'speed') return [x, this.speedMph.subarray(0, n)];
     if (label === 'acceleration') return [x, r.accTotal.subarray(0, n)];
+    if (label === 'safety') return [x, ...this.safety];
     return [x, r.jerk.subarray(0, n)];
   }
 
   /// New frames arrived (live): redraw with all of them.
   refresh() {
-    const labels = ['speed', 'acceleration', 'jerk'];
-    this.plots.forEach((p, k) => p.setData(this._data(labels[k]), this.windowS === 0));
+    this.plots.forEach((p, k) => p.setData(this._data(this.labels[k]), this.windowS === 0));
+    this._markSafety();
     this.lastCentre = -1;
   }
 

@@ -20,11 +20,18 @@ const INCIDENT_TEXT = {
   outside_lane: 'Outside of lane',
 };
 
-/// The banner text of an incident, with its value where it says something.
-export function incidentText(type, value) {
+/// A collision kind's name as words: 'ego_hit_car_ahead' -> 'ego hit car ahead'.
+export const kindText = (kind) => String(kind).replace(/_/g, ' ');
+
+/// The banner text of an incident, with its value where it says something, and for a
+/// collision its class ({kind, atFault}, from Replay.incidentClass) when the file has one.
+export function incidentText(type, value, cls = null) {
   const head = INCIDENT_TEXT[type] || type;
   switch (type) {
-    case 'collision': return `${head} with car ${Math.round(value)}`;
+    case 'collision': {
+      const what = `${head} with car ${Math.round(value)}`;
+      return cls ? `${what} — ${kindText(cls.kind)} (${cls.atFault ? 'at fault' : 'not at fault'})` : what;
+    }
     case 'speeding': return `${head}: ${value.toFixed(1)} mph`;
     case 'max_acceleration': return `${head}: ${value.toFixed(1)} m/s²`;
     case 'max_jerk': return `${head}: ${value.toFixed(1)} m/s³`;
@@ -45,4 +52,32 @@ export function planStatusText(report) {
   if (leastBad + fallback === 0) return '';
   const pct = (n) => `${((100 * n) / total).toFixed(1)}%`;
   return `planner: least-bad ${pct(leastBad)}, fallback ${pct(fallback)} of cycles`;
+}
+
+/// The TTC and headway thresholds of the run's near misses (seconds): the report's when it has
+/// them, else the defaults (docs/evaluation.md).
+export function safetyThresholds(report) {
+  const s = (report && report.safety) || {};
+  const pos = (x, dflt) => (typeof x === 'number' && x > 0 ? x : dflt);
+  return { ttc: pos(s.ttc_threshold_s, 1.5), headway: pos(s.headway_threshold_s, 1.0) };
+}
+
+/// What the run's report says of its collisions and near misses, e.g. '2 collisions (1 at
+/// fault) · 3 near misses'; '' for a report from before they were counted. No collisions
+/// are not mentioned (the status line counts incidents already).
+export function safetyStatusText(report) {
+  if (!report) return '';
+  const parts = [];
+  const c = report.collisions;
+  if (c && Number(c.total) > 0) {
+    const n = Number(c.total);
+    const fault = typeof c.at_fault === 'number' ? ` (${c.at_fault} at fault)` : '';
+    parts.push(`${n} collision${n === 1 ? '' : 's'}${fault}`);
+  }
+  const s = report.safety;
+  if (s && typeof s.near_miss_episodes === 'number') {
+    const n = s.near_miss_episodes;
+    parts.push(`${n} near miss${n === 1 ? '' : 'es'}`);
+  }
+  return parts.join(' · ');
 }

@@ -4,7 +4,9 @@ import './viewer.css';
 
 import { base64ToBytes, decodeReplayAsync, parseHeader, Replay, ReplayError } from '../replay.js';
 import { Charts } from './charts.js';
-import { clock, incidentText, METRES_PER_MILE, MPH_PER_MPS, planStatusText } from './format.js';
+import {
+  clock, incidentText, METRES_PER_MILE, MPH_PER_MPS, planStatusText, safetyStatusText, safetyThresholds,
+} from './format.js';
 import { Scene } from './scene.js';
 
 // Spelt in parts (joined at run time, so the minifier cannot fold them) so that the C++
@@ -41,8 +43,9 @@ class Viewer {
     this.hud = {
       speed: $('hud-speed'), accTotal: $('hud-acc-total'), accTan: $('hud-acc-tan'), accNorm: $('hud-acc-norm'),
       jerk: $('hud-jerk'), distance: $('hud-distance'), best: $('hud-best'), timer: $('hud-timer'),
-      lane: $('hud-lane'), d: $('hud-d'),
+      lane: $('hud-lane'), d: $('hud-d'), ttc: $('hud-ttc'), ttcEntering: $('hud-ttc-entering'), headway: $('hud-headway'),
     };
+    this.thresholds = safetyThresholds(null);
     this.bannerKey = '';
     this.timing = {}; // milliseconds: base64Ms, decodeMs, showMs, readyMs (since navigation start)
     this._wire();
@@ -53,6 +56,7 @@ class Viewer {
   /// Shows a decoded replay (replacing any other).
   show(replay) {
     this.replay = replay;
+    this.thresholds = safetyThresholds(replay.report);
     this.scene.setReplay(replay);
     if (!this.charts) this.charts = new Charts($('charts'), replay, (t) => this.seekTime(t, true));
     else this.charts.setReplay(replay);
@@ -176,7 +180,7 @@ class Viewer {
       $('btn-live').hidden = true;
       this.liveDirty = true;
       $('status').textContent = replay.ended ? 'live run finished' : 'live stream closed';
-      if (replay.ended) this._planStatus(replay);
+      if (replay.ended) this._reportStatus(replay);
       this.root.dataset.state = replay.ended ? 'ready' : 'partial';
       if (!replay.ended && !replay.problem) this.banner('The live stream closed before the run ended.', 'warn');
       this.requestRender();
@@ -195,14 +199,18 @@ class Viewer {
     $('provenance').textContent = parts.join(' · ');
     const end = r.frames ? r.time[r.frames - 1] : 0;
     $('status').textContent = `${r.frames.toLocaleString('en')} steps · ${clock(end)} · ${r.incidents} incident${r.incidents === 1 ? '' : 's'}`;
-    this._planStatus(r);
+    this._reportStatus(r);
   }
 
-  // How the planner planned (the report's plan statuses), when it left normal planning.
-  _planStatus(r) {
+  // What the run's report adds: collisions at fault and near misses, and how the planner
+  // planned when it left normal planning (the report's plan statuses).
+  _reportStatus(r) {
+    const status = $('status');
+    const safety = safetyStatusText(r.report);
+    if (safety) status.textContent += ` · ${safety}`;
+    this.thresholds = safetyThresholds(r.report);
     const text = planStatusText(r.report);
     if (!text) return;
-    const status = $('status');
     status.textContent += ` · ${text}`;
     const first = r.report.plan_status.first_reason;
     if (first) status.title = `first: ${first}`;
@@ -225,10 +233,13 @@ class Viewer {
     for (let k = 0; k < r.incidents; ++k) {
       const step = r.step[r.incFrame[k]];
       const type = r.incidentTypeName(r.incType[k]);
-      const key = `${type}:${Math.round(((step - s0) / span) * MARKER_BUCKETS)}`;
+      const cls = r.incidentClass(k);
+      // collisions at fault and not at fault get marks of their own (filled, outlined)
+      const fault = cls ? String(cls.atFault) : '';
+      const key = `${type}:${fault}:${Math.round(((step - s0) / span) * MARKER_BUCKETS)}`;
       const b = buckets.get(key);
       if (b) b.count += 1;
-      else buckets.set(key, { k, step, type, count: 1 });
+      else buckets.set(key, { k, step, type, cls, count: 1 });
     }
     const frag = document.createDocumentFragment();
     for (const b of buckets.values()) {
@@ -238,9 +249,13 @@ class Viewer {
       m.dataset.step = String(b.step);
       m.dataset.type = b.type;
       m.dataset.count = String(b.count);
+      if (b.cls) {
+        m.dataset.kind = b.cls.kind;
+        m.dataset.atFault = String(b.cls.atFault);
+      }
       m.style.left = `${(((b.step - s0) / span) * 100).toFixed(3)}%`;
       const more = b.count > 1 ? ` (and ${b.count - 1} more nearby)` : '';
-      m.title = `${clock(b.step * r.stepS)} ${incidentText(b.type, r.incValue[b.k])}${more}`;
+      m.title = `${clock(b.step * r.stepS)} ${incidentText(b.type, r.incValue[b.k], b.cls)}${more}`;
       m.setAttribute('aria-label', m.title);
       frag.appendChild(m);
     }
@@ -402,6 +417,12 @@ class Viewer {
     const lane = Math.floor(d / width);
     set(h.lane, lane >= 0 && lane < lanes ? String(lane) : 'off', !(lane >= 0 && lane < lanes));
     set(h.d, d.toFixed(2), false);
+    // near misses: below the threshold in red; none is a dash
+    const th = this.thresholds;
+    const secs = (el, v, limit) => set(el, Number.isFinite(v) ? v.toFixed(2) : '–', Number.isFinite(v) && v < limit);
+    secs(h.ttc, r.ttcAhead[i], th.ttc);
+    secs(h.ttcEntering, r.ttcEntering[i], th.ttc);
+    secs(h.headway, r.headway[i], th.headway);
   }
 
   _banners(i, t) {
@@ -420,7 +441,8 @@ class Viewer {
     const hits = new Set();
     for (let k = end - 1; k >= 0 && r.incFrame[k] >= from && shown.length < MAX_BANNERS; --k) {
       const type = r.incidentTypeName(r.incType[k]);
-      shown.push({ k, type, text: incidentText(type, r.incValue[k]) });
+      const cls = r.incidentClass(k);
+      shown.push({ k, type, cls, text: incidentText(type, r.incValue[k], cls) });
       if (type === 'collision') hits.add(Math.round(r.incValue[k]));
     }
     this.scene.highlightCars = hits;
@@ -433,6 +455,7 @@ class Viewer {
       const b = document.createElement('div');
       b.className = 'banner';
       b.dataset.type = s.type;
+      if (s.cls) b.dataset.atFault = String(s.cls.atFault);
       b.textContent = s.text;
       box.appendChild(b);
     }
