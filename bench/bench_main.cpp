@@ -11,6 +11,7 @@
 #include "overtake/app/commands.hpp"
 #include "overtake/core/units.hpp"
 #include "overtake/planner/policy.hpp"
+#include "overtake/sim/scorecard.hpp"
 #include "overtake/sim/world.hpp"
 
 namespace {
@@ -50,6 +51,33 @@ void BM_WorldStep(benchmark::State& state) {
   state.SetLabel(state.range(0) == 0 ? "faithful" : "calm");
 }
 BENCHMARK(BM_WorldStep)->Arg(0)->Arg(1);
+
+// One world step and the scorecard that watches it, as in a drive: the safety monitor (TTC,
+// headway, the class of a contact), the referee and the lane tracker. Less BM_WorldStep: what
+// the scorecard costs per step.
+void BM_ScoredStep(benchmark::State& state) {
+  const auto& track = default_track();
+  const app::Config config = app::default_config();
+  const auto profile =
+      state.range(0) == 0 ? sim::TrafficProfile::faithful : sim::TrafficProfile::calm;
+  sim::World world(track.map, track.line, config.world, profile, 1);
+  world.apply_path(lane_path(world, 1600));
+  for (int i = 0; i < 1500; ++i) world.step();  // 30 s: every car placed
+  sim::Scorecard scorecard(world);
+  world.apply_path(lane_path(world, 1000));
+  for (auto _ : state) {
+    if (world.queue().size() < 3) {
+      state.PauseTiming();
+      world.apply_path(lane_path(world, 1000));
+      state.ResumeTiming();
+    }
+    world.step();
+    scorecard.observe_step(world);
+  }
+  state.SetItemsProcessed(state.iterations());
+  state.SetLabel(state.range(0) == 0 ? "faithful" : "calm");
+}
+BENCHMARK(BM_ScoredStep)->Arg(0)->Arg(1);
 
 // The telemetry snapshot a planner gets each cycle (with wire rounding).
 void BM_Telemetry(benchmark::State& state) {

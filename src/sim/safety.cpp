@@ -25,7 +25,9 @@ constexpr double kAcrossM = 0.02;
 double wrap_delta(double from_s, double to_s, double loop_m) {
   double ds = to_s - from_s;
   if (loop_m <= 0.0) return ds;
-  ds = std::fmod(ds, loop_m);
+  // s lies within one loop, so one subtraction or addition does (fmod, far slower, is for
+  // anything else).
+  if (ds >= loop_m || ds <= -loop_m) ds = std::fmod(ds, loop_m);
   if (ds > 0.5 * loop_m) ds -= loop_m;
   if (ds <= -0.5 * loop_m) ds += loop_m;
   return ds;
@@ -133,14 +135,28 @@ SafetyMonitor::SafetyMonitor(const SafetyParams& params, double step_s,
                                 std::to_string(ego_.lane_since.size()));
   }
   window_steps_ = std::max<long>(1, std::lround(p_.braking_window_s / step_s));
+  inverse_lane_width_ = 1.0 / road_.lane_width_m;
   summary_.ttc_threshold_s = p_.ttc_threshold_s;
   summary_.headway_threshold_s = p_.headway_threshold_s;
 }
 
-bool SafetyMonitor::overlaps(double d_m, int lane) const {
-  const double lo = std::max(d_m - 0.5 * size_.width_m, lane * road_.lane_width_m);
-  const double hi = std::min(d_m + 0.5 * size_.width_m, (lane + 1) * road_.lane_width_m);
-  return hi - lo >= p_.lane_overlap_m;
+std::pair<int, int> SafetyMonitor::lane_span(double d_m) const {
+  // Lane l (from l w to (l + 1) w) holds at least m of the body [d - W/2, d + W/2] when
+  // l w <= d + W/2 - m and (l + 1) w >= d - W/2 + m (given W >= m and w >= m).
+  const double half = 0.5 * size_.width_m;
+  const double m = p_.lane_overlap_m;
+  if (size_.width_m < m) return {0, -1};
+  // Clamped to a little beyond the road first, so that the integer floor below is exact
+  // (a cast truncates toward zero) and cheap (std::floor is a library call on plain x86-64).
+  const double top = road_.lane_count - 1;
+  const auto floor_of = [&](double x) {
+    x = std::clamp(x, -top - 3.0, top + 3.0);
+    const int i = static_cast<int>(x);
+    return x < i ? i - 1 : i;
+  };
+  const int first = -floor_of(-(d_m - half + m) * inverse_lane_width_) - 1;  // ceil(x) - 1
+  const int last = floor_of((d_m + half - m) * inverse_lane_width_);
+  return {std::clamp(first, 0, road_.lane_count), std::clamp(last, -1, road_.lane_count - 1)};
 }
 
 double SafetyMonitor::wrapped_ds(double from_s, double to_s) const {
@@ -149,7 +165,8 @@ double SafetyMonitor::wrapped_ds(double from_s, double to_s) const {
 
 const SafetyMonitor::Sample& SafetyMonitor::sample(const Track& t, long back) const {
   const auto n = static_cast<long>(t.ring.size());
-  const long at = (static_cast<long>(ring_head_) - std::clamp(back, 0L, n - 1) + n) % n;
+  long at = static_cast<long>(ring_head_) - std::clamp(back, 0L, n - 1);
+  if (at < 0) at += n;
   return t.ring[static_cast<std::size_t>(at)];
 }
 
@@ -161,23 +178,25 @@ void SafetyMonitor::update_track(Track& t, core::FrenetPoint at, double speed_mp
     t.two_lanes_last = kNotIn;
   }
   t.ring[ring_head_] = {at, speed_mps};
-  int lanes = 0;
-  for (int lane = 0; lane < road_.lane_count; ++lane) {
-    const auto l = static_cast<std::size_t>(lane);
-    long& since = t.lane_since[l];
-    if (!overlaps(at.d_m, lane)) {
-      since = kNotIn;
-      continue;
+  const auto [first, last] = lane_span(at.d_m);
+  if (appeared || first != t.span_lo || last != t.span_hi) {  // else its lanes are as they were
+    for (int lane = 0; lane < road_.lane_count; ++lane) {
+      const auto l = static_cast<std::size_t>(lane);
+      long& since = t.lane_since[l];
+      if (lane < first || lane > last) {
+        since = kNotIn;
+      } else if (appeared) {
+        since = kAlways;
+      } else if (since == kNotIn) {
+        since = step_;
+        t.entry_self[l] = {at, speed_mps};
+        t.entered_now = entries_now_ = true;
+      }
     }
-    ++lanes;
-    if (appeared) {
-      since = kAlways;
-    } else if (since == kNotIn) {
-      since = step_;
-      t.entry_self[l] = {at, speed_mps};
-    }
+    t.span_lo = first;
+    t.span_hi = last;
   }
-  if (lanes >= 2) t.two_lanes_last = step_;
+  if (last > first) t.two_lanes_last = step_;
   t.active = true;
   last_step_ = step_;
 }
@@ -188,11 +207,7 @@ ContactBody SafetyMonitor::contact_body(const Track& self, const Track& other) c
   ContactBody b;
   b.frenet = me.frenet;
   b.speed_mps = me.speed_mps;
-  int lanes = 0;
-  for (int lane = 0; lane < road_.lane_count; ++lane) {
-    if (self.lane_since[static_cast<std::size_t>(lane)] != kNotIn) ++lanes;
-  }
-  b.in_two_lanes = lanes >= 2;
+  b.in_two_lanes = self.span_hi > self.span_lo;
   const double moved_m = me.frenet.d_m - sample(self, window_steps_).frenet.d_m;
   b.toward_other_m = them.frenet.d_m >= me.frenet.d_m ? moved_m : -moved_m;
   return b;
@@ -228,8 +243,10 @@ LaneEntry SafetyMonitor::lane_entry(const Track& mover, const Track& other,
 }
 
 void SafetyMonitor::note_entries() {
+  if (!entries_now_) return;
+  entries_now_ = false;
   // The ego's entries: every car as it was then. A car's entries: the ego as it was then.
-  for (std::size_t l = 0; l < static_cast<std::size_t>(road_.lane_count); ++l) {
+  for (std::size_t l = 0; ego_.entered_now && l < static_cast<std::size_t>(road_.lane_count); ++l) {
     if (ego_.lane_since[l] != step_) continue;
     auto& at = ego_.entry_cars[l];
     at.clear();
@@ -237,9 +254,11 @@ void SafetyMonitor::note_entries() {
       if (t.active) at.push_back({t.id, sample(t, 0)});
     }
   }
+  ego_.entered_now = false;
   const Sample& ego_now = sample(ego_, 0);
   for (Track& t : cars_) {
-    if (!t.active) continue;
+    if (!t.active || !t.entered_now) continue;
+    t.entered_now = false;
     for (std::size_t l = 0; l < static_cast<std::size_t>(road_.lane_count); ++l) {
       if (t.lane_since[l] == step_) t.entry_ego[l] = ego_now;
     }
@@ -317,28 +336,15 @@ void SafetyMonitor::measure(std::span<const TrafficCar> cars) {
   const Sample& me = sample(ego_, 0);
   // The lanes the ego's body is in, and the one it is entering: while it is in two, the one
   // it moves toward (the one it entered last when it does not move across).
-  int lowest = -1, highest = -1, last_entered = -1;
-  for (int lane = 0; lane < road_.lane_count; ++lane) {
-    const long since = ego_.lane_since[static_cast<std::size_t>(lane)];
-    if (since == kNotIn) continue;
-    if (lowest < 0) lowest = lane;
-    highest = lane;
-    if (last_entered < 0 || since > ego_.lane_since[static_cast<std::size_t>(last_entered)]) {
-      last_entered = lane;
-    }
-  }
-  if (lowest < 0) lowest = highest = core::lane_of(me.frenet.d_m, road_);  // off the road
+  int lowest = ego_.span_lo, highest = ego_.span_hi;
+  if (lowest > highest) lowest = highest = core::lane_of(me.frenet.d_m, road_);  // off the road
   int entering = -1;
   if (highest > lowest) {
     const double across_m = me.frenet.d_m - sample(ego_, kDirectionSteps).frenet.d_m;
+    const auto since = [&](int lane) { return ego_.lane_since[static_cast<std::size_t>(lane)]; };
+    const int last_entered = since(highest) >= since(lowest) ? highest : lowest;
     entering = across_m > kAcrossM ? highest : across_m < -kAcrossM ? lowest : last_entered;
   }
-  const auto in_ego_lanes = [&](double d_m) {
-    for (int lane = lowest; lane <= highest; ++lane) {
-      if (overlaps(d_m, lane)) return true;
-    }
-    return false;
-  };
 
   double lead_gap = kInf, lead_speed = 0.0;                  // the ego's lanes, ahead
   double enter_lead_gap = kInf, enter_lead_speed = 0.0;      // entering lane, ahead
@@ -350,11 +356,11 @@ void SafetyMonitor::measure(std::span<const TrafficCar> cars) {
     const double ds = wrapped_ds(me.frenet.s_m, car.frenet.s_m);
     const double gap = std::abs(ds) - size_.length_m;
     if (gap < 0.0) continue;  // alongside: neither ahead nor behind
-    if (ds > 0.0 && gap < lead_gap && in_ego_lanes(car.frenet.d_m)) {
+    if (ds > 0.0 && gap < lead_gap && t.span_lo <= highest && t.span_hi >= lowest) {
       lead_gap = gap;
       lead_speed = car.speed_mps;
     }
-    if (entering >= 0 && overlaps(car.frenet.d_m, entering)) {
+    if (entering >= 0 && t.span_lo <= entering && entering <= t.span_hi) {
       if (ds > 0.0 && gap < enter_lead_gap) {
         enter_lead_gap = gap;
         enter_lead_speed = car.speed_mps;

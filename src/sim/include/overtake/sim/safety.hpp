@@ -26,6 +26,7 @@
 #include <optional>
 #include <span>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include "overtake/core/road.hpp"
@@ -199,6 +200,9 @@ class SafetyMonitor {
     std::array<long, kMaxLanes>
         lane_since{};          ///< step its body entered each lane (or kNotIn, kAlways)
     long two_lanes_last = -1;  ///< the last step its body was in two lanes
+    int span_lo = 0;           ///< the lanes its body is in: span_lo..span_hi (none: lo > hi)
+    int span_hi = -1;
+    bool entered_now = false;                    ///< it entered a lane in this step
     std::array<Sample, kMaxLanes> entry_self{};  ///< itself at each lane entry
     std::array<Sample, kMaxLanes> entry_ego{};   ///< a car: the ego at each of its lane entries
     std::array<std::vector<CarAt>, kMaxLanes> entry_cars;  ///< the ego: the cars at its entries
@@ -216,7 +220,8 @@ class SafetyMonitor {
   /// has no track (not on the road).
   bool classify_contact(int car_id);
   [[nodiscard]] ContactBody contact_body(const Track& self, const Track& other) const;
-  [[nodiscard]] bool overlaps(double d_m, int lane) const;
+  /// The lanes a body at `d_m` is in, as [first, last] (none: first > last).
+  [[nodiscard]] std::pair<int, int> lane_span(double d_m) const;
   [[nodiscard]] double wrapped_ds(double from_s, double to_s) const;
   void measure(std::span<const TrafficCar> cars);
   void count_episode(bool below, bool contact);
@@ -226,9 +231,11 @@ class SafetyMonitor {
   core::RoadParams road_;
   core::CarFootprint size_;
   double loop_length_m_;
-  long window_steps_;   ///< the braking window in steps
-  long step_ = 0;       ///< the step being observed (0: the start)
-  long last_step_ = 0;  ///< the step the tracks hold
+  long window_steps_;  ///< the braking window in steps
+  double inverse_lane_width_ = 0.0;
+  long step_ = 0;             ///< the step being observed (0: the start)
+  long last_step_ = 0;        ///< the step the tracks hold
+  bool entries_now_ = false;  ///< some body entered a lane in this step
   std::size_t ring_head_ = 0;
   Track ego_;
   std::vector<Track> cars_;  ///< by index in the traffic's list
