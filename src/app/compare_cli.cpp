@@ -103,6 +103,17 @@ Subcommand register_compare(CLI::App& app) {
               }
             }
             if (!st->figures.empty()) o.metrics = parse_metric_list(st->figures);
+            // The comparison never takes the place of a bench's own files.
+            for (const std::string& dir : {st->before, st->after}) {
+              for (const char* name : {"runs.jsonl", "bench.json", "summary.md", "summary.csv",
+                                       "summary.json", "pairs.csv"}) {
+                const std::filesystem::path file = std::filesystem::path(dir) / name;
+                if (!st->json.empty() && same_file(st->json, file)) {
+                  throw UsageError("--json: " + st->json + " is " + file.string() +
+                                   ", a file of a bench being compared; write it elsewhere");
+                }
+              }
+            }
             const nlohmann::json result = compare_bench_folders(st->before, st->after, o);
             if (!st->json.empty()) write_file_atomic(st->json, result.dump(2) + "\n");
             if (!st->quiet) std::cout << eval::compare_text(result);

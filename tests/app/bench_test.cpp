@@ -156,6 +156,11 @@ TEST_F(BenchTest, CompareTellsNoDifferenceFromWorse) {
   EXPECT_EQ(missing, 1);
   EXPECT_THAT(missing_text, HasSubstr("no such folder"));
   EXPECT_EQ(compare({a.out, b.out, "--pair", "reference"}).first, 2);
+  const std::string runs_before = read_file(a.out / "runs.jsonl");
+  auto [over, over_text] = compare({a.out, b.out, "--json", a.out / "runs.jsonl"});
+  EXPECT_EQ(over, 2);
+  EXPECT_THAT(over_text, HasSubstr("a file of a bench being compared"));
+  EXPECT_EQ(read_file(a.out / "runs.jsonl"), runs_before);
   EXPECT_EQ(compare({a.out, b.out, "--pair", "reference=other"}).first, 2);
   auto [figures, figures_text] = compare({a.out, b.out, "--figures", "speed"});
   EXPECT_EQ(figures, 2);
