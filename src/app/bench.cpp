@@ -32,8 +32,8 @@ using nlohmann::json;
 
 constexpr int kMaxJobs = 256;
 constexpr int kMaxRecordWorst = 1000;
-constexpr const char* kRunsFile = "runs.jsonl";
-constexpr const char* kManifestFile = "bench.json";
+constexpr const char* kRunsFile = kBenchRunsFile;
+constexpr const char* kManifestFile = kBenchManifestFile;
 constexpr const char* kLogsDir = "logs";  ///< planner programs' output, one file per run
 
 // Where a planner program's output goes for one run (other planners write none).
@@ -271,76 +271,6 @@ std::vector<json> load_bench_runs(const std::filesystem::path& dir, std::size_t*
     return a["index"].get<std::size_t>() < b["index"].get<std::size_t>();
   });
   return runs;
-}
-
-BenchSummary summarize_bench(std::vector<json> runs, const std::vector<std::string>& policies,
-                             const std::vector<std::string>& traffic, const std::string& where) {
-  // Sweep order, whatever order the runs finished in: the figures' sums keep their last bits
-  // and the bootstraps draw the same runs.
-  std::stable_sort(runs.begin(), runs.end(), [](const json& a, const json& b) {
-    const auto index = [](const json& r) {
-      return r.contains("index") && r["index"].is_number_unsigned() ? r["index"].get<std::size_t>()
-                                                                    : 0;
-    };
-    return index(a) < index(b);
-  });
-  std::vector<eval::RunRow> rows;
-  rows.reserve(runs.size());
-  for (const json& r : runs) {
-    const std::string at =
-        where + ", run " + (r.contains("index") ? r["index"].dump() : std::to_string(rows.size()));
-    try {
-      rows.push_back(eval::read_run_row(r, at));
-    } catch (const std::invalid_argument& e) {
-      throw UsageError(e.what());
-    }
-  }
-  return {eval::summarize(rows, policies, traffic), eval::pair_policies(rows, policies, traffic)};
-}
-
-eval::BenchData load_bench_for_compare(const std::filesystem::path& dir,
-                                       std::vector<std::string>& notes) {
-  eval::BenchData b;
-  b.name = dir.string();
-  const auto manifest_path = dir / kManifestFile;
-  const auto runs_path = dir / kRunsFile;
-  if (!std::filesystem::is_directory(dir)) {
-    throw std::runtime_error(dir.string() +
-                             ": no such folder (give two `overtake bench --out` folders)");
-  }
-  try {
-    b.manifest = json::parse(read_file(manifest_path));
-  } catch (const std::exception& e) {
-    throw std::runtime_error(manifest_path.string() + " is missing or unreadable (" + e.what() +
-                             "): not a bench output folder");
-  }
-  if (!b.manifest.is_object()) {
-    throw std::runtime_error(manifest_path.string() +
-                             " is not a bench manifest (not a JSON object)");
-  }
-  if (!std::filesystem::exists(runs_path)) {
-    throw std::runtime_error(runs_path.string() + " is missing: the bench has no finished run");
-  }
-  std::size_t dropped = 0;
-  const std::vector<json> runs = load_bench_runs(dir, &dropped);
-  if (dropped) {
-    notes.push_back(runs_path.string() + ": " + std::to_string(dropped) +
-                    " line(s) that are not whole runs were left out");
-  }
-  for (const json& r : runs) {
-    try {
-      b.runs.push_back(eval::read_run_row(r, runs_path.string() + ", run " + r["index"].dump()));
-    } catch (const std::invalid_argument& e) {
-      throw std::runtime_error(e.what());
-    }
-  }
-  if (b.runs.empty()) throw std::runtime_error(runs_path.string() + " holds no finished run");
-  const std::size_t total = b.manifest.value("combinations", std::size_t{0});
-  if (total > b.runs.size() && b.manifest.value("shard", std::string("1/1")) == "1/1") {
-    notes.push_back(dir.string() + " is unfinished: " + std::to_string(b.runs.size()) + " of " +
-                    std::to_string(total) + " runs");
-  }
-  return b;
 }
 
 std::vector<std::uint64_t> parse_seed_list(const std::string& text) {

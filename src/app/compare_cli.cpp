@@ -4,7 +4,6 @@
 
 #include <iostream>
 #include <set>
-#include <sstream>
 
 #include "overtake/app/bench.hpp"
 #include "overtake/app/cli.hpp"
@@ -12,56 +11,6 @@
 #include "overtake/app/io.hpp"
 
 namespace overtake::app {
-
-eval::PolicyPair parse_policy_pair(const std::string& text) {
-  const auto eq = text.find('=');
-  if (eq == std::string::npos || eq == 0 || eq + 1 == text.size() ||
-      text.find('=', eq + 1) != std::string::npos) {
-    throw UsageError("--pair: '" + text +
-                     "' is not OLD=NEW (a policy of the first bench = one of the second)");
-  }
-  return {text.substr(0, eq), text.substr(eq + 1)};
-}
-
-std::vector<eval::Metric> parse_metric_list(const std::string& text) {
-  std::vector<eval::Metric> out;
-  std::stringstream ss(text);
-  std::string name;
-  while (std::getline(ss, name, ',')) {
-    if (name.empty()) continue;
-    const auto m = eval::parse_metric(name);
-    if (!m) {
-      std::string known;
-      for (const eval::Metric k : eval::all_metrics()) {
-        known += (known.empty() ? "" : ", ") + std::string(eval::info(k).name);
-      }
-      throw UsageError("--figures: unknown figure '" + name + "' (known: " + known + ")");
-    }
-    if (std::find(out.begin(), out.end(), *m) == out.end()) out.push_back(*m);
-  }
-  if (out.empty()) throw UsageError("--figures: no figure given");
-  return out;
-}
-
-nlohmann::json compare_bench_folders(const std::filesystem::path& base,
-                                     const std::filesystem::path& candidate,
-                                     const eval::CompareOptions& options) {
-  std::vector<std::string> notes;
-  const eval::BenchData a = load_bench_for_compare(base, notes);
-  const eval::BenchData b = load_bench_for_compare(candidate, notes);
-  nlohmann::json result;
-  try {
-    result = eval::compare_benches(a, b, options);
-  } catch (const eval::NotComparable& e) {
-    throw std::runtime_error(e.what());
-  } catch (const std::invalid_argument& e) {
-    throw UsageError(std::string("--pair: ") + e.what());
-  }
-  for (auto it = notes.rbegin(); it != notes.rend(); ++it) {
-    result["notes"].insert(result["notes"].begin(), *it);
-  }
-  return result;
-}
 
 Subcommand register_compare(CLI::App& app) {
   struct State {

@@ -22,6 +22,10 @@
 
 namespace overtake::app {
 
+/// The files of a bench's output folder: every finished run, and what was run.
+inline constexpr const char* kBenchRunsFile = "runs.jsonl";
+inline constexpr const char* kBenchManifestFile = "bench.json";
+
 /// What to run.
 struct BenchSpec {
   std::vector<std::string> policies;
