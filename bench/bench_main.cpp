@@ -31,13 +31,17 @@ std::vector<core::Vec2> lane_path(const sim::World& w, int n) {
   return path;
 }
 
-// One world step: 12 cars decide and move, the ego moves, collisions, the referee.
-void BM_WorldStep(benchmark::State& state) {
-  const auto& track = default_track();
-  const app::Config config = app::default_config();
+sim::World profile_world(const benchmark::State& state, const core::Map& map,
+                         const core::ReferenceLine& line) {
   const auto profile =
       state.range(0) == 0 ? sim::TrafficProfile::faithful : sim::TrafficProfile::calm;
-  sim::World world(track.map, track.line, config.world, profile, 1);
+  return {map, line, app::default_config().world, profile, 1};
+}
+
+// Steps `world` along lane 1 (its path refilled off the clock), `after_step` on the clock
+// after each step; labelled with the traffic profile (state.range(0): 0 faithful, 1 calm).
+template <class AfterStep>
+void time_steps(benchmark::State& state, sim::World& world, AfterStep after_step) {
   world.apply_path(lane_path(world, 1000));
   for (auto _ : state) {
     if (world.queue().size() < 3) {
@@ -46,9 +50,17 @@ void BM_WorldStep(benchmark::State& state) {
       state.ResumeTiming();
     }
     world.step();
+    after_step();
   }
   state.SetItemsProcessed(state.iterations());
   state.SetLabel(state.range(0) == 0 ? "faithful" : "calm");
+}
+
+// One world step: 12 cars decide and move, the ego moves, bodies that touch are separated.
+void BM_WorldStep(benchmark::State& state) {
+  const auto& track = default_track();
+  sim::World world = profile_world(state, track.map, track.line);
+  time_steps(state, world, [] {});
 }
 BENCHMARK(BM_WorldStep)->Arg(0)->Arg(1);
 
@@ -57,25 +69,11 @@ BENCHMARK(BM_WorldStep)->Arg(0)->Arg(1);
 // the scorecard costs per step.
 void BM_ScoredStep(benchmark::State& state) {
   const auto& track = default_track();
-  const app::Config config = app::default_config();
-  const auto profile =
-      state.range(0) == 0 ? sim::TrafficProfile::faithful : sim::TrafficProfile::calm;
-  sim::World world(track.map, track.line, config.world, profile, 1);
+  sim::World world = profile_world(state, track.map, track.line);
   world.apply_path(lane_path(world, 1600));
   for (int i = 0; i < 1500; ++i) world.step();  // 30 s: every car placed
   sim::Scorecard scorecard(world);
-  world.apply_path(lane_path(world, 1000));
-  for (auto _ : state) {
-    if (world.queue().size() < 3) {
-      state.PauseTiming();
-      world.apply_path(lane_path(world, 1000));
-      state.ResumeTiming();
-    }
-    world.step();
-    scorecard.observe_step(world);
-  }
-  state.SetItemsProcessed(state.iterations());
-  state.SetLabel(state.range(0) == 0 ? "faithful" : "calm");
+  time_steps(state, world, [&] { scorecard.observe_step(world); });
 }
 BENCHMARK(BM_ScoredStep)->Arg(0)->Arg(1);
 

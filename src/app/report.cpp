@@ -1,5 +1,6 @@
 #include "overtake/app/report.hpp"
 
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <sstream>
@@ -53,21 +54,34 @@ json finite_or_null(double v) {
   return std::isfinite(v) ? json(v) : json(nullptr);
 }
 
-json collisions_json(const sim::RunReport& r) {
-  json by_kind = json::object();
-  for (std::size_t k = 0; k < sim::kCollisionKindCount; ++k) {
-    by_kind[std::string(sim::to_string(static_cast<sim::CollisionKind>(k)))] = 0;
-  }
-  int total = 0, at_fault = 0;
+// The run's collisions summed up by their classes.
+struct CollisionCounts {
+  int total = 0;
+  int at_fault = 0;
+  std::array<int, sim::kCollisionKindCount> by_kind{};
+};
+
+CollisionCounts count_collisions(const sim::RunReport& r) {
+  CollisionCounts c;
   for (const sim::Incident& i : r.incidents) {
     if (i.type != sim::IncidentType::collision) continue;
-    ++total;
+    ++c.total;
     if (!i.collision) continue;
-    by_kind[std::string(sim::to_string(i.collision->kind))] =
-        by_kind[std::string(sim::to_string(i.collision->kind))].get<int>() + 1;
-    if (i.collision->at_fault) ++at_fault;
+    ++c.by_kind[static_cast<std::size_t>(i.collision->kind)];
+    if (i.collision->at_fault) ++c.at_fault;
   }
-  return {{"total", total}, {"at_fault", at_fault}, {"by_kind", by_kind}};
+  return c;
+}
+
+std::string kind_name(std::size_t k) {
+  return std::string(sim::to_string(static_cast<sim::CollisionKind>(k)));
+}
+
+json collisions_json(const sim::RunReport& r) {
+  const CollisionCounts c = count_collisions(r);
+  json by_kind = json::object();
+  for (std::size_t k = 0; k < c.by_kind.size(); ++k) by_kind[kind_name(k)] = c.by_kind[k];
+  return {{"total", c.total}, {"at_fault", c.at_fault}, {"by_kind", by_kind}};
 }
 
 json safety_json(const sim::RunReport& r) {
@@ -182,15 +196,13 @@ std::string format_scorecard(const sim::RunReport& r, const RunProvenance& p) {
        << r.incident_counts[i];
   }
   os << ")\n";
-  const json coll = collisions_json(r);
-  if (coll["total"].get<int>() > 0) {
-    os << "  collisions         " << coll["total"].get<int>() << ": at fault "
-       << coll["at_fault"].get<int>() << " (";
-    bool first = true;
-    for (const auto& [kind, n] : coll["by_kind"].items()) {
-      if (n.get<int>() == 0) continue;
-      os << (first ? "" : ", ") << kind << " " << n.get<int>();
-      first = false;
+  if (const CollisionCounts c = count_collisions(r); c.total > 0) {
+    os << "  collisions         " << c.total << ": at fault " << c.at_fault << " (";
+    const char* sep = "";
+    for (std::size_t k = 0; k < c.by_kind.size(); ++k) {
+      if (c.by_kind[k] == 0) continue;
+      os << sep << kind_name(k) << " " << c.by_kind[k];
+      sep = ", ";
     }
     os << ")\n";
   }

@@ -4,8 +4,6 @@
 #include <limits>
 #include <stdexcept>
 
-#include "overtake/core/units.hpp"
-
 namespace overtake::eval {
 namespace {
 
@@ -86,9 +84,7 @@ class RowReader {
   std::string_view where_;
 };
 
-double mph(double miles, double seconds) {
-  return seconds > 0.0 ? miles * core::kMetresPerMile / seconds * core::kMphPerMps : 0.0;
-}
+constexpr double kSecondsPerHour = 3600.0;
 
 }  // namespace
 
@@ -195,8 +191,7 @@ MetricTerms terms(Metric m, const RunRow& r) {
   const auto rate = [&](double events) { return MetricTerms{100.0 * events, r.miles}; };
   switch (m) {
     case Metric::mean_speed_mph:
-      // miles / hours, as miles x (mph per mile-per-second) / seconds.
-      return {mph(r.miles, 1.0), r.seconds};
+      return {r.miles, r.seconds / kSecondsPerHour};
     case Metric::incidents_per_100mi:
       return rate(r.incidents);
     case Metric::collisions_per_100mi:

@@ -8,7 +8,6 @@
 #include <set>
 #include <utility>
 
-#include "overtake/core/units.hpp"
 #include "overtake/eval/stats.hpp"
 
 namespace overtake::eval {
@@ -123,8 +122,7 @@ json summary_row(const std::string& policy, const std::string& traffic,
       {"traffic", traffic},
       {"runs", n},
       {"total_miles", miles},
-      {"mean_speed_mph",
-       seconds > 0 ? miles * core::kMetresPerMile / seconds * core::kMphPerMps : 0.0},
+      {"mean_speed_mph", value(Metric::mean_speed_mph, mine)},
       {"mean_speed_mph_ci", pair_of(speed_ci)},
       {"incidents", total_incidents},
       {"incidents_per_100mi", miles > 0 ? 100.0 * total_incidents / miles : 0.0},

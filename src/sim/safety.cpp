@@ -315,7 +315,7 @@ std::optional<CollisionClass> SafetyMonitor::observe(const SafetyEgo& ego,
     contact_class_ = {CollisionKind::car_cut_in, false};
   }
 
-  measure(cars);
+  measure();
   const double ttc = std::min(current_.ttc_ahead_s, current_.ttc_entering_s);
   summary_.min_ttc_ahead_s = std::min(summary_.min_ttc_ahead_s, current_.ttc_ahead_s);
   summary_.min_ttc_entering_s = std::min(summary_.min_ttc_entering_s, current_.ttc_entering_s);
@@ -331,7 +331,7 @@ std::optional<CollisionClass> SafetyMonitor::observe(const SafetyEgo& ego,
   return std::nullopt;
 }
 
-void SafetyMonitor::measure(std::span<const TrafficCar> cars) {
+void SafetyMonitor::measure() {
   current_ = {};
   const Sample& me = sample(ego_, 0);
   // The lanes the ego's body is in, and the one it is entering: while it is in two, the one
@@ -349,8 +349,7 @@ void SafetyMonitor::measure(std::span<const TrafficCar> cars) {
   double lead_gap = kInf, lead_speed = 0.0;                  // the ego's lanes, ahead
   double enter_lead_gap = kInf, enter_lead_speed = 0.0;      // entering lane, ahead
   double enter_follow_gap = kInf, enter_follow_speed = 0.0;  // entering lane, behind
-  for (std::size_t i = 0; i < cars.size(); ++i) {
-    const Track& t = cars_[i];
+  for (const Track& t : cars_) {
     if (!t.active) continue;
     const Sample& car = sample(t, 0);
     const double ds = wrapped_ds(me.frenet.s_m, car.frenet.s_m);

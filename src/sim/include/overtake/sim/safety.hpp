@@ -223,7 +223,8 @@ class SafetyMonitor {
   /// The lanes a body at `d_m` is in, as [first, last] (none: first > last).
   [[nodiscard]] std::pair<int, int> lane_span(double d_m) const;
   [[nodiscard]] double wrapped_ds(double from_s, double to_s) const;
-  void measure(std::span<const TrafficCar> cars);
+  /// TTC and headway from the tracks as they are now.
+  void measure();
   void count_episode(bool below, bool contact);
 
   SafetyParams p_;
