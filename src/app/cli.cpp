@@ -209,7 +209,8 @@ void add_run_flags(CLI::App& cmd, RunFlags& f) {
       ->check(CLI::ExistingFile);
   cmd.add_option(
          "--scenario", f.scenario,
-         "Scripted scenario (JSON: ego start, cars, timed events) instead of random traffic")
+         "Scenario instead of random traffic: scripted (ego start, cars, timed events) or cut\n"
+         "from a recorded run by `overtake cut` (docs/scenarios.md)")
       ->check(CLI::ExistingFile);
   f.minutes = cmd.add_option("--minutes", f.opts.minutes,
                              "Simulated minutes to drive (default 30, or the scenario's duration)");
@@ -227,6 +228,10 @@ void add_run_flags(CLI::App& cmd, RunFlags& f) {
   cmd.add_option("--record", f.record,
                  "Record a replay of the run to this file (every step's cars, the planned paths,\n"
                  "the referee's figures and incidents); watch it with `overtake view FILE`");
+  cmd.add_option("--checkpoint-every", f.opts.checkpoint_every_s,
+                 "With --record: store a world checkpoint every this many simulated seconds\n"
+                 "(0: none), from which `overtake cut` starts scenarios")
+      ->capture_default_str();
   auto* live =
       cmd.add_flag("--live", f.live_on,
                    "Serve the run's live view (open the printed address in a browser); the run\n"
@@ -340,9 +345,9 @@ int run_cli(int argc, const char* const* argv) {
   app.require_subcommand(1);
   app.set_version_flag("--version", "overtake " + overtake_version());
   const std::vector<Subcommand> commands{
-      register_drive(app), register_track(app),   register_config(app),
-      register_bench(app), register_compare(app), register_serve(app),
-      register_sim(app),   register_view(app),    register_calibrate(app)};
+      register_drive(app),     register_track(app), register_config(app), register_bench(app),
+      register_compare(app),   register_serve(app), register_sim(app),    register_view(app),
+      register_calibrate(app), register_cut(app)};
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

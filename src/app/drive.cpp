@@ -10,6 +10,8 @@
 #include "overtake/app/viewer.hpp"
 #include "overtake/core/hash.hpp"
 #include "overtake/planner/policy.hpp"
+#include "overtake/sim/checkpoint.hpp"
+#include "overtake/sim/recorded_traffic.hpp"
 #include "overtake/sim/world.hpp"
 
 namespace overtake::app {
@@ -25,6 +27,44 @@ const PlannerCatalog& builtin_catalog() {
 
 const PlannerCatalog& catalog_of(const DriveOptions& opts) {
   return opts.planners ? *opts.planners : builtin_catalog();
+}
+
+/// What a cut scenario starts from, checked against the drive's map.
+struct CutStart {
+  sim::Checkpoint checkpoint;
+  sim::TrafficProfile profile = sim::TrafficProfile::faithful;
+  std::optional<sim::RecordedTraffic> recorded;
+};
+
+CutStart prepare_cut(const Track& track, const Config& config, const sim::Scenario& scenario) {
+  const sim::ScenarioCut& cut = *scenario.cut;
+  const std::string name = "scenario '" + scenario.name + "'";
+  CutStart out;
+  try {
+    out.checkpoint = sim::decode_checkpoint(cut.checkpoint, name + ": cut.checkpoint");
+    if (cut.replayed) {
+      out.recorded =
+          sim::decode_recorded_traffic(cut.recorded, name + ": cut.recorded_traffic",
+                                       config.road.lane_count, track.map.waypoints.size());
+    }
+  } catch (const core::StateError& e) {
+    throw ConfigError(e.what());
+  }
+  const sim::CheckpointInfo& info = out.checkpoint.info;
+  const auto profile = sim::parse_traffic_profile(info.traffic);
+  if (!profile) {
+    throw ConfigError(name + ": cut from " + info.traffic +
+                      " traffic; only faithful and calm runs can be cut");
+  }
+  out.profile = *profile;
+  const std::string map_hash = core::hex64(track.map.content_hash);
+  if (info.map_hash != map_hash) {
+    throw ConfigError(name + ": cut from a run on the map " + info.track + " (hash " +
+                      info.map_hash + "), but this drive's map is " + track.map.source + " (hash " +
+                      map_hash + ")" +
+                      (cut.map.empty() ? std::string() : "; give --map " + cut.map));
+  }
+  return out;
 }
 
 }  // namespace
@@ -48,6 +88,10 @@ void validate_drive_options(const DriveOptions& opts) {
   if (!opts.external && !catalog.find(opts.policy)) {
     throw UsageError("--policy: unknown policy '" + opts.policy +
                      "' (available: " + catalog.names_text() + ")");
+  }
+  if (!(opts.checkpoint_every_s >= 0.0) || opts.checkpoint_every_s > 3600.0) {
+    throw UsageError("--checkpoint-every must be between 0 (none) and 3600 s (got " +
+                     std::to_string(opts.checkpoint_every_s) + ")");
   }
   if (opts.live && (opts.live->port < 0 || opts.live->port > 65535)) {
     throw UsageError("--port must be between 0 and 65535 (got " + std::to_string(opts.live->port) +
@@ -82,7 +126,10 @@ RunProvenance drive_provenance(const Track& track, const Config& config, const D
     if (entry && entry->kind != PlannerKind::builtin) p.planner = entry->describe();
     if (entry && entry->program && opts.planner_log) p.planner_log = opts.planner_log->string();
   }
-  p.traffic = scenario ? "scripted" : std::string(sim::to_string(*profile));
+  p.traffic = !scenario                 ? std::string(sim::to_string(*profile))
+              : !scenario->cut          ? std::string("scripted")
+              : scenario->cut->replayed ? std::string("replayed")
+                                        : std::string("reactive");
   if (scenario) p.scenario = scenario->name.empty() ? "unnamed scenario" : scenario->name;
   p.map_path = track.map.source;
   p.map_hash = core::hex64(track.map.content_hash);
@@ -99,8 +146,12 @@ DriveResult drive_on(const Track& track, const Config& config, const DriveOption
                      const std::atomic<bool>* stop, const sim::Scenario* scenario) {
   validate_drive_options(opts);
   const auto profile = sim::parse_traffic_profile(opts.traffic);
+  std::optional<CutStart> cut;
+  if (scenario && scenario->cut) cut = prepare_cut(track, config, *scenario);
   auto world_ptr =
-      scenario
+      cut ? std::make_unique<sim::World>(track.map, track.line, config.world, cut->profile,
+                                         cut->checkpoint.info.seed)
+      : scenario
           ? std::make_unique<sim::World>(track.map, track.line, config.world, *scenario)
           : std::make_unique<sim::World>(track.map, track.line, config.world, *profile, opts.seed);
   sim::World& world = *world_ptr;
@@ -116,6 +167,11 @@ DriveResult drive_on(const Track& track, const Config& config, const DriveOption
   run.stop = stop;
   // A live view is watched at real time.
   if (opts.live) run.pace = sim::Pace::real_time;
+  if (cut) {
+    run.restore = cut->checkpoint.run;
+    run.restore_scope = sim::RunOptions::RestoreScope::world;
+    if (cut->recorded) run.replayed_traffic = &*cut->recorded;
+  }
 
   // Recording and the live view watch the run; without them it has no observer.
   std::unique_ptr<replay::ReplayWriter> writer;
@@ -124,6 +180,20 @@ DriveResult drive_on(const Track& track, const Config& config, const DriveOption
     if (opts.live) result.live = start_live_view(header, *opts.live);
     // Last: a failure above (a port in use) leaves no replay file behind.
     if (opts.record) writer = std::make_unique<replay::ReplayWriter>(*opts.record, header);
+  }
+  // Checkpoints restore into a world made the same way: random traffic, or a reactive cut
+  // (its world is random traffic restored); not scripted cars, not replayed ones.
+  const bool restorable = !scenario || (cut && !cut->recorded);
+  if (writer && restorable && opts.checkpoint_every_s > 0.0) {
+    run.checkpoint_every_s = opts.checkpoint_every_s;
+    sim::CheckpointInfo info;
+    info.traffic = cut ? cut->checkpoint.info.traffic : std::string(sim::to_string(*profile));
+    info.seed = cut ? cut->checkpoint.info.seed : opts.seed;
+    info.track = track.map.source;
+    info.map_hash = p.map_hash;
+    info.config_hash = p.params_hash;
+    info.policy = p.policy;
+    writer->set_checkpoint_info(std::move(info));
   }
   sim::ObserverList observers({writer.get(), result.live ? &result.live->observer() : nullptr});
   run.observer = observers.get();
@@ -138,6 +208,17 @@ DriveResult drive_on(const Track& track, const Config& config, const DriveOption
     result.report = program.loop(world, run);
   } else {
     auto policy = entry->make(track.line, config.planner);
+    // A built-in policy picks up where it was when the scenario was cut from its own run.
+    if (cut && cut->checkpoint.info.policy == opts.policy) {
+      try {
+        (void)planner::restore_policy_state(*policy, cut->checkpoint.planner);
+      } catch (const core::StateError& e) {
+        throw ConfigError(e.what());
+      }
+    }
+    if (run.checkpoint_every_s > 0.0) {
+      run.planner_state = [&policy] { return planner::save_policy_state(*policy); };
+    }
     const auto& tap = opts.telemetry_tap;
     result.report = sim::run_drive(
         world,
@@ -159,15 +240,19 @@ DriveResult drive_on(const Track& track, const Config& config, const DriveOption
 DriveInputs load_drive_inputs(const DriveOptions& opts) {
   DriveInputs in;
   in.config = load_config(opts.config);
-  in.track = load_track(opts.map);
   in.options = opts;
   if (opts.scenario) {
     in.scenario = load_scenario(*opts.scenario, in.config.road);
+    // A cut scenario names the map it was cut on (relative to the scenario file).
+    if (!opts.map && in.scenario->cut && !in.scenario->cut->map.empty()) {
+      in.options.map = opts.scenario->parent_path() / in.scenario->cut->map;
+    }
     if (in.scenario->name.empty()) in.scenario->name = opts.scenario->filename().string();
     if (opts.minutes_from_scenario && in.scenario->duration_s) {
       in.options.minutes = *in.scenario->duration_s / 60.0;
     }
   }
+  in.track = load_track(in.options.map);
   return in;
 }
 

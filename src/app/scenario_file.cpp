@@ -7,6 +7,9 @@
 #include <sstream>
 
 #include "overtake/app/config.hpp"
+#include "overtake/view/page.hpp"
+
+#include <zlib.h>
 
 namespace overtake::app {
 namespace {
@@ -96,7 +99,111 @@ std::string fmt(double v) {
   return os.str();
 }
 
+void parse_expect(const json& j, sim::ScenarioExpect& ex, const core::RoadParams& road,
+                  std::vector<std::string>& errors) {
+  Fields e(j, "scenario.expect", errors);
+  const auto count = [&](const char* key, std::optional<int>& out) {
+    if (e.has(key)) out = e.integer(key, 0, false, 0, 1000000);
+  };
+  count("at_fault_collisions", ex.max_at_fault_collisions);
+  count("collisions", ex.max_collisions);
+  count("incidents", ex.max_incidents);
+  if (e.has("reach_lane")) {
+    Fields r(j["reach_lane"], "scenario.expect.reach_lane", errors);
+    ex.reach_lane = r.integer("lane", 0, true, 0, road.lane_count - 1);
+    ex.reach_lane_by_s = r.number("by_s", 0.0, true, 0.0, kMaxDurationS);
+    r.check_unknown();
+  }
+  if (e.has("min_distance_m")) {
+    ex.min_distance_m = e.number("min_distance_m", 0.0, false, 0.0, 1e9);
+  }
+  e.check_unknown();
+}
+
+std::string text_of(const json& j, const char* key, const std::string& path,
+                    std::vector<std::string>& errors) {
+  if (!j.contains(key)) return {};
+  if (!j[key].is_string()) {
+    errors.push_back(path + "." + key + ": expected a string");
+    return {};
+  }
+  return j[key].get<std::string>();
+}
+
+void parse_cut(const json& j, sim::ScenarioCut& cut, std::vector<std::string>& errors) {
+  Fields c(j, "scenario.cut", errors);
+  if (c.has("traffic")) {
+    const std::string t = text_of(j, "traffic", "scenario.cut", errors);
+    if (t == "replayed") {
+      cut.replayed = true;
+    } else if (t != "reactive") {
+      errors.push_back("scenario.cut.traffic: '" + t + "' is neither reactive nor replayed");
+    }
+  } else {
+    errors.push_back("scenario.cut.traffic: missing");
+  }
+  cut.start_s = c.number("start_s", 0.0, true, 0.0, kMaxDurationS);
+  cut.at_s = c.number("at_s", 0.0, true, 0.0, kMaxDurationS);
+  cut.lead_in_s = c.number("lead_in_s", 0.0, false, 0.0, kMaxDurationS);
+  if (c.has("map")) cut.map = text_of(j, "map", "scenario.cut", errors);
+  c.has("from");  // where it was cut from: for people, not read
+  const auto blob = [&](const char* key, std::string& out, bool required) {
+    if (!c.has(key)) {
+      if (required) errors.push_back(c.at(key) + ": missing");
+      return;
+    }
+    try {
+      out = unpack_blob(text_of(j, key, "scenario.cut", errors), c.at(key));
+    } catch (const ConfigError& e) {
+      errors.emplace_back(e.what());
+    }
+  };
+  blob("checkpoint", cut.checkpoint, true);
+  blob("recorded_traffic", cut.recorded, cut.replayed);
+  c.check_unknown();
+}
+
 }  // namespace
+
+std::string pack_blob(std::string_view bytes) {
+  uLongf size = compressBound(static_cast<uLong>(bytes.size()));
+  std::string out(size, '\0');
+  if (compress2(reinterpret_cast<Bytef*>(out.data()), &size,
+                reinterpret_cast<const Bytef*>(bytes.data()), static_cast<uLong>(bytes.size()),
+                Z_BEST_COMPRESSION) != Z_OK) {
+    throw std::runtime_error("cannot compress " + std::to_string(bytes.size()) + " bytes");
+  }
+  out.resize(size);
+  return view::base64_encode(out);
+}
+
+std::string unpack_blob(std::string_view text, std::string_view what) {
+  constexpr std::size_t kMaxBytes = std::size_t{256} << 20U;
+  const std::optional<std::string> packed = view::base64_decode(text);
+  if (!packed) throw ConfigError(std::string(what) + ": not base64");
+  z_stream z{};
+  if (inflateInit(&z) != Z_OK) throw ConfigError(std::string(what) + ": cannot inflate");
+  z.next_in = reinterpret_cast<Bytef*>(const_cast<char*>(packed->data()));
+  z.avail_in = static_cast<uInt>(packed->size());
+  std::string out;
+  char chunk[1 << 16];
+  int rc = Z_OK;
+  while (rc == Z_OK) {
+    z.next_out = reinterpret_cast<Bytef*>(chunk);
+    z.avail_out = sizeof chunk;
+    rc = inflate(&z, Z_NO_FLUSH);
+    out.append(chunk, sizeof chunk - z.avail_out);
+    if (out.size() > kMaxBytes) rc = Z_MEM_ERROR;
+    if (rc == Z_BUF_ERROR && z.avail_in == 0) break;
+  }
+  inflateEnd(&z);
+  if (rc != Z_STREAM_END) {
+    throw ConfigError(std::string(what) + (out.size() > kMaxBytes
+                                               ? ": more than 256 MB once inflated"
+                                               : ": damaged or truncated (zlib)"));
+  }
+  return out;
+}
 
 sim::Scenario parse_scenario(const json& j, std::string_view source, const core::RoadParams& road) {
   std::vector<std::string> errors;
@@ -108,7 +215,18 @@ sim::Scenario parse_scenario(const json& j, std::string_view source, const core:
     else
       errors.push_back("scenario.name: expected a string");
   }
-  top.has("description");
+  if (top.has("description")) sc.description = text_of(j, "description", "scenario", errors);
+  if (top.has("expect")) parse_expect(j["expect"], sc.expect, road, errors);
+  if (top.has("cut")) {
+    sc.cut.emplace();
+    parse_cut(j["cut"], *sc.cut, errors);
+    for (const char* key : {"ego", "cars", "events"}) {
+      if (j.contains(key)) {
+        errors.push_back(std::string("scenario.") + key +
+                         ": a cut scenario starts from its checkpoint (no " + key + ")");
+      }
+    }
+  }
   if (top.has("duration_s")) {
     const double d = top.number("duration_s", 1.0, false, 0.0, kMaxDurationS);
     if (!(d > 0.0)) errors.push_back("scenario.duration_s: must be more than 0");

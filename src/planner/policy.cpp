@@ -48,3 +48,21 @@ PolicyFactory builtin_policy_factory(std::string_view name) {
 }
 
 }  // namespace overtake::planner
+
+namespace overtake::planner {
+
+std::string save_policy_state(Policy& policy) {
+  core::StateArchive ar;
+  if (!policy.archive_state(ar)) return {};
+  return ar.take();
+}
+
+bool restore_policy_state(Policy& policy, std::string_view state) {
+  if (state.empty()) return false;
+  core::StateArchive ar(state, "planner state");
+  if (!policy.archive_state(ar)) return false;
+  ar.expect_end();
+  return true;
+}
+
+}  // namespace overtake::planner

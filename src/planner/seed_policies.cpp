@@ -316,3 +316,26 @@ core::PlanResult Seed004Policy::plan(const core::Telemetry& t) {
 }
 
 }  // namespace overtake::planner
+
+namespace overtake::planner {
+
+bool SeedPolicyBase::archive_state(core::StateArchive& ar) {
+  ar.part("seed policy");
+  ar.io_range(lane_, 0, road_.lane_count - 1, "lane");
+  ar.io(ref_speed_mps_, "reference speed");
+  return true;
+}
+
+bool Seed001Policy::archive_state(core::StateArchive& ar) {
+  SeedPolicyBase::archive_state(ar);
+  ar.io(too_longer_, "cycles slowing");
+  return true;
+}
+
+bool Seed003Policy::archive_state(core::StateArchive& ar) {
+  SeedPolicyBase::archive_state(ar);
+  ar.io(allow_strong_acc_, "strong acceleration");
+  return true;
+}
+
+}  // namespace overtake::planner

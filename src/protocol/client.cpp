@@ -250,6 +250,7 @@ sim::RunReport run_realtime(sim::World& world, PlannerConnection& connection,
   const auto send_telemetry = [&](bool full) {
     sent_at = Clock::now();
     if (full) {
+      run.checkpoint_if_due();
       buffer.clear();
       append_telemetry(buffer, run.telemetry());
       last_full_step = world.steps();

@@ -95,4 +95,10 @@ void ReplayEncoder::append_end(std::string_view report_json, std::string& out) {
   end_record(out, at);
 }
 
+void ReplayEncoder::append_checkpoint(std::string_view encoded, std::string& out) {
+  const std::size_t at = begin_record(out, ReplayRecordKind::checkpoint);
+  out += encoded;
+  end_record(out, at);
+}
+
 }  // namespace overtake::replay

@@ -25,6 +25,7 @@ struct Sink {
   virtual void incident(const ReplayIncident& i) = 0;
   virtual void end(std::string text) = 0;
   virtual void unknown() = 0;
+  virtual void checkpoint(ReplayCheckpoint&& c) = 0;
 };
 
 template <class T>
@@ -467,6 +468,25 @@ class Decoder {
         sink_.incident(i);
         return;
       }
+      case static_cast<std::uint8_t>(ReplayRecordKind::checkpoint): {
+        if (!st_.last_step) bad_record(kind, at, "a checkpoint before the first frame");
+        ReplayCheckpoint c;
+        c.step = *st_.last_step;
+        try {
+          const sim::Checkpoint decoded = sim::decode_checkpoint(p, "the checkpoint");
+          if (decoded.info.step != c.step) {
+            bad_record(kind, at,
+                       "a checkpoint of step " + std::to_string(decoded.info.step) + " at frame " +
+                           std::to_string(c.step));
+          }
+          c.t_s = decoded.info.t_s;
+        } catch (const core::StateError& e) {
+          bad_record(kind, at, e.what());
+        }
+        c.bytes.assign(p);
+        sink_.checkpoint(std::move(c));
+        return;
+      }
       case static_cast<std::uint8_t>(ReplayRecordKind::end): {
         std::string text(p);
         if (!json::accept(text)) bad_record(kind, at, "the report is not valid JSON");
@@ -508,6 +528,7 @@ struct BuildSink final : Sink {
   void incident(const ReplayIncident& i) override { out.incidents.push_back(i); }
   void end(std::string text) override { out.end_json = std::move(text); }
   void unknown() override { ++out.unknown_records; }
+  void checkpoint(ReplayCheckpoint&& c) override { out.checkpoints.push_back(std::move(c)); }
 };
 
 struct CountSink final : Sink {
@@ -518,6 +539,7 @@ struct CountSink final : Sink {
   void incident(const ReplayIncident&) override { ++check->incidents; }
   void end(std::string) override {}
   void unknown() override {}
+  void checkpoint(ReplayCheckpoint&&) override { ++check->checkpoints; }
 };
 
 }  // namespace

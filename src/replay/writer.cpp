@@ -34,6 +34,7 @@ struct ReplayWriter::Impl {
   std::string error;  // the first failure; nothing more is written after it
   bool finished = false;
   bool in_place = false;  // a device or pipe: written directly, never renamed
+  sim::CheckpointInfo checkpoint_info;
 
   void fail(const std::string& what) {
     if (error.empty()) error = partial_path.string() + ": " + what;
@@ -169,6 +170,23 @@ void ReplayWriter::on_path(std::span<const core::Vec2> path) {
   Impl& m = *impl_;
   if (m.finished || !m.error.empty()) return;
   m.encoder.append_path(path, m.pending);
+  m.maybe_deflate();
+}
+
+void ReplayWriter::set_checkpoint_info(sim::CheckpointInfo info) {
+  impl_->checkpoint_info = std::move(info);
+}
+
+void ReplayWriter::on_checkpoint(const sim::Checkpoint& checkpoint) {
+  Impl& m = *impl_;
+  if (m.finished || !m.error.empty()) return;
+  sim::Checkpoint c = checkpoint;
+  const long step = c.info.step;
+  const double t = c.info.t_s;
+  c.info = m.checkpoint_info;
+  c.info.step = step;
+  c.info.t_s = t;
+  ReplayEncoder::append_checkpoint(sim::encode_checkpoint(c), m.pending);
   m.maybe_deflate();
 }
 

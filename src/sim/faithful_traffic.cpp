@@ -493,3 +493,57 @@ void FaithfulTraffic::on_contact(std::size_t i, core::Vec2 shift_m, double speed
 }
 
 }  // namespace overtake::sim
+
+// ----- checkpoints -------------------------------------------------------------------------
+
+namespace overtake::sim {
+
+void SmoothNoise::archive(core::StateArchive& ar) {
+  ar.io(rng_, "noise stream");
+  ar.io(cell_, "noise cell");
+  ar.io(v0_, "noise value");
+  ar.io(v1_, "noise value");
+}
+
+void FaithfulTraffic::archive(core::StateArchive& ar) {
+  ar.part("faithful traffic");
+  const std::size_t n = cars_.size();
+  const int lanes = road_.lane_count;
+  const std::size_t waypoints = chords_.size();
+  ar.io(spawn_rng_, "spawn stream");
+  ar.require(ar.io_length(n, n, "cars") == n, "the checkpoint has another number of cars");
+  for (std::size_t i = 0; i < n; ++i) {
+    archive_car(ar, cars_[i], lanes, waypoints);
+    Driver& d = drivers_[i];
+    ar.io(d.cap_mps, "cap");
+    ar.io_range(d.target_waypoint, 0, waypoints - 1, "target waypoint");
+    ar.io(d.lane_change_time, "lane change time");
+    ar.require(ar.io_length(d.clear_counts.size(), d.clear_counts.size(), "clear counts") ==
+                   d.clear_counts.size(),
+               "the checkpoint has another number of lanes");
+    for (int& c : d.clear_counts) ar.io(c, "clear count");
+    ar.io(d.staged, "staged");
+    ar.io(d.fresh, "fresh");
+    ar.io(d.avoid_until_s, "avoid until");
+    ar.io(d.avoid_slowdown, "avoid slowdown");
+    ar.io(d.avoid_offset_m, "avoid offset");
+    d.noise.archive(ar);
+    ar.io_enum(d.sight, SightKind::ego, "sight");
+    ar.io_range(d.sight_car, -1, static_cast<int>(n) - 1, "sight car");
+    ar.io(d.sight_distance_m, "sight distance");
+    ar.io(d.reacting, "reacting");
+    ar.io(d.desired_mph, "desired speed");
+    ar.io(d.pedal, "pedal");
+    ar.io(parked_[i], "parked position");
+  }
+  const std::size_t queued = ar.io_length(queue_.size(), n, "staged queue");
+  if (ar.loading()) queue_.assign(queued, 0);
+  for (std::size_t& i : queue_) ar.io_range(i, 0, n - 1, "staged car");
+  ar.io(init_, "first frame");
+  ar.io(batches_held_, "batches held");
+  ar.io(frame_counter_, "frame counter");
+  ar.io(frames_to_batch_, "frames to batch");
+  ar.io(time_s_, "time");
+}
+
+}  // namespace overtake::sim

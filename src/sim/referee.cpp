@@ -217,3 +217,56 @@ void Referee::update_strict() {
 }
 
 }  // namespace overtake::sim
+
+namespace overtake::sim {
+
+void archive_incident(core::StateArchive& ar, Incident& incident, int lanes) {
+  ar.io_enum(incident.type, IncidentType::outside_lane, "incident type");
+  ar.io(incident.t_s, "incident time");
+  ar.io(incident.s_m, "incident s");
+  ar.io_range(incident.lane, -64, lanes + 64, "incident lane");
+  ar.io(incident.value, "incident value");
+  ar.io_optional(incident.collision, "collision class",
+                 [](core::StateArchive& a, CollisionClass& c) {
+                   a.io_enum(c.kind, CollisionKind::car_stopped, "collision kind");
+                   a.io(c.at_fault, "at fault");
+                 });
+}
+
+void Referee::archive(core::StateArchive& ar) {
+  // A run of a week at 50 steps per second counts fewer than this.
+  constexpr std::size_t kMaxIncidents = 1U << 24U;
+  ar.part("referee");
+  const int lanes = road_.lane_count;
+  ar.io_vector(incidents_, kMaxIncidents, "incidents",
+               [lanes](core::StateArchive& a, Incident& i) { archive_incident(a, i, lanes); });
+  ar.io(peaks_.speed_mps, "peak speed");
+  ar.io(peaks_.acceleration_mps2, "peak acceleration");
+  ar.io(peaks_.jerk_mps3, "peak jerk");
+  ar.io(peaks_.strict_acceleration_mps2, "peak strict acceleration");
+  ar.io(peaks_.strict_jerk_mps3, "peak strict jerk");
+  ar.io(distance_m_, "distance");
+  ar.io(incident_free_m_, "incident-free distance");
+  ar.io(best_incident_free_m_, "best incident-free distance");
+  for (long& l : latch_until_step_) ar.io(l, "latch");
+  for (int& c : counts_) ar.io(c, "incident count");
+  ar.io(step_, "step");
+  ar.io_range(block_fill_, 0, p_.accel_block_steps, "block fill");
+  ar.io(block_speed_sum_, "block speed sum");
+  ar.io(prev_block_mean_speed_, "previous block speed");
+  ar.io_range(group_fill_, 0, p_.jerk_group_blocks, "group fill");
+  ar.io(group_sum_, "group sum");
+  ar.io(prev_group_mean_, "previous group mean");
+  ar.io(exact_outside_lane_, "exact outside of lane");
+  ar.io(exact_latch_until_step_, "exact latch");
+  ar.io(exact_straddle_steps_, "exact straddle steps");
+  const std::size_t ring = ring_.size();
+  ar.require(ar.io_length(ring, ring, "recent positions") == ring,
+             "recent positions: another window (the referee's params differ)");
+  for (core::Vec2& v : ring_) ar.io(v, "recent position");
+  ar.io_range(ring_head_, 0, ring - 1, "ring head");
+  ar.io_range(ring_filled_, 0, static_cast<long>(ring), "ring fill");
+  ar.io(straddle_steps_, "straddle steps");
+}
+
+}  // namespace overtake::sim

@@ -1,6 +1,7 @@
 #include "overtake/sim/run.hpp"
 
 #include <cmath>
+#include <limits>
 #include <thread>
 
 #include "overtake/core/cpu_clock.hpp"
@@ -27,6 +28,10 @@ void ObserverList::on_frame(const Frame& frame, std::span<const Incident> new_in
 
 void ObserverList::on_path(std::span<const core::Vec2> path) {
   for (RunObserver* o : observers_) o->on_path(path);
+}
+
+void ObserverList::on_checkpoint(const Checkpoint& checkpoint) {
+  for (RunObserver* o : observers_) o->on_checkpoint(checkpoint);
 }
 
 RunObserver* ObserverList::get() {
@@ -56,13 +61,60 @@ void PaceClock::wait_for(long step) const {
 Stepper::Stepper(World& world, const RunOptions& options)
     : world_(world),
       options_(options),
-      total_steps_(std::lround(options.duration_s / world.params().step_s)),
+      total_steps_(world.steps() + std::lround(options.duration_s / world.params().step_s)),
       start_step_(world.steps()),
       scorecard_(world),
       pace_(options.pace, world.params().step_s),
       latency_(core::derive_seed(options.seed, kLatencyStream)),
-      next_progress_s_(kProgressEveryS) {
+      next_progress_s_(world.time_s() + kProgressEveryS),
+      next_checkpoint_s_(world.time_s()) {
+  if (!options.restore.empty()) {
+    core::StateArchive ar(options.restore, "checkpoint");
+    world_.archive(ar);
+    if (options.replayed_traffic) world_.replay_traffic(*options.replayed_traffic);
+    if (options.restore_scope == RunOptions::RestoreScope::whole_run) {
+      scorecard_.archive(ar);
+      archive(ar);
+    } else {
+      Scorecard skipped(world_);
+      skipped.archive(ar);
+      archive(ar);
+      scorecard_ = Scorecard(world_);
+      total_steps_ = world_.steps() + std::lround(options.duration_s / world_.params().step_s);
+    }
+    ar.expect_end();
+    start_step_ = world_.steps();
+    next_progress_s_ = world_.time_s() + kProgressEveryS;
+    next_checkpoint_s_ = world_.time_s();
+  }
   emit_frame(0);
+}
+
+void Stepper::archive(core::StateArchive& ar) {
+  ar.part("stepper");
+  ar.io_range(total_steps_, 0, std::numeric_limits<long>::max() / 2, "end step");
+  ar.io(latency_, "latency stream");
+}
+
+std::string Stepper::save() {
+  core::StateArchive ar;
+  world_.archive(ar);
+  scorecard_.archive(ar);
+  archive(ar);
+  return ar.take();
+}
+
+void Stepper::checkpoint_if_due() {
+  if (options_.checkpoint_every_s <= 0.0 || !options_.observer) return;
+  if (world_.time_s() + 1e-9 < next_checkpoint_s_) return;
+  while (next_checkpoint_s_ <= world_.time_s() + 1e-9)
+    next_checkpoint_s_ += options_.checkpoint_every_s;
+  Checkpoint c;
+  c.info.step = world_.steps();
+  c.info.t_s = world_.time_s();
+  c.run = save();
+  if (options_.planner_state) c.planner = options_.planner_state();
+  options_.observer->on_checkpoint(c);
 }
 
 bool Stepper::finished() const {
@@ -134,6 +186,7 @@ RunReport run_drive(World& world, const PlannerFn& planner, const RunOptions& op
       run.end(RunEnd::stopped);
       break;
     }
+    run.checkpoint_if_due();
     const core::Telemetry telemetry = run.telemetry();
     core::PlanResult plan;
     const double c0 = core::thread_cpu_us();

@@ -406,3 +406,77 @@ SafetySummary SafetyMonitor::summary() const {
 }
 
 }  // namespace overtake::sim
+
+namespace overtake::sim {
+
+void SafetyMonitor::archive_track(core::StateArchive& ar, Track& t, bool is_ego) {
+  const auto archive_sample = [](core::StateArchive& a, Sample& x) {
+    a.io(x.frenet, "sample s and d");
+    a.io(x.speed_mps, "sample speed");
+  };
+  ar.io(t.active, "track active");
+  ar.io_range(t.id, -1, 65535, "track car");
+  const auto lanes = static_cast<std::size_t>(road_.lane_count);
+  for (std::size_t l = 0; l < lanes; ++l) ar.io(t.lane_since[l], "lane since");
+  ar.io(t.two_lanes_last, "two lanes last");
+  ar.io_range(t.span_lo, -64, 64, "lanes from");
+  ar.io_range(t.span_hi, -64, 64, "lanes to");
+  ar.io(t.entered_now, "entered now");
+  for (std::size_t l = 0; l < lanes; ++l) archive_sample(ar, t.entry_self[l]);
+  for (std::size_t l = 0; l < lanes; ++l) archive_sample(ar, t.entry_ego[l]);
+  for (std::size_t l = 0; l < lanes; ++l) {
+    ar.io_vector(t.entry_cars[l], 1U << 16U, "cars at an entry",
+                 [&](core::StateArchive& a, CarAt& c) {
+                   a.io_range(c.id, -1, 65535, "car at an entry");
+                   archive_sample(a, c.at);
+                 });
+  }
+  // The window's ring: empty until the body is first seen, else one sample per step.
+  const auto window = static_cast<std::size_t>(window_steps_ + 1);
+  const std::size_t n = ar.io_length(t.ring.size(), window, "window");
+  ar.require(n == 0 || n == window, "window: another length (the safety params differ)");
+  if (ar.loading()) t.ring.assign(n, Sample{});
+  // Of a sample older than the step before, only d is ever read again (and the ego's speed):
+  // at the window's far end. The rest is not kept, so that a checkpoint stays small.
+  std::uint64_t d_bits = 0, v_bits = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    Sample& x = t.ring[i];
+    const std::size_t back = (ring_head_ + n - i) % n;
+    if (back <= 1) {
+      archive_sample(ar, x);
+      continue;
+    }
+    ar.io_delta(x.frenet.d_m, d_bits, "window d");
+    if (is_ego) ar.io_delta(x.speed_mps, v_bits, "window speed");
+    if (ar.loading()) x.frenet.s_m = 0.0;  // never read
+  }
+}
+
+void SafetyMonitor::archive(core::StateArchive& ar) {
+  ar.part("safety");
+  ar.io(step_, "step");
+  ar.io(last_step_, "tracks' step");
+  ar.io(entries_now_, "entries now");
+  ar.io_range(ring_head_, 0, static_cast<std::size_t>(window_steps_), "ring head");
+  archive_track(ar, ego_, true);
+  ar.io_vector(cars_, 1U << 16U, "car tracks",
+               [this](core::StateArchive& a, Track& t) { archive_track(a, t, false); });
+  ar.io_optional(contact_id_, "contact",
+                 [](core::StateArchive& a, int& id) { a.io_range(id, 0, 65535, "contact car"); });
+  ar.io_enum(contact_class_.kind, CollisionKind::car_stopped, "contact kind");
+  ar.io(contact_class_.at_fault, "contact at fault");
+  ar.io(current_.ttc_ahead_s, "ttc ahead");
+  ar.io(current_.ttc_entering_s, "ttc entering");
+  ar.io(current_.headway_s, "headway");
+  ar.io(summary_.min_ttc_ahead_s, "least ttc ahead");
+  ar.io(summary_.min_ttc_entering_s, "least ttc entering");
+  ar.io(summary_.min_headway_s, "least headway");
+  ar.io(summary_.ttc_below_s, "time below ttc");
+  ar.io(summary_.headway_below_s, "time below headway");
+  ar.io(summary_.near_miss_episodes, "near misses");
+  ar.io(in_episode_, "in episode");
+  ar.io(episode_contact_, "episode contact");
+  ar.io(last_below_step_, "last step below");
+}
+
+}  // namespace overtake::sim

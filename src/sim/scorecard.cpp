@@ -1,6 +1,7 @@
 #include "overtake/sim/scorecard.hpp"
 
 #include <cmath>
+#include <limits>
 
 #include "overtake/sim/world.hpp"
 
@@ -52,7 +53,8 @@ Scorecard::Scorecard(const World& world)
       safety_(world.params().safety, world.params().step_s, world.params().road, world.params().car,
               world.chords().loop_length_m()),
       lanes_(world.params().road),
-      step_s_(world.params().step_s) {
+      step_s_(world.params().step_s),
+      start_s_(world.time_s()) {
   // The safety monitor's first look: the start, before any step.
   (void)safety_.observe({world.ego().map_frenet, world.ego().speed_mps}, world.traffic().cars(),
                         std::nullopt);
@@ -103,7 +105,7 @@ void Scorecard::fill_frame(const World& world, Frame& f) const {
 RunReport Scorecard::report(const World& world, RunOutcome outcome, CycleClock clock) const {
   RunReport r;
   r.outcome = std::move(outcome);
-  r.duration_s = world.time_s();
+  r.duration_s = world.time_s() - start_s_;
   r.distance_m = referee_.distance_m();
   r.mean_speed_mps = r.duration_s > 0.0 ? r.distance_m / r.duration_s : 0.0;
   r.best_incident_free_m = referee_.best_incident_free_m();
@@ -114,17 +116,39 @@ RunReport Scorecard::report(const World& world, RunOutcome outcome, CycleClock c
   r.safety = safety_.summary();
   r.lane_changes = lanes_.lane_changes();
   r.time_in_lane_s = lanes_.time_in_lane_s();
-  r.planner_cycles = static_cast<long>(cycle_us_.count());
+  for (const long n : status_cycles_) r.planner_cycles += n;
   r.plan_status_cycles = status_cycles_;
   r.first_plan_reason = first_reason_;
   r.timing.p50_us = cycle_us_.quantile(0.5);
   r.timing.p99_us = cycle_us_.quantile(0.99);
   r.timing.max_us = cycle_us_.max();
-  r.timing.cycles = r.planner_cycles;
+  r.timing.cycles = static_cast<long>(cycle_us_.count());
   r.timing.clock = clock;
   r.timing.wall_p99_us = wall_us_.quantile(0.99);
   r.timing.wall_max_us = wall_us_.max();
   return r;
+}
+
+}  // namespace overtake::sim
+
+namespace overtake::sim {
+
+void LaneTracker::archive(core::StateArchive& ar) {
+  ar.io_range(settled_, -1, road_.lane_count - 1, "settled lane");
+  ar.io(changes_, "lane changes");
+  const std::size_t n = time_in_lane_s_.size();
+  ar.require(ar.io_length(n, n, "time in lane") == n, "time in lane: another number of lanes");
+  for (double& t : time_in_lane_s_) ar.io(t, "time in lane");
+}
+
+void Scorecard::archive(core::StateArchive& ar) {
+  referee_.archive(ar);
+  safety_.archive(ar);
+  ar.part("scorecard");
+  lanes_.archive(ar);
+  ar.io(start_s_, "start time");
+  for (long& n : status_cycles_) ar.io_range(n, 0, std::numeric_limits<long>::max(), "cycles");
+  ar.io(first_reason_, 4096, "first plan reason");
 }
 
 }  // namespace overtake::sim

@@ -25,7 +25,47 @@ double speed_along(core::Vec2 v, double heading_rad) {
   return std::max(0.0, core::dot(v, {std::cos(heading_rad), std::sin(heading_rad)}));
 }
 
+/// Traffic that follows recorded bodies step by step, whatever the ego does.
+class ReplayedTraffic final : public TrafficModel {
+ public:
+  ReplayedTraffic(std::vector<std::vector<TrafficCar>> steps)  // NOLINT(*-explicit-*)
+      : steps_(std::move(steps)) {
+    if (!steps_.empty()) cars_ = steps_.front();
+  }
+  void start(const EgoView& /*ego*/) override {}
+  void step(const EgoView& /*ego*/, double /*dt_s*/) override {
+    if (next_ < steps_.size()) cars_ = steps_[next_];
+    if (next_ < steps_.size()) ++next_;
+  }
+  [[nodiscard]] const std::vector<TrafficCar>& cars() const override { return cars_; }
+  void on_contact(std::size_t /*i*/, core::Vec2 /*shift_m*/, double /*speed_mps*/,
+                  const core::OrientedBox& /*other*/) override {}
+  void archive(core::StateArchive& ar) override {
+    ar.part("replayed traffic");
+    ar.io_range(next_, 0, steps_.size(), "recorded step");
+    if (ar.loading())
+      cars_ = steps_.empty() ? std::vector<TrafficCar>{} : steps_[next_ == 0 ? 0 : next_ - 1];
+  }
+
+ private:
+  std::vector<std::vector<TrafficCar>> steps_;
+  std::vector<TrafficCar> cars_;
+  std::size_t next_ = 1;  // the recorded step the next world step moves the cars to
+};
+
 }  // namespace
+
+void archive_car(core::StateArchive& ar, TrafficCar& car, int lanes, std::size_t waypoints) {
+  ar.io_range(car.id, 0, 65535, "car id");
+  ar.io(car.position, "car position");
+  ar.io(car.heading_rad, "car heading");
+  ar.io(car.speed_mps, "car speed");
+  ar.io(car.reported_velocity_mps, "car reported velocity");
+  ar.io(car.map_frenet, "car s and d");
+  ar.io_range(car.closest_waypoint, 0, waypoints == 0 ? 0 : waypoints - 1, "car waypoint");
+  ar.io_range(car.lane, 0, lanes - 1, "car lane");
+  ar.io(car.parked, "car parked");
+}
 
 std::optional<TrafficProfile> parse_traffic_profile(std::string_view name) {
   if (name == "faithful") return TrafficProfile::faithful;
@@ -136,6 +176,16 @@ void Traffic::set_script(const std::vector<ScriptedCar>& cars) {
   calm->set_script(cars);
   model_ = std::move(calm);
   scripted_ = true;
+}
+
+void Traffic::set_replayed(std::vector<std::vector<TrafficCar>> steps) {
+  model_ = std::make_unique<ReplayedTraffic>(std::move(steps));
+  replayed_ = true;
+  scripted_ = false;
+}
+
+void Traffic::archive(core::StateArchive& ar) {
+  model_->archive(ar);
 }
 
 void Traffic::apply_event(const ScenarioEvent& event) {

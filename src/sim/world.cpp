@@ -1,6 +1,7 @@
 #include "overtake/sim/world.hpp"
 
 #include <cmath>
+#include <limits>
 
 #include "overtake/core/random.hpp"
 #include "overtake/core/units.hpp"
@@ -115,6 +116,7 @@ void World::step() {
   }
   // Traffic decides from the frame before this step, then moves.
   traffic_.step(ego_view(), params_.step_s);
+  if (keep_moved_) moved_ = traffic_.cars();
 
   // The ego's perfect controller: onto the next point, facing the one after it. With one
   // point left the car stays where it is and the point is dropped.
@@ -134,6 +136,35 @@ void World::step() {
   ++steps_;
 
   contact_ = traffic_.resolve_contacts(ego_view());
+}
+
+void World::archive(core::StateArchive& ar) {
+  // A queue longer than this was never sent by any planner (the protocol's paths hold a few
+  // hundred points).
+  constexpr std::size_t kMaxQueue = 1U << 20U;
+  ar.part("world");
+  ar.io_range(steps_, 0, std::numeric_limits<long>::max() / 2, "step");
+  ar.io(ego_.position, "ego position");
+  ar.io(ego_.yaw_rad, "ego heading");
+  ar.io(ego_.speed_mps, "ego speed");
+  ar.io(ego_.frenet, "ego s and d");
+  ar.io(ego_.map_frenet, "ego s and d on the chords");
+  ar.io_range(ego_.closest_waypoint, 0, chords_.size() - 1, "ego waypoint");
+  const std::size_t queued = ar.io_length(queue_.size(), kMaxQueue, "path queue");
+  if (ar.loading()) queue_.assign(queued, core::Vec2{});
+  std::uint64_t x_bits = 0, y_bits = 0;
+  for (core::Vec2& p : queue_) {
+    ar.io_delta(p.x, x_bits, "queued point");
+    ar.io_delta(p.y, y_bits, "queued point");
+  }
+  ar.io_optional(contact_, "contact",
+                 [](core::StateArchive& a, int& id) { a.io_range(id, 0, 65535, "contact car"); });
+  ar.io_range(next_event_, 0, events_.size(), "next event");
+  traffic_.archive(ar);
+}
+
+void World::replay_traffic(std::vector<std::vector<TrafficCar>> steps) {
+  traffic_.set_replayed(std::move(steps));
 }
 
 EgoFrame World::ego_frame() const {

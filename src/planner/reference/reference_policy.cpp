@@ -1,6 +1,7 @@
 #include "overtake/planner/reference/reference_policy.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <string>
@@ -206,6 +207,68 @@ core::PlanResult ReferencePolicy::plan(const core::Telemetry& t) {
   origin_ = car;
   have_plan_ = true;
   return {std::move(points), to_core(chosen.status), status_reason(chosen)};
+}
+
+}  // namespace overtake::planner::reference
+
+namespace overtake::planner::reference {
+namespace {
+
+void archive_frenet_state(core::StateArchive& ar, FrenetState& f) {
+  ar.io(f.s_m, "state s");
+  ar.io(f.s_dot, "state s rate");
+  ar.io(f.s_ddot, "state s acceleration");
+  ar.io(f.d_m, "state d");
+  ar.io(f.d_dot_mps, "state d rate");
+  ar.io(f.d_ddot_mps2, "state d acceleration");
+}
+
+/// States along a path, each field against the state before it (they compress).
+void archive_states(core::StateArchive& ar, std::vector<FrenetState>& states,
+                    std::string_view what) {
+  constexpr std::size_t kMaxPoints = 1U << 16U;
+  const std::size_t n = ar.io_length(states.size(), kMaxPoints, what);
+  if (ar.loading()) states.assign(n, FrenetState{});
+  std::array<std::uint64_t, 6> prev{};
+  for (FrenetState& f : states) {
+    ar.io_delta(f.s_m, prev[0], what);
+    ar.io_delta(f.s_dot, prev[1], what);
+    ar.io_delta(f.s_ddot, prev[2], what);
+    ar.io_delta(f.d_m, prev[3], what);
+    ar.io_delta(f.d_dot_mps, prev[4], what);
+    ar.io_delta(f.d_ddot_mps2, prev[5], what);
+  }
+}
+
+}  // namespace
+
+bool ReferencePolicy::archive_state(core::StateArchive& ar) {
+  constexpr std::size_t kMaxPoints = 1U << 16U;
+  ar.part("reference");
+  archive_states(ar, states_, "states sent");
+  archive_states(ar, driven_, "states driven");
+  const std::size_t sent = ar.io_length(sent_.size(), kMaxPoints, "points sent");
+  if (ar.loading()) sent_.assign(sent, core::Vec2{});
+  std::uint64_t x_bits = 0, y_bits = 0;
+  for (core::Vec2& p : sent_) {
+    ar.io_delta(p.x, x_bits, "point sent");
+    ar.io_delta(p.y, y_bits, "point sent");
+  }
+  ar.require(sent_.size() == states_.size() || sent_.empty(), "points sent: not one per state");
+  archive_frenet_state(ar, origin_);
+  ar.io(have_plan_, "has a plan");
+  ar.io(band_time_s_, "time in a line band");
+  ar.io_vector(tracks_, kMaxPoints, "car tracks", [](core::StateArchive& a, CarTrack& t) {
+    a.io_range(t.id, -1, 65535, "track id");
+    a.io(t.s_m, "track s");
+    a.io(t.s_dot, "track speed");
+    a.io(t.s_ddot, "track acceleration");
+    a.io(t.top_speed_mps, "track top speed");
+  });
+  ar.io_range(behaviour_.target_lane, -1, road_.lane_count - 1, "target lane");
+  ar.io_range(behaviour_.goal_lane, -1, road_.lane_count - 1, "goal lane");
+  ar.io(behaviour_.since_settled_s, "since settled");
+  return true;
 }
 
 }  // namespace overtake::planner::reference

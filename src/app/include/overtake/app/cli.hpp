@@ -32,6 +32,7 @@ Subcommand register_track(CLI::App& app);
 Subcommand register_config(CLI::App& app);
 Subcommand register_bench(CLI::App& app);
 Subcommand register_compare(CLI::App& app);
+Subcommand register_cut(CLI::App& app);
 Subcommand register_serve(CLI::App& app);
 Subcommand register_sim(CLI::App& app);
 Subcommand register_view(CLI::App& app);

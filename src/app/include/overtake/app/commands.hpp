@@ -75,6 +75,9 @@ struct DriveOptions {
   bool minutes_from_scenario = false;
   /// Record a replay (docs/replay.md) to this file.
   std::optional<std::filesystem::path> record;
+  /// A recorded replay carries a world checkpoint this often (simulated seconds; 0: none), so
+  /// that `overtake cut` can start a scenario at any moment of it.
+  double checkpoint_every_s = 10.0;
   /// Serve the live view of the run, which then goes at 1x real time.
   std::optional<LiveOptions> live;
   /// Sees every telemetry the planner receives, with the world time (not a flag: for

@@ -8,6 +8,7 @@
 //               {"t_s": 9, "car": 1, "speed_mps": 20, "accel_mps2": 2}]}
 
 #include <filesystem>
+#include <string>
 #include <string_view>
 
 #include <nlohmann/json.hpp>
@@ -25,6 +26,12 @@ namespace overtake::app {
 /// fault is a ConfigError naming `source`.
 [[nodiscard]] sim::Scenario parse_scenario_text(std::string_view text, std::string_view source,
                                                 const core::RoadParams& road);
+
+/// Bytes as scenario files carry them: zlib, then base64.
+[[nodiscard]] std::string pack_blob(std::string_view bytes);
+/// The bytes back; a ConfigError naming `what` when the text is not base64 of a whole zlib
+/// stream, or inflates beyond 256 MB.
+[[nodiscard]] std::string unpack_blob(std::string_view text, std::string_view what);
 
 /// Reads a scenario file.
 [[nodiscard]] sim::Scenario load_scenario(const std::filesystem::path& path,

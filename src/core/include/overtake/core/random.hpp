@@ -3,6 +3,8 @@
 // implementation-defined, so the project draws its numbers here to stay deterministic on
 // every platform for a given seed.
 
+#include <array>
+#include <cstddef>
 #include <cstdint>
 
 namespace overtake::core {
@@ -54,6 +56,14 @@ class Rng {
   }
   /// True with probability p.
   constexpr bool chance(double p) { return uniform01() < p; }
+
+  /// The generator's whole state (for checkpoints), and a generator in that state.
+  [[nodiscard]] constexpr std::array<std::uint64_t, 4> state() const {
+    return {state_[0], state_[1], state_[2], state_[3]};
+  }
+  constexpr void set_state(const std::array<std::uint64_t, 4>& s) {
+    for (std::size_t i = 0; i < 4; ++i) state_[i] = s[i];
+  }
 
  private:
   static constexpr std::uint64_t rotl(std::uint64_t x, int k) { return (x << k) | (x >> (64 - k)); }

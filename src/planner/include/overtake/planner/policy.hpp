@@ -10,6 +10,7 @@
 
 #include "overtake/core/plan.hpp"
 #include "overtake/core/reference_line.hpp"
+#include "overtake/core/state_archive.hpp"
 #include "overtake/core/telemetry.hpp"
 #include "overtake/planner/params.hpp"
 
@@ -22,7 +23,17 @@ class Policy {
   virtual ~Policy() = default;
   /// The path for this cycle (in map axes, in driving order) and how it was found.
   [[nodiscard]] virtual core::PlanResult plan(const core::Telemetry& telemetry) = 0;
+  /// Writes or restores the state it keeps between cycles (for checkpoints and cut
+  /// scenarios), and says whether it did: false for a policy whose state overtake cannot
+  /// see (a plugin, a Python planner), which then starts afresh from a checkpoint.
+  virtual bool archive_state(core::StateArchive& /*ar*/) { return false; }
 };
+
+/// The policy's state as bytes (empty when it keeps none overtake can see).
+[[nodiscard]] std::string save_policy_state(Policy& policy);
+/// Restores a state save_policy_state wrote; false (nothing changed) when `state` is empty or
+/// the policy keeps none; core::StateError when the bytes do not fit the policy.
+bool restore_policy_state(Policy& policy, std::string_view state);
 
 /// Makes one policy instance (for one drive or one connection). `line` outlives the policy.
 /// Built-in policies, C++ plugins and Python planners are all reached through one.

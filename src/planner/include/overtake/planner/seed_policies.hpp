@@ -23,6 +23,7 @@ struct SeenCar {
 /// What the seed policies share: lane, reference speed, the walkthrough's numbers and path.
 class SeedPolicyBase : public Policy {
  public:
+  bool archive_state(core::StateArchive& ar) override;
   [[nodiscard]] int lane() const { return lane_; }
   [[nodiscard]] double ref_speed_mps() const { return ref_speed_mps_; }
 
@@ -79,6 +80,7 @@ class Seed001Policy final : public SeedPolicyBase {
   Seed001Policy(const core::ReferenceLine& line, const PlannerParams& params);
   [[nodiscard]] core::PlanResult plan(const core::Telemetry& t) override;
   [[nodiscard]] int patience() const { return too_longer_; }
+  bool archive_state(core::StateArchive& ar) override;
 
  private:
   Seed001Params p_;
@@ -109,6 +111,7 @@ class Seed003Policy final : public SeedPolicyBase {
   Seed003Policy(const core::ReferenceLine& line, const PlannerParams& params);
   [[nodiscard]] core::PlanResult plan(const core::Telemetry& t) override;
   [[nodiscard]] bool strong_acceleration() const { return allow_strong_acc_; }
+  bool archive_state(core::StateArchive& ar) override;
 
  private:
   Seed003Params p_;

@@ -21,6 +21,7 @@ class WalkthroughPolicy final : public Policy {
  public:
   WalkthroughPolicy(const core::ReferenceLine& line, const PlannerParams& params);
   [[nodiscard]] core::PlanResult plan(const core::Telemetry& telemetry) override;
+  bool archive_state(core::StateArchive& ar) override;
   [[nodiscard]] double ref_speed_mps() const { return ref_speed_mps_; }
   [[nodiscard]] int lane() const { return lane_; }
 

@@ -21,6 +21,7 @@
 
 #include "overtake/core/geometry.hpp"
 #include "overtake/core/reference_line.hpp"
+#include "overtake/sim/checkpoint.hpp"
 #include "overtake/sim/frame.hpp"
 #include "overtake/sim/params.hpp"
 #include "overtake/sim/referee.hpp"
@@ -38,7 +39,13 @@ inline constexpr std::size_t kReplayPreambleBytes = 16;
 inline constexpr double kReplayLaneLineSpacingM = 5.0;
 
 /// Kinds of records in the body.
-enum class ReplayRecordKind : std::uint8_t { frame = 1, path = 2, incident = 3, end = 4 };
+enum class ReplayRecordKind : std::uint8_t {
+  frame = 1,
+  path = 2,
+  incident = 3,
+  end = 4,
+  checkpoint = 5,  ///< added within version 2: a world checkpoint (sim/checkpoint.hpp)
+};
 
 /// A replay that cannot be written or read; the message names the file and what is wrong
 /// (with the byte offset or the record where it went wrong).
@@ -111,6 +118,8 @@ class ReplayEncoder {
   void append_path(std::span<const core::Vec2> path, std::string& out) const;
   /// The last record: the run's report as JSON.
   static void append_end(std::string_view report_json, std::string& out);
+  /// A checkpoint of the run at the last frame appended (its encoded bytes).
+  static void append_checkpoint(std::string_view encoded, std::string& out);
 
   /// A position as stored: x, y in cm, yaw in 1e-4 rad, speed in cm/s.
   struct Fixed {
@@ -147,6 +156,11 @@ class ReplayWriter final : public sim::RunObserver {
 
   void on_frame(const sim::Frame& frame, std::span<const sim::Incident> new_incidents) override;
   void on_path(std::span<const core::Vec2> path) override;
+  /// Stores the checkpoint, its info completed from `checkpoint_info` (what was run).
+  void on_checkpoint(const sim::Checkpoint& checkpoint) override;
+  /// What the run's checkpoints are of (traffic, seed, track, map and config hashes,
+  /// policy); the step and time come with each checkpoint.
+  void set_checkpoint_info(sim::CheckpointInfo info);
 
   /// Writes the end record (the run's report, JSON), completes the stream and gives the file
   /// its name. Throws ReplayError naming the file when anything could not be written (the
@@ -180,6 +194,13 @@ struct ReplayIncident {
   std::optional<sim::CollisionClass> collision;
 };
 
+/// A checkpoint the run stored at frame `step`.
+struct ReplayCheckpoint {
+  long step = 0;
+  double t_s = 0.0;
+  std::string bytes;  ///< the checkpoint as encoded (sim::decode_checkpoint reads it)
+};
+
 /// A whole replay, decoded.
 struct Replay {
   ReplayHeader header;
@@ -187,6 +208,8 @@ struct Replay {
   std::vector<ReplayFrame> frames;
   std::vector<ReplayPath> paths;
   std::vector<ReplayIncident> incidents;
+  /// Checkpoints, in step order (none in files written before replays carried them).
+  std::vector<ReplayCheckpoint> checkpoints;
   std::string end_json;  ///< the run's report (the `drive --json` keys, without `timing`)
   std::size_t unknown_records = 0;  ///< records of kinds this build does not know (skipped)
 };
@@ -204,6 +227,7 @@ struct ReplayCheck {
   std::size_t records = 0;  ///< good records before the fault (all of them when valid)
   std::size_t frames = 0;
   std::size_t incidents = 0;
+  std::size_t checkpoints = 0;
   double duration_s = 0.0;  ///< time of the last good frame
 };
 /// Checks a replay in memory without keeping its records (for `overtake view`).

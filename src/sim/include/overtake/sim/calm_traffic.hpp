@@ -63,6 +63,7 @@ class CalmTraffic final : public TrafficModel {
   [[nodiscard]] const std::vector<TrafficCar>& cars() const override { return bodies_; }
   void on_contact(std::size_t i, core::Vec2 shift_m, double speed_mps,
                   const core::OrientedBox& other) override;
+  void archive(core::StateArchive& ar) override;
 
   [[nodiscard]] const std::vector<CalmCar>& calm_cars() const { return cars_; }
   /// Testing hook: replaces the cars (ids are reassigned in order).

@@ -38,6 +38,7 @@ class SmoothNoise {
   explicit SmoothNoise(std::uint64_t seed = 0);
   /// The signal at `x` (x must not go back).
   [[nodiscard]] double at(double x);
+  void archive(core::StateArchive& ar);
 
  private:
   [[nodiscard]] double draw();
@@ -82,6 +83,7 @@ class FaithfulTraffic final : public TrafficModel {
   [[nodiscard]] const std::vector<TrafficCar>& cars() const override { return cars_; }
   void on_contact(std::size_t i, core::Vec2 shift_m, double speed_mps,
                   const core::OrientedBox& other) override;
+  void archive(core::StateArchive& ar) override;
 
   [[nodiscard]] const std::vector<Driver>& drivers() const { return drivers_; }
   [[nodiscard]] double time_s() const { return time_s_; }

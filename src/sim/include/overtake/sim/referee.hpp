@@ -9,6 +9,7 @@
 
 #include "overtake/core/geometry.hpp"
 #include "overtake/core/road.hpp"
+#include "overtake/core/state_archive.hpp"
 #include "overtake/sim/params.hpp"
 #include "overtake/sim/safety.hpp"
 
@@ -33,6 +34,9 @@ struct Incident {
   std::optional<CollisionClass> collision;
   friend bool operator==(const Incident&, const Incident&) = default;
 };
+
+/// An incident through a checkpoint.
+void archive_incident(core::StateArchive& ar, Incident& incident, int lanes);
 
 /// The ego at the end of one step, as the referee sees it.
 struct EgoFrame {
@@ -97,6 +101,10 @@ class Referee {
   /// The strict figures at the newest step (computed on demand from the recent positions;
   /// for viewers, it changes nothing the referee counts).
   [[nodiscard]] StrictFigures current_strict() const;
+
+  /// Writes or restores everything it counts and keeps (a checkpoint); the params must be
+  /// the same.
+  void archive(core::StateArchive& ar);
 
  private:
   void count(IncidentType type, const EgoFrame& f, double value);

@@ -18,7 +18,9 @@
 #include "overtake/core/plan.hpp"
 #include "overtake/core/random.hpp"
 #include "overtake/core/telemetry.hpp"
+#include "overtake/sim/checkpoint.hpp"
 #include "overtake/sim/frame.hpp"
+#include "overtake/sim/recorded_traffic.hpp"
 #include "overtake/sim/scorecard.hpp"
 #include "overtake/sim/world.hpp"
 
@@ -45,6 +47,9 @@ class RunObserver {
   /// A path the planner sent, as sent (before the wire rounding and the trim). Lock-step: it
   /// was planned from the state of the last frame; real time: it arrived then.
   virtual void on_path(std::span<const core::Vec2> path) = 0;
+  /// A checkpoint of the run at the start of a planner cycle (RunOptions::checkpoint_every_s);
+  /// its info holds the step and time only (the watcher knows what was run).
+  virtual void on_checkpoint(const Checkpoint& /*checkpoint*/) {}
 };
 
 /// Passes every call on to several observers, in the order given (null ones are skipped).
@@ -53,6 +58,7 @@ class ObserverList final : public RunObserver {
   explicit ObserverList(std::vector<RunObserver*> observers);
   void on_frame(const Frame& frame, std::span<const Incident> new_incidents) override;
   void on_path(std::span<const core::Vec2> path) override;
+  void on_checkpoint(const Checkpoint& checkpoint) override;
   /// The single observer when there is one, this list when there are more, else null.
   [[nodiscard]] RunObserver* get();
 
@@ -100,14 +106,42 @@ struct RunOptions {
   /// What a cycle's planner time measures: an in-process planner's thread CPU time, or the
   /// round trip to a remote planner.
   CycleClock clock = CycleClock::thread_cpu;
+  /// When not empty: the run's state (Checkpoint::run) to restore before the first frame, so
+  /// that the run goes on from where the checkpoint was taken (the duration and the latency
+  /// draw are the checkpoint's, not the options').
+  std::string_view restore;
+  /// What of `restore` is taken: the whole run (it goes on as if it had never stopped), or
+  /// the world and the latency draw only (a cut scenario: the scorecard starts afresh and
+  /// the run lasts `duration_s` from the checkpoint's time).
+  enum class RestoreScope : std::uint8_t {
+    whole_run,
+    world
+  } restore_scope = RestoreScope::whole_run;
+  /// When set (with `restore`): once the world is restored, its cars follow these recorded
+  /// bodies (a cut scenario's replayed traffic; not owned).
+  const RecordedTraffic* replayed_traffic = nullptr;
+  /// Every this many simulated seconds, at the start of a planner cycle (the first included),
+  /// the watcher gets a checkpoint (0: never).
+  double checkpoint_every_s = 0.0;
+  /// The planner's state for those checkpoints; unset: the planner keeps none overtake sees.
+  std::function<std::string()> planner_state;
 };
 
 /// The course of one run. Made before the first step (the watcher sees the first frame
 /// then); the loop asks it for telemetry, hands it the planner's plans, steps it, and ends it.
 class Stepper {
  public:
-  /// The world must outlive the stepper.
+  /// The world must outlive the stepper. With RunOptions::restore, the world's state, the
+  /// scorecard's and the stepper's own are restored from it (core::StateError when the bytes
+  /// do not fit this world).
   Stepper(World& world, const RunOptions& options);
+
+  /// The run's state now (Checkpoint::run): the world, the scorecard and the stepper.
+  [[nodiscard]] std::string save();
+  /// At the start of a planner cycle: gives the watcher a checkpoint when one is due.
+  void checkpoint_if_due();
+  /// The step at which the run has gone its duration.
+  [[nodiscard]] long end_step() const { return total_steps_; }
 
   /// True once the run has gone its duration or has been ended.
   [[nodiscard]] bool finished() const;
@@ -141,6 +175,7 @@ class Stepper {
 
  private:
   void emit_frame(std::size_t incidents_before);
+  void archive(core::StateArchive& ar);
 
   World& world_;
   RunOptions options_;
@@ -151,6 +186,7 @@ class Stepper {
   core::Rng latency_;
   std::optional<RunOutcome> ended_;
   double next_progress_s_;
+  double next_checkpoint_s_ = 0.0;
   Frame frame_;  // scratch for the watcher
 };
 

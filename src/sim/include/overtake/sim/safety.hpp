@@ -30,6 +30,7 @@
 #include <vector>
 
 #include "overtake/core/road.hpp"
+#include "overtake/core/state_archive.hpp"
 #include "overtake/core/waypoint_frenet.hpp"
 
 namespace overtake::sim {
@@ -180,6 +181,9 @@ class SafetyMonitor {
   /// The run so far.
   [[nodiscard]] SafetySummary summary() const;
 
+  /// Writes or restores its tracks, figures and episodes (a checkpoint).
+  void archive(core::StateArchive& ar);
+
  private:
   /// One step of a body's history.
   struct Sample {
@@ -226,6 +230,7 @@ class SafetyMonitor {
   /// TTC and headway from the tracks as they are now.
   void measure();
   void count_episode(bool below, bool contact);
+  void archive_track(core::StateArchive& ar, Track& t, bool is_ego);
 
   SafetyParams p_;
   double step_s_;

@@ -1,7 +1,9 @@
 #pragma once
-// Scripted scenarios: a start state for the ego, cars placed by hand that keep their lane and
-// speed unless an event says otherwise, and timed events (lane changes, braking, speed
-// changes). Used by tests and by `--scenario FILE`.
+// Scenarios: scripted (a start state for the ego, cars placed by hand that keep their lane and
+// speed unless an event says otherwise, and timed events: lane changes, braking, speed
+// changes) or cut from a recorded run (its world checkpointed at the start, its traffic
+// reactive or replayed); and what a scenario expects of the planner. Used by tests,
+// `--scenario FILE` and `bench --scenarios DIR`.
 
 #include <optional>
 #include <string>
@@ -34,6 +36,36 @@ struct ScenarioEvent {
   double duration_s = 0.0;
 };
 
+/// A scenario cut from a recorded run (`overtake cut`).
+struct ScenarioCut {
+  std::string checkpoint;  ///< the world at the start (sim::encode_checkpoint's bytes)
+  bool replayed = false;   ///< traffic follows `recorded` instead of driving by its rules
+  std::string recorded;    ///< replayed: sim::encode_recorded_traffic's bytes
+  double start_s = 0.0;    ///< the run's time at the start (the scenario keeps its clock)
+  double at_s = 0.0;       ///< the moment it was cut around
+  double lead_in_s = 0.0;  ///< the first seconds are for the planner to settle (not judged)
+  std::string map;         ///< the map it needs (a path as written in the file; "" built-in)
+};
+
+/// What a scenario expects of a planner, over the judged part (after the lead-in); unset
+/// limits are not checked. `bench --scenarios` turns these into pass or fail.
+struct ScenarioExpect {
+  std::optional<int> max_at_fault_collisions;
+  std::optional<int> max_collisions;
+  std::optional<int> max_incidents;  ///< of every type
+  /// Reaches this lane (its d within the lane) ...
+  std::optional<int> reach_lane;
+  /// ... within this many seconds of the scenario's start.
+  double reach_lane_by_s = 0.0;
+  std::optional<double> min_distance_m;  ///< drives at least this far
+  /// True unless a limit is set (a scenario without expectations expects no at-fault
+  /// collision).
+  [[nodiscard]] bool any() const {
+    return max_at_fault_collisions || max_collisions || max_incidents || reach_lane ||
+           min_distance_m;
+  }
+};
+
 /// A whole scenario.
 struct Scenario {
   std::string name;
@@ -43,6 +75,9 @@ struct Scenario {
   double ego_speed_mps = 0.0;         ///< the ego starts at this speed along its lane
   std::vector<ScriptedCar> cars;      ///< replace the random traffic (ids in order)
   std::vector<ScenarioEvent> events;  ///< sorted by time when loaded
+  std::string description;
+  std::optional<ScenarioCut> cut;  ///< set for a scenario cut from a run (no ego, cars, events)
+  ScenarioExpect expect;
 };
 
 }  // namespace overtake::sim

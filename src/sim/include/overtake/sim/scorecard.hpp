@@ -101,6 +101,7 @@ class LaneTracker {
   void observe(double d_m, double dt_s);
   [[nodiscard]] int lane_changes() const { return changes_; }
   [[nodiscard]] const std::vector<double>& time_in_lane_s() const { return time_in_lane_s_; }
+  void archive(core::StateArchive& ar);
 
  private:
   core::RoadParams road_;
@@ -127,14 +128,21 @@ class Scorecard {
   /// The world's state and the running figures, as a frame for those who watch (`out` is
   /// reused, so that a long run does not allocate per step).
   void fill_frame(const World& world, Frame& out) const;
-  /// The report of the run so far, ended as `outcome` says, timed on `clock`.
+  /// The report of the run so far, ended as `outcome` says, timed on `clock`. Its duration
+  /// counts from the world's time when the scorecard was made (a scenario cut from a run
+  /// starts on that run's clock).
   [[nodiscard]] RunReport report(const World& world, RunOutcome outcome, CycleClock clock) const;
+
+  /// Writes or restores everything it counts (a checkpoint), but the planner's timing: that
+  /// is not part of the determinism promise, and after a restore it counts afresh.
+  void archive(core::StateArchive& ar);
 
  private:
   Referee referee_;
   SafetyMonitor safety_;
   LaneTracker lanes_;
   double step_s_;
+  double start_s_ = 0.0;  // the world's time when the scorecard was made
   // Timing in fixed memory: a 7-day run has 15 million cycles.
   core::QuantileSketch cycle_us_;
   core::QuantileSketch wall_us_;

@@ -13,6 +13,7 @@
 #include "overtake/core/geometry.hpp"
 #include "overtake/core/map.hpp"
 #include "overtake/core/reference_line.hpp"
+#include "overtake/core/state_archive.hpp"
 #include "overtake/core/telemetry.hpp"
 #include "overtake/core/waypoint_frenet.hpp"
 #include "overtake/sim/params.hpp"
@@ -67,7 +68,13 @@ class TrafficModel {
   /// is the body it touched (the car's reaction is the model's).
   virtual void on_contact(std::size_t i, core::Vec2 shift_m, double speed_mps,
                           const core::OrientedBox& other) = 0;
+  /// Writes or restores every piece of state that carries from one step to the next (a
+  /// checkpoint). Restoring needs a model built with the same params and the same map.
+  virtual void archive(core::StateArchive& ar) = 0;
 };
+
+/// A traffic car's body through a checkpoint; `lanes` and `waypoints` bound what is read.
+void archive_car(core::StateArchive& ar, TrafficCar& car, int lanes, std::size_t waypoints);
 
 /// All traffic. Deterministic from the seed. Keeps references to the map, its line and its
 /// chords, which must outlive it.
@@ -106,6 +113,16 @@ class Traffic {
   void apply_event(const ScenarioEvent& event);
   [[nodiscard]] bool scripted() const { return scripted_; }
 
+  /// Replaces the traffic by recorded bodies: now the cars are `steps[0]`, after the k-th
+  /// step from now `steps[k]`, whatever the ego does (a cut scenario's replayed traffic;
+  /// after the last recorded step they stay where they were). Contacts do not move them.
+  void set_replayed(std::vector<std::vector<TrafficCar>> steps);
+  [[nodiscard]] bool replayed() const { return replayed_; }
+
+  /// The model's state through a checkpoint (the model must be of the same kind: the
+  /// profile, or scripted).
+  void archive(core::StateArchive& ar);
+
  private:
   const core::Map& map_;
   const core::ReferenceLine& line_;
@@ -116,6 +133,7 @@ class Traffic {
   TrafficProfile profile_;
   std::uint64_t seed_;
   bool scripted_ = false;
+  bool replayed_ = false;
   std::unique_ptr<TrafficModel> model_;
 };
 

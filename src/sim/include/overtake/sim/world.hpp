@@ -67,6 +67,18 @@ class World {
   /// The ego's footprint in map axes.
   [[nodiscard]] core::OrientedBox ego_footprint() const;
 
+  /// Writes or restores the world's whole state: the clock, the ego and its queue, the
+  /// traffic model's state, the pending contact and the scenario's next event. Restoring
+  /// needs a world made the same way (map, params, profile or scenario); the seed does not
+  /// matter, the random streams are part of the state.
+  void archive(core::StateArchive& ar);
+  /// From now on the cars follow recorded bodies (Traffic::set_replayed).
+  void replay_traffic(std::vector<std::vector<TrafficCar>> steps);
+  /// Keeps, at each step, the cars as traffic moved them, before contacts pushed them apart
+  /// (moved_cars): what replayed traffic must follow for its contacts to happen as they did.
+  void keep_moved_cars(bool keep) { keep_moved_ = keep; }
+  [[nodiscard]] const std::vector<TrafficCar>& moved_cars() const { return moved_; }
+
  private:
   [[nodiscard]] EgoView ego_view() const;
   void place_ego(core::FrenetPoint start);
@@ -82,6 +94,8 @@ class World {
   long steps_ = 0;
   std::vector<ScenarioEvent> events_;  // pending, in time order
   std::size_t next_event_ = 0;
+  bool keep_moved_ = false;
+  std::vector<TrafficCar> moved_;  // the cars before contacts, when kept
 };
 
 }  // namespace overtake::sim

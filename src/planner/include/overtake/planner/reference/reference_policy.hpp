@@ -31,6 +31,9 @@ class ReferencePolicy final : public Policy {
  public:
   ReferencePolicy(const core::ReferenceLine& line, const PlannerParams& params);
   [[nodiscard]] core::PlanResult plan(const core::Telemetry& telemetry) override;
+  /// What carries from one cycle to the next: the points sent and their states, the states
+  /// driven, the cars' tracks and the behaviour's state.
+  bool archive_state(core::StateArchive& ar) override;
 
   /// The last cycle's behaviour decision (for tests and tools).
   [[nodiscard]] const BehaviourDecision& last_decision() const { return decision_; }

@@ -1,0 +1,443 @@
+#include "overtake/app/cut.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <iostream>
+#include <sstream>
+
+#include <nlohmann/json.hpp>
+
+#include "overtake/app/cli.hpp"
+#include "overtake/app/commands.hpp"
+#include "overtake/app/io.hpp"
+#include "overtake/app/scenario_file.hpp"
+#include "overtake/core/hash.hpp"
+#include "overtake/core/units.hpp"
+#include "overtake/core/waypoint_frenet.hpp"
+#include "overtake/planner/policy.hpp"
+#include "overtake/replay/replay.hpp"
+#include "overtake/sim/checkpoint.hpp"
+#include "overtake/sim/recorded_traffic.hpp"
+#include "overtake/sim/world.hpp"
+
+namespace overtake::app {
+namespace {
+
+using nlohmann::ordered_json;
+
+constexpr const char* kBuiltinMapSource = "builtin:default";
+constexpr double kEps = 1e-9;
+/// A re-driven ego further than this from its recorded place (stored to the centimetre) has
+/// not driven the same.
+constexpr double kSameRunToleranceM = 0.011;
+/// The incident a cut is named after: within this of the moment.
+constexpr double kNearIncidentS = 1.0;
+/// A recorded car this far outside the road is one waiting off it (parked).
+constexpr double kParkedMarginM = 20.0;
+
+std::string fixed(double v, int digits) {
+  std::ostringstream os;
+  os.setf(std::ios::fixed);
+  os.precision(digits);
+  os << v;
+  return os.str();
+}
+
+void check_options(const CutOptions& o) {
+  const auto finite_nonneg = [](double v) { return std::isfinite(v) && v >= 0.0; };
+  if (!finite_nonneg(o.at_s)) throw UsageError("--at must be a time in seconds, at least 0");
+  if (!finite_nonneg(o.before_s) || o.before_s > 3600.0) {
+    throw UsageError("--before must be between 0 and 3600 s");
+  }
+  if (!finite_nonneg(o.after_s) || o.after_s > 3600.0) {
+    throw UsageError("--after must be between 0 and 3600 s");
+  }
+  if (!finite_nonneg(o.lead_in_s) || o.lead_in_s > 3600.0) {
+    throw UsageError("--lead-in must be between 0 and 3600 s");
+  }
+  if (o.out.empty()) throw UsageError("-o/--out: give the scenario file to write");
+  if (same_file(o.out, o.replay)) {
+    throw UsageError("-o/--out names the replay itself (" + o.out.string() + ")");
+  }
+}
+
+/// The incident nearest `at_s` within kNearIncidentS (collisions first), as text.
+std::string incident_near(const replay::Replay& r, double at_s) {
+  const double step_s = r.header.step_s;
+  const replay::ReplayIncident* best = nullptr;
+  for (const replay::ReplayIncident& i : r.incidents) {
+    const double t = static_cast<double>(i.step) * step_s;
+    if (std::abs(t - at_s) > kNearIncidentS) continue;
+    const bool collision = i.collision.has_value();
+    const bool best_collision = best && best->collision.has_value();
+    if (!best || (collision && !best_collision) ||
+        (collision == best_collision &&
+         std::abs(t - at_s) < std::abs(static_cast<double>(best->step) * step_s - at_s))) {
+      best = &i;
+    }
+  }
+  if (!best) return {};
+  const auto type = static_cast<std::size_t>(best->type);
+  std::string text = type < r.header.incident_types.size() ? r.header.incident_types[type]
+                                                           : std::string("incident");
+  if (best->collision) {
+    text += std::string(" ") + std::string(sim::to_string(best->collision->kind)) +
+            (best->collision->at_fault ? " (at fault)" : " (not at fault)");
+  }
+  return text + " at t " + fixed(static_cast<double>(best->step) * step_s, 2) + " s";
+}
+
+/// Recorded frames as traffic bodies, steps [first, last] (for a run whose planner cannot be
+/// driven on: positions to the centimetre, headings to 1e-4 rad, speeds to 1 cm/s).
+sim::RecordedTraffic bodies_from_frames(const replay::Replay& r, long first, long last,
+                                        const core::Map& map, const core::RoadParams& road) {
+  const core::WaypointFrenet chords(map);
+  const double width = core::road_width_m(road);
+  sim::RecordedTraffic steps;
+  std::vector<std::size_t> hint;
+  for (const replay::ReplayFrame& f : r.frames) {
+    if (f.step < first || f.step > last) continue;
+    int count = 0;
+    for (const sim::CarPose& c : f.cars) count = std::max(count, c.id + 1);
+    std::vector<sim::TrafficCar> cars(static_cast<std::size_t>(count));
+    hint.resize(cars.size(), 0);
+    for (std::size_t k = 0; k < cars.size(); ++k) {
+      cars[k].id = static_cast<int>(k);
+      cars[k].parked = true;
+    }
+    for (const sim::CarPose& c : f.cars) {
+      sim::TrafficCar& b = cars[static_cast<std::size_t>(c.id)];
+      b.position = c.position;
+      b.heading_rad = c.yaw_rad;
+      b.speed_mps = c.speed_mps;
+      b.reported_velocity_mps = c.speed_mps * core::Vec2{std::cos(c.yaw_rad), std::sin(c.yaw_rad)};
+      std::size_t& h = hint[static_cast<std::size_t>(c.id)];
+      h = chords.closest(c.position, h);
+      b.closest_waypoint = h;
+      b.map_frenet = chords.to_frenet(c.position, h);
+      b.parked = b.map_frenet.d_m < -kParkedMarginM || b.map_frenet.d_m > width + kParkedMarginM;
+      b.lane = std::clamp(core::lane_of(b.map_frenet.d_m, road), 0, road.lane_count - 1);
+    }
+    steps.push_back(std::move(cars));
+  }
+  return steps;
+}
+
+/// Watches a run driven on from a checkpoint: checks the ego against the recorded frames
+/// and, once recording, keeps the cars' bodies at every step as traffic moved them (before
+/// contacts pushed them apart: replayed, they then touch the ego when they did).
+class Redrive final : public sim::RunObserver {
+ public:
+  Redrive(const sim::World& world, const replay::Replay& r) : world_(world), replay_(r) {}
+  void on_frame(const sim::Frame& frame, std::span<const sim::Incident> /*new*/) override {
+    const replay::ReplayFrame* rec = recorded(frame.step);
+    if (rec && !diverged_ && core::distance(rec->position, frame.position) > kSameRunToleranceM) {
+      diverged_ = "at t " + fixed(world_.time_s(), 2) + " s the ego is " +
+                  fixed(core::distance(rec->position, frame.position), 3) +
+                  " m from its recorded place";
+    }
+    if (recording_) bodies_.push_back(world_.moved_cars());
+  }
+  void on_path(std::span<const core::Vec2> /*path*/) override {}
+  void start_recording() {
+    bodies_.push_back(world_.traffic().cars());
+    recording_ = true;
+  }
+  [[nodiscard]] const std::optional<std::string>& diverged() const { return diverged_; }
+  [[nodiscard]] sim::RecordedTraffic take() { return std::move(bodies_); }
+
+ private:
+  const replay::ReplayFrame* recorded(long step) const {
+    const auto& f = replay_.frames;
+    if (f.empty()) return nullptr;
+    const long k = step - f.front().step;
+    if (k >= 0 && k < static_cast<long>(f.size()) && f[static_cast<std::size_t>(k)].step == step) {
+      return &f[static_cast<std::size_t>(k)];
+    }
+    return nullptr;
+  }
+  const sim::World& world_;
+  const replay::Replay& replay_;
+  bool recording_ = false;
+  sim::RecordedTraffic bodies_;
+  std::optional<std::string> diverged_;
+};
+
+/// The report's fixed steps per call, if the run had them.
+std::optional<int> fixed_steps_per_call(const replay::Replay& r) {
+  try {
+    const nlohmann::json j = nlohmann::json::parse(r.end_json);
+    const nlohmann::json& v = j.at("config").at("steps_per_call");
+    if (v.is_string()) {
+      const std::string s = v.get<std::string>();
+      if (!s.empty() &&
+          std::all_of(s.begin(), s.end(), [](char c) { return c >= '0' && c <= '9'; })) {
+        return std::stoi(s);
+      }
+    }
+  } catch (const std::exception&) {
+  }
+  return std::nullopt;
+}
+
+std::string map_reference(const std::optional<std::filesystem::path>& map,
+                          const std::filesystem::path& out) {
+  if (!map) return {};
+  std::error_code ec;
+  const auto base = std::filesystem::absolute(out, ec).parent_path();
+  const auto rel = std::filesystem::relative(std::filesystem::absolute(*map, ec), base, ec);
+  return ec || rel.empty() ? std::filesystem::absolute(*map, ec).string() : rel.generic_string();
+}
+
+}  // namespace
+
+std::string expect_json(const sim::ScenarioExpect& e) {
+  ordered_json j = ordered_json::object();
+  if (e.max_at_fault_collisions) j["at_fault_collisions"] = *e.max_at_fault_collisions;
+  if (e.max_collisions) j["collisions"] = *e.max_collisions;
+  if (e.max_incidents) j["incidents"] = *e.max_incidents;
+  if (e.reach_lane) j["reach_lane"] = {{"lane", *e.reach_lane}, {"by_s", e.reach_lane_by_s}};
+  if (e.min_distance_m) j["min_distance_m"] = *e.min_distance_m;
+  return j.dump();
+}
+
+CutResult cut_replay(const CutOptions& opts) {
+  check_options(opts);
+  const replay::Replay r = replay::read_replay(opts.replay);
+  const std::string name = opts.replay.string();
+  if (r.frames.empty()) throw ConfigError(name + ": the replay has no frames");
+  if (r.checkpoints.empty()) {
+    throw ConfigError(name +
+                      ": the replay carries no checkpoints (recorded before replays carried "
+                      "them, with --checkpoint-every 0, or of a scripted or replayed scenario); "
+                      "record the run again with --record");
+  }
+  const double step_s = r.header.step_s;
+  const double first_t = static_cast<double>(r.frames.front().step) * step_s;
+  const double last_t = static_cast<double>(r.frames.back().step) * step_s;
+  if (opts.at_s < first_t - kEps || opts.at_s > last_t + kEps) {
+    throw UsageError("--at " + fixed(opts.at_s, 2) + " s is outside the run (" + fixed(first_t, 2) +
+                     " to " + fixed(last_t, 2) + " s)");
+  }
+  CutResult result;
+  result.asked_start_s = std::max(first_t, opts.at_s - opts.before_s - opts.lead_in_s);
+  const double end_t = std::min(last_t, opts.at_s + opts.after_s);
+  const long end_step = std::lround(end_t / step_s);
+  result.incident = incident_near(r, opts.at_s);
+
+  // The last checkpoint at or before the start.
+  const replay::ReplayCheckpoint* from = nullptr;
+  for (const replay::ReplayCheckpoint& c : r.checkpoints) {
+    if (c.t_s <= result.asked_start_s + kEps) from = &c;
+  }
+  if (!from) {
+    throw ConfigError(name + ": no checkpoint at or before t " + fixed(result.asked_start_s, 2) +
+                      " s (the first is at " + fixed(r.checkpoints.front().t_s, 2) + " s)");
+  }
+  sim::Checkpoint cp;
+  try {
+    cp = sim::decode_checkpoint(from->bytes, name + ": checkpoint at t " + fixed(from->t_s, 2));
+  } catch (const core::StateError& e) {
+    throw ConfigError(e.what());
+  }
+  const auto profile = sim::parse_traffic_profile(cp.info.traffic);
+  if (!profile)
+    throw ConfigError(name + ": a run of " + cp.info.traffic + " traffic cannot be cut");
+
+  std::optional<std::filesystem::path> map_path = opts.map;
+  if (!map_path && cp.info.track != kBuiltinMapSource) map_path = cp.info.track;
+  if (map_path && !std::filesystem::exists(*map_path)) {
+    throw ConfigError(name + ": the run was on the map " + map_path->string() +
+                      ", which is not there; give --map FILE");
+  }
+  const auto track = load_track(map_path);
+  if (core::hex64(track->map.content_hash) != cp.info.map_hash) {
+    throw ConfigError(name + ": the run was on a map of hash " + cp.info.map_hash + ", " +
+                      track->map.source + " has hash " + core::hex64(track->map.content_hash) +
+                      "; give the run's map with --map");
+  }
+  const Config config = load_config(opts.config);
+  const bool same_config = config_hash(config) == cp.info.config_hash;
+
+  sim::Checkpoint start = cp;
+  sim::RecordedTraffic recorded;
+  auto policy = planner::make_policy(cp.info.policy, track->line, config.planner);
+  std::string why_not_exact;
+  if (!policy) {
+    why_not_exact = "the run's planner (" + cp.info.policy +
+                    ") is not a built-in policy, so the run cannot be driven on from the "
+                    "checkpoint";
+  } else if (!same_config) {
+    why_not_exact = "the parameters differ from the run's (config hash " + config_hash(config) +
+                    ", the run's " + cp.info.config_hash + ")";
+  }
+  if (why_not_exact.empty()) {
+    // Drive the run on from the checkpoint with its own policy, to the exact start.
+    sim::World world(track->map, track->line, config.world, *profile, cp.info.seed);
+    world.keep_moved_cars(true);
+    Redrive watch(world, r);
+    sim::RunOptions ro;
+    ro.restore = cp.run;
+    ro.observer = &watch;
+    ro.steps_per_call = fixed_steps_per_call(r);
+    try {
+      (void)planner::restore_policy_state(*policy, cp.planner);
+      sim::Stepper run(world, ro);
+      const auto cycle = [&] {
+        run.apply(policy->plan(run.telemetry()), 0.0);
+        run.step_one_call();
+      };
+      while (!run.finished() && world.time_s() + kEps < result.asked_start_s) cycle();
+      start.info.step = world.steps();
+      start.info.t_s = world.time_s();
+      start.run = run.save();
+      start.planner = planner::save_policy_state(*policy);
+      if (opts.replayed) {
+        watch.start_recording();
+        while (!run.finished() && world.steps() < end_step) cycle();
+        recorded = watch.take();
+      }
+    } catch (const core::StateError& e) {
+      throw ConfigError(e.what());
+    }
+    if (watch.diverged()) {
+      why_not_exact = "driven on from the checkpoint, the run does not replay the same (" +
+                      *watch.diverged() + "): it was recorded by another build";
+      start = cp;
+      recorded.clear();
+    } else {
+      result.exact_start = true;
+    }
+  }
+  if (!result.exact_start && opts.replayed) {
+    recorded = bodies_from_frames(r, cp.info.step, end_step, track->map, config.road);
+  }
+  result.planner_state = !start.planner.empty()
+                             ? std::string("restored")
+                             : "the planner starts afresh: its state is not in the checkpoint (" +
+                                   cp.info.policy + " keeps state overtake cannot see)";
+  if (!why_not_exact.empty()) result.planner_state += "; " + why_not_exact;
+  result.start_s = start.info.t_s;
+  result.policy = cp.info.policy;
+  result.end_s = std::max(result.start_s, end_t);
+
+  const std::string policy_name = cp.info.policy.empty() ? "the planner" : cp.info.policy;
+  ordered_json j;
+  j["name"] = opts.name.empty()
+                  ? policy_name + ", " + cp.info.traffic + " traffic, seed " +
+                        std::to_string(cp.info.seed) + ", t " + fixed(opts.at_s, 1) + " s"
+                  : opts.name;
+  j["description"] = !opts.description.empty()
+                         ? opts.description
+                         : "Cut from a run of " + policy_name + " (" + cp.info.traffic +
+                               " traffic, seed " + std::to_string(cp.info.seed) + ", map " +
+                               cp.info.track + ") around t " + fixed(opts.at_s, 2) + " s" +
+                               (result.incident.empty() ? std::string() : ": " + result.incident) +
+                               ".";
+  j["duration_s"] = std::round((result.end_s - result.start_s) * 1e6) / 1e6;
+  sim::ScenarioExpect no_fault;
+  no_fault.max_at_fault_collisions = 0;
+  j["expect"] = ordered_json::parse(expect_json(opts.expect.value_or(no_fault)));
+  ordered_json cut;
+  cut["traffic"] = opts.replayed ? "replayed" : "reactive";
+  cut["start_s"] = result.start_s;
+  cut["at_s"] = opts.at_s;
+  cut["lead_in_s"] = std::max(0.0, std::min(opts.lead_in_s, opts.at_s - result.start_s));
+  const std::string map_ref = map_reference(map_path, opts.out);
+  if (!map_ref.empty()) cut["map"] = map_ref;
+  cut["from"] = {{"replay", opts.replay.string()},
+                 {"policy", cp.info.policy},
+                 {"traffic", cp.info.traffic},
+                 {"seed", cp.info.seed},
+                 {"track", cp.info.track},
+                 {"map_hash", cp.info.map_hash},
+                 {"config_hash", cp.info.config_hash},
+                 {"incident", result.incident},
+                 {"exact_start", result.exact_start}};
+  const std::string checkpoint = sim::encode_checkpoint(start);
+  result.checkpoint_bytes = checkpoint.size();
+  cut["checkpoint"] = pack_blob(checkpoint);
+  if (opts.replayed) cut["recorded_traffic"] = pack_blob(sim::encode_recorded_traffic(recorded));
+  j["cut"] = std::move(cut);
+  const std::string text = j.dump(2) + "\n";
+  result.file_bytes = text.size();
+  write_file_atomic(opts.out, text);
+  return result;
+}
+
+Subcommand register_cut(CLI::App& app) {
+  struct State {
+    CutOptions o;
+    std::string traffic = "reactive";
+    std::string expect;
+    std::string config, map;
+    bool quiet = false;
+  };
+  auto st = std::make_shared<State>();
+  auto* cmd = app.add_subcommand(
+      "cut",
+      "Cut a scenario from a recorded run: it starts --before seconds before the moment --at\n"
+      "and lasts until --after seconds after it, from the world's exact state (replays carry\n"
+      "checkpoints). Drive it with `overtake drive --scenario FILE`, or run a folder of them\n"
+      "with `overtake bench --scenarios DIR` (docs/scenarios.md).");
+  cmd->add_option("replay", st->o.replay, "A replay written by --record")
+      ->required()
+      ->check(CLI::ExistingFile);
+  cmd->add_option("--at", st->o.at_s, "The moment that matters (run time, seconds)")->required();
+  cmd->add_option("-o,--out", st->o.out, "The scenario file to write")->required();
+  cmd->add_option("--before", st->o.before_s, "Seconds before the moment to start")
+      ->capture_default_str();
+  cmd->add_option("--after", st->o.after_s, "Seconds after the moment to end")
+      ->capture_default_str();
+  cmd->add_option("--lead-in", st->o.lead_in_s,
+                  "Start this many seconds earlier still, for a planner that keeps its own\n"
+                  "state (a target speed starting at 0) to settle; not judged")
+      ->capture_default_str();
+  cmd->add_option("--traffic", st->traffic,
+                  "reactive: the cars start from their recorded state and keep driving by\n"
+                  "their rules (they react to another planner); replayed: every car follows its\n"
+                  "recorded trajectory whatever the ego does")
+      ->capture_default_str();
+  cmd->add_option("--expect", st->expect,
+                  "What the scenario expects, as JSON (default {\"at_fault_collisions\": 0}):\n"
+                  "at_fault_collisions, collisions, incidents (at most so many), reach_lane\n"
+                  "{\"lane\": L, \"by_s\": T}, min_distance_m");
+  cmd->add_option("--name", st->o.name, "The scenario's name (default: the run and the moment)");
+  cmd->add_option("--description", st->o.description, "What happens in it");
+  cmd->add_option("--config", st->config, "The parameters the run used (default: the defaults)")
+      ->check(CLI::ExistingFile);
+  cmd->add_option("--map", st->map, "The run's map, when it is no longer where the replay says")
+      ->check(CLI::ExistingFile);
+  cmd->add_flag("--quiet,-q", st->quiet, "Print nothing");
+  return {cmd, [st] {
+            CutOptions o = st->o;
+            if (st->traffic != "reactive" && st->traffic != "replayed") {
+              throw UsageError("--traffic: '" + st->traffic + "' is neither reactive nor replayed");
+            }
+            o.replayed = st->traffic == "replayed";
+            if (!st->config.empty()) o.config = st->config;
+            if (!st->map.empty()) o.map = st->map;
+            if (!st->expect.empty()) {
+              const nlohmann::json j = parse_json_text(st->expect, "--expect");
+              o.expect = parse_scenario(nlohmann::json{{"expect", j}}, "--expect", {}).expect;
+            }
+            const CutResult res = cut_replay(o);
+            if (!st->quiet) {
+              std::cout << "wrote " << o.out.string() << " (" << res.file_bytes / 1024
+                        << " KiB): t " << fixed(res.start_s, 2) << " to " << fixed(res.end_s, 2)
+                        << " s, " << (o.replayed ? "replayed" : "reactive") << " traffic\n";
+              if (!res.exact_start) {
+                std::cout << "  starts at the checkpoint at t " << fixed(res.start_s, 2) << " s, "
+                          << fixed(res.asked_start_s - res.start_s, 2)
+                          << " s before the asked start\n";
+              }
+              std::cout << "  planner: " << res.planner_state << "\n";
+              if (!res.incident.empty()) std::cout << "  near the moment: " << res.incident << "\n";
+              std::cout << "drive it: overtake drive --scenario " << o.out.string() << " --policy "
+                        << (res.policy.empty() ? "POLICY" : res.policy) << "\n";
+            }
+            return 0;
+          }};
+}
+
+}  // namespace overtake::app

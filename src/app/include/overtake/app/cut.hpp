@@ -1,0 +1,58 @@
+#pragma once
+// `overtake cut REPLAY --at T`: a scenario file that starts a little before a moment of a
+// recorded run and lasts a little after it (docs/scenarios.md). The world starts from the
+// replay's checkpoint; when the run was driven by a built-in policy (whose state is in the
+// checkpoint), the run is driven on from the checkpoint to the exact start, checked against
+// the recorded frames. Traffic is reactive (it keeps driving by its rules) or replayed (every
+// car follows its recorded bodies whatever the ego does).
+
+#include <filesystem>
+#include <optional>
+#include <string>
+
+#include "overtake/sim/scenario.hpp"
+
+namespace overtake::app {
+
+struct CutOptions {
+  std::filesystem::path replay;
+  double at_s = 0.0;
+  double before_s = 15.0;
+  double after_s = 5.0;
+  /// The scenario starts this much earlier still, for the planner to settle (not judged).
+  double lead_in_s = 0.0;
+  bool replayed = false;  ///< replayed traffic (else reactive)
+  std::filesystem::path out;
+  std::optional<std::filesystem::path> config;
+  /// The map the run was on, when it is no longer where the replay says.
+  std::optional<std::filesystem::path> map;
+  std::string name;
+  std::string description;
+  /// What the scenario expects; default: no at-fault collision.
+  std::optional<sim::ScenarioExpect> expect;
+};
+
+/// What was cut.
+struct CutResult {
+  double start_s = 0.0;  ///< where the scenario starts (run time)
+  double end_s = 0.0;    ///< where it ends
+  double asked_start_s = 0.0;
+  /// True when the start is exactly the asked one (a built-in policy drove the run on from
+  /// the checkpoint); false when it is the checkpoint at or before it.
+  bool exact_start = false;
+  std::string planner_state;  ///< "restored", or why the planner starts afresh
+  std::string incident;       ///< the incident nearest the moment, if any ("collision ...")
+  std::string policy;         ///< the planner that drove the run
+  std::size_t checkpoint_bytes = 0;
+  std::size_t file_bytes = 0;
+};
+
+/// Cuts the scenario and writes it to `opts.out` (replacing it atomically). Throws UsageError
+/// for bad flags, replay::ReplayError for an unreadable replay, ConfigError when the replay
+/// cannot be cut (no checkpoints, another map, a run that does not replay the same).
+CutResult cut_replay(const CutOptions& opts);
+
+/// The JSON of `expect` as scenario files write it.
+[[nodiscard]] std::string expect_json(const sim::ScenarioExpect& expect);
+
+}  // namespace overtake::app
