@@ -10,6 +10,7 @@
 #include "overtake/app/commands.hpp"
 #include "overtake/app/interrupt.hpp"
 #include "overtake/app/planner_process.hpp"
+#include "overtake/app/suite.hpp"
 #include "overtake/app/viewer.hpp"
 #include "overtake/core/units.hpp"
 
@@ -75,6 +76,9 @@ Subcommand register_bench(CLI::App& app) {
     CLI::Option* policies_opt = nullptr;
     std::vector<std::string> merge_dirs;
     std::string merge_out, merge_html;
+    std::string scenarios;
+    std::vector<CLI::Option*> sweep_opts;  // flags a scenario suite does not take
+    CLI::Option* out_opt = nullptr;
   };
   auto st = std::make_shared<State>();
   st->spec.jobs = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
@@ -90,12 +94,22 @@ Subcommand register_bench(CLI::App& app) {
                                      "built-in policy, or only the brought ones when any are")
                          ->capture_default_str();
   add_planner_flags(*cmd, st->planners, PlannerFlagSet::all);
-  cmd->add_option("--seeds", st->seeds, "Seeds: a range and/or list, e.g. 1-20 or 1,5,9-12")
-      ->capture_default_str();
-  cmd->add_option("--minutes", st->spec.minutes, "Simulated minutes per run")
-      ->capture_default_str();
-  cmd->add_option("--traffic", st->traffic, "Comma-separated traffic profiles (faithful, calm)")
-      ->capture_default_str();
+  st->sweep_opts.push_back(
+      cmd->add_option("--seeds", st->seeds, "Seeds: a range and/or list, e.g. 1-20 or 1,5,9-12")
+          ->capture_default_str());
+  st->sweep_opts.push_back(
+      cmd->add_option("--minutes", st->spec.minutes, "Simulated minutes per run")
+          ->capture_default_str());
+  st->sweep_opts.push_back(
+      cmd->add_option("--traffic", st->traffic, "Comma-separated traffic profiles (faithful, calm)")
+          ->capture_default_str());
+  cmd->add_option(
+         "--scenarios", st->scenarios,
+         "Instead of the sweep: run every scenario file (*.json) of this folder with every\n"
+         "policy and judge it by what it expects (default: no at-fault collision); prints a\n"
+         "pass/fail table (with --out: suite.md, suite.json and the failed runs' replays) and\n"
+         "exits with status 1 when any fails (docs/scenarios.md)")
+      ->check(CLI::ExistingDirectory);
   cmd->add_option("--map", st->map, "Map file; default: the built-in track")
       ->check(CLI::ExistingFile);
   cmd->add_option("--config", st->config, "JSON parameter overrides")->check(CLI::ExistingFile);
@@ -104,7 +118,7 @@ Subcommand register_bench(CLI::App& app) {
       ->check(CLI::Range(1, 1000));
   cmd->add_option("--jobs,-j", st->spec.jobs, "Runs in parallel (default: all cores)")
       ->capture_default_str();
-  cmd->add_option("--out,-o", st->out, "Output folder")->capture_default_str();
+  st->out_opt = cmd->add_option("--out,-o", st->out, "Output folder")->capture_default_str();
   cmd->add_option("--shard", st->shard, "Run only slice I of N (e.g. 3/8) of the combinations");
   cmd->add_flag("--resume", st->spec.resume,
                 "Continue an interrupted bench in --out, skipping finished runs");
@@ -155,6 +169,50 @@ Subcommand register_bench(CLI::App& app) {
                       << (pages.size() == 1 ? "" : "s") << " linked)\n";
           }
           return kExitOk;
+        }
+        if (!st->scenarios.empty()) {
+          for (const CLI::Option* o : st->sweep_opts) {
+            if (o->count() > 0) {
+              throw UsageError(o->get_name() +
+                               ": a scenario suite (--scenarios) runs each scenario as its file "
+                               "says; seeds, minutes and traffic do not apply");
+            }
+          }
+          SuiteSpec suite;
+          suite.dir = st->scenarios;
+          suite.planners = catalog_from_flags(st->planners);
+          const auto brought = suite.planners->added_names();
+          if (st->policies_opt->count() > 0 || brought.empty())
+            suite.policies = split_list(st->policies);
+          for (const auto& name : brought) {
+            if (std::find(suite.policies.begin(), suite.policies.end(), name) ==
+                suite.policies.end())
+              suite.policies.push_back(name);
+          }
+          if (!st->config.empty()) suite.config = st->config;
+          if (!st->map.empty()) suite.map = st->map;
+          suite.jobs = st->spec.jobs;
+          if (st->out_opt->count() > 0) suite.out = st->out;
+          const bool draw = !st->quiet && stderr_is_terminal();
+          SuiteOutcome o;
+          {
+            const InterruptScope interrupt;
+            o = run_suite(suite, &InterruptScope::flag(), [&](std::size_t done, std::size_t all) {
+              if (draw) std::fprintf(stderr, "\r  scenarios: %zu/%zu   ", done, all);
+            });
+            if (draw) std::fprintf(stderr, "\n");
+          }
+          if (!st->quiet) {
+            std::cout << suite_table(o);
+            if (suite.out) {
+              std::cout << "written: " << suite.out->string() << "/{suite.md,suite.json}\n";
+            }
+          }
+          if (o.interrupted) {
+            std::cerr << "bench: interrupted; " << o.verdicts.size() << " scenario runs judged\n";
+            return kExitInterrupted;
+          }
+          return o.failed > 0 ? kExitFailure : kExitOk;
         }
         BenchSpec spec = st->spec;
         spec.planners = catalog_from_flags(st->planners);

@@ -23,13 +23,14 @@
 #include "overtake/planner/policy.hpp"
 
 namespace overtake::app {
-namespace {
 
 std::string policy_help() {
-  std::string out = "Policy to drive with. Available:";
+  std::string out = "Policy (built-in planner). Available:";
   for (const auto& p : planner::list_policies()) out += "\n  " + p.name + ": " + p.summary;
   return out;
 }
+
+namespace {
 
 int cmd_drive(DriveOptions opts, const std::optional<std::filesystem::path>& json_out, bool quiet) {
   const double total_s =
@@ -347,7 +348,7 @@ int run_cli(int argc, const char* const* argv) {
   const std::vector<Subcommand> commands{
       register_drive(app),     register_track(app), register_config(app), register_bench(app),
       register_compare(app),   register_serve(app), register_sim(app),    register_view(app),
-      register_calibrate(app), register_cut(app)};
+      register_calibrate(app), register_cut(app),   register_hunt(app)};
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

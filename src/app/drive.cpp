@@ -157,6 +157,7 @@ DriveResult drive_on(const Track& track, const Config& config, const DriveOption
   sim::World& world = *world_ptr;
   DriveResult result;
   result.provenance = drive_provenance(track, config, opts, scenario);
+  if (cut) result.provenance.seed = cut->checkpoint.info.seed;  // the run it was cut from
   const RunProvenance& p = result.provenance;
 
   sim::RunOptions run;
@@ -176,7 +177,8 @@ DriveResult drive_on(const Track& track, const Config& config, const DriveOption
   // Recording and the live view watch the run; without them it has no observer.
   std::unique_ptr<replay::ReplayWriter> writer;
   if (opts.record || opts.live) {
-    const replay::ReplayHeader header = replay_header_for(track, config, p, run.duration_s);
+    const replay::ReplayHeader header = replay_header_for(
+        track, config, p, run.duration_s, scenario, cut ? &cut->checkpoint.info : nullptr);
     if (opts.live) result.live = start_live_view(header, *opts.live);
     // Last: a failure above (a port in use) leaves no replay file behind.
     if (opts.record) writer = std::make_unique<replay::ReplayWriter>(*opts.record, header);
@@ -195,7 +197,8 @@ DriveResult drive_on(const Track& track, const Config& config, const DriveOption
     info.policy = p.policy;
     writer->set_checkpoint_info(std::move(info));
   }
-  sim::ObserverList observers({writer.get(), result.live ? &result.live->observer() : nullptr});
+  sim::ObserverList observers(
+      {writer.get(), result.live ? &result.live->observer() : nullptr, opts.watcher});
   run.observer = observers.get();
 
   const PlannerEntry* entry = opts.external ? nullptr : catalog_of(opts).find(opts.policy);

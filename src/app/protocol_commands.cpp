@@ -33,12 +33,6 @@ namespace {
 
 constexpr std::size_t kMinFrameBytes = 1024;
 
-std::string policy_help() {
-  std::string out = "Policy to plan with. Available:";
-  for (const auto& p : planner::list_policies()) out += "\n  " + p.name + ": " + p.summary;
-  return out;
-}
-
 void check_limits(std::size_t max_frame_bytes, std::size_t max_path_points) {
   if (max_frame_bytes < kMinFrameBytes) {
     throw UsageError("--max-frame-bytes must be at least " + std::to_string(kMinFrameBytes) +

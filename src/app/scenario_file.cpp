@@ -146,7 +146,15 @@ void parse_cut(const json& j, sim::ScenarioCut& cut, std::vector<std::string>& e
   cut.at_s = c.number("at_s", 0.0, true, 0.0, kMaxDurationS);
   cut.lead_in_s = c.number("lead_in_s", 0.0, false, 0.0, kMaxDurationS);
   if (c.has("map")) cut.map = text_of(j, "map", "scenario.cut", errors);
-  c.has("from");  // where it was cut from: for people, not read
+  if (c.has("from")) {  // where it was cut from (shown by the viewer)
+    const json& f = j["from"];
+    if (!f.is_object()) {
+      errors.push_back("scenario.cut.from: expected an object");
+    } else {
+      cut.from_replay = text_of(f, "replay", "scenario.cut.from", errors);
+      cut.incident = text_of(f, "incident", "scenario.cut.from", errors);
+    }
+  }
   const auto blob = [&](const char* key, std::string& out, bool required) {
     if (!c.has(key)) {
       if (required) errors.push_back(c.at(key) + ": missing");

@@ -48,7 +48,9 @@ std::string_view embedded_page(std::string_view name) {
 }
 
 replay::ReplayHeader replay_header_for(const Track& track, const Config& config,
-                                       const RunProvenance& p, double duration_s) {
+                                       const RunProvenance& p, double duration_s,
+                                       const sim::Scenario* scenario,
+                                       const sim::CheckpointInfo* from) {
   replay::ReplayProvenance rp;
   rp.policy = p.policy;
   rp.traffic = p.traffic;
@@ -57,6 +59,18 @@ replay::ReplayHeader replay_header_for(const Track& track, const Config& config,
   rp.duration_s = duration_s;
   rp.overtake_version = overtake_version();
   rp.config_hash = p.params_hash;
+  if (scenario && scenario->cut && from) {
+    replay::ReplayCutOrigin o;
+    o.scenario = scenario->name;
+    o.replay = scenario->cut->from_replay;
+    o.policy = from->policy;
+    o.traffic = from->traffic;
+    o.seed = from->seed;
+    o.at_s = scenario->cut->at_s;
+    o.start_s = scenario->cut->start_s;
+    o.incident = scenario->cut->incident;
+    rp.cut_from = std::move(o);
+  }
   return replay::make_replay_header(track.line, config.world, std::move(rp));
 }
 

@@ -68,6 +68,13 @@ std::string replay_header_json(const ReplayHeader& h) {
                      {"duration_s", p.duration_s},
                      {"overtake_version", p.overtake_version},
                      {"config_hash", p.config_hash}};
+  if (p.cut_from) {
+    const ReplayCutOrigin& c = *p.cut_from;
+    j["provenance"]["cut_from"] = {{"scenario", c.scenario}, {"replay", c.replay},
+                                   {"policy", c.policy},     {"traffic", c.traffic},
+                                   {"seed", c.seed},         {"at_s", c.at_s},
+                                   {"start_s", c.start_s},   {"incident", c.incident}};
+  }
   return j.dump();
 }
 

@@ -85,6 +85,19 @@ ReplayHeader parse_header(const json& j) {
   h.provenance.duration_s = header_value<double>(p, "duration_s", "provenance.");
   h.provenance.overtake_version = header_value<std::string>(p, "overtake_version", "provenance.");
   h.provenance.config_hash = header_value<std::string>(p, "config_hash", "provenance.");
+  if (p.contains("cut_from")) {  // added within version 2
+    const json& c = p.at("cut_from");
+    ReplayCutOrigin o;
+    o.scenario = header_value<std::string>(c, "scenario", "provenance.cut_from.");
+    o.replay = header_value<std::string>(c, "replay", "provenance.cut_from.");
+    o.policy = header_value<std::string>(c, "policy", "provenance.cut_from.");
+    o.traffic = header_value<std::string>(c, "traffic", "provenance.cut_from.");
+    o.seed = header_integer<std::uint64_t>(c, "seed", "provenance.cut_from.");
+    o.at_s = header_value<double>(c, "at_s", "provenance.cut_from.");
+    o.start_s = header_value<double>(c, "start_s", "provenance.cut_from.");
+    o.incident = header_value<std::string>(c, "incident", "provenance.cut_from.");
+    h.provenance.cut_from = std::move(o);
+  }
   return h;
 }
 

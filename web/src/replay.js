@@ -10,8 +10,10 @@ import { Inflate, unzlibSync } from 'fflate';
 
 export const MAGIC = 'OVTKRPLY';
 export const FORMAT_VERSION = 2;
-export const RECORD = Object.freeze({ frame: 1, path: 2, incident: 3, end: 4 });
-const RECORD_NAMES = { 1: 'frame', 2: 'path', 3: 'incident', 4: 'end' };
+// A checkpoint (the world's state in binary, for `overtake cut`) is of no use to the page: it
+// is skipped, as a kind this page does not know would be.
+export const RECORD = Object.freeze({ frame: 1, path: 2, incident: 3, end: 4, checkpoint: 5 });
+const RECORD_NAMES = { 1: 'frame', 2: 'path', 3: 'incident', 4: 'end', 5: 'checkpoint' };
 
 const CM = 0.01; // metres per centimetre
 const YAW_UNIT = 1e-4; // radians per yaw unit
@@ -68,6 +70,24 @@ function readDelta(bytes, end) {
   return z % 2 === 0 ? z / 2 : -(z + 1) / 2;
 }
 
+/// Where a replay of a cut scenario was cut from (the header's `provenance.cut_from`), as
+/// {scenario, replay, policy, traffic, seed, atS, startS, incident}; null for a replay that
+/// was not cut from another, or whose cut_from has no moment (`at_s`) to show. A text that is
+/// missing is '', a number NaN, the seed null.
+export function cutOrigin(header) {
+  const c = header && header.provenance && header.provenance.cut_from;
+  if (!c || typeof c !== 'object' || Array.isArray(c)) return null;
+  const text = (v) => (typeof v === 'string' ? v : '');
+  const num = (v) => (typeof v === 'number' && Number.isFinite(v) ? v : NaN);
+  const atS = num(c.at_s);
+  if (atS !== atS) return null;
+  return {
+    scenario: text(c.scenario), replay: text(c.replay), policy: text(c.policy), traffic: text(c.traffic),
+    seed: typeof c.seed === 'number' || typeof c.seed === 'string' ? c.seed : null,
+    atS, startS: num(c.start_s), incident: text(c.incident),
+  };
+}
+
 /// A replay that could not be read at all (bad magic, version, header).
 export class ReplayError extends Error {}
 
@@ -92,6 +112,7 @@ export class Replay {
     this.incidentTypes = header.incident_types || [];
     this.collisionKinds = Array.isArray(header.collision_kinds) ? header.collision_kinds : [];
     this.laneLines = (header.lane_lines || []).map((l) => Float64Array.from(l));
+    this.cutFrom = cutOrigin(header);
     this.frames = 0;
     this.cars = 0; // car entries over all frames
     this.paths = 0;
@@ -432,6 +453,8 @@ export class Replay {
         this.ended = true;
         return null;
       }
+      case RECORD.checkpoint:
+        return null; // the C++ side's, for `overtake cut`
       default:
         return null; // unknown kinds are skipped
     }
@@ -572,7 +595,9 @@ export class Replay {
   /// A sentence on how much was read, for warnings.
   summary() {
     const t = this.frames ? this.time[this.frames - 1] : 0;
-    return `${this.frames} frames (${t.toFixed(2)} s), ${this.paths} paths, ${this.incidents} incidents`;
+    // a cut scenario's frames keep the run's clock: they start later than 0
+    const span = this.frames && this.step[0] > 0 ? `t ${this.time[0].toFixed(2)} to ${t.toFixed(2)} s` : `${t.toFixed(2)} s`;
+    return `${this.frames} frames (${span}), ${this.paths} paths, ${this.incidents} incidents`;
   }
 }
 

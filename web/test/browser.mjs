@@ -1,8 +1,10 @@
 // The viewer in a real browser: Debian's Chromium, driven by playwright-core.
 //
-//   node test/browser.mjs --overtake BIN --source-dir ROOT --artifacts DIR
+//   node test/browser.mjs --overtake BIN --source-dir ROOT --artifacts DIR [--viewer viewer.html]
 //       what CTest runs: records two short drives with BIN (a scenario with incidents and a
-//       clean drive), writes their pages with `BIN view FILE --html`, runs a small bench
+//       clean drive) and a scenario cut from a third (`BIN cut`, then driven), writes their
+//       pages with `BIN view FILE --html` (or, with --viewer, fills that template itself: a
+//       page built from this tree against a binary built before it), runs a small bench
 //       with --record-worst and --html, and opens all of them
 //   node test/browser.mjs --page PAGE.html --replay FILE.otr [--expect-incident]
 //                         [--expect-collision TEXT] [--name NAME] [--artifacts DIR]
@@ -10,7 +12,9 @@
 //       opens a page written by `overtake view FILE --html PAGE.html` for the replay FILE
 //   node test/browser.mjs --synthetic --viewer viewer.html [--artifacts DIR]
 //       fills the viewer template with replays made by test/encode.mjs (a drive with
-//       incidents, a clean one, and one as an older writer wrote it) and opens those
+//       incidents, a clean one, one as an older writer wrote it, and a cut scenario's with
+//       checkpoint records, frames from a later step and the replay's name in the config)
+//       and opens those
 //   node test/browser.mjs --report REPORT.html [--runs N] [--replays N]
 //       opens a bench report page (`overtake bench ... --html REPORT.html`); or, with
 //       --bench-dir DIR --report-template report.html, fills the template from DIR's
@@ -24,7 +28,11 @@
 // it seeks there; a collision's marker and banner name its kind and fault; the near-miss
 // chart shows every TTC and headway the replay holds, the HUD the TTC at a step, the status
 // line the report's collisions and near misses; a truncated copy of the replay shows the
-// warning banner and what could be read. The bench report shows the intervals, error bars,
+// warning banner and what could be read. The cut control shows the `overtake cut` command for
+// the current time (it follows seeks and playback, the traffic choice, and copies or selects
+// the command); a cut scenario's replay says where it was cut from and marks the moment on
+// the timeline, and its clock (from a later step than 0) drives the time label, the slider
+// and the charts. The bench report shows the intervals, error bars,
 // precision and paired comparisons its data holds, and so do copies of it with the data of
 // today's bench filled in, with an older bench's data, and with no summary. Saves a
 // screenshot per page into the artifacts folder.
@@ -37,7 +45,7 @@ import { pathToFileURL } from 'node:url';
 import { chromium } from 'playwright-core';
 
 import { decodeReplay } from '../src/replay.js';
-import { incidentText, safetyStatusText } from '../src/viewer/format.js';
+import { clock, cutCommand, cutOriginText, incidentText, safetyStatusText } from '../src/viewer/format.js';
 import { syntheticDrive } from './encode.mjs';
 
 const MPH_PER_MPS = 2.2369362920544025;
@@ -74,10 +82,11 @@ function parseArgs(argv) {
   return a;
 }
 
-// Fills the viewer template as the C++ side does (docs/replay.md).
-function fillViewer(template, bytes) {
+// Fills the viewer template as the C++ side does (docs/replay.md); `name`, the replay file's
+// name, goes into the config when given (the page's cut command uses it).
+function fillViewer(template, bytes, name = null) {
   return template
-    .replace('__OVERTAKE_CONFIG__', () => JSON.stringify({ source: 'embedded' }))
+    .replace('__OVERTAKE_CONFIG__', () => JSON.stringify(name ? { source: 'embedded', name } : { source: 'embedded' }).replace(/</g, '\\u003c'))
     .replace('__OVERTAKE_DATA__', () => Buffer.from(bytes).toString('base64'));
 }
 
@@ -204,6 +213,8 @@ async function testPage(context, spec, artifacts) {
   }
   await testCollisionMarks(page, replay, spec);
   await testNearMisses(page, replay, name, artifacts);
+  await testCutOrigin(page, replay, spec, name, artifacts);
+  await testCutCommand(page, replay, spec);
 
   // a chart click seeks
   const box = await page.locator('#chart-speed .u-over').boundingBox();
@@ -284,6 +295,129 @@ async function testCollisionMarks(page, replay, spec) {
   await mark.evaluate((m) => m.click()); // as a click on it, wherever other marks lie
   const banners = await page.locator('#incident-banners .banner[data-type="collision"]').allTextContents();
   check(banners.includes(want), `the banner says "${want}" (${banners.join(' | ')})`);
+}
+
+// A cut scenario's replay says where it was cut from and marks the moment on the timeline;
+// another replay has neither. A replay whose frames start later than step 0 (a cut keeps the
+// run's clock) shows that clock: time label, slider, charts.
+async function testCutOrigin(page, replay, spec, name, artifacts) {
+  const c = replay.cutFrom;
+  if (spec.cut) check(c !== null, `the replay was cut from another (provenance.cut_from: ${JSON.stringify(replay.header.provenance?.cut_from)})`);
+  const seen = await page.evaluate(() => {
+    const bar = document.getElementById('cut-origin');
+    const mark = document.getElementById('cut-mark');
+    return { hidden: bar.hidden, text: bar.textContent, markHidden: mark.hidden, markStep: mark.dataset.step, markLeft: mark.style.left };
+  });
+  if (!c) {
+    check(seen.hidden && seen.markHidden, `a replay that was not cut shows no cut origin and no cut mark (bar ${seen.hidden ? 'hidden' : 'shown'}, mark ${seen.markHidden ? 'hidden' : 'shown'})`);
+  } else {
+    const want = cutOriginText(c);
+    check(!seen.hidden && seen.text.includes(want), `the page says where the scenario was cut from: "${want}" (${seen.hidden ? 'hidden' : seen.text})`);
+    const step = Math.round(c.atS / replay.stepS);
+    const s0 = replay.step[0];
+    const where = (step - s0) / Math.max(1, replay.step[replay.frames - 1] - s0);
+    check(!seen.markHidden && Number(seen.markStep) === step && Math.abs(parseFloat(seen.markLeft) - 100 * where) < 0.01,
+      `the timeline marks the moment t ${c.atS.toFixed(2)} s, step ${step} (${seen.markHidden ? 'no mark' : `step ${seen.markStep} at ${seen.markLeft}`})`);
+    await page.click('#cut-origin-seek');
+    const now = Number(await page.getAttribute('#viewer', 'data-step'));
+    check(now === replay.step[replay.frameOfStep(step)], `the cut origin's button seeks to the moment (step ${now})`);
+    await page.locator('#controls').screenshot({ path: join(artifacts, `${name}-cut-mark.png`) });
+  }
+  if (replay.step[0] === 0) return;
+  // the run's clock: the first frame is at t > 0, the slider's ends are the first and last frame
+  const first = await page.evaluate((s) => {
+    window.overtakeViewer.seek(s);
+    return { label: document.getElementById('time-label').textContent, slider: document.getElementById('scrubber').value, max: document.getElementById('scrubber').max };
+  }, replay.step[0]);
+  check(first.label.startsWith(`${clock(replay.time[0])} / ${clock(replay.time[replay.frames - 1])} · step ${replay.step[0]}`) &&
+    first.slider === '0' && Number(first.max) === replay.frames - 1,
+  `a replay from step ${replay.step[0]} starts at its own time (${first.label}; slider ${first.slider} of ${first.max})`);
+  // the slider's middle is the middle frame
+  const mid = await page.evaluate(() => {
+    const el = document.getElementById('scrubber');
+    el.value = String(Math.floor(Number(el.max) / 2));
+    el.dispatchEvent(new Event('input', { bubbles: true }));
+    return Number(document.getElementById('viewer').dataset.step);
+  });
+  const midStep = replay.step[Math.floor((replay.frames - 1) / 2)];
+  check(mid === midStep, `the slider's middle is the middle frame (step ${mid}, want ${midStep})`);
+  // the charts span the replay's times: the playhead sits in proportion, a click in the
+  // middle of the speed chart seeks to about the middle
+  await page.selectOption('#chart-window', '0');
+  await page.evaluate(() => new Promise((r) => requestAnimationFrame(() => requestAnimationFrame(() => r()))));
+  const head = await page.evaluate(() => {
+    const over = document.querySelector('#chart-speed .u-over');
+    const h = over.querySelector('.playhead');
+    const m = /translateX\(([-\d.]+)px\)/.exec(h.style.transform);
+    return { shown: h.style.display !== 'none', x: m ? Number(m[1]) : NaN, width: over.clientWidth };
+  });
+  check(head.shown && Math.abs(head.x / head.width - 0.5) < 0.02, `the charts' playhead is in the middle at the middle frame (${head.x} of ${head.width} px)`);
+  const box = await page.locator('#chart-speed .u-over').boundingBox();
+  await page.mouse.click(box.x + box.width * 0.5, box.y + box.height * 0.5);
+  const clicked = Number(await page.getAttribute('#viewer', 'data-step'));
+  const span = replay.step[replay.frames - 1] - replay.step[0];
+  check(Math.abs(clicked - midStep) < span * 0.02, `a click in the middle of the speed chart seeks to about the middle (step ${clicked}, middle ${midStep})`);
+}
+
+// The cut control: the command for the current time, following seeks and playback; the
+// traffic choice; copied (or, without the clipboard API, selected for the user to copy).
+async function testCutCommand(page, replay, spec) {
+  const known = await page.evaluate(() => window.overtakeViewer.fileName);
+  if (spec.fileName !== undefined) check(known === spec.fileName, `the page knows the replay's file name from its config (${known})`);
+  else check(known === null || known === basename(spec.replay), `the page's replay file name is none or the file's (${known})`);
+  const closed = await page.evaluate(() => ({ button: !document.getElementById('btn-cut').hidden, box: document.getElementById('cut-box').hidden }));
+  check(closed.button && closed.box, `the cut button is shown, its box closed (${JSON.stringify(closed)})`);
+  await page.click('#btn-cut');
+  const command = () => page.evaluate(() => ({
+    text: document.getElementById('cut-command').textContent,
+    step: Number(document.getElementById('viewer').dataset.step),
+    open: !document.getElementById('cut-box').hidden,
+  }));
+  for (const f of [0.3, 0.85]) {
+    const step = replay.step[Math.floor((replay.frames - 1) * f)];
+    await page.evaluate((s) => window.overtakeViewer.seek(s), step);
+    const got = await command();
+    const want = cutCommand(known, replay.time[replay.frameOfStep(step)]);
+    check(got.open && got.text === want, `at step ${step} the cut box shows "${want}" (${got.open ? got.text : 'closed'})`);
+  }
+  await page.evaluate((s) => { window.overtakeViewer.seek(s); window.overtakeViewer.setSpeed(16); window.overtakeViewer.play(); }, replay.step[0]);
+  await page.waitForTimeout(300);
+  await page.evaluate(() => window.overtakeViewer.pause());
+  await page.evaluate(() => new Promise((r) => requestAnimationFrame(() => r())));
+  const played = await command();
+  const wantPlayed = cutCommand(known, replay.time[replay.frameOfStep(played.step)]);
+  check(played.step > replay.step[0] && played.text === wantPlayed, `while playing the command follows the time (step ${played.step}: ${played.text})`);
+  await page.selectOption('#cut-traffic', 'replayed');
+  const replayed = await command();
+  check(replayed.text === cutCommand(known, replay.time[replay.frameOfStep(replayed.step)], 'replayed'), `replayed traffic adds --traffic replayed (${replayed.text})`);
+  await page.selectOption('#cut-traffic', 'reactive');
+  // copy: with the clipboard API the status says copied (and the clipboard holds the command
+  // where the test may read it); without it, the command is selected
+  await page.click('#btn-cut-copy');
+  await page.waitForFunction(() => document.getElementById('cut-copy-status').textContent !== '', null, { timeout: 5000 });
+  const copied = await page.evaluate(async () => {
+    const cmd = document.getElementById('cut-command').textContent;
+    let clip = null;
+    try {
+      clip = await navigator.clipboard.readText();
+    } catch {
+      clip = null; // no permission to read it back: the status is what there is to check
+    }
+    return { cmd, clip, status: document.getElementById('cut-copy-status').textContent, selection: String(window.getSelection()) };
+  });
+  check((copied.status === 'copied' && (copied.clip === null || copied.clip === copied.cmd)) || (/selected/.test(copied.status) && copied.selection === copied.cmd),
+    `copy copies the command or selects it (${copied.status}${copied.clip !== null ? `; clipboard: ${copied.clip}` : ''})`);
+  const fallback = await page.evaluate(() => {
+    Object.defineProperty(navigator, 'clipboard', { value: undefined, configurable: true });
+    window.getSelection().removeAllRanges();
+    document.getElementById('btn-cut-copy').click();
+    const out = { status: document.getElementById('cut-copy-status').textContent, selection: String(window.getSelection()), cmd: document.getElementById('cut-command').textContent };
+    delete navigator.clipboard;
+    return out;
+  });
+  check(/selected/.test(fallback.status) && fallback.selection === fallback.cmd, `without the clipboard API the command is selected to copy (${fallback.status}: ${fallback.selection})`);
+  await page.click('#btn-cut');
+  check(await page.locator('#cut-box').isHidden(), 'the cut button closes its box');
 }
 
 // The near-miss chart holds every TTC and headway of the replay (none is a gap), the HUD
@@ -556,6 +690,11 @@ async function testLive(context, bin, artifacts) {
     await page.waitForFunction(() => Number(document.getElementById('viewer').dataset.frames) > 50, null, { timeout: 30000 });
     const mid = await page.evaluate(() => ({ frames: Number(document.getElementById('viewer').dataset.frames), step: Number(document.getElementById('viewer').dataset.step) }));
     check(mid.frames > 50 && mid.step >= mid.frames - 60, `the page follows the live run (${mid.frames} frames so far, at step ${mid.step})`);
+    const cut = await page.evaluate(() => {
+      const b = document.getElementById('btn-cut');
+      return b ? (b.hidden ? 'hidden' : 'shown') : 'absent';
+    });
+    check(cut !== 'shown', `the live view offers no cut command (its button: ${cut})`);
     await page.waitForFunction(() => document.getElementById('viewer').dataset.state !== 'live', null, { timeout: 60000 });
     const end = await page.evaluate(() => ({ state: document.getElementById('viewer').dataset.state, frames: Number(document.getElementById('viewer').dataset.frames) }));
     await page.screenshot({ path: join(artifacts, 'live.png') });
@@ -663,6 +802,11 @@ function recordWithOvertake(args) {
   const bin = args.overtake;
   const w = args.artifacts;
   if (!args.sourceDir) throw new Error('--overtake needs --source-dir (the source tree, for its scenarios)');
+  const template = args.viewer ? readFileSync(args.viewer, 'utf8') : null;
+  const page = (otr, html) => {
+    if (template) writeFileSync(html, fillViewer(template, readFileSync(otr)));
+    else run(bin, ['view', otr, '--html', html, '--quiet']);
+  };
   const drives = [
     { name: 'incident', incident: true, collision: 'ego hit car ahead (at fault)',
       flags: ['--scenario', join(args.sourceDir, 'tests/scenarios/hard_brake_ahead.json'), '--policy', 'walkthrough'] },
@@ -674,9 +818,20 @@ function recordWithOvertake(args) {
     rmSync(otr, { force: true });
     rmSync(html, { force: true });
     run(bin, ['drive', ...d.flags, '--minutes', '0.5', '--record', otr, '--quiet']);
-    run(bin, ['view', otr, '--html', html, '--quiet']);
+    page(otr, html);
     args.pages.push({ page: html, replay: otr, incident: d.incident, collision: d.collision, name: d.name });
   }
+  // a scenario cut from a recorded run, driven: its replay says where it was cut from, and
+  // its frames keep the run's clock (from t 25 s)
+  const source = join(w, 'cut-source.otr');
+  const scenario = join(w, 'cut.json');
+  const cut = join(w, 'cut.otr');
+  for (const f of [source, scenario, cut, join(w, 'cut.html')]) rmSync(f, { force: true });
+  run(bin, ['drive', '--policy', 'reference', '--seed', '3', '--minutes', '1', '--record', source, '--quiet']);
+  run(bin, ['cut', source, '--at', '40', '-o', scenario, '--quiet']);
+  run(bin, ['drive', '--scenario', scenario, '--record', cut, '--quiet']);
+  page(cut, join(w, 'cut.html'));
+  args.pages.push({ page: join(w, 'cut.html'), replay: cut, incident: false, cut: true, name: 'cut' });
   const bench = join(w, 'bench');
   rmSync(bench, { recursive: true, force: true });
   run(bin, ['bench', '--policies', 'walkthrough,reference', '--seeds', '1-2', '--minutes', '0.5', '--traffic', 'faithful',
@@ -698,13 +853,20 @@ async function main() {
           { step: 1200, type: 'collision', value: 6, kind: 'ego_lane_change', atFault: true }] }) },
       { name: 'synthetic-clean', incident: false, drive: syntheticDrive({ seconds: 20 }) },
       { name: 'synthetic-legacy', incident: true, drive: syntheticDrive({ seconds: 20, legacy: true, incidents: [{ step: 300, type: 'collision', value: 2 }] }) },
+      // a cut scenario's replay: checkpoints among the records, frames from t 1049.44 s, the
+      // moment at t 1064.44 s, and the file's name in the page's config
+      { name: 'synthetic-cut', incident: true, cut: true, fileName: 'synthetic-cut.otr', collision: 'hit from behind (not at fault)',
+        drive: syntheticDrive({ seconds: 20, startStep: 52472, checkpointEvery: 250,
+          incidents: [{ step: 53222, type: 'collision', value: 3, kind: 'hit_from_behind' }],
+          cutFrom: { scenario: 'reference, faithful traffic, seed 5, t 1064.4 s', replay: 't2s5.otr', policy: 'reference', traffic: 'faithful', seed: 5,
+            at_s: 1064.44, start_s: 1049.44, incident: 'collision hit_from_behind (not at fault) at t 1064.44 s' } }) },
     ];
     for (const d of drives) {
       const replayPath = join(args.artifacts, `${d.name}.otr`);
       const pagePath = join(args.artifacts, `${d.name}.html`);
       writeFileSync(replayPath, d.drive.bytes);
-      writeFileSync(pagePath, fillViewer(template, d.drive.bytes));
-      args.pages.push({ page: pagePath, replay: replayPath, incident: d.incident, collision: d.collision, name: d.name });
+      writeFileSync(pagePath, fillViewer(template, d.drive.bytes, d.fileName));
+      args.pages.push({ page: pagePath, replay: replayPath, incident: d.incident, collision: d.collision, name: d.name, cut: d.cut, fileName: d.fileName });
     }
   }
   if (args.benchDir) {

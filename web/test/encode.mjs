@@ -129,6 +129,15 @@ export function endRecord(report) {
   return record(4, enc.encode(JSON.stringify(report)));
 }
 
+/// kind 5: a checkpoint, the world's state in binary (for `overtake cut`; the page skips it).
+/// The payload here is `n` bytes of a pattern that holds bytes like record heads (1 to 5) and
+/// varints' continuation bits, so a reader that looked inside would stumble.
+export function checkpointRecord(n = 300) {
+  const payload = new Uint8Array(n);
+  for (let i = 0; i < n; ++i) payload[i] = i % 7 === 0 ? 1 + (i % 5) : (i * 37 + 0x80) & 0xff;
+  return record(5, payload);
+}
+
 export function concat(parts) {
   const n = parts.reduce((a, p) => a + p.length, 0);
   const out = new Uint8Array(n);
@@ -173,9 +182,16 @@ export function syntheticSafety(step) {
 /// steps, and a car with the id 65535 jumps between two far ends of the i32 range (5-byte
 /// differences). `legacy` writes as a writer from before TTC, headway and collision classes
 /// (no collision_kinds, frames without their last six bytes, 18-byte incidents); otherwise an
-/// incident may give `kind` (a collision kind's name) and `atFault`. Returns the file bytes
-/// and the frames as plain objects for the assertions.
-export function syntheticDrive({ seconds = 20, carCount = 12, incidents = [], trackLength = 6945.554, end = true, churn = false, legacy = false } = {}) {
+/// incident may give `kind` (a collision kind's name) and `atFault`. As the replay of a cut
+/// scenario: `startStep`, the step of the first frame (the run's clock: a cut starts later
+/// than 0; an incident's step is one of the frames'), and `cutFrom`, the header's
+/// provenance.cut_from. `checkpointEvery` adds a checkpoint record (kind 5) after the first
+/// frame and every so many frames after it, as the C++ writer does. Returns the file bytes and
+/// the frames as plain objects for the assertions.
+export function syntheticDrive({
+  seconds = 20, carCount = 12, incidents = [], trackLength = 6945.554, end = true, churn = false, legacy = false,
+  startStep = 0, cutFrom = null, checkpointEvery = 0,
+} = {}) {
   const stepS = 0.02;
   const R = trackLength / (2 * Math.PI);
   const at = (s, d) => {
@@ -200,13 +216,13 @@ export function syntheticDrive({ seconds = 20, carCount = 12, incidents = [], tr
     lane_lines: laneLines,
     incident_types: INCIDENT_TYPES,
     ...(legacy ? {} : { collision_kinds: COLLISION_KINDS }),
-    provenance: { policy: 'synthetic', traffic: 'faithful', seed: 1, track: 'circle', duration_s: seconds },
+    provenance: { policy: 'synthetic', traffic: 'faithful', seed: 1, track: 'circle', duration_s: seconds, ...(cutFrom ? { cut_from: cutFrom } : {}) },
   };
   const writer = new RecordWriter();
   const records = [];
   const frames = [];
   const paths = [];
-  const steps = Math.round(seconds / stepS);
+  const steps = startStep + Math.round(seconds / stepS);
   let s = 100;
   let v = 0;
   let best = 0;
@@ -214,7 +230,7 @@ export function syntheticDrive({ seconds = 20, carCount = 12, incidents = [], tr
   let dist = 0;
   const incidentAt = new Map(incidents.map((i) => [i.step, i]));
   const recorded = [];
-  for (let step = 0; step < steps; ++step) {
+  for (let step = startStep; step < steps; ++step) {
     const acc = v < 20 ? 4 : 0;
     v = Math.min(20, v + acc * stepS);
     s += v * stepS;
@@ -255,6 +271,7 @@ export function syntheticDrive({ seconds = 20, carCount = 12, incidents = [], tr
       paths.push(pts);
       records.push(writer.path(pts));
     }
+    if (checkpointEvery > 0 && (step - startStep) % checkpointEvery === 0) records.push(checkpointRecord(200 + (step % 300)));
     const inc = incidentAt.get(step);
     if (inc) {
       const type = INCIDENT_TYPES.indexOf(inc.type);

@@ -4,9 +4,13 @@
 import assert from 'node:assert/strict';
 import { test } from 'node:test';
 
-import { adler32, base64ToBytes, decodeReplay, decodeReplayAsync, NO_COLLISION_KIND, parseHeader, Replay, ReplayError } from '../src/replay.js';
 import {
-  centiseconds, cm, COLLISION_KINDS, concat, encodeReplay, incidentRecord, RecordWriter, speedUnits, syntheticDrive, syntheticSafety, yawUnits,
+  adler32, base64ToBytes, cutOrigin, decodeReplay, decodeReplayAsync, NO_COLLISION_KIND, parseHeader, RECORD, Replay, ReplayError,
+} from '../src/replay.js';
+import { cutCommand, cutOriginText, REPLAY_PLACEHOLDER, shellWord } from '../src/viewer/format.js';
+import {
+  centiseconds, checkpointRecord, cm, COLLISION_KINDS, concat, encodeReplay, incidentRecord, RecordWriter, speedUnits, syntheticDrive,
+  syntheticSafety, yawUnits,
 } from './encode.mjs';
 
 const close = (a, b, tol, what) => assert.ok(Math.abs(a - b) <= tol, `${what}: ${a} vs ${b}`);
@@ -438,4 +442,115 @@ test('incident and status texts name the collision kind and fault', async () => 
   assert.equal(safetyStatusText({ collisions: { total: 2, at_fault: 1 }, safety: { near_miss_episodes: 3 } }), '2 collisions (1 at fault) · 3 near misses');
   assert.equal(safetyStatusText({ collisions: { total: 0, at_fault: 0 }, safety: { near_miss_episodes: 1 } }), '1 near miss');
   assert.equal(safetyStatusText({ collisions: { total: 1, at_fault: 0 } }), '1 collision (0 at fault)');
+});
+
+// The columns that two decodings of the same run must share.
+const COLUMNS = ['step', 'egoX', 'egoY', 'egoYaw', 'egoSpeed', 'accTotal', 'distance', 'ttcAhead', 'headway', 'framePath'];
+function sameRun(a, b) {
+  assert.equal(a.frames, b.frames);
+  assert.equal(a.cars, b.cars);
+  assert.equal(a.paths, b.paths);
+  assert.equal(a.incidents, b.incidents);
+  for (const k of COLUMNS) assert.deepEqual(a[k].subarray(0, a.frames), b[k].subarray(0, b.frames), k);
+  assert.deepEqual(a.carX.subarray(0, a.cars), b.carX.subarray(0, b.cars), 'carX');
+  assert.deepEqual(a.pathX.subarray(0, a.pathPoints), b.pathX.subarray(0, b.pathPoints), 'pathX');
+}
+
+test('checkpoint records (kind 5) are skipped without a problem, wherever they are', async () => {
+  assert.equal(RECORD.checkpoint, 5);
+  const plain = syntheticDrive({ seconds: 8, incidents: [{ step: 150, type: 'collision', value: 2, kind: 'hit_from_behind' }] });
+  const withCheckpoints = syntheticDrive({ seconds: 8, checkpointEvery: 100, incidents: [{ step: 150, type: 'collision', value: 2, kind: 'hit_from_behind' }] });
+  const kinds = withCheckpoints.records.filter((rec) => rec[0] === 5).length;
+  assert.equal(kinds, 4); // after frames 0, 100, 200, 300
+  for (const r of [decodeReplay(withCheckpoints.bytes, 'cp.otr'), await decodeReplayAsync(withCheckpoints.bytes, 'cp.otr')]) {
+    assert.equal(r.problem, null);
+    assert.ok(r.ended);
+    assert.equal(r.recordsRead, withCheckpoints.records.length);
+    sameRun(r, decodeReplay(plain.bytes));
+  }
+  // before the first frame, between a frame and its incident, last before the end, and empty
+  const recs = plain.records;
+  const at = recs.findIndex((rec) => rec[0] === 3);
+  const mixed = [checkpointRecord(40), ...recs.slice(0, at), checkpointRecord(0), ...recs.slice(at, -1), checkpointRecord(5000), recs[recs.length - 1]];
+  const r = decodeReplay(encodeReplay(plain.header, mixed));
+  assert.equal(r.problem, null);
+  sameRun(r, decodeReplay(plain.bytes));
+  assert.equal(r.incFrame[0], 150);
+  // live: split anywhere, a checkpoint is read as a whole record and skipped
+  const live = new Replay(withCheckpoints.header);
+  const all = concat(withCheckpoints.records);
+  for (let off = 0; off < all.length; off += 97) live.appendRecords(all.subarray(off, Math.min(all.length, off + 97)), { live: true });
+  assert.equal(live.problem, null);
+  sameRun(live, decodeReplay(plain.bytes));
+  // a checkpoint cut short is reported by its name, with the frames before it kept
+  const cp = concat(withCheckpoints.records);
+  const firstCp = withCheckpoints.records.findIndex((rec) => rec[0] === 5);
+  const upTo = withCheckpoints.records.slice(0, firstCp).reduce((n, rec) => n + rec.length, 0);
+  const cut = new Replay(withCheckpoints.header);
+  cut.appendRecords(cp.subarray(0, upTo + 50));
+  assert.match(cut.problem, /\(checkpoint\) at byte \d+ of the data is cut short/);
+  assert.equal(cut.frames, 1);
+});
+
+const CUT_FROM = {
+  scenario: 'reference, faithful traffic, seed 5, t 1064.4 s', replay: 't2s5.otr', policy: 'reference', traffic: 'faithful', seed: 5,
+  at_s: 1064.44, start_s: 1049.44, incident: 'collision hit_from_behind (not at fault) at t 1064.44 s',
+};
+
+test('a cut scenario\'s replay: cut_from is read, its frames start at a later step', () => {
+  const start = Math.round(1049.44 / 0.02);
+  const drive = syntheticDrive({ seconds: 20, startStep: start, cutFrom: CUT_FROM, checkpointEvery: 250,
+    incidents: [{ step: 53222, type: 'collision', value: 3, kind: 'hit_from_behind' }] });
+  const r = decodeReplay(drive.bytes, 'cut.otr');
+  assert.equal(r.problem, null);
+  assert.deepEqual(r.cutFrom, {
+    scenario: CUT_FROM.scenario, replay: 't2s5.otr', policy: 'reference', traffic: 'faithful', seed: 5,
+    atS: 1064.44, startS: 1049.44, incident: CUT_FROM.incident,
+  });
+  assert.equal(r.frames, 1000);
+  assert.equal(r.step[0], start);
+  close(r.time[0], 1049.44, 1e-9, 'first time');
+  close(r.time[r.frames - 1], 1069.42, 1e-9, 'last time');
+  assert.equal(r.frameOfStep(0), 0);
+  assert.equal(r.frameOfStep(53222), 53222 - start);
+  assert.equal(r.step[r.incFrame[0]], 53222);
+  assert.match(r.summary(), /^1000 frames \(t 1049\.44 to 1069\.42 s\)/);
+  // the moment's frame, and the command for it
+  const i = r.frameOfStep(Math.round(r.cutFrom.atS / r.stepS));
+  assert.equal(cutCommand('cut.otr', r.time[i]), 'overtake cut cut.otr --at 1064.44 -o cut-1064.json');
+  assert.equal(decodeReplay(syntheticDrive({ seconds: 1 }).bytes).cutFrom, null);
+});
+
+test('cut_from: missing fields are empty, without a moment it is none', () => {
+  const header = (c) => ({ provenance: { policy: 'x', cut_from: c } });
+  assert.equal(cutOrigin(header(undefined)), null);
+  assert.equal(cutOrigin({}), null);
+  assert.equal(cutOrigin(null), null);
+  assert.equal(cutOrigin(header(null)), null);
+  assert.equal(cutOrigin(header('t2s5.otr')), null);
+  assert.equal(cutOrigin(header([1064.44])), null);
+  assert.equal(cutOrigin(header({ replay: 'a.otr' })), null);
+  assert.equal(cutOrigin(header({ replay: 'a.otr', at_s: '1064' })), null);
+  const c = cutOrigin(header({ at_s: 60, replay: 7, start_s: null }));
+  assert.deepEqual(c, { scenario: '', replay: '', policy: '', traffic: '', seed: null, atS: 60, startS: NaN, incident: '' });
+  assert.equal(cutOriginText(c), 'Cut at t 60.00 s');
+});
+
+test('the cut command and the cut origin\'s text', () => {
+  assert.equal(cutCommand('run.otr', 1064.44), 'overtake cut run.otr --at 1064.44 -o cut-1064.json');
+  assert.equal(cutCommand('run.otr', 53222 * 0.02), 'overtake cut run.otr --at 1064.44 -o cut-1064.json');
+  assert.equal(cutCommand('run.otr', 1064.44, 'replayed'), 'overtake cut run.otr --at 1064.44 -o cut-1064.json --traffic replayed');
+  assert.equal(cutCommand('run.otr', 1064.44, 'reactive'), 'overtake cut run.otr --at 1064.44 -o cut-1064.json');
+  assert.equal(cutCommand(null, 0), `overtake cut ${REPLAY_PLACEHOLDER} --at 0.00 -o cut-0.json`);
+  assert.equal(cutCommand('', 59.999), 'overtake cut REPLAY.otr --at 60.00 -o cut-60.json');
+  assert.equal(cutCommand('runs/t2 s5.otr', 7.5), "overtake cut 'runs/t2 s5.otr' --at 7.50 -o cut-7.json");
+  assert.equal(shellWord("it's.otr"), "'it'\\''s.otr'");
+  assert.equal(shellWord('$(rm -rf).otr'), "'$(rm -rf).otr'");
+  assert.equal(shellWord('a_b-c.1.otr'), 'a_b-c.1.otr');
+  const c = cutOrigin({ provenance: { cut_from: CUT_FROM } });
+  assert.equal(cutOriginText(c),
+    'Cut from t2s5.otr at t 1064.44 s — reference, faithful traffic, seed 5: collision hit_from_behind (not at fault) at t 1064.44 s');
+  assert.equal(cutOriginText({ ...c, incident: '' }), 'Cut from t2s5.otr at t 1064.44 s — reference, faithful traffic, seed 5');
+  assert.equal(cutOriginText({ ...c, seed: 0 }).includes('seed 0'), true);
+  assert.equal(cutOriginText(null), '');
 });

@@ -81,3 +81,38 @@ export function safetyStatusText(report) {
   }
   return parts.join(' · ');
 }
+
+/// The replay's name in `cutCommand` when the page does not know the file's name.
+export const REPLAY_PLACEHOLDER = 'REPLAY.otr';
+
+/// A word for a POSIX shell: as it is when it has no special characters, else in single
+/// quotes (a quote inside as '\'').
+export function shellWord(word) {
+  const w = String(word);
+  if (/^[A-Za-z0-9_./+:=@%,-]+$/.test(w)) return w;
+  return `'${w.replace(/'/g, "'\\''")}'`;
+}
+
+/// The command that cuts a scenario from the replay `file` around time `t` (seconds, run
+/// time), e.g. 'overtake cut run.otr --at 1064.44 -o cut-1064.json'; `traffic` 'replayed'
+/// adds --traffic replayed (reactive, the CLI's default, adds nothing).
+export function cutCommand(file, t, traffic = 'reactive') {
+  const at = Math.max(0, t).toFixed(2);
+  const out = `cut-${at.slice(0, at.indexOf('.'))}.json`;
+  const extra = traffic === 'replayed' ? ' --traffic replayed' : '';
+  return `overtake cut ${shellWord(file || REPLAY_PLACEHOLDER)} --at ${at} -o ${out}${extra}`;
+}
+
+/// Where a cut scenario's replay was cut from (Replay.cutFrom), e.g. 'Cut from t2s5.otr at t
+/// 1064.44 s — reference, faithful traffic, seed 5: collision hit_from_behind (not at fault)
+/// at t 1064.44 s'; what the origin lacks is left out.
+export function cutOriginText(c) {
+  if (!c) return '';
+  const from = c.replay ? ` from ${c.replay}` : '';
+  const run = [];
+  if (c.policy) run.push(c.policy);
+  if (c.traffic) run.push(`${c.traffic} traffic`);
+  if (c.seed !== null && c.seed !== undefined && c.seed !== '') run.push(`seed ${c.seed}`);
+  const incident = c.incident ? `: ${c.incident}` : '';
+  return `Cut${from} at t ${c.atS.toFixed(2)} s${run.length ? ` — ${run.join(', ')}` : ''}${incident}`;
+}

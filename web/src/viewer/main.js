@@ -5,7 +5,8 @@ import './viewer.css';
 import { base64ToBytes, decodeReplayAsync, parseHeader, Replay, ReplayError } from '../replay.js';
 import { Charts } from './charts.js';
 import {
-  clock, incidentText, METRES_PER_MILE, MPH_PER_MPS, planStatusText, safetyStatusText, safetyThresholds,
+  clock, cutCommand, cutOriginText, incidentText, METRES_PER_MILE, MPH_PER_MPS, planStatusText, safetyStatusText,
+  safetyThresholds,
 } from './format.js';
 import { Scene } from './scene.js';
 
@@ -21,6 +22,9 @@ const MARKER_BUCKETS = 400; // at most one timeline marker per type per 1/400 of
 const LIVE_REFRESH_MS = 500;
 
 const $ = (id) => document.getElementById(id);
+
+// The step of the moment a cut scenario's replay was cut around.
+const cutStep = (r) => Math.round(r.cutFrom.atS / r.stepS);
 
 class Viewer {
   constructor() {
@@ -40,6 +44,8 @@ class Viewer {
     this.lastLiveRefresh = 0;
     this.liveDirty = false;
     this.markerCount = -1;
+    this.fileName = null; // the replay file's name, for the cut command (null: not known)
+    this.cutText = '';
     this.hud = {
       speed: $('hud-speed'), accTotal: $('hud-acc-total'), accTan: $('hud-acc-tan'), accNorm: $('hud-acc-norm'),
       jerk: $('hud-jerk'), distance: $('hud-distance'), best: $('hud-best'), timer: $('hud-timer'),
@@ -60,14 +66,19 @@ class Viewer {
     this.scene.setReplay(replay);
     if (!this.charts) this.charts = new Charts($('charts'), replay, (t) => this.seekTime(t, true));
     else this.charts.setReplay(replay);
-    const duration = replay.frames ? replay.time[replay.frames - 1] : 0;
+    // a cut scenario's replay starts later than 0 (it keeps the run's clock)
+    const duration = replay.frames ? replay.time[replay.frames - 1] - replay.time[0] : 0;
     const defaultWindow = duration > 180 ? '120' : '0';
     $('chart-window').value = defaultWindow;
     this.charts.setWindow(Number(defaultWindow));
     this.frame = 0;
     this.simT = replay.frames ? replay.time[0] : 0;
     this.markerCount = -1;
+    $('btn-cut').hidden = this.live;
+    if (this.live) this._showCut(false);
+    this.cutText = '';
     this._provenance();
+    this._cutOrigin();
     this._timeline();
     this.root.dataset.frames = String(replay.frames);
     this.scene.resize();
@@ -75,9 +86,10 @@ class Viewer {
     this.render();
   }
 
-  /// Decodes file bytes and shows them; problems go to the banner. Resolves to the replay,
-  /// or null when nothing could be read.
-  async load(bytes, name) {
+  /// Decodes file bytes and shows them; problems go to the banner. `file` is the replay
+  /// file's name when the page knows it (for the cut command; null: a placeholder). Resolves
+  /// to the replay, or null when nothing could be read.
+  async load(bytes, name, file = null) {
     let replay;
     const t0 = performance.now();
     try {
@@ -101,6 +113,7 @@ class Viewer {
       return replay;
     }
     const t1 = performance.now();
+    this.fileName = file;
     this.show(replay);
     this.timing.showMs = performance.now() - t1;
     this.root.dataset.state = replay.problem ? 'partial' : 'ready';
@@ -198,7 +211,9 @@ class Viewer {
     if (p.scenario) parts.push(`scenario ${p.scenario}`);
     $('provenance').textContent = parts.join(' · ');
     const end = r.frames ? r.time[r.frames - 1] : 0;
-    $('status').textContent = `${r.frames.toLocaleString('en')} steps · ${clock(end)} · ${r.incidents} incident${r.incidents === 1 ? '' : 's'}`;
+    // a cut scenario's replay keeps the run's clock: its frames start later than 0
+    const span = r.frames && r.step[0] > 0 ? `${clock(r.time[0])}–${clock(end)}` : clock(end);
+    $('status').textContent = `${r.frames.toLocaleString('en')} steps · ${span} · ${r.incidents} incident${r.incidents === 1 ? '' : 's'}`;
     this._reportStatus(r);
   }
 
@@ -216,12 +231,25 @@ class Viewer {
     if (first) status.title = `first: ${first}`;
   }
 
+  // Where a cut scenario's replay was cut from: the bar under the header (hidden for another).
+  _cutOrigin() {
+    const c = this.replay.cutFrom;
+    const bar = $('cut-origin');
+    bar.hidden = !c;
+    if (!c) return;
+    bar.dataset.atS = String(c.atS);
+    bar.title = c.scenario ? `scenario: ${c.scenario}${Number.isFinite(c.startS) ? `, from t ${c.startS.toFixed(2)} s` : ''}` : '';
+    $('cut-origin-text').textContent = cutOriginText(c);
+    $('cut-origin-seek').textContent = `go to t ${c.atS.toFixed(2)} s`;
+  }
+
   // ---- the timeline -------------------------------------------------------------------------
 
   _timeline() {
     const r = this.replay;
     const scrub = $('scrubber');
     scrub.max = String(Math.max(0, r.frames - 1));
+    this._cutMark();
     if (this.markerCount === r.incidents) return;
     this.markerCount = r.incidents;
     const box = $('incident-markers');
@@ -260,6 +288,63 @@ class Viewer {
       frag.appendChild(m);
     }
     box.appendChild(frag);
+  }
+
+  // The moment a cut scenario was cut around, as a line on the timeline (none when the replay
+  // was not cut, or the moment is outside its frames).
+  _cutMark() {
+    const r = this.replay;
+    const c = r.cutFrom;
+    const mark = $('cut-mark');
+    const step = c && r.frames ? cutStep(r) : -1;
+    if (step < 0 || step < r.step[0] || step > r.step[r.frames - 1]) {
+      mark.hidden = true;
+      return;
+    }
+    const s0 = r.step[0];
+    const span = Math.max(1, r.step[r.frames - 1] - s0);
+    mark.hidden = false;
+    mark.dataset.step = String(step);
+    mark.style.left = `${(((step - s0) / span) * 100).toFixed(3)}%`;
+  }
+
+  // ---- the cut command ----------------------------------------------------------------------
+
+  _showCut(show) {
+    $('cut-box').hidden = !show;
+    $('btn-cut').setAttribute('aria-expanded', String(show));
+    $('cut-copy-status').textContent = '';
+    if (show && this.replay && this.replay.frames) this._cut(Math.min(this.frame, this.replay.frames - 1));
+  }
+
+  // The command that cuts a scenario around frame i, while the box shows it.
+  _cut(i) {
+    if ($('cut-box').hidden) return;
+    const text = cutCommand(this.fileName, this.replay.time[i], $('cut-traffic').value);
+    if (text === this.cutText) return;
+    this.cutText = text;
+    $('cut-command').textContent = text;
+    $('cut-copy-status').textContent = '';
+  }
+
+  // Copies the command (the clipboard API where the page may use it), else selects it for
+  // the user to copy.
+  _copyCut() {
+    const el = $('cut-command');
+    const status = $('cut-copy-status');
+    const select = () => {
+      const sel = window.getSelection();
+      if (sel) sel.selectAllChildren(el);
+      status.textContent = 'selected: press Ctrl+C to copy';
+    };
+    const clip = navigator.clipboard;
+    if (!clip || typeof clip.writeText !== 'function') {
+      select();
+      return;
+    }
+    clip.writeText(el.textContent).then(() => {
+      status.textContent = 'copied';
+    }, select);
   }
 
   // ---- playback -----------------------------------------------------------------------------
@@ -386,6 +471,7 @@ class Viewer {
     this._hud(i, t);
     $('scrubber').value = String(i);
     $('time-label').textContent = `${clock(t)} / ${clock(r.time[r.frames - 1])} · step ${r.step[i]}`;
+    this._cut(i);
     this.root.dataset.step = String(r.step[i]);
     this.root.dataset.frame = String(i);
     this.root.dataset.frames = String(r.frames);
@@ -468,6 +554,16 @@ class Viewer {
     $('btn-step-back').addEventListener('click', () => this.stepBy(-1));
     $('btn-step-fwd').addEventListener('click', () => this.stepBy(1));
     $('btn-live').addEventListener('click', () => this.follow());
+    $('btn-cut').addEventListener('click', () => this._showCut($('cut-box').hidden));
+    $('btn-cut-copy').addEventListener('click', () => this._copyCut());
+    $('cut-traffic').addEventListener('change', () => {
+      if (this.replay && this.replay.frames) this._cut(Math.min(this.frame, this.replay.frames - 1));
+    });
+    $('cut-origin-seek').addEventListener('click', () => {
+      if (!this.replay || !this.replay.cutFrom) return;
+      this.pause();
+      this.seek(cutStep(this.replay));
+    });
     for (const b of document.querySelectorAll('#speeds button')) {
       b.addEventListener('click', () => this.setSpeed(Number(b.dataset.speed)));
     }
@@ -582,7 +678,7 @@ class Viewer {
   _openFile(file) {
     this.pause();
     file.arrayBuffer().then(
-      (buf) => this.load(new Uint8Array(buf), file.name),
+      (buf) => this.load(new Uint8Array(buf), file.name, file.name),
       (e) => this.fail(`${file.name}: cannot read the file (${e.message})`),
     );
   }
@@ -600,6 +696,12 @@ function embeddedBytes() {
   const text = el ? el.textContent.trim() : '';
   if (!text || text === DATA_PLACEHOLDER) return null;
   return base64ToBytes(text);
+}
+
+// The replay file's name, when the page's config gives it (`name`); else null.
+function fileName(config) {
+  const name = config && config.name;
+  return typeof name === 'string' && name.trim() ? name : null;
 }
 
 function start(viewer) {
@@ -631,7 +733,7 @@ function start(viewer) {
       return Promise.resolve();
     }
     viewer.timing.base64Ms = performance.now() - t0;
-    return viewer.load(bytes, (config && config.name) || 'the embedded replay');
+    return viewer.load(bytes, (config && config.name) || 'the embedded replay', fileName(config));
   }
   if (source === 'http') {
     const url = config.url || '/replay.otr';
@@ -641,7 +743,7 @@ function start(viewer) {
         return res.arrayBuffer();
       })
       .then(
-        (buf) => viewer.load(new Uint8Array(buf), (config && config.name) || url),
+        (buf) => viewer.load(new Uint8Array(buf), (config && config.name) || url, fileName(config)),
         (e) => viewer.fail(`cannot fetch the replay from ${url}: ${e.message}`),
       );
   }
@@ -672,6 +774,7 @@ window.overtakeViewer = {
   get frame() { return viewer.frame; },
   get step() { return viewer.replay && viewer.replay.frames ? viewer.replay.step[viewer.frame] : 0; },
   get playing() { return viewer.playing; },
+  get fileName() { return viewer.fileName; },
   seek: (step) => viewer.seek(step),
   seekTime: (t) => viewer.seekTime(t),
   stepBy: (n) => viewer.stepBy(n),
@@ -679,7 +782,7 @@ window.overtakeViewer = {
   pause: () => viewer.pause(),
   setSpeed: (x) => viewer.setSpeed(x),
   follow: () => viewer.follow(),
-  load: (bytes, name = 'replay') => viewer.load(bytes instanceof Uint8Array ? bytes : new Uint8Array(bytes), name),
+  load: (bytes, name = 'replay', file = null) => viewer.load(bytes instanceof Uint8Array ? bytes : new Uint8Array(bytes), name, file),
   get scene() { return viewer.scene; },
   get timing() { return { ...viewer.timing }; },
 };

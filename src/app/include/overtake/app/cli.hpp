@@ -33,6 +33,7 @@ Subcommand register_config(CLI::App& app);
 Subcommand register_bench(CLI::App& app);
 Subcommand register_compare(CLI::App& app);
 Subcommand register_cut(CLI::App& app);
+Subcommand register_hunt(CLI::App& app);
 Subcommand register_serve(CLI::App& app);
 Subcommand register_sim(CLI::App& app);
 Subcommand register_view(CLI::App& app);
@@ -82,5 +83,7 @@ void print_live_address(const std::string& url);
 
 /// Whether progress lines may be drawn (stderr is a terminal).
 [[nodiscard]] bool stderr_is_terminal();
+/// The --policy flag's help: every built-in policy with its summary.
+[[nodiscard]] std::string policy_help();
 
 }  // namespace overtake::app

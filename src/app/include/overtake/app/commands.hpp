@@ -90,6 +90,8 @@ struct DriveOptions {
   std::shared_ptr<const PlannerCatalog> planners;
   /// Where a planner program's standard output and error go (`--planner-cmd`).
   std::optional<std::filesystem::path> planner_log;
+  /// Also watches the run (not a flag: scenario suites; not owned).
+  sim::RunObserver* watcher = nullptr;
 };
 
 /// Checks flag values and names (UsageError naming the flag).

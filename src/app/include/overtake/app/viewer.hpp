@@ -34,9 +34,13 @@ inline constexpr std::string_view kReplaysFolder = "replays";
 [[nodiscard]] std::string_view embedded_page(std::string_view name);
 
 /// The replay header of a run: the track's lane lines, the config's limits, the provenance.
+/// For a cut scenario (`cut` set) the header says where it was cut from (`from`: the
+/// checkpoint's info).
 [[nodiscard]] replay::ReplayHeader replay_header_for(const Track& track, const Config& config,
                                                      const RunProvenance& provenance,
-                                                     double duration_s);
+                                                     double duration_s,
+                                                     const sim::Scenario* scenario = nullptr,
+                                                     const sim::CheckpointInfo* from = nullptr);
 
 /// The `end` record of a replay: the report JSON without `timing` (deterministic).
 [[nodiscard]] std::string replay_report_json(const sim::RunReport& report,

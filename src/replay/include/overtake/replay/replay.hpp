@@ -54,6 +54,19 @@ class ReplayError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+/// Where a scenario cut from a run was cut (the header's `provenance.cut_from`).
+struct ReplayCutOrigin {
+  std::string scenario;  ///< the scenario's name
+  std::string replay;    ///< the replay it was cut from, as the cut named it
+  std::string policy;    ///< the planner of that run, its traffic and seed
+  std::string traffic;
+  std::uint64_t seed = 0;
+  double at_s = 0.0;     ///< the moment it was cut around (run time)
+  double start_s = 0.0;  ///< where the scenario starts
+  std::string incident;  ///< the incident near the moment ("" when none)
+  friend bool operator==(const ReplayCutOrigin&, const ReplayCutOrigin&) = default;
+};
+
 /// What was run (the header's "provenance").
 struct ReplayProvenance {
   std::string policy;
@@ -63,6 +76,8 @@ struct ReplayProvenance {
   double duration_s = 0.0;        ///< the duration asked for
   std::string overtake_version;
   std::string config_hash;
+  /// A run of a cut scenario: where it was cut from (not in the header otherwise).
+  std::optional<ReplayCutOrigin> cut_from;
   friend bool operator==(const ReplayProvenance&, const ReplayProvenance&) = default;
 };
 

@@ -38,13 +38,15 @@ struct ScenarioEvent {
 
 /// A scenario cut from a recorded run (`overtake cut`).
 struct ScenarioCut {
-  std::string checkpoint;  ///< the world at the start (sim::encode_checkpoint's bytes)
-  bool replayed = false;   ///< traffic follows `recorded` instead of driving by its rules
-  std::string recorded;    ///< replayed: sim::encode_recorded_traffic's bytes
-  double start_s = 0.0;    ///< the run's time at the start (the scenario keeps its clock)
-  double at_s = 0.0;       ///< the moment it was cut around
-  double lead_in_s = 0.0;  ///< the first seconds are for the planner to settle (not judged)
-  std::string map;         ///< the map it needs (a path as written in the file; "" built-in)
+  std::string checkpoint;   ///< the world at the start (sim::encode_checkpoint's bytes)
+  bool replayed = false;    ///< traffic follows `recorded` instead of driving by its rules
+  std::string recorded;     ///< replayed: sim::encode_recorded_traffic's bytes
+  double start_s = 0.0;     ///< the run's time at the start (the scenario keeps its clock)
+  double at_s = 0.0;        ///< the moment it was cut around
+  double lead_in_s = 0.0;   ///< the first seconds are for the planner to settle (not judged)
+  std::string map;          ///< the map it needs (a path as written in the file; "" built-in)
+  std::string from_replay;  ///< the replay it was cut from, as the cut named it
+  std::string incident;     ///< the incident near the moment, as the cut named it
 };
 
 /// What a scenario expects of a planner, over the judged part (after the lead-in); unset

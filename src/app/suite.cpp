@@ -1,0 +1,293 @@
+#include "overtake/app/suite.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <mutex>
+#include <sstream>
+#include <thread>
+
+#include "overtake/app/commands.hpp"
+#include "overtake/app/io.hpp"
+#include "overtake/app/scenario_file.hpp"
+#include "overtake/core/road.hpp"
+
+namespace overtake::app {
+namespace {
+
+using nlohmann::json;
+
+constexpr int kMaxJobs = 256;
+
+std::string fixed(double v, int digits) {
+  std::ostringstream os;
+  os.setf(std::ios::fixed);
+  os.precision(digits);
+  os << v;
+  return os.str();
+}
+
+/// Follows the ego's lane through the frames of a run.
+class TraceWatch final : public sim::RunObserver {
+ public:
+  explicit TraceWatch(const core::RoadParams& road) : road_(road) {
+    trace.lane_reached_s.assign(static_cast<std::size_t>(road.lane_count), std::nullopt);
+  }
+  void on_frame(const sim::Frame& frame, std::span<const sim::Incident> /*new*/) override {
+    const double t = static_cast<double>(frame.step) * step_s;
+    if (first_) {
+      trace.start_s = t;
+      first_ = false;
+    }
+    // In a lane: the ego's d within it (its centre within half a lane).
+    const int lane = core::lane_of(frame.d_m, road_);
+    if (lane >= 0 && lane < road_.lane_count) {
+      auto& reached = trace.lane_reached_s[static_cast<std::size_t>(lane)];
+      if (!reached) reached = t - trace.start_s;
+    }
+  }
+  void on_path(std::span<const core::Vec2> /*path*/) override {}
+  ScenarioTrace trace;
+  double step_s = 0.02;
+
+ private:
+  core::RoadParams road_;
+  bool first_ = true;
+};
+
+std::string incident_text(const sim::Incident& i) {
+  std::string text = std::string(sim::to_string(i.type));
+  if (i.collision) {
+    text += std::string(" ") + std::string(sim::to_string(i.collision->kind));
+  }
+  return text + " at t " + fixed(i.t_s, 2) + " s";
+}
+
+/// The incidents of the judged part.
+std::vector<sim::Incident> judged_incidents(const sim::Scenario& sc, const sim::RunReport& r,
+                                            const ScenarioTrace& trace) {
+  const double from = trace.start_s + (sc.cut ? sc.cut->lead_in_s : 0.0) - 1e-9;
+  std::vector<sim::Incident> out;
+  for (const sim::Incident& i : r.incidents) {
+    if (i.t_s >= from) out.push_back(i);
+  }
+  return out;
+}
+
+}  // namespace
+
+std::vector<std::string> judge_scenario(const sim::Scenario& sc, const sim::RunReport& r,
+                                        const ScenarioTrace& trace) {
+  std::vector<std::string> fails;
+  if (r.outcome.end == sim::RunEnd::planner_failed) {
+    fails.push_back("the planner failed: " + r.outcome.reason);
+  }
+  const std::vector<sim::Incident> inc = judged_incidents(sc, r, trace);
+  std::vector<const sim::Incident*> collisions, at_fault;
+  for (const sim::Incident& i : inc) {
+    if (i.type != sim::IncidentType::collision) continue;
+    collisions.push_back(&i);
+    if (!i.collision || i.collision->at_fault) at_fault.push_back(&i);
+  }
+  const auto limit = [&](const std::optional<int>& max, std::size_t got, const char* what,
+                         const sim::Incident* first) {
+    if (max && got > static_cast<std::size_t>(*max)) {
+      fails.push_back(std::to_string(got) + " " + what + " (at most " + std::to_string(*max) +
+                      "); the first: " + incident_text(*first));
+    }
+  };
+  sim::ScenarioExpect ex = sc.expect;
+  if (!ex.any()) ex.max_at_fault_collisions = 0;
+  limit(ex.max_at_fault_collisions, at_fault.size(), "at-fault collisions",
+        at_fault.empty() ? nullptr : at_fault.front());
+  limit(ex.max_collisions, collisions.size(), "collisions",
+        collisions.empty() ? nullptr : collisions.front());
+  limit(ex.max_incidents, inc.size(), "incidents", inc.empty() ? nullptr : &inc.front());
+  if (ex.reach_lane) {
+    const auto lane = static_cast<std::size_t>(*ex.reach_lane);
+    const auto& reached =
+        lane < trace.lane_reached_s.size() ? trace.lane_reached_s[lane] : std::nullopt;
+    if (!reached || *reached > ex.reach_lane_by_s + 1e-9) {
+      fails.push_back(
+          "did not reach lane " + std::to_string(*ex.reach_lane) + " by t " +
+          fixed(ex.reach_lane_by_s, 1) + " s" +
+          (reached ? " (reached it at t " + fixed(*reached, 2) + " s)" : std::string(" (never)")));
+    }
+  }
+  if (ex.min_distance_m && r.distance_m < *ex.min_distance_m) {
+    fails.push_back("drove " + fixed(r.distance_m, 1) + " m, less than " +
+                    fixed(*ex.min_distance_m, 1) + " m");
+  }
+  return fails;
+}
+
+SuiteOutcome run_suite(const SuiteSpec& spec, const std::atomic<bool>* stop,
+                       const std::function<void(std::size_t, std::size_t)>& progress) {
+  if (spec.policies.empty()) throw UsageError("--policies: no policy given");
+  if (spec.jobs < 1 || spec.jobs > kMaxJobs) {
+    throw UsageError("--jobs must be between 1 and " + std::to_string(kMaxJobs));
+  }
+  std::error_code ec;
+  if (!std::filesystem::is_directory(spec.dir, ec)) {
+    throw UsageError("--scenarios: " + spec.dir.string() + " is not a folder");
+  }
+  std::vector<std::filesystem::path> files;
+  for (const auto& e : std::filesystem::directory_iterator(spec.dir, ec)) {
+    if (e.is_regular_file() && e.path().extension() == ".json") files.push_back(e.path());
+  }
+  if (ec) throw UsageError("--scenarios: " + spec.dir.string() + ": " + ec.message());
+  if (files.empty()) {
+    throw UsageError("--scenarios: " + spec.dir.string() + " holds no scenario files (*.json)");
+  }
+  std::sort(files.begin(), files.end());
+  for (const auto& p : spec.policies) {
+    DriveOptions o;
+    o.policy = p;
+    o.planners = spec.planners;
+    validate_drive_options(o);
+  }
+  const Config config = load_config(spec.config);
+  if (spec.out) {
+    std::filesystem::create_directories(*spec.out / "replays", ec);
+    if (ec) throw std::runtime_error(spec.out->string() + ": cannot create (" + ec.message() + ")");
+  }
+
+  struct Job {
+    std::size_t file = 0;
+    std::string policy;
+  };
+  std::vector<Job> jobs;
+  for (std::size_t f = 0; f < files.size(); ++f) {
+    for (const auto& p : spec.policies) jobs.push_back({f, p});
+  }
+  SuiteOutcome outcome;
+  std::vector<std::optional<ScenarioVerdict>> verdicts(jobs.size());
+  std::mutex mu;
+  std::size_t done = 0;
+  std::atomic<std::size_t> next{0};
+  const auto wall0 = std::chrono::steady_clock::now();
+  const auto stopping = [&] { return stop && stop->load(); };
+
+  const auto run_one = [&](const Job& job) {
+    ScenarioVerdict v;
+    v.file = files[job.file].filename().string();
+    v.policy = job.policy;
+    try {
+      DriveOptions o;
+      o.scenario = files[job.file];
+      o.minutes_from_scenario = true;
+      o.policy = job.policy;
+      o.planners = spec.planners;
+      o.config = spec.config;
+      if (spec.map) o.map = spec.map;
+      const std::string stem = files[job.file].stem().string() + "-" + job.policy;
+      if (spec.out) {
+        o.record = *spec.out / "replays" / (stem + ".otr");
+        o.checkpoint_every_s = 0.0;
+        o.planner_log = *spec.out / "logs" / (stem + ".log");
+      }
+      DriveInputs in = load_drive_inputs(o);
+      v.name = in.scenario->name;
+      TraceWatch watch(config.road);
+      watch.step_s = in.config.world.step_s;
+      in.options.watcher = &watch;
+      const DriveResult r = drive_loaded(in, {}, stop);
+      if (r.report.outcome.end == sim::RunEnd::stopped) return std::optional<ScenarioVerdict>();
+      v.failures = judge_scenario(*in.scenario, r.report, watch.trace);
+      for (const sim::Incident& i : judged_incidents(*in.scenario, r.report, watch.trace)) {
+        ++v.incidents;
+        if (i.type == sim::IncidentType::collision) {
+          ++v.collisions;
+          if (!i.collision || i.collision->at_fault) ++v.at_fault_collisions;
+        }
+      }
+      v.distance_m = r.report.distance_m;
+      v.duration_s = r.report.duration_s;
+      v.pass = v.failures.empty();
+      if (spec.out) {
+        if (v.pass) {
+          std::filesystem::remove(*o.record, ec);
+        } else {
+          v.replay = (std::filesystem::path("replays") / (stem + ".otr")).generic_string();
+        }
+      }
+    } catch (const std::exception& e) {
+      v.pass = false;
+      v.failures.push_back(std::string("could not run: ") + e.what());
+    }
+    return std::optional<ScenarioVerdict>(std::move(v));
+  };
+
+  const auto worker = [&] {
+    while (!stopping()) {
+      const std::size_t i = next.fetch_add(1);
+      if (i >= jobs.size()) return;
+      std::optional<ScenarioVerdict> v = run_one(jobs[i]);
+      std::lock_guard lock(mu);
+      if (v) verdicts[i] = std::move(v);
+      ++done;
+      if (progress) progress(done, jobs.size());
+    }
+  };
+  const int threads = std::min<int>(spec.jobs, static_cast<int>(jobs.size()));
+  std::vector<std::thread> pool;
+  for (int t = 0; t < threads; ++t) pool.emplace_back(worker);
+  for (auto& t : pool) t.join();
+
+  for (auto& v : verdicts) {
+    if (!v) {
+      outcome.interrupted = true;
+      continue;
+    }
+    (v->pass ? outcome.passed : outcome.failed) += 1;
+    outcome.verdicts.push_back(std::move(*v));
+  }
+  outcome.interrupted = outcome.interrupted || stopping();
+  outcome.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
+  if (spec.out) {
+    write_file_atomic(*spec.out / "suite.md", suite_table(outcome));
+    write_file_atomic(*spec.out / "suite.json", suite_json(outcome).dump(2) + "\n");
+  }
+  return outcome;
+}
+
+std::string suite_table(const SuiteOutcome& o) {
+  std::ostringstream os;
+  os << "| scenario | policy | result | incidents | collisions (at fault) | distance m | why |\n"
+     << "|---|---|---|---:|---:|---:|---|\n";
+  for (const ScenarioVerdict& v : o.verdicts) {
+    std::string why;
+    for (const std::string& f : v.failures) why += (why.empty() ? "" : "; ") + f;
+    if (!v.replay.empty()) why += " (replay: " + v.replay + ")";
+    os << "| " << v.file << " | " << v.policy << " | " << (v.pass ? "pass" : "**FAIL**") << " | "
+       << v.incidents << " | " << v.collisions << " (" << v.at_fault_collisions << ") | "
+       << fixed(v.distance_m, 1) << " | " << why << " |\n";
+  }
+  os << "\n"
+     << o.passed << " passed, " << o.failed << " failed"
+     << (o.interrupted ? " (interrupted: not every scenario ran)" : "") << "\n";
+  return os.str();
+}
+
+nlohmann::json suite_json(const SuiteOutcome& o) {
+  json rows = json::array();
+  for (const ScenarioVerdict& v : o.verdicts) {
+    rows.push_back({{"file", v.file},
+                    {"name", v.name},
+                    {"policy", v.policy},
+                    {"pass", v.pass},
+                    {"failures", v.failures},
+                    {"incidents", v.incidents},
+                    {"collisions", v.collisions},
+                    {"at_fault_collisions", v.at_fault_collisions},
+                    {"distance_m", v.distance_m},
+                    {"duration_s", v.duration_s},
+                    {"replay", v.replay}});
+  }
+  return {{"passed", o.passed},
+          {"failed", o.failed},
+          {"interrupted", o.interrupted},
+          {"verdicts", rows}};
+}
+
+}  // namespace overtake::app
