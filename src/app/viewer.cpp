@@ -106,9 +106,9 @@ std::string load_replay_for_view(const fs::path& replay, bool allow_partial, std
 }
 
 void write_viewer_html(std::string_view replay_bytes, const fs::path& out,
-                       std::string_view viewer_template) {
-  write_file_atomic(out,
-                    view::viewer_page(viewer_template, view::ViewerSource::embedded, replay_bytes));
+                       std::string_view viewer_template, std::string_view name) {
+  write_file_atomic(out, view::viewer_page(viewer_template, view::ViewerSource::embedded,
+                                           replay_bytes, name));
 }
 
 std::string bench_replay_name(const std::string& policy, const std::string& traffic,
@@ -169,7 +169,7 @@ std::vector<fs::path> write_bench_report(const fs::path& bench_out, const fs::pa
         continue;
       }
       if (!warning.empty()) std::fprintf(stderr, "bench: warning: %s\n", warning.c_str());
-      write_viewer_html(bytes, page, viewer_template);
+      write_viewer_html(bytes, page, viewer_template, otr.filename().string());
       pages.push_back(page);
     }
   }
@@ -194,7 +194,8 @@ int run_view(const ViewOptions& opts, const std::atomic<bool>& stop,
   if (!warning.empty()) std::fprintf(stderr, "warning: %s\n", warning.c_str());
   const std::string_view page = embedded_page(kViewerPageName);
   if (opts.html) {
-    const std::string html = view::viewer_page(page, view::ViewerSource::embedded, bytes);
+    const std::string html = view::viewer_page(page, view::ViewerSource::embedded, bytes,
+                                               opts.replay.filename().string());
     write_file_atomic(*opts.html, html);
     if (!opts.quiet) {
       // The page's own size: the target may be a device (/dev/null) with none.
@@ -204,7 +205,8 @@ int run_view(const ViewOptions& opts, const std::atomic<bool>& stop,
     return kExitOk;
   }
   view::ViewContent content;
-  content.page = view::viewer_page(page, view::ViewerSource::http);
+  content.page =
+      view::viewer_page(page, view::ViewerSource::http, {}, opts.replay.filename().string());
   content.replay = std::make_shared<const std::string>(std::move(bytes));
   view::ViewServerOptions server_opts;
   server_opts.host = opts.host;

@@ -1,5 +1,7 @@
 #include "overtake/view/page.hpp"
 
+#include <nlohmann/json.hpp>
+
 #include <array>
 #include <cstdint>
 
@@ -140,22 +142,27 @@ std::string fill_script_element(std::string_view page, std::string_view id,
   return out;
 }
 
-std::string viewer_config_json(ViewerSource source) {
+std::string viewer_config_json(ViewerSource source, std::string_view name) {
+  nlohmann::json j;
   switch (source) {
     case ViewerSource::embedded:
-      return R"({"source":"embedded"})";
+      j = {{"source", "embedded"}};
+      break;
     case ViewerSource::http:
-      return R"({"source":"http","url":")" + std::string(kReplayUrlPath) + "\"}";
+      j = {{"source", "http"}, {"url", kReplayUrlPath}};
+      break;
     case ViewerSource::live:
-      return R"({"source":"live","url":")" + std::string(kLiveUrlPath) + "\"}";
+      j = {{"source", "live"}, {"url", kLiveUrlPath}};
+      break;
   }
-  return "{}";
+  if (!name.empty()) j["name"] = std::string(name);
+  return j.dump();
 }
 
 std::string viewer_page(std::string_view page_template, ViewerSource source,
-                        std::string_view replay_bytes) {
+                        std::string_view replay_bytes, std::string_view name) {
   std::string page = fill_script_element(page_template, kConfigElementId, kConfigPlaceholder,
-                                         script_safe_json(viewer_config_json(source)));
+                                         script_safe_json(viewer_config_json(source, name)));
   const std::string data = source == ViewerSource::embedded ? base64_encode(replay_bytes) : "";
   return fill_script_element(page, kDataElementId, kDataPlaceholder, data);
 }

@@ -58,9 +58,10 @@ inline constexpr std::string_view kReplaysFolder = "replays";
 [[nodiscard]] std::string load_replay_for_view(const std::filesystem::path& replay,
                                                bool allow_partial, std::string* warning = nullptr);
 
-/// Writes the self-contained viewer page of `replay_bytes` to `out` (atomically).
+/// Writes the self-contained viewer page of `replay_bytes` to `out` (atomically); `name` is
+/// the replay's file name (for the page's cut command).
 void write_viewer_html(std::string_view replay_bytes, const std::filesystem::path& out,
-                       std::string_view viewer_template);
+                       std::string_view viewer_template, std::string_view name = {});
 
 /// The bench report's data (docs/replay.md): bench.json's object with "runs" (each with
 /// "replay": a link relative to `html_dir`, or null) and "summary". `replay_html_of` maps a

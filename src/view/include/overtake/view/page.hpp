@@ -49,13 +49,17 @@ inline constexpr std::string_view kLiveUrlPath = "/live";
                                               std::string_view placeholder,
                                               std::string_view content);
 
-/// The viewer's config object for a source (see ViewerSource), as JSON text.
-[[nodiscard]] std::string viewer_config_json(ViewerSource source);
+/// The viewer's config object for a source (see ViewerSource), as JSON text; `name` (when
+/// given) is the replay's file name, which the page shows in its "cut a scenario here"
+/// command (only the name: a shared page does not tell the folders it came from).
+[[nodiscard]] std::string viewer_config_json(ViewerSource source, std::string_view name = {});
 
-/// The viewer page filled: its config for `source`, and for ViewerSource::embedded the
-/// base64 of `replay_bytes` (the data element is left empty otherwise).
+/// The viewer page filled: its config for `source` (and `name`), and for
+/// ViewerSource::embedded the base64 of `replay_bytes` (the data element is left empty
+/// otherwise).
 [[nodiscard]] std::string viewer_page(std::string_view page_template, ViewerSource source,
-                                      std::string_view replay_bytes = {});
+                                      std::string_view replay_bytes = {},
+                                      std::string_view name = {});
 
 /// The bench report page filled with the bench object (JSON text, made script-safe here).
 [[nodiscard]] std::string report_page(std::string_view page_template, std::string_view bench_json);
