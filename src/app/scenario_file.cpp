@@ -7,7 +7,7 @@
 #include <sstream>
 
 #include "overtake/app/config.hpp"
-#include "overtake/view/page.hpp"
+#include "overtake/core/base64.hpp"
 
 #include <zlib.h>
 
@@ -182,12 +182,12 @@ std::string pack_blob(std::string_view bytes) {
     throw std::runtime_error("cannot compress " + std::to_string(bytes.size()) + " bytes");
   }
   out.resize(size);
-  return view::base64_encode(out);
+  return core::base64_encode(out);
 }
 
 std::string unpack_blob(std::string_view text, std::string_view what) {
   constexpr std::size_t kMaxBytes = std::size_t{256} << 20U;
-  const std::optional<std::string> packed = view::base64_decode(text);
+  const std::optional<std::string> packed = core::base64_decode(text);
   if (!packed) throw ConfigError(std::string(what) + ": not base64");
   z_stream z{};
   if (inflateInit(&z) != Z_OK) throw ConfigError(std::string(what) + ": cannot inflate");

@@ -92,17 +92,17 @@ std::vector<std::string> judge_scenario(const sim::Scenario& sc, const sim::RunR
   const auto limit = [&](const std::optional<int>& max, std::size_t got, const char* what,
                          const sim::Incident* first) {
     if (max && got > static_cast<std::size_t>(*max)) {
-      fails.push_back(std::to_string(got) + " " + what + " (at most " + std::to_string(*max) +
-                      "); the first: " + incident_text(*first));
+      fails.push_back(std::to_string(got) + " " + what + (got == 1 ? "" : "s") + " (at most " +
+                      std::to_string(*max) + "); the first: " + incident_text(*first));
     }
   };
   sim::ScenarioExpect ex = sc.expect;
   if (!ex.any()) ex.max_at_fault_collisions = 0;
-  limit(ex.max_at_fault_collisions, at_fault.size(), "at-fault collisions",
+  limit(ex.max_at_fault_collisions, at_fault.size(), "at-fault collision",
         at_fault.empty() ? nullptr : at_fault.front());
-  limit(ex.max_collisions, collisions.size(), "collisions",
+  limit(ex.max_collisions, collisions.size(), "collision",
         collisions.empty() ? nullptr : collisions.front());
-  limit(ex.max_incidents, inc.size(), "incidents", inc.empty() ? nullptr : &inc.front());
+  limit(ex.max_incidents, inc.size(), "incident", inc.empty() ? nullptr : &inc.front());
   if (ex.reach_lane) {
     const auto lane = static_cast<std::size_t>(*ex.reach_lane);
     const auto& reached =

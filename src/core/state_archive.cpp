@@ -122,28 +122,54 @@ void StateArchive::io(double& v, std::string_view what) {
     return;
   }
   v = std::bit_cast<double>(get(8, what));
-  if (std::isnan(v)) fail(std::string(what) + ": not a number");
+  if (std::isnan(v) || (std::isfinite(v) && std::abs(v) > kMaxValue)) {
+    fail(std::string(what) + ": " + std::to_string(v) + " is not a value a run holds");
+  }
 }
 
-void StateArchive::io_delta(double& v, std::uint64_t& prev_bits, std::string_view what) {
+namespace {
+
+void check_bound(const StateArchive& ar, double v, double limit, std::string_view what) {
+  if (!std::isfinite(v) || std::abs(v) > limit) {
+    ar.fail(std::string(what) + ": " + std::to_string(v) + " is outside +-" +
+            std::to_string(limit));
+  }
+}
+
+}  // namespace
+
+void StateArchive::io_metres(double& v, std::string_view what) {
+  io(v, what);
+  if (loading_) check_bound(*this, v, kMaxMetres, what);
+}
+
+void StateArchive::io_speed(double& v, std::string_view what) {
+  io(v, what);
+  if (loading_) check_bound(*this, v, kMaxSpeed, what);
+}
+
+void StateArchive::io_delta(double& v, std::uint64_t& prev_bits, std::string_view what,
+                            double limit) {
   std::uint64_t bits = loading_ ? 0 : std::bit_cast<std::uint64_t>(v) ^ prev_bits;
   io(bits, what);
   bits ^= prev_bits;
   if (loading_) {
     v = std::bit_cast<double>(bits);
-    if (std::isnan(v)) fail(std::string(what) + ": not a number");
+    if (std::isnan(v) || (std::isfinite(v) && std::abs(v) > limit)) {
+      fail(std::string(what) + ": " + std::to_string(v) + " is outside +-" + std::to_string(limit));
+    }
   }
   prev_bits = bits;
 }
 
 void StateArchive::io(Vec2& v, std::string_view what) {
-  io(v.x, what);
-  io(v.y, what);
+  io_metres(v.x, what);
+  io_metres(v.y, what);
 }
 
 void StateArchive::io(FrenetPoint& v, std::string_view what) {
-  io(v.s_m, what);
-  io(v.d_m, what);
+  io_metres(v.s_m, what);
+  io_metres(v.d_m, what);
 }
 
 void StateArchive::io(Rng& v, std::string_view what) {

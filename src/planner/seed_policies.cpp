@@ -322,7 +322,7 @@ namespace overtake::planner {
 bool SeedPolicyBase::archive_state(core::StateArchive& ar) {
   ar.part("seed policy");
   ar.io_range(lane_, 0, road_.lane_count - 1, "lane");
-  ar.io(ref_speed_mps_, "reference speed");
+  ar.io_speed(ref_speed_mps_, "reference speed");
   return true;
 }
 

@@ -57,7 +57,7 @@ namespace overtake::planner {
 bool WalkthroughPolicy::archive_state(core::StateArchive& ar) {
   ar.part("walkthrough");
   ar.io_range(lane_, 0, road_.lane_count - 1, "lane");
-  ar.io(ref_speed_mps_, "reference speed");
+  ar.io_speed(ref_speed_mps_, "reference speed");
   return true;
 }
 

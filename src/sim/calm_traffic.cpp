@@ -204,20 +204,20 @@ void CalmTraffic::archive(core::StateArchive& ar) {
   ar.io(spawn_rng_, "spawn stream");
   ar.io(frames_to_batch_, "frames to batch");
   ar.io(scripted_, "scripted");
-  ar.io(ego_prev_speed_mps_, "ego's previous speed");
+  ar.io_speed(ego_prev_speed_mps_, "ego's previous speed");
   ar.require(ar.io_length(n, n, "cars") == n, "the checkpoint has another number of cars");
   for (CalmCar& c : cars_) {
-    ar.io(c.s_m, "s");
-    ar.io(c.d_m, "d");
-    ar.io(c.speed_mps, "speed");
-    ar.io(c.accel_mps2, "acceleration");
-    ar.io(c.d_rate_mps, "lateral speed");
-    ar.io(c.cruise_mps, "cruise speed");
+    ar.io_metres(c.s_m, "s");
+    ar.io_metres(c.d_m, "d");
+    ar.io_speed(c.speed_mps, "speed");
+    ar.io_speed(c.accel_mps2, "acceleration");
+    ar.io_speed(c.d_rate_mps, "lateral speed");
+    ar.io_speed(c.cruise_mps, "cruise speed");
     ar.io_range(c.lane, 0, lanes - 1, "lane");
     ar.io_optional(c.manoeuvre, "lane change", [lanes](core::StateArchive& a, LaneManoeuvre& m) {
       a.io_range(m.from_lane, 0, lanes - 1, "lane change from");
       a.io_range(m.to_lane, 0, lanes - 1, "lane change to");
-      a.io(m.from_d_m, "lane change start d");
+      a.io_metres(m.from_d_m, "lane change start d");
       a.io(m.elapsed_s, "lane change elapsed");
       a.io(m.duration_s, "lane change duration");
     });
@@ -226,11 +226,11 @@ void CalmTraffic::archive(core::StateArchive& ar) {
     ar.io(c.since_held_up_s, "since held up");
     ar.io(c.wander_phase_rad, "wander phase");
     ar.io(c.wander_omega_rps, "wander frequency");
-    ar.io(c.lane_offset_m, "wander offset");
+    ar.io_metres(c.lane_offset_m, "wander offset");
     ar.io_optional(c.script, "script", [lanes](core::StateArchive& a, CalmCar::Script& s) {
-      a.io(s.target_speed_mps, "script speed");
-      a.io(s.rate_mps2, "script rate");
-      a.io(s.brake_mps2, "script braking");
+      a.io_speed(s.target_speed_mps, "script speed");
+      a.io_speed(s.rate_mps2, "script rate");
+      a.io_speed(s.brake_mps2, "script braking");
       a.io(s.brake_left_s, "script braking left");
       a.io_range(s.change_to_lane, -1, lanes - 1, "script lane change");
     });
@@ -243,9 +243,9 @@ void CalmTraffic::archive(core::StateArchive& ar) {
   // The ego's acceleration at the last step is read by placement: the vehicles of the last
   // step carry over.
   ar.io_vector(vehicles_, n + 1, "vehicles", [n](core::StateArchive& a, Vehicle& v) {
-    a.io(v.s_m, "vehicle s");
-    a.io(v.speed_mps, "vehicle speed");
-    a.io(v.accel_mps2, "vehicle acceleration");
+    a.io_metres(v.s_m, "vehicle s");
+    a.io_speed(v.speed_mps, "vehicle speed");
+    a.io_speed(v.accel_mps2, "vehicle acceleration");
     a.io(v.follow_lanes, "vehicle lanes");
     a.io(v.now_lanes, "vehicle lanes");
     a.io_range(v.car, -1, static_cast<int>(n) - 1, "vehicle car");

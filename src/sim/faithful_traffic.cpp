@@ -515,7 +515,7 @@ void FaithfulTraffic::archive(core::StateArchive& ar) {
   for (std::size_t i = 0; i < n; ++i) {
     archive_car(ar, cars_[i], lanes, waypoints);
     Driver& d = drivers_[i];
-    ar.io(d.cap_mps, "cap");
+    ar.io_speed(d.cap_mps, "cap");
     ar.io_range(d.target_waypoint, 0, waypoints - 1, "target waypoint");
     ar.io(d.lane_change_time, "lane change time");
     ar.require(ar.io_length(d.clear_counts.size(), d.clear_counts.size(), "clear counts") ==
@@ -526,13 +526,13 @@ void FaithfulTraffic::archive(core::StateArchive& ar) {
     ar.io(d.fresh, "fresh");
     ar.io(d.avoid_until_s, "avoid until");
     ar.io(d.avoid_slowdown, "avoid slowdown");
-    ar.io(d.avoid_offset_m, "avoid offset");
+    ar.io_metres(d.avoid_offset_m, "avoid offset");
     d.noise.archive(ar);
     ar.io_enum(d.sight, SightKind::ego, "sight");
     ar.io_range(d.sight_car, -1, static_cast<int>(n) - 1, "sight car");
-    ar.io(d.sight_distance_m, "sight distance");
+    ar.io_metres(d.sight_distance_m, "sight distance");
     ar.io(d.reacting, "reacting");
-    ar.io(d.desired_mph, "desired speed");
+    ar.io_speed(d.desired_mph, "desired speed");
     ar.io(d.pedal, "pedal");
     ar.io(parked_[i], "parked position");
   }

@@ -2,6 +2,7 @@
 
 #include <array>
 #include <bit>
+#include <cmath>
 #include <cstdint>
 
 #include "overtake/core/state_archive.hpp"
@@ -41,18 +42,16 @@ void archive_steps(core::StateArchive& ar, RecordedTraffic& steps, int lanes,
       ar.io_range(c.lane, 0, lanes - 1, "car lane");
       ar.io(c.parked, "car parked");
       ar.io_range(c.closest_waypoint, 0, waypoints == 0 ? 0 : waypoints - 1, "car waypoint");
+      // Positions and s, d within any run's reach; heading, speed and velocity bounded too.
+      static constexpr std::array<double, kDoubles> kLimit = {
+          core::StateArchive::kMaxMetres, core::StateArchive::kMaxMetres,
+          core::StateArchive::kMaxValue,  core::StateArchive::kMaxSpeed,
+          core::StateArchive::kMaxSpeed,  core::StateArchive::kMaxSpeed,
+          core::StateArchive::kMaxMetres, core::StateArchive::kMaxMetres};
       for (std::size_t f = 0; f < kDoubles; ++f) {
         double* v = doubles_of(c)[f];
-        std::uint64_t bits = ar.loading() ? 0 : std::bit_cast<std::uint64_t>(*v) ^ prev[k][f];
-        ar.io(bits, "car value");
-        if (ar.loading()) {
-          bits ^= prev[k][f];
-          *v = std::bit_cast<double>(bits);
-          ar.require(*v == *v, "car value: not a number");
-        } else {
-          bits ^= prev[k][f];
-        }
-        prev[k][f] = bits;
+        ar.io_delta(*v, prev[k][f], "car value", kLimit[f]);
+        ar.require(std::isfinite(*v), "car value: not finite");
       }
     }
   }

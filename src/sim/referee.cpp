@@ -223,7 +223,7 @@ namespace overtake::sim {
 void archive_incident(core::StateArchive& ar, Incident& incident, int lanes) {
   ar.io_enum(incident.type, IncidentType::outside_lane, "incident type");
   ar.io(incident.t_s, "incident time");
-  ar.io(incident.s_m, "incident s");
+  ar.io_metres(incident.s_m, "incident s");
   ar.io_range(incident.lane, -64, lanes + 64, "incident lane");
   ar.io(incident.value, "incident value");
   ar.io_optional(incident.collision, "collision class",
@@ -252,8 +252,8 @@ void Referee::archive(core::StateArchive& ar) {
   for (int& c : counts_) ar.io(c, "incident count");
   ar.io(step_, "step");
   ar.io_range(block_fill_, 0, p_.accel_block_steps, "block fill");
-  ar.io(block_speed_sum_, "block speed sum");
-  ar.io(prev_block_mean_speed_, "previous block speed");
+  ar.io_metres(block_speed_sum_, "block speed sum");
+  ar.io_speed(prev_block_mean_speed_, "previous block speed");
   ar.io_range(group_fill_, 0, p_.jerk_group_blocks, "group fill");
   ar.io(group_sum_, "group sum");
   ar.io(prev_group_mean_, "previous group mean");

@@ -412,7 +412,7 @@ namespace overtake::sim {
 void SafetyMonitor::archive_track(core::StateArchive& ar, Track& t, bool is_ego) {
   const auto archive_sample = [](core::StateArchive& a, Sample& x) {
     a.io(x.frenet, "sample s and d");
-    a.io(x.speed_mps, "sample speed");
+    a.io_speed(x.speed_mps, "sample speed");
   };
   ar.io(t.active, "track active");
   ar.io_range(t.id, -1, 65535, "track car");
@@ -446,8 +446,8 @@ void SafetyMonitor::archive_track(core::StateArchive& ar, Track& t, bool is_ego)
       archive_sample(ar, x);
       continue;
     }
-    ar.io_delta(x.frenet.d_m, d_bits, "window d");
-    if (is_ego) ar.io_delta(x.speed_mps, v_bits, "window speed");
+    ar.io_delta(x.frenet.d_m, d_bits, "window d", core::StateArchive::kMaxMetres);
+    if (is_ego) ar.io_delta(x.speed_mps, v_bits, "window speed", core::StateArchive::kMaxSpeed);
     if (ar.loading()) x.frenet.s_m = 0.0;  // never read
   }
 }

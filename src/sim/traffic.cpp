@@ -59,8 +59,9 @@ void archive_car(core::StateArchive& ar, TrafficCar& car, int lanes, std::size_t
   ar.io_range(car.id, 0, 65535, "car id");
   ar.io(car.position, "car position");
   ar.io(car.heading_rad, "car heading");
-  ar.io(car.speed_mps, "car speed");
-  ar.io(car.reported_velocity_mps, "car reported velocity");
+  ar.io_speed(car.speed_mps, "car speed");
+  ar.io_speed(car.reported_velocity_mps.x, "car reported velocity");
+  ar.io_speed(car.reported_velocity_mps.y, "car reported velocity");
   ar.io(car.map_frenet, "car s and d");
   ar.io_range(car.closest_waypoint, 0, waypoints == 0 ? 0 : waypoints - 1, "car waypoint");
   ar.io_range(car.lane, 0, lanes - 1, "car lane");

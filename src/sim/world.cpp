@@ -146,7 +146,7 @@ void World::archive(core::StateArchive& ar) {
   ar.io_range(steps_, 0, std::numeric_limits<long>::max() / 2, "step");
   ar.io(ego_.position, "ego position");
   ar.io(ego_.yaw_rad, "ego heading");
-  ar.io(ego_.speed_mps, "ego speed");
+  ar.io_speed(ego_.speed_mps, "ego speed");
   ar.io(ego_.frenet, "ego s and d");
   ar.io(ego_.map_frenet, "ego s and d on the chords");
   ar.io_range(ego_.closest_waypoint, 0, chords_.size() - 1, "ego waypoint");
@@ -154,8 +154,8 @@ void World::archive(core::StateArchive& ar) {
   if (ar.loading()) queue_.assign(queued, core::Vec2{});
   std::uint64_t x_bits = 0, y_bits = 0;
   for (core::Vec2& p : queue_) {
-    ar.io_delta(p.x, x_bits, "queued point");
-    ar.io_delta(p.y, y_bits, "queued point");
+    ar.io_delta(p.x, x_bits, "queued point", core::StateArchive::kMaxMetres);
+    ar.io_delta(p.y, y_bits, "queued point", core::StateArchive::kMaxMetres);
   }
   ar.io_optional(contact_, "contact",
                  [](core::StateArchive& a, int& id) { a.io_range(id, 0, 65535, "contact car"); });

@@ -143,7 +143,7 @@ TEST(ScenarioFile, ANumberBeyondADoubleIsBadJsonNamingTheFile) {
 
 TEST(ScenarioFile, TheShippedExampleDrives) {
   DriveOptions o;
-  o.scenario = std::string(OVERTAKE_SOURCE_DIR) + "/data/scenarios/cut_in.json";
+  o.scenario = std::string(OVERTAKE_SOURCE_DIR) + "/data/scenarios/scripted-cut-in.json";
   o.minutes_from_scenario = true;
   o.policy = "walkthrough";
   const DriveResult r = drive(o);

@@ -32,6 +32,7 @@
 #include "overtake/app/io.hpp"
 #include "overtake/app/resources.hpp"
 #include "overtake/app/viewer.hpp"
+#include "overtake/core/base64.hpp"
 #include "overtake/planner/policy.hpp"
 #include "overtake/replay/replay.hpp"
 #include "overtake/sim/world.hpp"
@@ -236,14 +237,14 @@ TEST_F(ViewerTest, APipeIsWrittenInPlaceNotReplaced) {
 TEST(ViewPage, Base64RoundTripsEverySizeOfTail) {
   for (const std::string& s :
        std::vector<std::string>{"", "a", "ab", "abc", "abcd", std::string("\0\xff\x80 z", 5)}) {
-    const std::string e = view::base64_encode(s);
+    const std::string e = core::base64_encode(s);
     EXPECT_EQ(e.size() % 4, 0u);
-    EXPECT_EQ(view::base64_decode(e), s);
+    EXPECT_EQ(core::base64_decode(e), s);
   }
-  EXPECT_EQ(view::base64_encode("hello"), "aGVsbG8=");
-  EXPECT_EQ(view::base64_decode("aGVs\nbG8="), "hello");
-  EXPECT_EQ(view::base64_decode("aGVsbG8"), std::nullopt);
-  EXPECT_EQ(view::base64_decode("a*Vs"), std::nullopt);
+  EXPECT_EQ(core::base64_encode("hello"), "aGVsbG8=");
+  EXPECT_EQ(core::base64_decode("aGVs\nbG8="), "hello");
+  EXPECT_EQ(core::base64_decode("aGVsbG8"), std::nullopt);
+  EXPECT_EQ(core::base64_decode("a*Vs"), std::nullopt);
 }
 
 TEST(ViewPage, FillsOnlyTheElementAndEscapesScriptEnds) {
@@ -272,7 +273,7 @@ TEST_F(ViewerTest, ViewHtmlEmbedsTheReplayInThePage) {
   const std::string page = read_file(out);
   EXPECT_EQ(json::parse(element_text(page, "overtake-config")),
             json::parse(R"({"source":"embedded"})"));
-  EXPECT_EQ(view::base64_decode(element_text(page, "overtake-data")), bytes_of(replay));
+  EXPECT_EQ(core::base64_decode(element_text(page, "overtake-data")), bytes_of(replay));
   EXPECT_THAT(element_text(page, "overtake-data"), Not(HasSubstr("__OVERTAKE")));
 }
 
@@ -302,7 +303,7 @@ TEST_F(ViewerTest, ViewAtTheCommandLine) {
   EXPECT_THAT(testing::internal::GetCapturedStdout(), HasSubstr("written: " + out.string()));
   const std::string page = read_file(out);
   EXPECT_EQ(json::parse(element_text(page, "overtake-config"))["source"], "embedded");
-  EXPECT_EQ(view::base64_decode(element_text(page, "overtake-data")), bytes);
+  EXPECT_EQ(core::base64_decode(element_text(page, "overtake-data")), bytes);
   // --partial: the cut file's page, with a warning.
   testing::internal::CaptureStdout();
   testing::internal::CaptureStderr();
@@ -631,7 +632,7 @@ TEST_F(ViewerTest, BenchRecordsItsWorstRunsAndLinksThemFromTheReport) {
     EXPECT_EQ(r["replay"].get<std::string>().rfind("bench/replays/", 0), 0u);
     fs::path otr = page;
     otr.replace_extension(".otr");
-    EXPECT_EQ(view::base64_decode(element_text(read_file(page), "overtake-data")), bytes_of(otr));
+    EXPECT_EQ(core::base64_decode(element_text(read_file(page), "overtake-data")), bytes_of(otr));
   }
   EXPECT_EQ(linked, 2);
 }

@@ -215,11 +215,11 @@ namespace overtake::planner::reference {
 namespace {
 
 void archive_frenet_state(core::StateArchive& ar, FrenetState& f) {
-  ar.io(f.s_m, "state s");
-  ar.io(f.s_dot, "state s rate");
+  ar.io_metres(f.s_m, "state s");
+  ar.io_speed(f.s_dot, "state s rate");
   ar.io(f.s_ddot, "state s acceleration");
-  ar.io(f.d_m, "state d");
-  ar.io(f.d_dot_mps, "state d rate");
+  ar.io_metres(f.d_m, "state d");
+  ar.io_speed(f.d_dot_mps, "state d rate");
   ar.io(f.d_ddot_mps2, "state d acceleration");
 }
 
@@ -231,11 +231,11 @@ void archive_states(core::StateArchive& ar, std::vector<FrenetState>& states,
   if (ar.loading()) states.assign(n, FrenetState{});
   std::array<std::uint64_t, 6> prev{};
   for (FrenetState& f : states) {
-    ar.io_delta(f.s_m, prev[0], what);
-    ar.io_delta(f.s_dot, prev[1], what);
+    ar.io_delta(f.s_m, prev[0], what, core::StateArchive::kMaxMetres);
+    ar.io_delta(f.s_dot, prev[1], what, core::StateArchive::kMaxSpeed);
     ar.io_delta(f.s_ddot, prev[2], what);
-    ar.io_delta(f.d_m, prev[3], what);
-    ar.io_delta(f.d_dot_mps, prev[4], what);
+    ar.io_delta(f.d_m, prev[3], what, core::StateArchive::kMaxMetres);
+    ar.io_delta(f.d_dot_mps, prev[4], what, core::StateArchive::kMaxSpeed);
     ar.io_delta(f.d_ddot_mps2, prev[5], what);
   }
 }
@@ -251,8 +251,8 @@ bool ReferencePolicy::archive_state(core::StateArchive& ar) {
   if (ar.loading()) sent_.assign(sent, core::Vec2{});
   std::uint64_t x_bits = 0, y_bits = 0;
   for (core::Vec2& p : sent_) {
-    ar.io_delta(p.x, x_bits, "point sent");
-    ar.io_delta(p.y, y_bits, "point sent");
+    ar.io_delta(p.x, x_bits, "point sent", core::StateArchive::kMaxMetres);
+    ar.io_delta(p.y, y_bits, "point sent", core::StateArchive::kMaxMetres);
   }
   ar.require(sent_.size() == states_.size() || sent_.empty(), "points sent: not one per state");
   archive_frenet_state(ar, origin_);
@@ -260,10 +260,10 @@ bool ReferencePolicy::archive_state(core::StateArchive& ar) {
   ar.io(band_time_s_, "time in a line band");
   ar.io_vector(tracks_, kMaxPoints, "car tracks", [](core::StateArchive& a, CarTrack& t) {
     a.io_range(t.id, -1, 65535, "track id");
-    a.io(t.s_m, "track s");
-    a.io(t.s_dot, "track speed");
+    a.io_metres(t.s_m, "track s");
+    a.io_speed(t.s_dot, "track speed");
     a.io(t.s_ddot, "track acceleration");
-    a.io(t.top_speed_mps, "track top speed");
+    a.io_speed(t.top_speed_mps, "track top speed");
   });
   ar.io_range(behaviour_.target_lane, -1, road_.lane_count - 1, "target lane");
   ar.io_range(behaviour_.goal_lane, -1, road_.lane_count - 1, "goal lane");

@@ -30,6 +30,10 @@ class StateError : public std::runtime_error {
 
 class StateArchive {
  public:
+  static constexpr double kMaxValue = 1e10;
+  static constexpr double kMaxMetres = 1e8;
+  static constexpr double kMaxSpeed = 1e3;
+
   /// An archive that writes (take() returns the bytes).
   StateArchive() = default;
   /// An archive that reads `bytes` (which must outlive it); `name` names them in errors.
@@ -50,15 +54,21 @@ class StateArchive {
   void io(std::uint32_t& v, std::string_view what);
   void io(std::uint64_t& v, std::string_view what);
   void io(std::uint8_t& v, std::string_view what);
-  /// Any double but NaN (infinities are sentinels here).
+  /// A double: infinite (a sentinel) or finite within kMaxValue; never NaN.
   void io(double& v, std::string_view what);
+  /// A length or coordinate: finite, within kMaxMetres (10^5 km: beyond any run's reach, and
+  /// small enough that lane numbers and indices computed from it stay in range).
+  void io_metres(double& v, std::string_view what);
+  /// A speed (m/s) or a rate of a length: finite, within kMaxSpeed.
+  void io_speed(double& v, std::string_view what);
   void io(Vec2& v, std::string_view what);
   void io(FrenetPoint& v, std::string_view what);
   void io(Rng& v, std::string_view what);
   /// A double of a series (the states along a path, a window of samples): stored as its bits
   /// XOR `prev_bits`, the bits of the series' value before it (0 for the first), which then
   /// become this value's. Neighbours share their high bytes, so the stored bytes compress.
-  void io_delta(double& v, std::uint64_t& prev_bits, std::string_view what);
+  void io_delta(double& v, std::uint64_t& prev_bits, std::string_view what,
+                double limit = kMaxValue);
   /// At most `max_bytes` bytes.
   void io(std::string& v, std::size_t max_bytes, std::string_view what);
   /// An index or count that must lie in [lo, hi] when read.
@@ -102,7 +112,7 @@ class StateArchive {
     io(has, what);
     if (loading_) {
       if (has) {
-        o.emplace();
+        o.emplace(T{});
       } else {
         o.reset();
       }

@@ -33,11 +33,6 @@ inline constexpr std::string_view kBenchPlaceholder = "__OVERTAKE_BENCH__";
 inline constexpr std::string_view kReplayUrlPath = "/replay.otr";
 inline constexpr std::string_view kLiveUrlPath = "/live";
 
-/// Standard base64 (RFC 4648, with padding, no line breaks).
-[[nodiscard]] std::string base64_encode(std::string_view bytes);
-/// Decodes standard base64 (whitespace ignored); nullopt when it is not valid base64.
-[[nodiscard]] std::optional<std::string> base64_decode(std::string_view text);
-
 /// JSON text made safe inside a <script> element: every '<' becomes \u003c (valid JSON, and
 /// no "</script>" can end the element early).
 [[nodiscard]] std::string script_safe_json(std::string_view json_text);

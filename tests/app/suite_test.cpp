@@ -1,0 +1,217 @@
+// Scenario suites and hunting: expectations judged as scenarios say, a folder run for every
+// policy with a pass/fail table and exit status, and `hunt` finding the same failures
+// whatever the number of jobs, each with a scenario that reproduces it.
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+
+#include "overtake/app/commands.hpp"
+#include "overtake/app/config.hpp"
+#include "overtake/app/hunt.hpp"
+#include "overtake/app/io.hpp"
+#include "overtake/app/suite.hpp"
+
+namespace overtake::app {
+namespace {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+using ::testing::HasSubstr;
+
+class TempDir {
+ public:
+  TempDir() {
+    path_ = fs::temp_directory_path() /
+            ("overtake-suite-" + std::to_string(::getpid()) + "-" + std::to_string(counter_++));
+    fs::remove_all(path_);
+    fs::create_directories(path_);
+  }
+  ~TempDir() { fs::remove_all(path_); }
+  [[nodiscard]] const fs::path& path() const { return path_; }
+
+ private:
+  static inline int counter_ = 0;
+  fs::path path_;
+};
+
+sim::Incident collision(double t, sim::CollisionKind kind, bool at_fault) {
+  sim::Incident i;
+  i.type = sim::IncidentType::collision;
+  i.t_s = t;
+  i.collision = sim::CollisionClass{kind, at_fault};
+  return i;
+}
+
+TEST(JudgeScenario, NoExpectationMeansNoAtFaultCollision) {
+  sim::Scenario sc;
+  sim::RunReport r;
+  ScenarioTrace trace;
+  EXPECT_TRUE(judge_scenario(sc, r, trace).empty());
+  r.incidents.push_back(collision(3.0, sim::CollisionKind::hit_from_behind, false));
+  EXPECT_TRUE(judge_scenario(sc, r, trace).empty());  // not the ego's fault
+  r.incidents.push_back(collision(4.0, sim::CollisionKind::ego_lane_change, true));
+  const auto fails = judge_scenario(sc, r, trace);
+  ASSERT_EQ(fails.size(), 1U);
+  EXPECT_THAT(fails[0], HasSubstr("1 at-fault collision (at most 0)"));
+  EXPECT_THAT(fails[0], HasSubstr("ego_lane_change at t 4.00 s"));
+}
+
+TEST(JudgeScenario, EachLimitIsChecked) {
+  sim::Scenario sc;
+  sc.expect.max_collisions = 0;
+  sc.expect.max_incidents = 1;
+  sc.expect.reach_lane = 2;
+  sc.expect.reach_lane_by_s = 10.0;
+  sc.expect.min_distance_m = 100.0;
+  sim::RunReport r;
+  r.distance_m = 50.0;
+  r.incidents.push_back(collision(3.0, sim::CollisionKind::hit_from_behind, false));
+  sim::Incident jerk;
+  jerk.type = sim::IncidentType::max_jerk;
+  jerk.t_s = 5.0;
+  r.incidents.push_back(jerk);
+  ScenarioTrace trace;
+  trace.lane_reached_s = {0.0, 0.0, 12.5};
+  const auto fails = judge_scenario(sc, r, trace);
+  ASSERT_EQ(fails.size(), 4U);
+  EXPECT_THAT(fails[0], HasSubstr("1 collision (at most 0)"));
+  EXPECT_THAT(fails[1], HasSubstr("2 incidents (at most 1)"));
+  EXPECT_THAT(fails[2], HasSubstr("did not reach lane 2 by t 10.0 s (reached it at t 12.50 s)"));
+  EXPECT_THAT(fails[3], HasSubstr("drove 50.0 m, less than 100.0 m"));
+  // Within the limits, it passes.
+  r.distance_m = 150.0;
+  r.incidents.pop_back();
+  sc.expect.max_collisions = 1;
+  trace.lane_reached_s[2] = 9.0;
+  EXPECT_TRUE(judge_scenario(sc, r, trace).empty());
+}
+
+TEST(JudgeScenario, TheLeadInIsNotJudgedAndAFailedPlannerFails) {
+  sim::Scenario sc;
+  sc.cut.emplace();
+  sc.cut->lead_in_s = 10.0;
+  sim::RunReport r;
+  r.incidents.push_back(collision(105.0, sim::CollisionKind::ego_lane_change, true));
+  ScenarioTrace trace;
+  trace.start_s = 100.0;
+  EXPECT_TRUE(judge_scenario(sc, r, trace).empty());  // 5 s in: the lead-in
+  r.incidents.push_back(collision(111.0, sim::CollisionKind::ego_lane_change, true));
+  EXPECT_EQ(judge_scenario(sc, r, trace).size(), 1U);
+  r.incidents.clear();
+  r.outcome = {sim::RunEnd::planner_failed, 104.0, "stalled"};
+  const auto fails = judge_scenario(sc, r, trace);
+  ASSERT_EQ(fails.size(), 1U);
+  EXPECT_THAT(fails[0], HasSubstr("the planner failed: stalled"));
+}
+
+fs::path library() {
+  return fs::path(OVERTAKE_SOURCE_DIR) / "data/scenarios";
+}
+
+TEST(ScenarioSuite, RunsAFolderForEveryPolicyAndSaysWhatFailed) {
+  TempDir dir;
+  const fs::path scenarios = dir.path() / "s";
+  fs::create_directories(scenarios);
+  for (const char* f :
+       {"seed001-default-faithful-ego-lane-change.json", "scripted-all-lanes-blocked.json"}) {
+    fs::copy_file(library() / f, scenarios / f);
+  }
+  // Reach the left lane within 5 s of a scripted cut-in: the reference planner keeps its lane.
+  std::ofstream(scenarios / "reach.json") << R"({"name": "reach", "duration_s": 8,
+      "ego": {"s_m": 300, "lane": 1, "speed_mps": 20},
+      "expect": {"reach_lane": {"lane": 0, "by_s": 5}}})";
+  std::ofstream(scenarios / "broken.json") << "{";
+  SuiteSpec spec;
+  spec.dir = scenarios;
+  spec.policies = {"reference", "seed001"};
+  spec.jobs = 2;
+  spec.out = dir.path() / "out";
+  const SuiteOutcome o = run_suite(spec, nullptr, {});
+  ASSERT_EQ(o.verdicts.size(), 8U);
+  const auto verdict = [&](const std::string& file, const std::string& policy) {
+    for (const auto& v : o.verdicts) {
+      if (v.file == file && v.policy == policy) return v;
+    }
+    ADD_FAILURE() << "no verdict for " << file << " / " << policy;
+    return ScenarioVerdict{};
+  };
+  EXPECT_TRUE(verdict("seed001-default-faithful-ego-lane-change.json", "reference").pass);
+  const ScenarioVerdict failed =
+      verdict("seed001-default-faithful-ego-lane-change.json", "seed001");
+  EXPECT_FALSE(failed.pass);
+  EXPECT_GE(failed.at_fault_collisions, 1);
+  EXPECT_THAT(failed.failures.front(), HasSubstr("ego_lane_change at t 79.36 s"));
+  EXPECT_TRUE(fs::exists(dir.path() / "out" / failed.replay));  // the failed run's replay
+  EXPECT_TRUE(verdict("scripted-all-lanes-blocked.json", "reference").pass);
+  EXPECT_FALSE(verdict("reach.json", "reference").pass);
+  EXPECT_THAT(verdict("broken.json", "reference").failures.front(), HasSubstr("could not run"));
+  EXPECT_EQ(o.passed + o.failed, 8U);
+  const json written = read_json_file(dir.path() / "out" / "suite.json");
+  EXPECT_EQ(written["verdicts"].size(), 8U);
+  EXPECT_THAT(read_file(dir.path() / "out" / "suite.md"), HasSubstr("| **FAIL** |"));
+}
+
+int run_binary(const std::string& args) {
+  const std::string cmd = std::string(OVERTAKE_BINARY_DIR) + "/overtake " + args + " > /dev/null";
+  const int rc = std::system(cmd.c_str());
+  return WIFEXITED(rc) ? WEXITSTATUS(rc) : -1;
+}
+
+TEST(ScenarioSuite, TheExitStatusSaysWhetherAnyFailed) {
+  TempDir dir;
+  fs::copy_file(library() / "seed001-default-faithful-ego-lane-change.json", dir.path() / "a.json");
+  EXPECT_EQ(run_binary("bench -q --scenarios " + dir.path().string() + " --policies reference"), 0);
+  EXPECT_EQ(run_binary("bench -q --scenarios " + dir.path().string() + " --policies seed001"), 1);
+  EXPECT_EQ(run_binary("bench -q --scenarios " + dir.path().string() + " --seeds 1-3"), 2);
+  EXPECT_EQ(run_binary("bench -q --scenarios " + (dir.path() / "none").string()), 2);
+}
+
+TEST(Hunt, FindsTheSameFailuresWhateverTheJobsAndEachScenarioReproducesIt) {
+  std::string first;
+  TempDir dir;
+  for (const int jobs : {1, 2}) {
+    fs::remove_all(dir.path() / "hunt");
+    HuntSpec spec;
+    spec.policy = "seed001";
+    spec.traffic = {"faithful"};
+    spec.minutes = 2.0;
+    spec.failures = 2;
+    spec.budget_hours = 1.0;
+    spec.jobs = jobs;
+    spec.out = dir.path() / "hunt";
+    const HuntOutcome o = run_hunt(spec, nullptr, {});
+    ASSERT_EQ(o.failures.size(), 2U);
+    EXPECT_FALSE(o.groups.empty());
+    json j = read_json_file(spec.out / "hunt.json");
+    j.erase("timing");
+    if (first.empty()) {
+      first = j.dump();
+    } else {
+      EXPECT_EQ(j.dump(), first);
+    }
+    EXPECT_TRUE(fs::is_empty(spec.out / "runs"));  // only the failing runs' replays are kept
+    for (const HuntGroup& g : o.groups) {
+      const HuntFailure& f = o.failures[g.failures.front()];
+      EXPECT_TRUE(fs::exists(spec.out / f.replay));
+      for (const std::string& scenario : {g.reactive, g.replayed}) {
+        DriveOptions d;
+        d.scenario = spec.out / scenario;
+        d.minutes_from_scenario = true;
+        d.policy = "seed001";
+        bool again = false;
+        for (const sim::Incident& i : drive(d).report.incidents) {
+          again =
+              again || (i.type == sim::IncidentType::collision && std::abs(i.t_s - f.t_s) < 1e-6);
+        }
+        EXPECT_TRUE(again) << scenario << " does not repeat " << f.what << " at " << f.t_s;
+      }
+    }
+  }
+}
+
+}  // namespace
+}  // namespace overtake::app

@@ -1,0 +1,261 @@
+// The state archive and checkpoint files: values go through bit for bit, and bytes that do
+// not hold a valid state are refused with a StateError naming the part and the field, never
+// read as an out-of-range index, an absurd length or a value no run holds.
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+
+#include "overtake/core/reference_line.hpp"
+#include "overtake/core/state_archive.hpp"
+#include "overtake/sim/checkpoint.hpp"
+#include "overtake/sim/recorded_traffic.hpp"
+#include "overtake/sim/run.hpp"
+#include "overtake/sim/world.hpp"
+#include "test_maps.hpp"
+
+namespace overtake::sim {
+namespace {
+
+using ::testing::HasSubstr;
+
+std::string error_of(std::string_view bytes, const std::function<void(core::StateArchive&)>& read) {
+  try {
+    core::StateArchive ar(bytes, "bytes");
+    read(ar);
+    ar.expect_end();
+  } catch (const core::StateError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(StateArchive, EveryKindOfValueGoesThroughBitForBit) {
+  core::StateArchive w;
+  bool b = true;
+  std::int32_t i = -7;
+  std::int64_t l = -1234567890123;
+  std::uint64_t u = 0xFEDCBA9876543210ULL;
+  double d = 0.1 + 0.2;
+  double inf = std::numeric_limits<double>::infinity();
+  core::Vec2 v{1.5, -2.25};
+  std::string text = "reason";
+  std::optional<int> some = 4;
+  std::vector<double> xs = {1.0, 1.0 + 1e-15, 2.0};
+  core::Rng rng(42);
+  (void)rng.next();
+  std::uint64_t prev = 0;
+  double series = 123.456;
+  w.part("all");
+  w.io(b, "b");
+  w.io(i, "i");
+  w.io(l, "l");
+  w.io(u, "u");
+  w.io(d, "d");
+  w.io(inf, "inf");
+  w.io(v, "v");
+  w.io(text, 100, "text");
+  w.io_optional(some, "some", [](core::StateArchive& a, int& x) { a.io(x, "x"); });
+  w.io_vector(xs, 10, "xs");
+  w.io(rng, "rng");
+  w.io_delta(series, prev, "series");
+  const std::string bytes = w.take();
+
+  core::StateArchive r(bytes, "bytes");
+  bool b2 = false;
+  std::int32_t i2 = 0;
+  std::int64_t l2 = 0;
+  std::uint64_t u2 = 0;
+  double d2 = 0, inf2 = 0, series2 = 0;
+  core::Vec2 v2;
+  std::string text2;
+  std::optional<int> some2;
+  std::vector<double> xs2;
+  core::Rng rng2(0);
+  std::uint64_t prev2 = 0;
+  r.part("all");
+  r.io(b2, "b");
+  r.io(i2, "i");
+  r.io(l2, "l");
+  r.io(u2, "u");
+  r.io(d2, "d");
+  r.io(inf2, "inf");
+  r.io(v2, "v");
+  r.io(text2, 100, "text");
+  r.io_optional(some2, "some", [](core::StateArchive& a, int& x) { a.io(x, "x"); });
+  r.io_vector(xs2, 10, "xs");
+  r.io(rng2, "rng");
+  r.io_delta(series2, prev2, "series");
+  r.expect_end();
+  EXPECT_EQ(b2, b);
+  EXPECT_EQ(i2, i);
+  EXPECT_EQ(l2, l);
+  EXPECT_EQ(u2, u);
+  EXPECT_EQ(std::bit_cast<std::uint64_t>(d2), std::bit_cast<std::uint64_t>(d));
+  EXPECT_EQ(inf2, inf);
+  EXPECT_EQ(v2, v);
+  EXPECT_EQ(text2, text);
+  EXPECT_EQ(some2, some);
+  EXPECT_EQ(xs2, xs);
+  EXPECT_EQ(rng2.next(), rng.next());
+  EXPECT_EQ(series2, series);
+}
+
+TEST(StateArchive, BadBytesNameThePartAndTheField) {
+  core::StateArchive w;
+  w.part("traffic");
+  std::int32_t lane = 5;
+  w.io(lane, "lane");
+  double nan = std::nan("");
+  double huge = 1e15;
+  const std::string lane_bytes = w.bytes();
+  w.io(nan, "speed");
+  const std::string nan_bytes = w.take();
+  EXPECT_THAT(error_of(lane_bytes,
+                       [](core::StateArchive& a) {
+                         a.part("traffic");
+                         std::int32_t l = 0;
+                         a.io_range(l, 0, 2, "lane");
+                       }),
+              HasSubstr("bytes: in part 'traffic', at byte 12: lane: 5 is outside [0, 2]"));
+  EXPECT_THAT(error_of(lane_bytes, [](core::StateArchive& a) { a.part("world"); }),
+              HasSubstr("expected part 'world'"));
+  EXPECT_THAT(error_of(lane_bytes.substr(0, 10),
+                       [](core::StateArchive& a) {
+                         a.part("traffic");
+                         std::int32_t l = 0;
+                         a.io(l, "lane");
+                       }),
+              HasSubstr("lane: the state ends early"));
+  EXPECT_THAT(error_of(nan_bytes,
+                       [](core::StateArchive& a) {
+                         a.part("traffic");
+                         std::int32_t l = 0;
+                         double s = 0;
+                         a.io(l, "lane");
+                         a.io(s, "speed");
+                       }),
+              HasSubstr("speed"));
+  core::StateArchive big;
+  big.io(huge, "position");
+  EXPECT_THAT(error_of(big.bytes(),
+                       [](core::StateArchive& a) {
+                         double x = 0;
+                         a.io_metres(x, "position");
+                       }),
+              HasSubstr("position"));
+  // A length beyond what the field may hold is refused before anything is allocated.
+  core::StateArchive len;
+  std::uint64_t n = 1ULL << 60U;
+  len.io(n, "xs");
+  EXPECT_THAT(error_of(len.bytes(),
+                       [](core::StateArchive& a) {
+                         std::vector<double> xs;
+                         a.io_vector(xs, 100, "xs");
+                       }),
+              HasSubstr("xs (count)"));
+  EXPECT_THAT(error_of(lane_bytes + "x",
+                       [](core::StateArchive& a) {
+                         a.part("traffic");
+                         std::int32_t l = 0;
+                         a.io(l, "lane");
+                       }),
+              HasSubstr("1 bytes left over"));
+}
+
+struct Fixture {
+  core::Map map = test::circle_map();
+  core::ReferenceLine line{map};
+};
+
+Checkpoint checkpoint_after(const Fixture& f, TrafficProfile profile, int steps) {
+  World world(f.map, f.line, WorldParams{}, profile, 3);
+  RunOptions opts;
+  opts.steps_per_call = 1;
+  Stepper run(world, opts);
+  for (int k = 0; k < steps; ++k) run.step();
+  Checkpoint c;
+  c.info.step = world.steps();
+  c.info.t_s = world.time_s();
+  c.info.traffic = std::string(to_string(profile));
+  c.run = run.save();
+  return c;
+}
+
+TEST(CheckpointFile, EveryTruncationIsRefusedAndWholeBytesReadBack) {
+  const Fixture f;
+  const Checkpoint c = checkpoint_after(f, TrafficProfile::faithful, 50);
+  const std::string bytes = encode_checkpoint(c);
+  EXPECT_EQ(bytes.substr(0, 8), "OVTKCKPT");
+  EXPECT_EQ(decode_checkpoint(bytes, "c"), c);
+  for (std::size_t n = 0; n < bytes.size(); n += 7) {
+    EXPECT_THROW((void)decode_checkpoint(std::string_view(bytes).substr(0, n), "c"),
+                 core::StateError)
+        << n;
+  }
+  std::string other = bytes;
+  other[8] = 9;  // the version
+  try {
+    (void)decode_checkpoint(other, "c");
+    FAIL();
+  } catch (const core::StateError& e) {
+    EXPECT_THAT(e.what(), HasSubstr("checkpoint version 9"));
+  }
+  EXPECT_THROW((void)decode_checkpoint("OVTKRPLY", "c"), core::StateError);
+}
+
+TEST(CheckpointFile, ARunStateRestoresOnlyIntoAWorldMadeTheSameWay) {
+  const Fixture f;
+  const Checkpoint c = checkpoint_after(f, TrafficProfile::calm, 30);
+  WorldParams fewer;
+  fewer.traffic.car_count = 5;
+  World world(f.map, f.line, fewer, TrafficProfile::calm, 3);
+  RunOptions opts;
+  opts.restore = c.run;
+  try {
+    Stepper run(world, opts);
+    FAIL();
+  } catch (const core::StateError& e) {
+    EXPECT_THAT(e.what(), HasSubstr("in part 'calm traffic'"));
+    EXPECT_THAT(e.what(), HasSubstr("cars (count): 12 is outside [0, 5]"));
+  }
+  // Every truncation of the run's state is refused (nothing restores half a world).
+  for (std::size_t n = 0; n < c.run.size(); n += 97) {
+    World w(f.map, f.line, WorldParams{}, TrafficProfile::calm, 3);
+    RunOptions o;
+    const std::string part = c.run.substr(0, n);
+    o.restore = part;
+    if (part.empty()) continue;  // empty: nothing to restore
+    EXPECT_THROW(Stepper(w, o), core::StateError) << n;
+  }
+}
+
+TEST(RecordedTraffic, GoesThroughExactlyAndIsCheckedAgainstTheRoad) {
+  const Fixture f;
+  World world(f.map, f.line, WorldParams{}, TrafficProfile::faithful, 5);
+  RecordedTraffic steps;
+  for (int k = 0; k < 200; ++k) {
+    world.step();
+    steps.push_back(world.traffic().cars());
+  }
+  const std::string bytes = encode_recorded_traffic(steps);
+  const RecordedTraffic back = decode_recorded_traffic(bytes, "r", 3, f.map.waypoints.size());
+  ASSERT_EQ(back.size(), steps.size());
+  for (std::size_t k = 0; k < steps.size(); ++k) {
+    ASSERT_EQ(back[k].size(), steps[k].size());
+    for (std::size_t i = 0; i < steps[k].size(); ++i) {
+      EXPECT_EQ(back[k][i].position, steps[k][i].position);
+      EXPECT_EQ(back[k][i].speed_mps, steps[k][i].speed_mps);
+      EXPECT_EQ(back[k][i].map_frenet, steps[k][i].map_frenet);
+      EXPECT_EQ(back[k][i].parked, steps[k][i].parked);
+    }
+  }
+  // On a road of one lane, lane 2 is refused.
+  EXPECT_THROW((void)decode_recorded_traffic(bytes, "r", 1, f.map.waypoints.size()),
+               core::StateError);
+}
+
+}  // namespace
+}  // namespace overtake::sim
