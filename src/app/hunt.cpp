@@ -112,9 +112,35 @@ Combo combo_of(const HuntSpec& spec, std::size_t k) {
           spec.traffic[within % spec.traffic.size()]};
 }
 
+std::string shell_quoted(const std::string& text) {
+  std::string out = "'";
+  for (const char ch : text) out += ch == '\'' ? std::string("'\\''") : std::string(1, ch);
+  return out + "'";
+}
+
+/// The command and flags that give a run the hunt's planner: `drive --policy P` for a
+/// built-in policy, the flag that brings a plugin or a Python planner, `sim --planner-cmd`
+/// for a planner program.
+std::string planner_command(const HuntSpec& spec) {
+  const PlannerEntry* e = spec.planners ? spec.planners->find(spec.policy) : nullptr;
+  const std::string named = e ? shell_quoted(e->name + "=" + e->source) : std::string();
+  if (!e || e->kind == PlannerKind::builtin) return "overtake drive --policy " + spec.policy;
+  switch (e->kind) {
+    case PlannerKind::plugin:
+      return "overtake drive --policy-lib " + named;
+    case PlannerKind::python:
+      return "overtake drive --policy-py " + named;
+    case PlannerKind::program:
+      return "overtake sim --planner-cmd " + named;
+    case PlannerKind::builtin:
+      break;
+  }
+  return "overtake drive --policy " + spec.policy;
+}
+
 std::string rerun_command(const HuntSpec& spec, const Combo& c, const std::string& replay) {
-  std::string cmd = "overtake drive --policy " + spec.policy + " --traffic " + c.traffic +
-                    " --seed " + std::to_string(c.seed) + " --minutes " + fixed(spec.minutes, 1);
+  std::string cmd = planner_command(spec) + " --traffic " + c.traffic + " --seed " +
+                    std::to_string(c.seed) + " --minutes " + fixed(spec.minutes, 1);
   if (c.map) cmd += " --map " + c.map->string();
   if (spec.config) cmd += " --config " + spec.config->string();
   return cmd + " --record " + replay;
@@ -261,6 +287,9 @@ HuntOutcome run_hunt(const HuntSpec& spec, const std::atomic<bool>* stop,
     // One failure per episode: the referee counts a contact (or a speeding, a straddle)
     // again each second it lasts; those repeats are the same failure.
     std::vector<const sim::Incident*> found;
+    // A planner that fails (stalls, crashes, sends what cannot be read) is a failure too.
+    const bool planner_failed = res.report.outcome.end == sim::RunEnd::planner_failed &&
+                                static_cast<int>(out.failures.size()) < spec.failures;
     std::map<std::pair<int, long>, double> last_seen;  // (type, car) -> time of its last count
     for (const sim::Incident& i : res.report.incidents) {
       if (!counts(i, spec.target)) continue;
@@ -274,7 +303,7 @@ HuntOutcome run_hunt(const HuntSpec& spec, const std::atomic<bool>* stop,
         found.push_back(&i);
       }
     }
-    if (found.empty()) {
+    if (found.empty() && !planner_failed) {
       std::filesystem::remove(res.replay, ec);
       continue;
     }
@@ -285,15 +314,22 @@ HuntOutcome run_hunt(const HuntSpec& spec, const std::atomic<bool>* stop,
     if (ec)
       throw std::runtime_error(kept.string() + ": cannot keep the replay (" + ec.message() + ")");
     const replay::Replay r = replay::read_replay(kept);
+    if (planner_failed) found.push_back(nullptr);
     for (const sim::Incident* i : found) {
       HuntFailure f;
       f.run = k;
       f.seed = c.seed;
       f.traffic = c.traffic;
       f.map = map_name(c.map);
-      f.t_s = i->t_s;
-      f.what = what_of(*i);
-      f.situation = situation_of(*i, c.traffic, r, config.road);
+      if (i) {
+        f.t_s = i->t_s;
+        f.what = what_of(*i);
+        f.situation = situation_of(*i, c.traffic, r, config.road);
+      } else {
+        f.t_s = res.report.outcome.t_s;
+        f.what = "the planner failed: " + res.report.outcome.reason.substr(0, 200);
+        f.situation = "the planner failed, " + c.traffic + " traffic";
+      }
       f.replay = (std::filesystem::path("replays") / (base + ".otr")).generic_string();
       f.rerun = rerun_command(spec, c, f.replay);
       const std::size_t index = out.failures.size();
@@ -363,12 +399,16 @@ std::string hunt_markdown(const HuntSpec& spec, const HuntOutcome& o) {
   os << "# hunt: " << spec.policy << "\n\n"
      << o.runs << " runs of " << fixed(spec.minutes, 1) << " min, " << fixed(hours, 2)
      << " simulated hours" << (o.interrupted ? " (interrupted)" : "") << ": " << o.failures.size()
-     << " failures in " << o.groups.size() << " situations.\n\n";
+     << (o.failures.size() == 1 ? " failure" : " failures") << " in " << o.groups.size()
+     << (o.groups.size() == 1 ? " situation" : " situations") << ".\n\n";
   os << "| situation | failures | scenario (reactive / replayed) | reproduce "
         "|\n|---|---:|---|---|\n";
   for (const HuntGroup& g : o.groups) {
-    os << "| " << g.situation << " | " << g.failures.size() << " | " << g.reactive << " / "
-       << g.replayed << " | `" << g.repro << "` |\n";
+    const std::string scenarios = g.reactive.empty() && g.replayed.empty()
+                                      ? "could not cut: " + g.cut_error
+                                      : g.reactive + " / " + g.replayed;
+    os << "| " << g.situation << " | " << g.failures.size() << " | " << scenarios << " | `"
+       << g.repro << "` |\n";
   }
   os << "\n| # | t s | what | seed | traffic | map | replay | run again "
         "|\n|---:|---:|---|---:|---|---|---|---|\n";
@@ -399,6 +439,7 @@ nlohmann::json hunt_json(const HuntSpec& spec, const HuntOutcome& o) {
                       {"failures", g.failures},
                       {"reactive", g.reactive},
                       {"replayed", g.replayed},
+                      {"cut_error", g.cut_error},
                       {"repro", g.repro}});
   }
   return {{"policy", spec.policy},

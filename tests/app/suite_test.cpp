@@ -215,3 +215,27 @@ TEST(Hunt, FindsTheSameFailuresWhateverTheJobsAndEachScenarioReproducesIt) {
 
 }  // namespace
 }  // namespace overtake::app
+
+namespace overtake::app {
+namespace {
+
+TEST(Hunt, CtrlCKeepsWhatWasFound) {
+  TempDir dir;
+  const fs::path out = dir.path() / "hunt";
+  // SIGINT after 3 s of a hunt that would go on for hours.
+  const std::string cmd = "timeout --preserve-status -s INT 3 " + std::string(OVERTAKE_BINARY_DIR) +
+                          "/overtake hunt --policy seed001 --traffic faithful --minutes 2 "
+                          "--failures 1000 --budget-hours 1000 --jobs 2 --quiet --out " +
+                          out.string() + " 2>/dev/null";
+  const int rc = std::system(cmd.c_str());
+  ASSERT_TRUE(WIFEXITED(rc));
+  EXPECT_EQ(WEXITSTATUS(rc), 130);
+  const json j = read_json_file(out / "hunt.json");
+  EXPECT_TRUE(j["interrupted"].get<bool>());
+  EXPECT_GE(j["runs"].get<int>(), 1);
+  for (const json& f : j["failures"]) EXPECT_TRUE(fs::exists(out / f["replay"].get<std::string>()));
+  EXPECT_TRUE(fs::is_empty(out / "runs"));  // no run's replay left half-kept
+}
+
+}  // namespace
+}  // namespace overtake::app

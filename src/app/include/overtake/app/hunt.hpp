@@ -59,7 +59,9 @@ struct HuntGroup {
   std::vector<std::size_t> failures;  ///< indices into HuntOutcome::failures
   std::string reactive;               ///< the first one's cut scenarios (relative paths)
   std::string replayed;
-  std::string repro;  ///< the one-line command that reproduces it (the reactive scenario)
+  std::string cut_error;  ///< why a scenario could not be cut (empty when both were)
+  /// The one-line command that reproduces it: the reactive scenario, or the whole run.
+  std::string repro;
 };
 
 struct HuntProgress {

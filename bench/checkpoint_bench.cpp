@@ -1,0 +1,114 @@
+// World checkpoints (README: "Figures"): taking one (the run's state and the reference
+// planner's, encoded as replays and cut scenarios store it) and restoring one into a new
+// world and policy, 5 minutes into a reference drive in faithful or calm traffic.
+//   ./build/release/overtake_bench --benchmark_filter=Checkpoint
+
+#include <benchmark/benchmark.h>
+
+#include <memory>
+#include <string>
+
+#include "overtake/app/commands.hpp"
+#include "overtake/app/scenario_file.hpp"
+#include "overtake/planner/policy.hpp"
+#include "overtake/sim/checkpoint.hpp"
+#include "overtake/sim/run.hpp"
+#include "overtake/sim/world.hpp"
+
+namespace {
+
+using namespace overtake;
+
+const app::Track& track() {
+  static const auto t = app::load_track(std::nullopt);
+  return *t;
+}
+
+sim::TrafficProfile profile_of(const benchmark::State& state) {
+  return state.range(0) == 0 ? sim::TrafficProfile::faithful : sim::TrafficProfile::calm;
+}
+
+/// A reference drive of 5 minutes, stopped at a cycle's start.
+struct Drive {
+  app::Config config = app::default_config();
+  std::unique_ptr<sim::World> world;
+  std::unique_ptr<planner::Policy> policy;
+  std::unique_ptr<sim::Stepper> run;
+  explicit Drive(sim::TrafficProfile profile) {
+    world = std::make_unique<sim::World>(track().map, track().line, config.world, profile, 7);
+    policy = planner::make_policy("reference", track().line, config.planner);
+    run = std::make_unique<sim::Stepper>(*world, sim::RunOptions{});
+    while (world->time_s() < 300.0) {
+      run->apply(policy->plan(run->telemetry()), 0.0);
+      run->step_one_call();
+    }
+  }
+  [[nodiscard]] sim::Checkpoint take() {
+    sim::Checkpoint c;
+    c.info.step = world->steps();
+    c.info.t_s = world->time_s();
+    c.info.traffic = std::string(sim::to_string(world->traffic().profile()));
+    c.run = run->save();
+    c.planner = planner::save_policy_state(*policy);
+    return c;
+  }
+};
+
+void BM_CheckpointTake(benchmark::State& state) {
+  Drive d(profile_of(state));
+  std::size_t bytes = 0;
+  for (auto _ : state) {
+    const std::string encoded = sim::encode_checkpoint(d.take());
+    bytes = encoded.size();
+    benchmark::DoNotOptimize(encoded.data());
+  }
+  const std::string encoded = sim::encode_checkpoint(d.take());
+  state.counters["bytes"] = static_cast<double>(bytes);
+  state.counters["packed_bytes"] = static_cast<double>(app::pack_blob(encoded).size());
+  state.SetLabel(state.range(0) == 0 ? "faithful" : "calm");
+}
+BENCHMARK(BM_CheckpointTake)->Arg(0)->Arg(1)->Unit(benchmark::kMicrosecond);
+
+void BM_CheckpointRestore(benchmark::State& state) {
+  Drive d(profile_of(state));
+  const std::string encoded = sim::encode_checkpoint(d.take());
+  const app::Config config = app::default_config();
+  for (auto _ : state) {
+    const sim::Checkpoint c = sim::decode_checkpoint(encoded, "bench");
+    sim::World world(track().map, track().line, config.world, profile_of(state), 1);
+    auto policy = planner::make_policy("reference", track().line, config.planner);
+    (void)planner::restore_policy_state(*policy, c.planner);
+    sim::RunOptions opts;
+    opts.restore = c.run;
+    sim::Stepper run(world, opts);
+    benchmark::DoNotOptimize(run.end_step());
+  }
+  state.SetLabel(state.range(0) == 0 ? "faithful" : "calm");
+}
+BENCHMARK(BM_CheckpointRestore)->Arg(0)->Arg(1)->Unit(benchmark::kMicrosecond);
+
+}  // namespace
+
+namespace {
+
+// The state alone, into a world and a policy already made (what restoring costs beyond
+// making them).
+void BM_CheckpointRestoreState(benchmark::State& state) {
+  Drive d(profile_of(state));
+  const std::string encoded = sim::encode_checkpoint(d.take());
+  const app::Config config = app::default_config();
+  sim::World world(track().map, track().line, config.world, profile_of(state), 1);
+  auto policy = planner::make_policy("reference", track().line, config.planner);
+  for (auto _ : state) {
+    const sim::Checkpoint c = sim::decode_checkpoint(encoded, "bench");
+    (void)planner::restore_policy_state(*policy, c.planner);
+    sim::RunOptions opts;
+    opts.restore = c.run;
+    sim::Stepper run(world, opts);
+    benchmark::DoNotOptimize(run.end_step());
+  }
+  state.SetLabel(state.range(0) == 0 ? "faithful" : "calm");
+}
+BENCHMARK(BM_CheckpointRestoreState)->Arg(0)->Arg(1)->Unit(benchmark::kMicrosecond);
+
+}  // namespace
