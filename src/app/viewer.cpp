@@ -107,8 +107,8 @@ std::string load_replay_for_view(const fs::path& replay, bool allow_partial, std
 
 void write_viewer_html(std::string_view replay_bytes, const fs::path& out,
                        std::string_view viewer_template, std::string_view name) {
-  write_file_atomic(out, view::viewer_page(viewer_template, view::ViewerSource::embedded,
-                                           replay_bytes, name));
+  write_file_atomic(
+      out, view::viewer_page(viewer_template, view::ViewerSource::embedded, replay_bytes, name));
 }
 
 std::string bench_replay_name(const std::string& policy, const std::string& traffic,
