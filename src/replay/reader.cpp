@@ -111,6 +111,8 @@ std::string kind_name(std::uint8_t kind) {
       return "incident";
     case 4:
       return "end";
+    case 5:
+      return "checkpoint";
     default:
       return "kind " + std::to_string(kind);
   }

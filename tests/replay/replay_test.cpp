@@ -732,3 +732,61 @@ TEST_F(ReplayTest, BadDifferencesAndIdsAreNamed) {
 
 }  // namespace
 }  // namespace overtake::replay
+
+namespace overtake::replay {
+namespace {
+
+// Checkpoint records (kind 5): read back whole, each belonging to the frame before it; one
+// before any frame, of another step or damaged is named.
+TEST_F(ReplayTest, CheckpointsAreReadBackAndBadOnesNamed) {
+  World world(map_, line_, params_, TrafficProfile::faithful, 1);
+  RunOptions opts;
+  Stepper run(world, opts);
+  run.step();
+  Checkpoint c;
+  c.info.step = world.steps();
+  c.info.t_s = world.time_s();
+  c.info.traffic = "faithful";
+  c.run = run.save();
+  const std::string encoded = encode_checkpoint(c);
+
+  ReplayEncoder enc;
+  std::string records;
+  Frame f = first_frame(world);
+  f.step = world.steps();
+  enc.append_frame(f, records);
+  ReplayEncoder::append_checkpoint(encoded, records);
+  ReplayEncoder::append_end("{}", records);
+  const auto file = dir_ / "ck.otr";
+  write_bytes(file, handmade(header(), records));
+  const Replay r = read_replay(file);
+  ASSERT_EQ(r.checkpoints.size(), 1U);
+  EXPECT_EQ(r.checkpoints[0].step, 1);
+  EXPECT_EQ(r.checkpoints[0].bytes, encoded);
+  EXPECT_EQ(decode_checkpoint(r.checkpoints[0].bytes, "x"), c);
+
+  std::string first;
+  ReplayEncoder::append_checkpoint(encoded, first);
+  write_bytes(file, handmade(header(), first));
+  EXPECT_THAT(error_of(file), HasSubstr("a checkpoint before the first frame"));
+
+  std::string other;
+  ReplayEncoder e2;
+  Frame g = first_frame(world);
+  g.step = 7;
+  e2.append_frame(g, other);
+  ReplayEncoder::append_checkpoint(encoded, other);
+  write_bytes(file, handmade(header(), other));
+  EXPECT_THAT(error_of(file), HasSubstr("a checkpoint of step 1 at frame 7"));
+
+  std::string damaged;
+  ReplayEncoder e3;
+  e3.append_frame(f, damaged);
+  ReplayEncoder::append_checkpoint(encoded.substr(0, encoded.size() / 2), damaged);
+  write_bytes(file, handmade(header(), damaged));
+  EXPECT_THAT(error_of(file), HasSubstr("(checkpoint, at inflated byte"));
+  EXPECT_THAT(error_of(file), HasSubstr("the state ends early"));
+}
+
+}  // namespace
+}  // namespace overtake::replay
