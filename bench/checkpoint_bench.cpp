@@ -69,46 +69,38 @@ void BM_CheckpointTake(benchmark::State& state) {
 }
 BENCHMARK(BM_CheckpointTake)->Arg(0)->Arg(1)->Unit(benchmark::kMicrosecond);
 
+// Restoring a checkpoint: decoding it, then the run's state and the planner's, into a world
+// and a reference planner made for it (state.range(1) == 1) or made once beforehand (0: what
+// restoring costs beyond making them).
 void BM_CheckpointRestore(benchmark::State& state) {
   Drive d(profile_of(state));
   const std::string encoded = sim::encode_checkpoint(d.take());
   const app::Config config = app::default_config();
-  for (auto _ : state) {
-    const sim::Checkpoint c = sim::decode_checkpoint(encoded, "bench");
-    sim::World world(track().map, track().line, config.world, profile_of(state), 1);
-    auto policy = planner::make_policy("reference", track().line, config.planner);
-    (void)planner::restore_policy_state(*policy, c.planner);
-    sim::RunOptions opts;
-    opts.restore = c.run;
-    sim::Stepper run(world, opts);
-    benchmark::DoNotOptimize(run.end_step());
-  }
-  state.SetLabel(state.range(0) == 0 ? "faithful" : "calm");
-}
-BENCHMARK(BM_CheckpointRestore)->Arg(0)->Arg(1)->Unit(benchmark::kMicrosecond);
-
-}  // namespace
-
-namespace {
-
-// The state alone, into a world and a policy already made (what restoring costs beyond
-// making them).
-void BM_CheckpointRestoreState(benchmark::State& state) {
-  Drive d(profile_of(state));
-  const std::string encoded = sim::encode_checkpoint(d.take());
-  const app::Config config = app::default_config();
-  sim::World world(track().map, track().line, config.world, profile_of(state), 1);
+  const bool make = state.range(1) == 1;
+  auto world =
+      std::make_unique<sim::World>(track().map, track().line, config.world, profile_of(state), 1);
   auto policy = planner::make_policy("reference", track().line, config.planner);
   for (auto _ : state) {
+    if (make) {
+      world = std::make_unique<sim::World>(track().map, track().line, config.world,
+                                           profile_of(state), 1);
+      policy = planner::make_policy("reference", track().line, config.planner);
+    }
     const sim::Checkpoint c = sim::decode_checkpoint(encoded, "bench");
     (void)planner::restore_policy_state(*policy, c.planner);
     sim::RunOptions opts;
     opts.restore = c.run;
-    sim::Stepper run(world, opts);
+    sim::Stepper run(*world, opts);
     benchmark::DoNotOptimize(run.end_step());
   }
-  state.SetLabel(state.range(0) == 0 ? "faithful" : "calm");
+  state.SetLabel(std::string(state.range(0) == 0 ? "faithful" : "calm") +
+                 (make ? ", world and planner made" : ", state only"));
 }
-BENCHMARK(BM_CheckpointRestoreState)->Arg(0)->Arg(1)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_CheckpointRestore)
+    ->Args({0, 0})
+    ->Args({1, 0})
+    ->Args({0, 1})
+    ->Args({1, 1})
+    ->Unit(benchmark::kMicrosecond);
 
 }  // namespace

@@ -10,6 +10,7 @@
 #include "overtake/app/cli.hpp"
 #include "overtake/app/commands.hpp"
 #include "overtake/app/io.hpp"
+#include "overtake/app/report.hpp"
 #include "overtake/app/scenario_file.hpp"
 #include "overtake/core/hash.hpp"
 #include "overtake/core/units.hpp"
@@ -34,14 +35,6 @@ constexpr double kSameRunToleranceM = 0.011;
 constexpr double kNearIncidentS = 1.0;
 /// A recorded car this far outside the road is one waiting off it (parked).
 constexpr double kParkedMarginM = 20.0;
-
-std::string fixed(double v, int digits) {
-  std::ostringstream os;
-  os.setf(std::ios::fixed);
-  os.precision(digits);
-  os << v;
-  return os.str();
-}
 
 void check_options(const CutOptions& o) {
   const auto finite_nonneg = [](double v) { return std::isfinite(v) && v >= 0.0; };
@@ -84,7 +77,7 @@ std::string incident_near(const replay::Replay& r, double at_s) {
     text += std::string(" ") + std::string(sim::to_string(best->collision->kind)) +
             (best->collision->at_fault ? " (at fault)" : " (not at fault)");
   }
-  return text + " at t " + fixed(static_cast<double>(best->step) * step_s, 2) + " s";
+  return text + " at t " + fixed_text(static_cast<double>(best->step) * step_s, 2) + " s";
 }
 
 /// Recorded frames as traffic bodies, steps [first, last] (for a run whose planner cannot be
@@ -132,8 +125,8 @@ class Redrive final : public sim::RunObserver {
   void on_frame(const sim::Frame& frame, std::span<const sim::Incident> /*new*/) override {
     const replay::ReplayFrame* rec = recorded(frame.step);
     if (rec && !diverged_ && core::distance(rec->position, frame.position) > kSameRunToleranceM) {
-      diverged_ = "at t " + fixed(world_.time_s(), 2) + " s the ego is " +
-                  fixed(core::distance(rec->position, frame.position), 3) +
+      diverged_ = "at t " + fixed_text(world_.time_s(), 2) + " s the ego is " +
+                  fixed_text(core::distance(rec->position, frame.position), 3) +
                   " m from its recorded place";
     }
     if (recording_) bodies_.push_back(world_.moved_cars());
@@ -216,8 +209,8 @@ CutResult cut_replay(const CutOptions& opts) {
   const double first_t = static_cast<double>(r.frames.front().step) * step_s;
   const double last_t = static_cast<double>(r.frames.back().step) * step_s;
   if (opts.at_s < first_t - kEps || opts.at_s > last_t + kEps) {
-    throw UsageError("--at " + fixed(opts.at_s, 2) + " s is outside the run (" + fixed(first_t, 2) +
-                     " to " + fixed(last_t, 2) + " s)");
+    throw UsageError("--at " + fixed_text(opts.at_s, 2) + " s is outside the run (" +
+                     fixed_text(first_t, 2) + " to " + fixed_text(last_t, 2) + " s)");
   }
   CutResult result;
   result.asked_start_s = std::max(first_t, opts.at_s - opts.before_s - opts.lead_in_s);
@@ -231,12 +224,14 @@ CutResult cut_replay(const CutOptions& opts) {
     if (c.t_s <= result.asked_start_s + kEps) from = &c;
   }
   if (!from) {
-    throw ConfigError(name + ": no checkpoint at or before t " + fixed(result.asked_start_s, 2) +
-                      " s (the first is at " + fixed(r.checkpoints.front().t_s, 2) + " s)");
+    throw ConfigError(name + ": no checkpoint at or before t " +
+                      fixed_text(result.asked_start_s, 2) + " s (the first is at " +
+                      fixed_text(r.checkpoints.front().t_s, 2) + " s)");
   }
   sim::Checkpoint cp;
   try {
-    cp = sim::decode_checkpoint(from->bytes, name + ": checkpoint at t " + fixed(from->t_s, 2));
+    cp =
+        sim::decode_checkpoint(from->bytes, name + ": checkpoint at t " + fixed_text(from->t_s, 2));
   } catch (const core::StateError& e) {
     throw ConfigError(e.what());
   }
@@ -325,13 +320,13 @@ CutResult cut_replay(const CutOptions& opts) {
   ordered_json j;
   j["name"] = opts.name.empty()
                   ? policy_name + ", " + cp.info.traffic + " traffic, seed " +
-                        std::to_string(cp.info.seed) + ", t " + fixed(opts.at_s, 1) + " s"
+                        std::to_string(cp.info.seed) + ", t " + fixed_text(opts.at_s, 1) + " s"
                   : opts.name;
   j["description"] = !opts.description.empty()
                          ? opts.description
                          : "Cut from a run of " + policy_name + " (" + cp.info.traffic +
                                " traffic, seed " + std::to_string(cp.info.seed) + ", map " +
-                               cp.info.track + ") around t " + fixed(opts.at_s, 2) + " s" +
+                               cp.info.track + ") around t " + fixed_text(opts.at_s, 2) + " s" +
                                (result.incident.empty() ? std::string() : ": " + result.incident) +
                                ".";
   j["duration_s"] = std::round((result.end_s - result.start_s) * 1e6) / 1e6;
@@ -424,11 +419,12 @@ Subcommand register_cut(CLI::App& app) {
             const CutResult res = cut_replay(o);
             if (!st->quiet) {
               std::cout << "wrote " << o.out.string() << " (" << res.file_bytes / 1024
-                        << " KiB): t " << fixed(res.start_s, 2) << " to " << fixed(res.end_s, 2)
-                        << " s, " << (o.replayed ? "replayed" : "reactive") << " traffic\n";
+                        << " KiB): t " << fixed_text(res.start_s, 2) << " to "
+                        << fixed_text(res.end_s, 2) << " s, "
+                        << (o.replayed ? "replayed" : "reactive") << " traffic\n";
               if (!res.exact_start) {
-                std::cout << "  starts at the checkpoint at t " << fixed(res.start_s, 2) << " s, "
-                          << fixed(res.asked_start_s - res.start_s, 2)
+                std::cout << "  starts at the checkpoint at t " << fixed_text(res.start_s, 2)
+                          << " s, " << fixed_text(res.asked_start_s - res.start_s, 2)
                           << " s before the asked start\n";
               }
               std::cout << "  planner: " << res.planner_state << "\n";

@@ -15,6 +15,7 @@
 #include "overtake/app/cut.hpp"
 #include "overtake/app/interrupt.hpp"
 #include "overtake/app/io.hpp"
+#include "overtake/app/report.hpp"
 #include "overtake/core/road.hpp"
 #include "overtake/replay/replay.hpp"
 
@@ -32,14 +33,6 @@ constexpr double kSlowMps = 10.0;
 constexpr double kBetweenLanesM = 1.0;
 /// An incident of the same type (and car) within this of the last is a repeat of it.
 constexpr double kRepeatS = 1.5;
-
-std::string fixed(double v, int digits) {
-  std::ostringstream os;
-  os.setf(std::ios::fixed);
-  os.precision(digits);
-  os << v;
-  return os.str();
-}
 
 std::string map_name(const std::optional<std::filesystem::path>& map) {
   return map ? map->string() : std::string("default");
@@ -140,7 +133,7 @@ std::string planner_command(const HuntSpec& spec) {
 
 std::string rerun_command(const HuntSpec& spec, const Combo& c, const std::string& replay) {
   std::string cmd = planner_command(spec) + " --traffic " + c.traffic + " --seed " +
-                    std::to_string(c.seed) + " --minutes " + fixed(spec.minutes, 1);
+                    std::to_string(c.seed) + " --minutes " + fixed_text(spec.minutes, 1);
   if (c.map) cmd += " --map " + c.map->string();
   if (spec.config) cmd += " --config " + spec.config->string();
   return cmd + " --record " + replay;
@@ -338,7 +331,7 @@ HuntOutcome run_hunt(const HuntSpec& spec, const std::atomic<bool>* stop,
       if (is_new) {
         HuntGroup g;
         g.situation = f.situation;
-        const std::string stem = "scenarios/" + slug(base + "-t" + fixed(f.t_s, 2));
+        const std::string stem = "scenarios/" + slug(base + "-t" + fixed_text(f.t_s, 2));
         for (const bool replayed : {false, true}) {
           CutOptions co;
           co.replay = kept;
@@ -350,7 +343,7 @@ HuntOutcome run_hunt(const HuntSpec& spec, const std::atomic<bool>* stop,
           co.map = c.map;
           co.out = spec.out / (stem + (replayed ? ".replayed.json" : ".reactive.json"));
           co.description = "Found by overtake hunt: " + f.what + " of " + spec.policy + " at t " +
-                           fixed(f.t_s, 2) + " s (" + f.situation + "; " + c.traffic +
+                           fixed_text(f.t_s, 2) + " s (" + f.situation + "; " + c.traffic +
                            " traffic, seed " + std::to_string(c.seed) + ", map " + f.map + ").";
           try {
             (void)cut_replay(co);
@@ -397,7 +390,7 @@ std::string hunt_markdown(const HuntSpec& spec, const HuntOutcome& o) {
   std::ostringstream os;
   const double hours = o.simulated_s / 3600.0;
   os << "# hunt: " << spec.policy << "\n\n"
-     << o.runs << " runs of " << fixed(spec.minutes, 1) << " min, " << fixed(hours, 2)
+     << o.runs << " runs of " << fixed_text(spec.minutes, 1) << " min, " << fixed_text(hours, 2)
      << " simulated hours" << (o.interrupted ? " (interrupted)" : "") << ": " << o.failures.size()
      << (o.failures.size() == 1 ? " failure" : " failures") << " in " << o.groups.size()
      << (o.groups.size() == 1 ? " situation" : " situations") << ".\n\n";
@@ -414,8 +407,8 @@ std::string hunt_markdown(const HuntSpec& spec, const HuntOutcome& o) {
         "|\n|---:|---:|---|---:|---|---|---|---|\n";
   for (std::size_t i = 0; i < o.failures.size(); ++i) {
     const HuntFailure& f = o.failures[i];
-    os << "| " << i + 1 << " | " << fixed(f.t_s, 2) << " | " << f.what << " | " << f.seed << " | "
-       << f.traffic << " | " << f.map << " | " << f.replay << " | `" << f.rerun << "` |\n";
+    os << "| " << i + 1 << " | " << fixed_text(f.t_s, 2) << " | " << f.what << " | " << f.seed
+       << " | " << f.traffic << " | " << f.map << " | " << f.replay << " | `" << f.rerun << "` |\n";
   }
   return os.str();
 }

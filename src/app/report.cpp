@@ -281,4 +281,12 @@ std::string format_scorecard(const sim::RunReport& r, const RunProvenance& p) {
   return os.str();
 }
 
+std::string fixed_text(double value, int digits) {
+  std::ostringstream os;
+  os.setf(std::ios::fixed);
+  os.precision(digits);
+  os << value;
+  return os.str();
+}
+
 }  // namespace overtake::app

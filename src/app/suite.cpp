@@ -9,6 +9,7 @@
 
 #include "overtake/app/commands.hpp"
 #include "overtake/app/io.hpp"
+#include "overtake/app/report.hpp"
 #include "overtake/app/scenario_file.hpp"
 #include "overtake/core/road.hpp"
 
@@ -18,14 +19,6 @@ namespace {
 using nlohmann::json;
 
 constexpr int kMaxJobs = 256;
-
-std::string fixed(double v, int digits) {
-  std::ostringstream os;
-  os.setf(std::ios::fixed);
-  os.precision(digits);
-  os << v;
-  return os.str();
-}
 
 /// Follows the ego's lane through the frames of a run.
 class TraceWatch final : public sim::RunObserver {
@@ -60,7 +53,7 @@ std::string incident_text(const sim::Incident& i) {
   if (i.collision) {
     text += std::string(" ") + std::string(sim::to_string(i.collision->kind));
   }
-  return text + " at t " + fixed(i.t_s, 2) + " s";
+  return text + " at t " + fixed_text(i.t_s, 2) + " s";
 }
 
 /// The incidents of the judged part.
@@ -108,15 +101,15 @@ std::vector<std::string> judge_scenario(const sim::Scenario& sc, const sim::RunR
     const auto& reached =
         lane < trace.lane_reached_s.size() ? trace.lane_reached_s[lane] : std::nullopt;
     if (!reached || *reached > ex.reach_lane_by_s + 1e-9) {
-      fails.push_back(
-          "did not reach lane " + std::to_string(*ex.reach_lane) + " by t " +
-          fixed(ex.reach_lane_by_s, 1) + " s" +
-          (reached ? " (reached it at t " + fixed(*reached, 2) + " s)" : std::string(" (never)")));
+      fails.push_back("did not reach lane " + std::to_string(*ex.reach_lane) + " by t " +
+                      fixed_text(ex.reach_lane_by_s, 1) + " s" +
+                      (reached ? " (reached it at t " + fixed_text(*reached, 2) + " s)"
+                               : std::string(" (never)")));
     }
   }
   if (ex.min_distance_m && r.distance_m < *ex.min_distance_m) {
-    fails.push_back("drove " + fixed(r.distance_m, 1) + " m, less than " +
-                    fixed(*ex.min_distance_m, 1) + " m");
+    fails.push_back("drove " + fixed_text(r.distance_m, 1) + " m, less than " +
+                    fixed_text(*ex.min_distance_m, 1) + " m");
   }
   return fails;
 }
@@ -261,7 +254,7 @@ std::string suite_table(const SuiteOutcome& o) {
     if (!v.replay.empty()) why += " (replay: " + v.replay + ")";
     os << "| " << v.file << " | " << v.policy << " | " << (v.pass ? "pass" : "**FAIL**") << " | "
        << v.incidents << " | " << v.collisions << " (" << v.at_fault_collisions << ") | "
-       << fixed(v.distance_m, 1) << " | " << why << " |\n";
+       << fixed_text(v.distance_m, 1) << " | " << why << " |\n";
   }
   os << "\n"
      << o.passed << " passed, " << o.failed << " failed"

@@ -17,6 +17,7 @@
 #include "overtake/app/scenario_file.hpp"
 #include "overtake/replay/replay.hpp"
 #include "overtake/sim/checkpoint.hpp"
+#include "temp_dir.hpp"
 
 namespace overtake::app {
 namespace {
@@ -25,20 +26,9 @@ namespace fs = std::filesystem;
 using nlohmann::json;
 using ::testing::HasSubstr;
 
-class TempDir {
+class TempDir : public test::TempDir {
  public:
-  TempDir() {
-    path_ = fs::temp_directory_path() /
-            ("overtake-cut-" + std::to_string(::getpid()) + "-" + std::to_string(counter_++));
-    fs::remove_all(path_);
-    fs::create_directories(path_);
-  }
-  ~TempDir() { fs::remove_all(path_); }
-  [[nodiscard]] const fs::path& path() const { return path_; }
-
- private:
-  static inline int counter_ = 0;
-  fs::path path_;
+  TempDir() : test::TempDir("overtake-cut") {}
 };
 
 /// Collisions of a report as (time, kind).

@@ -14,6 +14,7 @@
 #include "overtake/app/hunt.hpp"
 #include "overtake/app/io.hpp"
 #include "overtake/app/suite.hpp"
+#include "temp_dir.hpp"
 
 namespace overtake::app {
 namespace {
@@ -22,20 +23,9 @@ namespace fs = std::filesystem;
 using nlohmann::json;
 using ::testing::HasSubstr;
 
-class TempDir {
+class TempDir : public test::TempDir {
  public:
-  TempDir() {
-    path_ = fs::temp_directory_path() /
-            ("overtake-suite-" + std::to_string(::getpid()) + "-" + std::to_string(counter_++));
-    fs::remove_all(path_);
-    fs::create_directories(path_);
-  }
-  ~TempDir() { fs::remove_all(path_); }
-  [[nodiscard]] const fs::path& path() const { return path_; }
-
- private:
-  static inline int counter_ = 0;
-  fs::path path_;
+  TempDir() : test::TempDir("overtake-suite") {}
 };
 
 sim::Incident collision(double t, sim::CollisionKind kind, bool at_fault) {

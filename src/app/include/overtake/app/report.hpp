@@ -35,6 +35,9 @@ struct RunProvenance {
   std::string planner_log;
 };
 
+/// `value` with `digits` decimals (for messages and tables).
+[[nodiscard]] std::string fixed_text(double value, int digits);
+
 /// One incident as the report lists it: type, t_s, s_m, lane, value (in `unit`), unit.
 [[nodiscard]] nlohmann::json incident_to_json(const sim::Incident& incident);
 
