@@ -24,6 +24,21 @@
 
 namespace overtake::app {
 
+std::vector<std::string> split_list(const std::string& text) {
+  std::vector<std::string> out;
+  std::string cur;
+  for (char c : text) {
+    if (c == ',') {
+      if (!cur.empty()) out.push_back(cur);
+      cur.clear();
+    } else if (c != ' ') {
+      cur += c;
+    }
+  }
+  if (!cur.empty()) out.push_back(cur);
+  return out;
+}
+
 std::string policy_help() {
   std::string out = "Policy (built-in planner). Available:";
   for (const auto& p : planner::list_policies()) out += "\n  " + p.name + ": " + p.summary;

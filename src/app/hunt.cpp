@@ -525,14 +525,7 @@ Subcommand register_hunt(CLI::App& app) {
             }
           }
         }
-        spec.traffic.clear();
-        {
-          std::string cur;
-          std::istringstream in(st->traffic);
-          while (std::getline(in, cur, ',')) {
-            if (!cur.empty()) spec.traffic.push_back(cur);
-          }
-        }
+        spec.traffic = split_list(st->traffic);
         if (!st->config.empty()) spec.config = st->config;
         spec.out = st->out;
         const bool draw = !st->quiet && stderr_is_terminal();

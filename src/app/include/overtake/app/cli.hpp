@@ -83,6 +83,9 @@ void print_live_address(const std::string& url);
 
 /// Whether progress lines may be drawn (stderr is a terminal).
 [[nodiscard]] bool stderr_is_terminal();
+/// A comma-separated list of names (policies, traffic profiles); spaces and empty items
+/// are dropped.
+[[nodiscard]] std::vector<std::string> split_list(const std::string& text);
 /// The --policy flag's help: every built-in policy with its summary.
 [[nodiscard]] std::string policy_help();
 
