@@ -25,13 +25,11 @@ inline std::filesystem::path overtake_binary() {
   return std::filesystem::path(OVERTAKE_BINARY_DIR) / "overtake";
 }
 
-/// Starts the binary with these arguments, its stdout into `out` (a path, e.g. /dev/full) and
-/// its stderr into `err`; returns its pid.
-/// With `out_fd` >= 0, stdout is that descriptor instead (e.g. a pipe's write end).
-inline pid_t start_overtake(const std::vector<std::string>& args, const std::filesystem::path& out,
-                            const std::filesystem::path& err, int out_fd = -1) {
-  std::vector<std::string> all = {overtake_binary().string()};
-  all.insert(all.end(), args.begin(), args.end());
+/// Starts the program all[0] (a path) with arguments all[1..], its stdout into `out` (a path, e.g.
+/// /dev/full) and its stderr into `err`; returns its pid. With `out_fd` >= 0, stdout is that
+/// descriptor instead (e.g. a pipe's write end).
+inline pid_t start_command(std::vector<std::string> all, const std::filesystem::path& out,
+                           const std::filesystem::path& err, int out_fd = -1) {
   std::vector<char*> argv;
   for (auto& a : all) argv.push_back(a.data());
   argv.push_back(nullptr);
@@ -46,8 +44,16 @@ inline pid_t start_overtake(const std::vector<std::string>& args, const std::fil
   pid_t pid = -1;
   const int rc = posix_spawn(&pid, argv[0], &files, nullptr, argv.data(), environ);
   posix_spawn_file_actions_destroy(&files);
-  if (rc != 0) throw std::runtime_error("cannot start " + overtake_binary().string());
+  if (rc != 0) throw std::runtime_error("cannot start " + all.front());
   return pid;
+}
+
+/// start_command of the overtake binary with these arguments.
+inline pid_t start_overtake(const std::vector<std::string>& args, const std::filesystem::path& out,
+                            const std::filesystem::path& err, int out_fd = -1) {
+  std::vector<std::string> all = {overtake_binary().string()};
+  all.insert(all.end(), args.begin(), args.end());
+  return start_command(std::move(all), out, err, out_fd);
 }
 
 /// The child's exit status (1000 + the signal when one killed it), or nullopt when it is

@@ -8,6 +8,9 @@
 // anchors on the target lane, spacing the new points so that the speed changes with bounded
 // acceleration and jerk.
 //
+// It reads only what version 2.0 of the header has, so that the tests can also build it
+// against the frozen 2.0 header (tests/plugin/abi/v2_0) as a plugin nobody rebuilt.
+//
 // Build (needs only the installed header):
 //   g++ -std=c++17 -O2 -shared -fPIC -I<prefix>/include keep_lane.cpp -o libkeep_lane.so
 
@@ -16,6 +19,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
+#include <cstdio>
 #include <exception>
 #include <new>
 #include <vector>
@@ -396,7 +400,7 @@ struct overtake_plugin_handle {
 };
 
 namespace {
-const overtake_plugin_info_t kInfo = {
+const overtake_plugin_info kInfo = {
     "keep_lane",
     "follows its lane at 49 mph with a time gap to the car ahead; overtakes when held up"};
 }  // namespace
@@ -405,17 +409,25 @@ int overtake_plugin_abi_version(void) {
   return OVERTAKE_PLUGIN_ABI_VERSION;
 }
 
-const overtake_plugin_info_t* overtake_plugin_info(void) {
+const overtake_plugin_info* overtake_plugin_get_info(void) {
   return &kInfo;
 }
 
-overtake_plugin_handle* overtake_plugin_create(const overtake_plugin_setup* setup,
-                                               const char** error) {
+overtake_plugin_handle* overtake_plugin_create(const overtake_plugin_setup* setup, char* error,
+                                               size_t error_size) {
   auto* h = new (std::nothrow) overtake_plugin_handle;
-  if (h == nullptr) return nullptr;
+  if (h == nullptr) {
+    std::snprintf(error, error_size, "keep_lane: out of memory");
+    return nullptr;
+  }
   if (setup->lane_count < 1 || !(setup->lane_width > 0.0) || !(setup->step_time > 0.0) ||
       !h->road.build(*setup)) {
-    if (error != nullptr) *error = "keep_lane: the map or the road is unusable";
+    // The reason with the numbers that made it so: the buffer is the caller's.
+    std::snprintf(error, error_size,
+                  "keep_lane: the map or the road is unusable (%zu waypoints, loop of %g m, "
+                  "%d lanes of %g m, step %g s)",
+                  setup->waypoint_count, setup->max_s, setup->lane_count, setup->lane_width,
+                  setup->step_time);
     delete h;
     return nullptr;
   }

@@ -6,8 +6,9 @@
 // Build (Debian: libboost-dev, nlohmann-json3-dev):
 //   g++ -std=c++17 -O2 planner.cpp -o planner -pthread
 // Run it under overtake (a network of its own per run, so runs go in parallel):
-//   overtake sim --planner-cmd "./planner ../../data/tracks/default.csv" --planner-cwd examples/program
-//   overtake bench --planner-cmd "mine=./planner ../../data/tracks/default.csv"
+//   overtake sim --planner-cmd "./planner ../../data/tracks/default.csv" --planner-cwd
+//   examples/program overtake bench --planner-cmd "./planner ../../data/tracks/default.csv"
+//   --planner-name mine
 //                  --planner-cwd examples/program --policies walkthrough --seeds 1-10
 
 #include <algorithm>
@@ -108,8 +109,10 @@ struct Planner {
       const double v = std::hypot(double(c[3]), double(c[4]));
       double gap = double(c[5]) + v * ahead_s - s0;
       gap = std::fmod(gap + 1.5 * map.length, map.length) - 0.5 * map.length;
-      if (gap >= 0) front = std::min(front, gap);
-      else back = std::min(back, -gap);
+      if (gap >= 0)
+        front = std::min(front, gap);
+      else
+        back = std::min(back, -gap);
     }
     return {front, back};
   }
@@ -136,9 +139,12 @@ struct Planner {
       }
     }
     if (settle > 0) --settle;
-    if (front < 15.0) speed = std::max(0.0, speed - 2.0 * kSpeedStep);
-    else if (held_up) speed = std::max(0.0, speed - kSpeedStep);
-    else speed = std::min(kTopSpeed, speed + kSpeedStep);
+    if (front < 15.0)
+      speed = std::max(0.0, speed - 2.0 * kSpeedStep);
+    else if (held_up)
+      speed = std::max(0.0, speed - kSpeedStep);
+    else
+      speed = std::min(kTopSpeed, speed + kSpeedStep);
 
     // Anchors: the kept path's last two points, then three points ahead in the lane.
     double x0 = t["x"], y0 = t["y"], yaw = double(t["yaw"]) * kPi / 180.0;
@@ -207,7 +213,8 @@ int main(int argc, char** argv) {
       if (msg.rfind("42", 0) == 0 && open != std::string::npos &&
           msg.find("null") == std::string::npos) {
         const json event = json::parse(msg.substr(open));
-        if (event[0] == "telemetry") reply = "42[\"control\"," + planner.plan(event[1]).dump() + "]";
+        if (event[0] == "telemetry")
+          reply = "42[\"control\"," + planner.plan(event[1]).dump() + "]";
       }
       std::cout << msg.substr(0, 80) << std::endl;
       stream.text(true);

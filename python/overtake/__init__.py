@@ -52,6 +52,10 @@ class World(_World):
     call's), done, end ("running", "completed", "planner_failed") and ended_early (a reason
     or None). A malformed path (NaN, unequal lengths) ends the run as planner_failed, as in a
     drive. ``report()`` is the run's report, the dict ``overtake drive --json`` writes.
+
+    A World is for one thread at a time: a call made while another call of the same World
+    has not returned (from another thread) raises RuntimeError. Several Worlds may be used
+    from several threads.
     """
 
     def __init__(self, map=None, seed=1, traffic="faithful", config=None,
@@ -68,7 +72,10 @@ def drive(policy, map=None, seed=1, traffic="faithful", minutes=30.0, config=Non
     policy: a built-in policy's name ("reference", "walkthrough", ...) or a callable taking
     the telemetry dict and returning (path_x, path_y); a class is instantiated once per run.
     name: the planner's name in the report (default: the callable's __name__). An exception
-    in the callable ends the run as planner_failed, with the Python error in ``ended_early``.
+    in the callable ends the run as planner_failed, with the Python error in ``ended_early``;
+    but KeyboardInterrupt and SystemExit stop the run and are raised again from drive() (the
+    same exception). Ctrl-C stops a drive of a built-in policy too, within a fraction of a
+    second, with KeyboardInterrupt.
     """
     return _drive(policy, map=_path(map), seed=seed, traffic=traffic, minutes=float(minutes),
                   config=_path(config), steps_per_call=steps_per_call, name=name)

@@ -1,9 +1,11 @@
 #include <algorithm>
 #include <cmath>
+#include <optional>
 #include <sstream>
 
 #include "overtake/app/commands.hpp"
 #include "overtake/app/map_file.hpp"
+#include "overtake/app/plan_watch.hpp"
 #include "overtake/app/program_planner.hpp"
 #include "overtake/app/resources.hpp"
 #include "overtake/app/scenario_file.hpp"
@@ -223,6 +225,11 @@ DriveResult drive_on(const Track& track, const Config& config, const DriveOption
       run.planner_state = [&policy] { return planner::save_policy_state(*policy); };
     }
     const auto& tap = opts.telemetry_tap;
+    // Planners from outside that share this process are watched: a plan() call past the
+    // reply timeout, or still running after Ctrl-C, is interrupted (or the process ends).
+    if (entry->watched()) {
+      policy = watch_policy(std::move(policy), entry->label(), entry->reply_timeout_s, run.stop);
+    }
     result.report = sim::run_drive(
         world,
         [&policy, &tap, &world](const core::Telemetry& t) {

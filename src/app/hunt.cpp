@@ -124,7 +124,8 @@ std::string planner_command(const HuntSpec& spec) {
     case PlannerKind::python:
       return "overtake drive --policy-py " + named;
     case PlannerKind::program:
-      return "overtake sim --planner-cmd " + named;
+      return "overtake sim --planner-cmd " + shell_quoted(e->source) + " --planner-name " +
+             shell_quoted(e->name);
     case PlannerKind::builtin:
       break;
   }

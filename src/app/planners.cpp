@@ -2,10 +2,12 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cstddef>
 
 #include <nlohmann/json.hpp>
 
 #include "overtake/app/commands.hpp"
+#include "overtake/app/program_planner.hpp"
 #include "overtake/plugin/plugin.hpp"
 #include "overtake/python/python_policy.hpp"
 
@@ -19,13 +21,63 @@ bool valid_name(std::string_view name) {
   });
 }
 
+// The words of a shell command, split where sh would split them (quotes and backslashes
+// kept out of the split, not interpreted further): enough to find the program it runs.
+std::vector<std::string> shell_words(const std::string& command) {
+  std::vector<std::string> words;
+  std::string word;
+  bool in_word = false;
+  char quote = 0;
+  for (std::size_t i = 0; i < command.size(); ++i) {
+    const char c = command[i];
+    if (quote != 0) {
+      if (c == quote)
+        quote = 0;
+      else
+        word += c;
+      continue;
+    }
+    if (c == '\'' || c == '"') {
+      quote = c;
+      in_word = true;
+    } else if (c == '\\' && i + 1 < command.size()) {
+      word += command[++i];
+      in_word = true;
+    } else if (c == ' ' || c == '\t' || c == '\n') {
+      if (in_word) words.push_back(word);
+      word.clear();
+      in_word = false;
+    } else {
+      word += c;
+      in_word = true;
+    }
+  }
+  if (in_word) words.push_back(word);
+  return words;
+}
+
+// `NAME=value` as sh reads a word before the command: a variable for the command.
+bool is_assignment(const std::string& word) {
+  const std::size_t eq = word.find('=');
+  if (eq == std::string::npos || eq == 0) return false;
+  if (std::isdigit(static_cast<unsigned char>(word[0]))) return false;
+  return std::all_of(word.begin(), word.begin() + static_cast<std::ptrdiff_t>(eq), [](char c) {
+    return std::isalnum(static_cast<unsigned char>(c)) || c == '_';
+  });
+}
+
+// The program a command runs: its first word after variable assignments and `exec`/`env`.
+std::string program_of_command(const std::string& command) {
+  for (const std::string& w : shell_words(command)) {
+    if (is_assignment(w) || w == "exec" || w == "env") continue;
+    return w;
+  }
+  return {};
+}
+
 // The name a command gives when none is: its program's file name.
 std::string name_of_command(const std::string& command) {
-  std::size_t b = command.find_first_not_of(" \t");
-  if (b == std::string::npos) return {};
-  std::size_t e = command.find_first_of(" \t", b);
-  std::string first = command.substr(b, e == std::string::npos ? std::string::npos : e - b);
-  std::string stem = std::filesystem::path(first).filename().string();
+  const std::string stem = std::filesystem::path(program_of_command(command)).filename().string();
   std::string out;
   for (char c : stem) out += valid_name(std::string(1, c)) ? c : '_';
   return out;
@@ -53,8 +105,24 @@ std::string PlannerEntry::describe() const {
   if (program) {
     j["cwd"] = program->cwd.string();
     j["port"] = program->port;
+    // Where it ran: on the host's network, whatever listened on the port was taken for it.
+    j["network"] = program_isolated(*this) ? "isolated" : "host";
   }
   return j.dump();
+}
+
+std::string PlannerEntry::label() const {
+  switch (kind) {
+    case PlannerKind::plugin:
+      return "the plugin " + name + " (" + source + ")";
+    case PlannerKind::python:
+      return "the Python planner " + name + " (" + source + ")";
+    case PlannerKind::program:
+      return "the planner program " + name + " (" + source + ")";
+    case PlannerKind::builtin:
+      break;
+  }
+  return "the policy " + name;
 }
 
 std::string chosen_policy(const PlannerCatalog& catalog, const std::string& policy, bool given) {
@@ -148,11 +216,30 @@ void add_planner_flags(CLI::App& cmd, PlannerFlags& f, PlannerFlagSet which) {
         ->allow_extra_args(false)
         ->take_all();
   }
-  if (which == PlannerFlagSet::in_process) return;
+  const auto reply_timeout = [&] {
+    cmd.add_option("--planner-reply-timeout", f.reply_timeout_s,
+                   "Seconds a planner has for each reply: a --planner-cmd program's, or one\n"
+                   "plan() call of a --policy-py planner (then interrupted: its run fails) or\n"
+                   "a --policy-lib plugin (which cannot be stopped in-process: overtake ends,\n"
+                   "keeping every finished run); Ctrl-C stops either within a second")
+        ->check(CLI::Range(0.01, 3600.0))
+        ->capture_default_str();
+  };
+  if (which == PlannerFlagSet::in_process) {
+    reply_timeout();
+    return;
+  }
   cmd.add_option("--planner-cmd", f.commands,
-                 "[NAME=]CMD: a planner program written for the original simulator; overtake\n"
-                 "starts it for each run (sh -c CMD) in a network namespace of its own, drives it\n"
-                 "over the protocol on --planner-port, and stops it afterwards")
+                 "CMD: a planner program written for the original simulator; overtake starts it\n"
+                 "for each run (sh -c CMD, so 'OMP_NUM_THREADS=1 ./planner' sets a variable)\n"
+                 "in namespaces of its own, drives it over the protocol on --planner-port, and\n"
+                 "stops it and everything it started afterwards; named after its program\n"
+                 "unless --planner-name")
+      ->allow_extra_args(false)
+      ->take_all();
+  cmd.add_option("--planner-name", f.names,
+                 "NAME: the name of a --planner-cmd program in reports and tables; give one\n"
+                 "per --planner-cmd, in the same order")
       ->allow_extra_args(false)
       ->take_all();
   cmd.add_option("--planner-cwd", f.cwd, "Working directory of --planner-cmd programs")
@@ -176,10 +263,7 @@ void add_planner_flags(CLI::App& cmd, PlannerFlags& f, PlannerFlagSet which) {
                  "Seconds a --planner-cmd program has to start listening")
       ->check(CLI::Range(0.1, 3600.0))
       ->capture_default_str();
-  cmd.add_option("--planner-reply-timeout", f.reply_timeout_s,
-                 "Seconds a --planner-cmd program has for each reply")
-      ->check(CLI::Range(0.01, 3600.0))
-      ->capture_default_str();
+  reply_timeout();
 }
 
 std::shared_ptr<const PlannerCatalog> catalog_from_flags(const PlannerFlags& f) {
@@ -197,6 +281,7 @@ std::shared_ptr<const PlannerCatalog> catalog_from_flags(const PlannerFlags& f) 
     e.name = name.empty() ? loaded.name : name;
     e.kind = PlannerKind::plugin;
     e.source = path;
+    e.reply_timeout_s = f.reply_timeout_s;
     e.make = std::move(loaded.make);
     catalog->add(std::move(e), "--policy-lib");
   }
@@ -213,16 +298,29 @@ std::shared_ptr<const PlannerCatalog> catalog_from_flags(const PlannerFlags& f) 
     e.name = name.empty() ? loaded.name : name;
     e.kind = PlannerKind::python;
     e.source = spec;
+    e.reply_timeout_s = f.reply_timeout_s;
     e.make = std::move(loaded.make);
     catalog->add(std::move(e), "--policy-py");
   }
-  for (const auto& text : f.commands) {
-    auto [name, command] = split_named(text);
+  if (!f.names.empty() && f.names.size() != f.commands.size()) {
+    throw UsageError("--planner-name: " + std::to_string(f.names.size()) + " names for " +
+                     std::to_string(f.commands.size()) +
+                     " --planner-cmd programs: give one per program, in the same order");
+  }
+  for (std::size_t i = 0; i < f.commands.size(); ++i) {
+    const std::string& command = f.commands[i];
+    const std::string name = f.names.empty() ? std::string() : f.names[i];
     if (command.find_first_not_of(" \t") == std::string::npos) {
-      throw UsageError("--planner-cmd: no command in '" + text + "'");
+      throw UsageError("--planner-cmd: no command in '" + command + "'");
+    }
+    if (program_of_command(command).empty()) {
+      throw UsageError("--planner-cmd: '" + command +
+                       "' only sets shell variables and runs no program (name a planner with "
+                       "--planner-name NAME; --planner-cmd takes the command alone)");
     }
     PlannerEntry e;
     e.name = name.empty() ? name_of_command(command) : name;
+    e.reply_timeout_s = f.reply_timeout_s;
     e.kind = PlannerKind::program;
     e.source = command;
     ProgramSpec p;

@@ -8,6 +8,7 @@
 #include <cmath>
 #include <map>
 #include <mutex>
+#include <optional>
 #include <thread>
 
 #include "overtake/protocol/client.hpp"
@@ -81,7 +82,16 @@ sim::RunReport run_program(const PlannerEntry& entry, const std::filesystem::pat
   po.log = log;
   po.isolated = isolated;
   po.log_max_bytes = static_cast<long long>(spec.log_max_mb * 1024.0 * 1024.0);
-  PlannerProcess process(po);
+  // A start that fails (namespaces refused after the probe passed, a keeper too slow on a
+  // loaded machine) fails this run only: the bench goes on with the others.
+  std::optional<PlannerProcess> started;
+  try {
+    started.emplace(po);
+  } catch (const std::runtime_error& e) {
+    return failed_at_start(world, run,
+                           std::string("cannot start the planner program: ") + e.what());
+  }
+  PlannerProcess& process = *started;
   const std::string see_log = " (its output: " + log.string() + ")";
 
   protocol::ClientOptions client;

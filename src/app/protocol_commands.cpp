@@ -2,6 +2,7 @@
 // (our simulator for any planner written for the original), over the original protocol.
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <csignal>
@@ -12,12 +13,12 @@
 #include <thread>
 
 #include <boost/asio/io_context.hpp>
-#include <boost/asio/signal_set.hpp>
 
 #include "overtake/app/cli.hpp"
 #include "overtake/app/commands.hpp"
 #include "overtake/app/interrupt.hpp"
 #include "overtake/app/io.hpp"
+#include "overtake/app/plan_watch.hpp"
 #include "overtake/app/program_planner.hpp"
 #include "overtake/app/progress.hpp"
 #include "overtake/app/viewer.hpp"
@@ -80,6 +81,16 @@ int cmd_serve(const ServeArgs& a) {
   setup.params = config.planner;
   setup.policy = policy;
   setup.factory = entry->make;
+  // Ctrl-C and SIGTERM set a flag (not an asio signal handler, which the one thread that
+  // serves would have to run): a planner from outside that hangs in that thread is then
+  // still interrupted, or the process ended, within a second, like a hang past its timeout.
+  const InterruptScope interrupt;
+  if (entry->watched()) {
+    setup.factory = [make = entry->make, label = entry->label(), timeout = entry->reply_timeout_s](
+                        const core::ReferenceLine& line, const planner::PlannerParams& params) {
+      return watch_policy(make(line, params), label, timeout, &InterruptScope::flag());
+    };
+  }
   protocol::ServeOptions opts;
   opts.host = a.host;
   opts.port = static_cast<std::uint16_t>(a.port);
@@ -89,11 +100,27 @@ int cmd_serve(const ServeArgs& a) {
   opts.log = protocol::stderr_log(!a.quiet);
 
   boost::asio::io_context ioc;
-  boost::asio::signal_set signals(ioc, SIGINT, SIGTERM);
-  signals.async_wait([&ioc, &a](const boost::system::error_code& ec, int) {
-    if (ec) return;
-    if (!a.quiet) std::fprintf(stderr, "stopping\n");
-    ioc.stop();
+  // Stops the server when the flag is set; ends with this function, however it ends.
+  struct Stopper {
+    std::atomic<bool> served{false};
+    std::thread thread;
+    Stopper() = default;
+    Stopper(const Stopper&) = delete;
+    Stopper& operator=(const Stopper&) = delete;
+    ~Stopper() {
+      served = true;
+      if (thread.joinable()) thread.join();
+    }
+  } stopper;
+  stopper.thread = std::thread([&ioc, &a, &served = stopper.served] {
+    while (!served.load()) {
+      if (InterruptScope::flag().load()) {
+        if (!a.quiet) std::fprintf(stderr, "stopping\n");
+        ioc.stop();
+        return;
+      }
+      std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    }
   });
   protocol::run_server(ioc, setup, opts);
   return kExitOk;

@@ -38,12 +38,17 @@ std::string steps_text(const RunProvenance& p) {
          std::to_string(p.max_steps_per_call);
 }
 
+// Null when the planner never said how it planned (a program over the protocol): its cycles
+// are not known to be normal. A run that mixes both keeps the known counts and adds how many
+// were unknown (only then, so that other reports keep their bytes).
 json plan_status_json(const sim::RunReport& r) {
+  if (!r.plan_status_known()) return nullptr;
   json cycles = json::object();
   for (std::size_t i = 0; i < core::kPlanStatusCount; ++i) {
     cycles[std::string(core::to_string(static_cast<core::PlanStatus>(i)))] =
         r.plan_status_cycles[i];
   }
+  if (r.plan_status_unknown_cycles > 0) cycles["unknown"] = r.plan_status_unknown_cycles;
   return {
       {"cycles", cycles},
       {"first_reason", r.first_plan_reason.empty() ? json(nullptr) : json(r.first_plan_reason)}};
@@ -182,6 +187,13 @@ std::string format_scorecard(const sim::RunReport& r, const RunProvenance& p) {
        << p.planner_url;
   }
   os << ", " << p.traffic << " traffic, seed " << p.seed << ", map " << p.map_path << "\n";
+  if (!p.planner.empty()) {
+    const json what = json::parse(p.planner);
+    if (what.value("network", "") == "host") {
+      os << "  network            the host's: whatever listened on port " << what.value("port", 0)
+         << " was taken for the planner\n";
+    }
+  }
   if (r.outcome.ended_early()) os << "  ENDED EARLY: " << sim::ended_early_text(r.outcome) << "\n";
   os << printf_string("  simulated         %8.1f min   distance %8.2f mi   mean speed %6.2f mph\n",
                       r.duration_s / 60.0, core::metres_to_miles(r.distance_m),
@@ -247,12 +259,14 @@ std::string format_scorecard(const sim::RunReport& r, const RunProvenance& p) {
   }
   const long unusual = r.plan_status_cycles[static_cast<std::size_t>(core::PlanStatus::least_bad)] +
                        r.plan_status_cycles[static_cast<std::size_t>(core::PlanStatus::fallback)];
+  // Nothing when no cycle was left normal planning, or no cycle said how it planned (then
+  // `unusual` is 0: unknown cycles are not counted by status). Shares are of the cycles whose
+  // status is known.
   if (unusual > 0) {
+    const long known = r.planner_cycles - r.plan_status_unknown_cycles;
     const auto share = [&](core::PlanStatus s) {
       const long n = r.plan_status_cycles[static_cast<std::size_t>(s)];
-      return r.planner_cycles > 0
-                 ? 100.0 * static_cast<double>(n) / static_cast<double>(r.planner_cycles)
-                 : 0.0;
+      return known > 0 ? 100.0 * static_cast<double>(n) / static_cast<double>(known) : 0.0;
     };
     os << printf_string(
         "  plan status        normal %.1f%%   least-bad %.1f%%   fallback %.1f%% of cycles\n",

@@ -148,8 +148,12 @@ RunRow read_run_row(const json& row, std::string_view where) {
                                 ? r.number(timing, "wall_p99_us", "timing.wall_p99_us")
                                 : out.planner_p99_us;
   out.planner_cycles = r.amount("planner_cycles");
-  // Rows written before plan statuses were kept have none: all their cycles were normal.
-  if (row.contains("plan_status")) {
+  // Rows written before plan statuses were kept have none: all their cycles were normal. A
+  // null one: the planner did not say (a program over the protocol).
+  if (row.contains("plan_status") && row["plan_status"].is_null()) {
+    out.plan_status_known = false;
+    out.plan_status_unknown_cycles = out.planner_cycles;
+  } else if (row.contains("plan_status")) {
     const json& cycles =
         r.object(r.object(row, "plan_status", "plan_status"), "cycles", "plan_status.cycles");
     for (std::size_t i = 0; i < core::kPlanStatusCount; ++i) {
@@ -157,6 +161,9 @@ RunRow read_run_row(const json& row, std::string_view where) {
       out.plan_status_cycles[i] =
           cycles.contains(name) ? r.amount(cycles, name, "plan_status.cycles." + name) : 0.0;
     }
+    out.plan_status_unknown_cycles = cycles.contains("unknown")
+                                         ? r.amount(cycles, "unknown", "plan_status.cycles.unknown")
+                                         : 0.0;
   }
   out.ended_early = row.contains("ended_early") && !row["ended_early"].is_null();
   return out;

@@ -70,10 +70,11 @@ json summary_row(const std::string& policy, const std::string& traffic,
                  const std::vector<const RunRow*>& mine) {
   const std::string key = policy + "|" + traffic;
   double miles = 0.0, seconds = 0.0, peak_acc = 0.0, peak_jerk = 0.0, strict_acc = 0.0,
-         strict_jerk = 0.0, worst_p99 = 0.0, worst_wall_p99 = 0.0, cycles = 0.0;
+         strict_jerk = 0.0, worst_p99 = 0.0, worst_wall_p99 = 0.0, known_cycles = 0.0;
   std::vector<double> free_miles, p50s, speed_num, speed_den;
   std::array<double, sim::kIncidentTypeCount> counts{};
   std::array<double, core::kPlanStatusCount> status_cycles{};
+  bool some_unknown = false;  // a row, or some cycles of one, whose plan status is unknown
   std::size_t ended_early = 0;
   for (const RunRow* r : mine) {
     miles += r->miles;
@@ -87,9 +88,12 @@ json summary_row(const std::string& policy, const std::string& traffic,
     p50s.push_back(r->planner_p50_us);
     worst_p99 = std::max(worst_p99, r->planner_p99_us);
     worst_wall_p99 = std::max(worst_wall_p99, r->planner_wall_p99_us);
-    cycles += r->planner_cycles;
-    for (std::size_t i = 0; i < status_cycles.size(); ++i)
-      status_cycles[i] += r->plan_status_cycles[i];
+    some_unknown = some_unknown || r->plan_status_unknown_cycles > 0 || !r->plan_status_known;
+    if (r->plan_status_known) {
+      known_cycles += r->planner_cycles - r->plan_status_unknown_cycles;
+      for (std::size_t i = 0; i < status_cycles.size(); ++i)
+        status_cycles[i] += r->plan_status_cycles[i];
+    }
     if (r->ended_early) ++ended_early;
     const MetricTerms speed = terms(Metric::mean_speed_mph, *r);
     speed_num.push_back(speed.numerator);
@@ -103,15 +107,22 @@ json summary_row(const std::string& policy, const std::string& traffic,
     per100_ci[incident_name(t)] = pair_of(rate_interval(counts[t], miles, 100.0));
     total_incidents += counts[t];
   }
-  json status_share = json::object();
-  for (std::size_t i = 0; i < status_cycles.size(); ++i) {
-    const std::string name(core::to_string(static_cast<core::PlanStatus>(i)));
-    status_share[name] = cycles > 0 ? status_cycles[i] / cycles : 0.0;
+  // The shares of the cycles whose status is known. Null when none is but some cycles are
+  // unknown (a planner over the protocol does not say how it planned: its cycles are not
+  // normal ones). A group that mixes both (it should not: one planner per policy) gets the
+  // shares of the runs that say; those that do not are left out, not counted as normal.
+  json status_share = nullptr;
+  if (known_cycles > 0 || !some_unknown) {
+    status_share = json::object();
+    for (std::size_t i = 0; i < status_cycles.size(); ++i) {
+      const std::string name(core::to_string(static_cast<core::PlanStatus>(i)));
+      status_share[name] = known_cycles > 0 ? status_cycles[i] / known_cycles : 0.0;
+    }
+    // Earlier rows without statuses: their cycles are normal ones.
+    status_share["normal"] = known_cycles > 0 ? 1.0 - status_share["least_bad"].get<double>() -
+                                                    status_share["fallback"].get<double>()
+                                              : 0.0;
   }
-  // Earlier rows without statuses: their cycles are normal ones.
-  status_share["normal"] = cycles > 0 ? 1.0 - status_share["least_bad"].get<double>() -
-                                            status_share["fallback"].get<double>()
-                                      : 0.0;
 
   const Interval speed_ci = bootstrap_ratio(speed_num, speed_den, bootstrap_for("speed|" + key));
   const Interval incidents_ci = rate_interval(total_incidents, miles, 100.0);
@@ -355,6 +366,12 @@ std::string percent(double share, int decimals = 1) {
   return fixed(100.0 * share, decimals) + "%";
 }
 
+/// "least-bad % / fallback %" of a plan_status_share; "–" when unknown (null).
+std::string status_cells(const json& share) {
+  if (share.is_null()) return "–";
+  return percent(share["least_bad"]) + " / " + percent(share["fallback"]);
+}
+
 /// A paired difference: "+0.27 (+0.05, +0.49) better" (the verdict only when beyond noise).
 std::string difference_cell(const json& f, int decimals) {
   if (f.is_null()) return "–";
@@ -420,8 +437,9 @@ std::string summary_csv(const json& rows) {
     f.push_back(fixed(r["timing"]["planner_p50_us_median"], 1));
     f.push_back(fixed(r["timing"]["planner_p99_us_worst"], 1));
     f.push_back(fixed(r["timing"]["planner_wall_p99_us_worst"], 1));
-    f.push_back(fixed(r["plan_status_share"]["least_bad"], 5));
-    f.push_back(fixed(r["plan_status_share"]["fallback"], 5));
+    const json& status = r["plan_status_share"];
+    f.push_back(status.is_null() ? std::string() : fixed(status["least_bad"], 5));
+    f.push_back(status.is_null() ? std::string() : fixed(status["fallback"], 5));
     f.push_back(std::to_string(r["runs_ended_early"].get<std::size_t>()));
     const json& c = r["collisions"];
     const json& nm = r["near_misses"];
@@ -583,8 +601,7 @@ std::string summary_markdown(const json& rows, const json& pairs) {
            " / " + fixed(r["peak_strict_jerk_mps3"], 1) + " | " +
            fixed(r["timing"]["planner_p50_us_median"], 0) + " / " +
            fixed(r["timing"]["planner_p99_us_worst"], 0) + " | " +
-           percent(r["plan_status_share"]["least_bad"]) + " / " +
-           percent(r["plan_status_share"]["fallback"]) + " | " +
+           status_cells(r["plan_status_share"]) + " | " +
            std::to_string(r["runs_ended_early"].get<std::size_t>()) + " |\n";
   }
 

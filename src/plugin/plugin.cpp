@@ -2,6 +2,7 @@
 
 #include <dlfcn.h>
 
+#include <array>
 #include <cmath>
 #include <cstddef>
 #include <memory>
@@ -17,10 +18,56 @@ namespace overtake::plugin {
 namespace {
 
 using AbiVersionFn = int (*)();
-using InfoFn = const overtake_plugin_info_t* (*)();
-using CreateFn = overtake_plugin_handle* (*)(const overtake_plugin_setup*, const char**);
+using InfoFn = const overtake_plugin_info* (*)();
+using CreateFn = overtake_plugin_handle* (*)(const overtake_plugin_setup*, char*, std::size_t);
 using PlanFn = int (*)(overtake_plugin_handle*, const overtake_telemetry*, overtake_path*);
 using DestroyFn = void (*)(overtake_plugin_handle*);
+
+/// Bytes of the buffer create may write its reason into (the header promises at least
+/// OVERTAKE_PLUGIN_MIN_ERROR_SIZE).
+constexpr std::size_t kCreateErrorSize = 1024;
+static_assert(kCreateErrorSize >= OVERTAKE_PLUGIN_MIN_ERROR_SIZE);
+
+/// Below this, a version number is one of the first ABI's plain numbers (version 1 returned
+/// 1), not major * 1000 + minor.
+constexpr int kVersionBase = 1000;
+static_assert(OVERTAKE_PLUGIN_ABI_VERSION ==
+              OVERTAKE_PLUGIN_ABI_MAJOR * kVersionBase + OVERTAKE_PLUGIN_ABI_MINOR);
+
+/// A version number as people write it: "2.1", or "1" for the first ABI's plain numbers.
+std::string version_text(int v) {
+  if (v < kVersionBase) return std::to_string(v);
+  return std::to_string(v / kVersionBase) + "." + std::to_string(v % kVersionBase);
+}
+
+/// Refuses a plugin whose version this overtake cannot load, naming both versions and what
+/// to do: another major version, or a newer minor one (whose structs may be longer than the
+/// ones this side fills). An older minor is fine: it reads a prefix of what this side gives.
+void check_version(const std::string& file, int v) {
+  const std::string ours = version_text(OVERTAKE_PLUGIN_ABI_VERSION);
+  const std::string head = file + ": built for plugin ABI version " + version_text(v) +
+                           ", but this overtake speaks version " + ours;
+  const std::string rebuild = "rebuild it against this overtake's overtake/planner_plugin.h";
+  if (v <= 0) {
+    throw PluginError(file + ": reports plugin ABI version " + std::to_string(v) +
+                      ", which is no version (overtake_plugin_abi_version() must return "
+                      "OVERTAKE_PLUGIN_ABI_VERSION)");
+  }
+  const int major = v < kVersionBase ? v : v / kVersionBase;
+  const int minor = v < kVersionBase ? 0 : v % kVersionBase;
+  if (major < OVERTAKE_PLUGIN_ABI_MAJOR) {
+    throw PluginError(head + ", which no longer loads version " + std::to_string(major) +
+                      " plugins: " + rebuild + " (see docs/planners.md for what changed)");
+  }
+  if (major > OVERTAKE_PLUGIN_ABI_MAJOR) {
+    throw PluginError(head + ": use an overtake of plugin ABI version " + std::to_string(major) +
+                      ", or " + rebuild);
+  }
+  if (minor > OVERTAKE_PLUGIN_ABI_MINOR) {
+    throw PluginError(head + ", which is older: use an overtake of plugin ABI version " +
+                      version_text(v) + " or later, or " + rebuild);
+  }
+}
 
 /// The text of a C string the plugin gave, or `fallback` when it gave none.
 std::string text_or(const char* s, const char* fallback) {
@@ -72,6 +119,7 @@ class PluginPolicy final : public planner::Policy {
   core::PlanResult plan(const core::Telemetry& t) override {
     const overtake_telemetry in = to_c(t);
     overtake_path out{};
+    out.struct_size = sizeof(overtake_path);
     out.next_x = out_x_.data();
     out.next_y = out_y_.data();
     out.capacity = out_x_.size();
@@ -93,6 +141,9 @@ class PluginPolicy final : public planner::Policy {
     if (out.next_x != out_x_.data() || out.next_y != out_y_.data()) {
       fail("replaced the path buffers instead of writing into them");
     }
+    if (out.struct_size != sizeof(overtake_path)) {
+      fail("wrote over the path's struct_size (overtake sets it, the plugin only reads it)");
+    }
     if (out.count > out_x_.size()) {
       fail("answered " + std::to_string(out.count) + " points, more than the buffers' " +
            std::to_string(out_x_.size()));
@@ -106,7 +157,10 @@ class PluginPolicy final : public planner::Policy {
       }
       path.push_back(p);
     }
-    return core::normal_plan(std::move(path));
+    // The ABI carries points only: how the plugin found them is not for overtake to say.
+    core::PlanResult result = core::normal_plan(std::move(path));
+    result.status_known = false;
+    return result;
   }
 
  private:
@@ -115,9 +169,12 @@ class PluginPolicy final : public planner::Policy {
   }
 
   /// The telemetry in the original's units (yaw in degrees, speed in mph), rounded as the
-  /// original sends them; the arrays live in this policy until the next call.
+  /// original sends them; the arrays live in this policy until the next call. An empty array
+  /// is NULL, as the header allows: a plugin that reads one without looking at its count is
+  /// then caught at once, not only when a vector happens to have no storage.
   overtake_telemetry to_c(const core::Telemetry& t) {
     overtake_telemetry c{};
+    c.struct_size = sizeof(overtake_telemetry);
     c.x = t.ego.position.x;
     c.y = t.ego.position.y;
     c.s = t.ego.s_m;
@@ -130,8 +187,8 @@ class PluginPolicy final : public planner::Policy {
       prev_x_.push_back(p.x);
       prev_y_.push_back(p.y);
     }
-    c.previous_path_x = prev_x_.data();
-    c.previous_path_y = prev_y_.data();
+    c.previous_path_x = prev_x_.empty() ? nullptr : prev_x_.data();
+    c.previous_path_y = prev_y_.empty() ? nullptr : prev_y_.data();
     c.previous_path_count = prev_x_.size();
     c.end_path_s = t.end_path.s_m;
     c.end_path_d = t.end_path.d_m;
@@ -141,11 +198,15 @@ class PluginPolicy final : public planner::Policy {
                                  car.velocity_mps.x, car.velocity_mps.y, car.s_m, car.d_m});
     }
     // Rows of OVERTAKE_SF_COLUMNS doubles, back to back: the C side's `double (*)[7]`.
-    c.sensor_fusion = reinterpret_cast<
-        const double(*)
-            [OVERTAKE_SF_COLUMNS]>(  // NOLINT(cppcoreguidelines-pro-type-reinterpret-cast)
-        cars_.data());
+    c.sensor_fusion =
+        cars_.empty()
+            ? nullptr
+            : reinterpret_cast<
+                  const double(*)
+                      [OVERTAKE_SF_COLUMNS]>(  // NOLINT(cppcoreguidelines-pro-type-reinterpret-cast)
+                  cars_.data());
     c.sensor_fusion_count = t.cars.size();
+    c.speed_mps = t.ego.speed_mps;  // 2.1
     return c;
   }
 
@@ -175,6 +236,7 @@ std::unique_ptr<planner::Policy> make_policy(const std::shared_ptr<const Library
     waypoints.push_back({w.x_m, w.y_m, w.s_m, w.dx, w.dy});
   }
   overtake_plugin_setup setup{};
+  setup.struct_size = sizeof(overtake_plugin_setup);
   setup.waypoints = waypoints.data();
   setup.waypoint_count = waypoints.size();
   setup.max_s = line.map().loop_length_m;
@@ -182,18 +244,19 @@ std::unique_ptr<planner::Policy> make_policy(const std::shared_ptr<const Library
   setup.lane_width = params.road.lane_width_m;
   setup.step_time = params.step_s;
   setup.config_json = nullptr;
-  const char* error = nullptr;
+  std::array<char, kCreateErrorSize> error{};  // empty text, as the header promises
   overtake_plugin_handle* handle = nullptr;
   try {
-    handle = lib->create(&setup, &error);
+    handle = lib->create(&setup, error.data(), error.size());
   } catch (const std::exception& e) {
     return std::make_unique<FailedPolicy>(lib->label + ": create threw an exception: " + e.what());
   } catch (...) {
     return std::make_unique<FailedPolicy>(lib->label + ": create threw an exception");
   }
   if (handle == nullptr) {
-    return std::make_unique<FailedPolicy>(lib->label +
-                                          ": create failed: " + text_or(error, "no reason given"));
+    error.back() = '\0';  // a reason that filled the buffer without its NUL is cut short
+    return std::make_unique<FailedPolicy>(
+        lib->label + ": create failed: " + text_or(error.data(), "no reason given"));
   }
   return std::make_unique<PluginPolicy>(lib, handle);
 }
@@ -205,27 +268,32 @@ LoadedPlugin load_plugin(const std::filesystem::path& path) {
   // A bare name would be searched on the library path: a plugin is always a file.
   const std::string open_as = path.has_parent_path() ? file : "./" + file;
   auto lib = std::make_shared<Library>();
-  lib->dl = ::dlopen(open_as.c_str(), RTLD_NOW | RTLD_LOCAL);
+  // RTLD_NODELETE: the code stays mapped after the last dlclose, so that a plugin's thread
+  // still finishing after destroy, or a plan call abandoned because it never returns, runs
+  // on instead of jumping into unmapped memory and taking the whole process down.
+  lib->dl = ::dlopen(open_as.c_str(), RTLD_NOW | RTLD_LOCAL | RTLD_NODELETE);
   if (lib->dl == nullptr) {
     const char* why = ::dlerror();
     throw PluginError(file + ": cannot load: " + text_or(why, "unknown dlopen error"));
   }
+  // The version first: a plugin of another version may name its functions otherwise (version
+  // 1 had overtake_plugin_info), and "built for version 1" says more than a missing function.
   const auto version = symbol<AbiVersionFn>(lib->dl, "overtake_plugin_abi_version", file);
-  const auto info = symbol<InfoFn>(lib->dl, "overtake_plugin_info", file);
+  int v = 0;
+  try {
+    v = version();
+  } catch (...) {
+    throw PluginError(file + ": threw an exception while being loaded");
+  }
+  check_version(file, v);
+  const auto info = symbol<InfoFn>(lib->dl, "overtake_plugin_get_info", file);
   lib->create = symbol<CreateFn>(lib->dl, "overtake_plugin_create", file);
   lib->plan = symbol<PlanFn>(lib->dl, "overtake_plugin_plan", file);
   lib->destroy = symbol<DestroyFn>(lib->dl, "overtake_plugin_destroy", file);
 
   LoadedPlugin loaded;
   try {
-    const int v = version();
-    if (v != OVERTAKE_PLUGIN_ABI_VERSION) {
-      throw PluginError(file + ": built for plugin ABI version " + std::to_string(v) +
-                        ", but this overtake speaks version " +
-                        std::to_string(OVERTAKE_PLUGIN_ABI_VERSION) +
-                        " (rebuild it against this overtake's overtake/planner_plugin.h)");
-    }
-    const overtake_plugin_info_t* i = info();
+    const overtake_plugin_info* i = info();
     if (i == nullptr || i->name == nullptr || *i->name == '\0') {
       throw PluginError(file + ": overtake_plugin_info() gives no name");
     }

@@ -73,6 +73,14 @@ const LogFn& log_of(const ClientOptions& o) {
   return o.log ? o.log : fallback;
 }
 
+// A reply as a plan: the protocol carries points only, so how the planner found them (its
+// plan status) is unknown, not normal.
+core::PlanResult remote_plan(std::vector<core::Vec2> path) {
+  core::PlanResult plan = core::normal_plan(std::move(path));
+  plan.status_known = false;
+  return plan;
+}
+
 }  // namespace
 
 // ---- lock-step --------------------------------------------------------------------------
@@ -182,9 +190,9 @@ core::PlanResult RemotePlanner::operator()(const core::Telemetry& telemetry) {
               "the planner answered a full telemetry with manual: the queued path is kept");
           manual_noted_ = true;
         }
-        return core::normal_plan(telemetry.previous_path);
+        return remote_plan(telemetry.previous_path);
       }
-      return core::normal_plan(std::move(reply).value().path);
+      return remote_plan(std::move(reply).value().path);
     }
   } catch (const ConnectionError& e) {
     throw sim::PlannerFailure(e.what());
@@ -310,10 +318,10 @@ sim::RunReport run_realtime(sim::World& world, PlannerConnection& connection,
         round_trip_us = std::chrono::duration<double, std::micro>(Clock::now() - sent_at).count();
       }
       if (!reply.value().manual) {
-        run.apply(core::normal_plan(std::move(reply).value().path), round_trip_us,
+        run.apply(remote_plan(std::move(reply).value().path), round_trip_us,
                   round_trip_us.value_or(0.0));
       } else if (round_trip_us) {
-        run.count_cycle(core::normal_plan({}), *round_trip_us, *round_trip_us);
+        run.count_cycle(remote_plan({}), *round_trip_us, *round_trip_us);
       }
       // Next telemetry: full when anything stepped; null once when nothing did; after the
       // answer to a null one, the next step sends it.

@@ -291,7 +291,13 @@ PlannerConnection::PlannerConnection(const PlannerUrl& url, const ClientOptions&
     : impl_(std::make_unique<Impl>()) {
   impl_->opts = options;
   const auto deadline = Clock::now() + options.connect_timeout;
+  const auto stopped = [&options] {
+    return options.stop != nullptr && options.stop->load(std::memory_order_relaxed);
+  };
   for (;;) {
+    // Ctrl-C while a planner is still starting stops the wait (within one retry delay, or one
+    // attempt when a peer accepts but never completes the upgrade).
+    if (stopped()) throw ConnectionError("stopped before the planner listened");
     const auto attempt_deadline = std::min(deadline, Clock::now() + kAttemptTimeout);
     const std::string why = impl_->attempt(url, attempt_deadline);
     if (why.empty()) return;

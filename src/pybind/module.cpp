@@ -92,6 +92,29 @@ std::shared_ptr<app::PlannerCatalog> catalog_with(const std::string& name, std::
   return catalog;
 }
 
+// One call at a time into an object that is not thread-safe. A second call while one runs
+// (from another thread, or from Python code the first one runs: a path's __float__, a
+// finalizer) would step or free the world under the first: it gets a RuntimeError instead.
+// The flag is taken and left with the GIL held.
+class OneCallAtATime {
+ public:
+  OneCallAtATime(bool& busy, const char* what) : busy_(busy) {
+    if (busy_) {
+      throw std::runtime_error(
+          std::string(what) +
+          ": another call of this object has not returned yet (from another thread?); it is "
+          "for one thread at a time: make one per thread, or lock around it");
+    }
+    busy_ = true;
+  }
+  ~OneCallAtATime() { busy_ = false; }
+  OneCallAtATime(const OneCallAtATime&) = delete;
+  OneCallAtATime& operator=(const OneCallAtATime&) = delete;
+
+ private:
+  bool& busy_;
+};
+
 // ---- World -------------------------------------------------------------------------------
 
 // The world stepped from Python: reset, then step with a path per reply, as `drive` does.
@@ -108,6 +131,7 @@ class World {
   }
 
   py::dict reset(const std::optional<std::uint64_t>& seed) {
+    const OneCallAtATime one(busy_, "World.reset()");
     if (seed) inputs_.options.seed = *seed;
     const app::DriveOptions& o = inputs_.options;
     stepper_.reset();
@@ -123,17 +147,18 @@ class World {
     run.clock = sim::CycleClock::round_trip;
     stepper_ = std::make_unique<sim::Stepper>(*world_, run);
     incidents_ = py::list();
-    return telemetry();
+    return telemetry_now();
   }
 
   py::dict telemetry() {
-    const sim::Stepper& s = stepper();
-    py::dict d = python::telemetry_to_dict(s.telemetry());
-    given_at_ = Clock::now();
-    return d;
+    const OneCallAtATime one(busy_, "World.telemetry()");
+    return telemetry_now();
   }
 
+  // The GIL stays held while the world steps (a call is a few microseconds of C++), so that
+  // no other thread runs Python, and none can reach the world, in the meantime.
   py::tuple step(py::handle path_x, py::handle path_y) {
+    const OneCallAtATime one(busy_, "World.step()");
     sim::Stepper& s = stepper();
     if (s.finished()) throw std::runtime_error("the run is over (info['done']); call reset()");
     const double wall_us =
@@ -143,7 +168,7 @@ class World {
     try {
       core::PlanResult plan =
           core::normal_plan(python::path_from_python(py::make_tuple(path_x, path_y)));
-      py::gil_scoped_release nogil;
+      plan.status_known = false;  // points only: how they were found is the caller's
       s.apply(std::move(plan), wall_us, wall_us);
       s.step_one_call();
     } catch (const python::PythonError& e) {
@@ -151,7 +176,25 @@ class World {
     }
     py::dict out = info_since(before);
     out["steps_this_call"] = world_->steps() - steps_before;
-    return py::make_tuple(telemetry(), out);
+    return py::make_tuple(telemetry_now(), out);
+  }
+
+  py::object report() const {
+    const OneCallAtATime one(busy_, "World.report()");
+    return to_python(app::report_to_json(stepper().report(), provenance_));
+  }
+
+  [[nodiscard]] bool done() const { return stepper().finished(); }
+  [[nodiscard]] double time_s() const { return world_ ? world_->time_s() : 0.0; }
+  [[nodiscard]] long steps() const { return world_ ? world_->steps() : 0; }
+  [[nodiscard]] double step_s() const { return inputs_.config.world.step_s; }
+
+ private:
+  py::dict telemetry_now() {
+    const sim::Stepper& s = stepper();
+    py::dict d = python::telemetry_to_dict(s.telemetry());
+    given_at_ = Clock::now();
+    return d;
   }
 
   py::dict info_since(std::size_t incidents_before) {
@@ -183,16 +226,6 @@ class World {
     return out;
   }
 
-  py::object report() const {
-    return to_python(app::report_to_json(stepper().report(), provenance_));
-  }
-
-  [[nodiscard]] bool done() const { return stepper().finished(); }
-  [[nodiscard]] double time_s() const { return world_ ? world_->time_s() : 0.0; }
-  [[nodiscard]] long steps() const { return world_ ? world_->steps() : 0; }
-  [[nodiscard]] double step_s() const { return inputs_.config.world.step_s; }
-
- private:
   sim::Stepper& stepper() const {
     if (!stepper_) throw std::runtime_error("call reset() first");
     return *stepper_;
@@ -204,6 +237,7 @@ class World {
   std::unique_ptr<sim::Stepper> stepper_;  // refers to world_: reset before it
   py::list incidents_;
   Clock::time_point given_at_ = Clock::now();
+  mutable bool busy_ = false;  // a call runs (OneCallAtATime)
 };
 
 // ---- built-in policies as callables --------------------------------------------------------
@@ -225,9 +259,12 @@ class BuiltinPolicy {
   }
 
   py::tuple call(py::handle telemetry) {
+    const OneCallAtATime one(busy_, "BuiltinPolicy.__call__()");
     const core::Telemetry t = python::telemetry_from_dict(telemetry);
     core::PlanResult plan;
     {
+      // Without the GIL: a planner's cycle may take milliseconds, other Python threads run
+      // meanwhile (and cannot call this policy: `busy_`).
       py::gil_scoped_release nogil;
       plan = policy_->plan(t);
     }
@@ -250,6 +287,7 @@ class BuiltinPolicy {
   std::shared_ptr<const app::Track> track_;
   std::unique_ptr<planner::Policy> policy_;  // refers to track_: declared after it
   std::string status_ = "normal";
+  bool busy_ = false;  // a call runs (OneCallAtATime)
 };
 
 // ---- whole drives --------------------------------------------------------------------------
@@ -268,6 +306,9 @@ py::object drive(const py::object& policy, const std::optional<std::string>& map
                  const std::optional<std::string>& config, const std::optional<int>& steps_per_call,
                  const std::optional<std::string>& name) {
   app::DriveOptions o = drive_options(map, seed, traffic, config, steps_per_call, minutes);
+  // Ctrl-C (or a planner's KeyboardInterrupt, SystemExit) stops the run and is raised again
+  // here: a loop over drives must end, not go on with the next one.
+  const auto stops = std::make_shared<python::DriveInterruption>();
   if (py::isinstance<py::str>(policy)) {
     o.policy = policy.cast<std::string>();
   } else if (PyCallable_Check(policy.ptr()) != 0) {
@@ -279,17 +320,28 @@ py::object drive(const py::object& policy, const std::optional<std::string>& map
     const std::string source =
         std::string(py::str(py::getattr(policy, "__module__", py::str("?")))) + ":" +
         std::string(py::str(py::getattr(policy, "__qualname__", py::str("callable"))));
-    o.planners =
-        catalog_with(label, source, python::callable_policy_factory(python::share(policy), label));
+    o.planners = catalog_with(label, source,
+                              python::callable_policy_factory(python::share(policy), label, stops));
     o.policy = label;
   } else {
     throw app::UsageError("policy must be a built-in policy's name or a callable");
   }
+  // Python's signal handlers run only when the main thread runs bytecode, which a built-in
+  // policy never does: the run looks for a signal Python has noted every 10 simulated
+  // seconds (tens of milliseconds of a built-in policy's drive).
+  const auto check_signals = [&stops](double /*t_s*/, double /*distance_m*/) {
+    py::gil_scoped_acquire gil;
+    if (PyErr_CheckSignals() != 0) stops->keep(py::error_already_set());
+  };
   app::DriveResult result;
-  {
+  try {
     py::gil_scoped_release nogil;
-    result = app::drive(o);
+    result = app::drive(o, check_signals, stops->stop_flag());
+  } catch (const std::exception&) {
+    stops->raise_if_kept();  // what stopped it, rather than what it ended with
+    throw;
   }
+  stops->raise_if_kept();
   return to_python(app::report_to_json(result.report, result.provenance));
 }
 

@@ -3,8 +3,12 @@
 #include <pybind11/numpy.h>
 
 #include <atomic>
+#include <chrono>
 #include <cmath>
+#include <condition_variable>
 #include <filesystem>
+#include <system_error>
+#include <thread>
 #include <utility>
 
 #include "overtake/core/units.hpp"
@@ -223,25 +227,41 @@ std::vector<core::Vec2> path_from_python(py::handle answer) {
   return path;
 }
 
-std::string describe(const py::error_already_set& e) {
-  std::string out = "an exception";
+namespace {
+
+// A Python exception in two parts: "Type: message", and where it was raised, "file, line N,
+// in function" (empty when it has no traceback).
+struct Described {
+  std::string what = "an exception";
+  std::string where;
+};
+
+Described described(const py::error_already_set& e) {
+  Described out;
   try {
-    out = py::str(e.type().attr("__name__"));
+    out.what = py::str(e.type().attr("__name__"));
     const std::string message = py::str(e.value());
-    if (!message.empty()) out += ": " + message;
+    if (!message.empty()) out.what += ": " + message;
     if (e.trace()) {
       const py::list frames = py::module_::import("traceback").attr("extract_tb")(e.trace());
       if (!frames.empty()) {
         const py::object last = frames[frames.size() - 1];
         const std::string file = py::str(last.attr("filename"));
-        out += " (" + std::filesystem::path(file).filename().string() + ", line " +
-               std::string(py::str(last.attr("lineno"))) + ", in " +
-               std::string(py::str(last.attr("name"))) + ")";
+        out.where = std::filesystem::path(file).filename().string() + ", line " +
+                    std::string(py::str(last.attr("lineno"))) + ", in " +
+                    std::string(py::str(last.attr("name")));
       }
     }
   } catch (const py::error_already_set&) {  // a message that cannot be printed: keep what we have
   }
   return out;
+}
+
+}  // namespace
+
+std::string describe(const py::error_already_set& e) {
+  const Described d = described(e);
+  return d.where.empty() ? d.what : d.what + " (" + d.where + ")";
 }
 
 SharedObject share(py::object object) {
@@ -256,23 +276,85 @@ SharedObject share(py::object object) {
   });
 }
 
+bool DriveInterruption::stops_the_drive(const py::error_already_set& e) {
+  return e.matches(PyExc_KeyboardInterrupt) || e.matches(PyExc_SystemExit);
+}
+
+void DriveInterruption::keep(const py::error_already_set& e) {
+  {
+    const std::lock_guard lock(mutex_);
+    if (!kept_) kept_ = e;
+  }
+  stop_.store(true);
+}
+
+void DriveInterruption::raise_if_kept() {
+  std::optional<py::error_already_set> kept;
+  {
+    const std::lock_guard lock(mutex_);
+    kept = kept_;
+  }
+  if (kept) throw *kept;
+}
+
 namespace {
+
+// How long interrupt() waits for the exception to be set before it returns anyway.
+constexpr auto kInterruptWait = std::chrono::milliseconds(200);
+
+// A policy's Python call as another thread sees it, to interrupt it. The policy and the
+// threads that deliver an interruption share it (a delivery may outlive the policy). Lock
+// order: the GIL before `mutex` (whoever holds `mutex` never waits for the GIL).
+struct CallWatch {
+  std::mutex mutex;
+  std::condition_variable delivered;
+  bool running = false;                         // a call runs now
+  unsigned long thread = 0;                     // the Python ident of the thread that runs it
+  std::optional<core::PlanInterruption> asked;  // what the running call was asked to stop for
+  bool delivering = false;                      // a delivery is on its way
+};
+
+// Sets the exception in the running call, on a thread of its own: taking the GIL may wait for
+// as long as the planner runs C code that holds it, and the watchdog that asked must not
+// wait that long. The exception is asynchronous: Python raises it at the planner's next
+// bytecode. A planner blocked in C (time.sleep, a long numpy call, a socket) runs none and
+// is not stopped by it until the C call returns; the watchdog then ends the process.
+void deliver(const std::shared_ptr<CallWatch>& watch) {
+  const PyGILState_STATE gil = PyGILState_Ensure();
+  {
+    const std::lock_guard lock(watch->mutex);
+    // Only into the call that was asked (a new call starts with `asked` empty).
+    if (watch->running && watch->asked) {
+      PyObject* type = *watch->asked == core::PlanInterruption::user_stop ? PyExc_KeyboardInterrupt
+                                                                          : PyExc_TimeoutError;
+      (void)PyThreadState_SetAsyncExc(watch->thread, type);
+    }
+    watch->delivering = false;
+  }
+  watch->delivered.notify_all();
+  PyGILState_Release(gil);
+}
 
 // A Python callable as a policy.
 class CallablePolicy final : public planner::Policy {
  public:
-  CallablePolicy(SharedObject callable, std::string label)
-      : callable_(std::move(callable)), label_(std::move(label)) {}
+  CallablePolicy(SharedObject callable, std::string label, std::shared_ptr<DriveInterruption> stops)
+      : callable_(std::move(callable)), label_(std::move(label)), stops_(std::move(stops)) {}
 
   core::PlanResult plan(const core::Telemetry& telemetry) override {
     std::string failure;
     {
       py::gil_scoped_acquire gil;
+      std::optional<core::PlanInterruption> asked;
       try {
-        const py::object answer = (*callable_)(telemetry_to_dict(telemetry));
-        return core::normal_plan(path_from_python(answer));
+        const py::object answer = call(telemetry_to_dict(telemetry), asked);
+        // A Python planner answers points only: how it found them is not for overtake to say.
+        core::PlanResult result = core::normal_plan(path_from_python(answer));
+        result.status_known = false;
+        return result;
       } catch (const py::error_already_set& e) {
-        failure = "Python planner " + label_ + " raised " + describe(e);
+        if (stops_ && DriveInterruption::stops_the_drive(e)) stops_->keep(e);
+        failure = failure_text(e, asked);
       } catch (const std::exception& e) {
         failure = "Python planner " + label_ + ": " + e.what();
       }
@@ -280,15 +362,88 @@ class CallablePolicy final : public planner::Policy {
     throw PythonError(failure);
   }
 
+  bool interrupt(core::PlanInterruption why) noexcept override {
+    if (Py_IsInitialized() == 0) return false;
+    try {
+      std::unique_lock lock(watch_->mutex);
+      if (!watch_->running) return true;  // between calls: nothing to stop
+      // Ctrl-C wins over a timeout: the run is over either way, the user's word says why.
+      if (!watch_->asked || why == core::PlanInterruption::user_stop) watch_->asked = why;
+      if (!watch_->delivering) {
+        watch_->delivering = true;
+        try {
+          std::thread([watch = watch_] { deliver(watch); }).detach();
+        } catch (const std::system_error&) {  // no thread to be had
+          watch_->delivering = false;
+          return false;
+        }
+      }
+      (void)watch_->delivered.wait_for(lock, kInterruptWait,
+                                       [this] { return !watch_->delivering; });
+      return true;
+    } catch (const std::exception&) {  // a mutex that cannot be locked
+      return false;
+    }
+  }
+
  private:
+  // Calls the callable (with the GIL held) where interrupt() can reach it; `asked` is what the
+  // call was asked to stop for, if anything.
+  py::object call(const py::dict& telemetry, std::optional<core::PlanInterruption>& asked) {
+    {
+      const std::lock_guard lock(watch_->mutex);
+      watch_->running = true;
+      watch_->thread = PyThread_get_thread_ident();
+      watch_->asked.reset();
+    }
+    try {
+      py::object answer = (*callable_)(telemetry);
+      asked = end_call();
+      return answer;
+    } catch (...) {
+      asked = end_call();
+      throw;
+    }
+  }
+
+  std::optional<core::PlanInterruption> end_call() {
+    std::optional<core::PlanInterruption> asked;
+    unsigned long thread = 0;
+    {
+      const std::lock_guard lock(watch_->mutex);
+      watch_->running = false;
+      asked = watch_->asked;
+      thread = watch_->thread;
+    }
+    // An exception set just as the call returned has not been raised yet: it would be at the
+    // next bytecode this thread runs, in another call or another planner. Dropped here (no
+    // delivery can set one now: it would need the GIL, which this thread holds).
+    (void)PyThreadState_SetAsyncExc(thread, nullptr);
+    return asked;
+  }
+
+  [[nodiscard]] std::string failure_text(const py::error_already_set& e,
+                                         std::optional<core::PlanInterruption> asked) const {
+    if (!asked) return "Python planner " + label_ + " raised " + describe(e);
+    const Described d = described(e);
+    const std::string how = *asked == core::PlanInterruption::timeout
+                                ? " did not answer in time and was interrupted ("
+                                : " was stopped by the user (";
+    return "Python planner " + label_ + how + d.what + (d.where.empty() ? "" : " at " + d.where) +
+           ")";
+  }
+
   SharedObject callable_;
   std::string label_;
+  std::shared_ptr<DriveInterruption> stops_;
+  std::shared_ptr<CallWatch> watch_ = std::make_shared<CallWatch>();
 };
 
 }  // namespace
 
-planner::PolicyFactory callable_policy_factory(SharedObject callable, std::string label) {
-  return [callable = std::move(callable), label = std::move(label)](
+planner::PolicyFactory callable_policy_factory(SharedObject callable, std::string label,
+                                               std::shared_ptr<DriveInterruption> stops) {
+  return [callable = std::move(callable), label = std::move(label), stops = std::move(stops)](
              const core::ReferenceLine&,
              const planner::PlannerParams&) -> std::unique_ptr<planner::Policy> {
     SharedObject target = callable;
@@ -298,12 +453,13 @@ planner::PolicyFactory callable_policy_factory(SharedObject callable, std::strin
         try {
           target = share((*callable)());
         } catch (const py::error_already_set& e) {
+          if (stops && DriveInterruption::stops_the_drive(e)) stops->keep(e);
           throw PythonError("Python planner " + label + ": making an instance raised " +
                             describe(e));
         }
       }
     }
-    return std::make_unique<CallablePolicy>(std::move(target), label);
+    return std::make_unique<CallablePolicy>(std::move(target), label, stops);
   };
 }
 

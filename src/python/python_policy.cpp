@@ -5,9 +5,13 @@
 
 #include <pybind11/embed.h>
 
+#include <cctype>
 #include <filesystem>
 #include <mutex>
+#include <optional>
+#include <system_error>
 
+#include "overtake/core/hash.hpp"
 #include "overtake/python/bridge.hpp"
 
 namespace overtake::python {
@@ -23,7 +27,8 @@ void ensure_interpreter() {
   static std::once_flag once;
   std::call_once(once, [] {
     if (Py_IsInitialized() != 0) return;  // inside Python: the module's interpreter
-    // No signal handlers: Ctrl-C stays the run's (it stops the run, not the interpreter).
+    // No signal handlers: Ctrl-C stays the run's (it stops the run, not the interpreter); a
+    // planner still running then gets its KeyboardInterrupt from Policy::interrupt().
     py::initialize_interpreter(/*init_signal_handlers=*/false);
     try {
       py::module_::import("sys").attr("path").attr("insert")(
@@ -35,6 +40,56 @@ void ensure_interpreter() {
   });
 }
 
+// A module name of its own for a planner file, from its absolute path: two planner.py in two
+// folders are two modules, and neither takes the name of a module a planner might import.
+std::string module_name_of(const std::filesystem::path& file) {
+  std::string stem = file.stem().string();
+  for (char& c : stem) {
+    if (std::isalnum(static_cast<unsigned char>(c)) == 0) c = '_';
+  }
+  return "overtake_planner_" + stem + "_" + core::hex64(core::fnv1a64(file.string())).substr(0, 12);
+}
+
+// Removes from sys.path the entry `entry` (that very object, wherever the module's code may
+// have moved it); an entry the module removed itself is left so.
+void remove_path_entry(const py::object& entry) {
+  const py::list path = py::module_::import("sys").attr("path");
+  for (std::size_t i = 0; i < path.size(); ++i) {
+    if (path[i].ptr() == entry.ptr()) {
+      (void)path.attr("pop")(i);
+      return;
+    }
+  }
+}
+
+// Runs the planner file as the module `name` (or takes the module already loaded from it).
+// Its folder is first on sys.path while it runs, for the imports of the modules beside it,
+// and no longer afterwards: it must not decide what later imports of other planners find.
+// Needs the GIL.
+py::object load_file_module(const std::filesystem::path& file, const std::string& name) {
+  const py::dict modules = py::module_::import("sys").attr("modules");
+  if (modules.contains(name)) return modules[name.c_str()];
+  // The loader named explicitly: a planner file need not end in .py.
+  const py::object loader =
+      py::module_::import("importlib.machinery").attr("SourceFileLoader")(name, file.string());
+  const py::module_ util = py::module_::import("importlib.util");
+  const py::object spec =
+      util.attr("spec_from_file_location")(name, file.string(), py::arg("loader") = loader);
+  const py::object module = util.attr("module_from_spec")(spec);
+  modules[name.c_str()] = module;  // before it runs, as an import does (dataclasses need it)
+  const py::str folder(file.parent_path().string());
+  py::module_::import("sys").attr("path").attr("insert")(0, folder);
+  try {
+    loader.attr("exec_module")(module);
+  } catch (const py::error_already_set&) {
+    remove_path_entry(folder);
+    (void)modules.attr("pop")(name, py::none());
+    throw;
+  }
+  remove_path_entry(folder);
+  return module;
+}
+
 }  // namespace
 
 LoadedPython load_python_policy(const std::string& spec) {
@@ -42,45 +97,54 @@ LoadedPython load_python_policy(const std::string& spec) {
   if (colon == std::string::npos || colon == 0 || colon + 1 == spec.size()) {
     throw PythonError("'" + spec + "' is not MODULE:FUNCTION (e.g. planner:plan)");
   }
-  std::string module_name = spec.substr(0, colon);
+  const std::string target = spec.substr(0, colon);
   const std::string function_name = spec.substr(colon + 1);
-  // A file (planners/mine.py:plan): its folder goes first on sys.path, its stem is the module.
-  std::string folder;
-  if (module_name.ends_with(".py") || module_name.find('/') != std::string::npos) {
-    const std::filesystem::path file(module_name);
-    if (!std::filesystem::is_regular_file(file)) {
-      throw PythonError("no Python file '" + module_name + "' (from '" + spec + "')");
+  // A file (planners/mine.py:plan), loaded as a module named after its path; else a module,
+  // imported from the current directory or PYTHONPATH.
+  std::optional<std::filesystem::path> file;
+  std::string module_name = target;
+  if (target.ends_with(".py") || target.find('/') != std::string::npos) {
+    if (!std::filesystem::is_regular_file(target)) {
+      throw PythonError("no Python file '" + target + "' (from '" + spec + "')");
     }
-    folder = std::filesystem::absolute(file).parent_path().string();
-    module_name = file.stem().string();
+    std::error_code error;
+    file = std::filesystem::weakly_canonical(std::filesystem::absolute(target), error);
+    if (error) file = std::filesystem::absolute(target);
+    module_name = module_name_of(*file);
   }
   ensure_interpreter();
   SharedObject callable;
   {
     py::gil_scoped_acquire gil;
-    if (!folder.empty()) py::module_::import("sys").attr("path").attr("insert")(0, folder);
-    py::module_ module;
+    py::object module;
     try {
-      module = py::module_::import(module_name.c_str());
+      module =
+          file ? load_file_module(*file, module_name) : py::module_::import(module_name.c_str());
     } catch (const py::error_already_set& e) {
-      throw PythonError("cannot import the module '" + module_name + "': " + describe(e));
+      throw PythonError((file ? "cannot load the file '" + target + "': "
+                              : "cannot import the module '" + module_name + "': ") +
+                        describe(e));
     }
+    const std::string what =
+        file ? "the file '" + target + "'" : "the module '" + module_name + "'";
     if (!py::hasattr(module, function_name.c_str())) {
-      throw PythonError("the module '" + module_name + "' (" +
+      throw PythonError(what + " (" +
                         std::string(py::str(py::getattr(module, "__file__", py::str("?")))) +
                         ") has no '" + function_name + "'");
     }
     py::object f = module.attr(function_name.c_str());
     if (PyCallable_Check(f.ptr()) == 0) {
-      throw PythonError(module_name + "." + function_name + " is a " +
+      throw PythonError((file ? target : module_name) + "." + function_name + " is a " +
                         std::string(py::str(py::type::handle_of(f).attr("__name__"))) +
                         ", not callable");
     }
     callable = share(std::move(f));
   }
   LoadedPython loaded;
-  // Named after the module (its last part): planner.py:plan is "planner".
-  loaded.name = module_name.substr(module_name.rfind('.') + 1);
+  // Named after the file's stem, or the module (its last part): planner.py:plan and
+  // pkg.planner:plan are both "planner".
+  loaded.name = file ? std::filesystem::path(target).stem().string()
+                     : module_name.substr(module_name.rfind('.') + 1);
   loaded.make = callable_policy_factory(std::move(callable), spec);
   return loaded;
 }

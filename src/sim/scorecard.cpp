@@ -74,6 +74,10 @@ void Scorecard::observe_step(const World& world) {
 void Scorecard::count_cycle(const core::PlanResult& plan, double cycle_us, double wall_us) {
   cycle_us_.add(cycle_us);
   wall_us_.add(wall_us);
+  if (!plan.status_known) {
+    ++unknown_status_cycles_;
+    return;
+  }
   ++status_cycles_[static_cast<std::size_t>(plan.status)];
   if (plan.status != core::PlanStatus::normal && first_reason_.empty()) {
     first_reason_ = plan.reason.empty() ? std::string(core::to_string(plan.status)) : plan.reason;
@@ -116,9 +120,11 @@ RunReport Scorecard::report(const World& world, RunOutcome outcome, CycleClock c
   r.safety = safety_.summary();
   r.lane_changes = lanes_.lane_changes();
   r.time_in_lane_s = lanes_.time_in_lane_s();
+  r.planner_cycles = unknown_status_cycles_;
   for (const long n : status_cycles_) r.planner_cycles += n;
   r.plan_status_cycles = status_cycles_;
   r.first_plan_reason = first_reason_;
+  r.plan_status_unknown_cycles = unknown_status_cycles_;
   r.timing.p50_us = cycle_us_.quantile(0.5);
   r.timing.p99_us = cycle_us_.quantile(0.99);
   r.timing.max_us = cycle_us_.max();
@@ -147,7 +153,23 @@ void Scorecard::archive(core::StateArchive& ar) {
   ar.part("scorecard");
   lanes_.archive(ar);
   ar.io(start_s_, "start time");
-  for (long& n : status_cycles_) ar.io_range(n, 0, std::numeric_limits<long>::max(), "cycles");
+  // Cycles of unknown status (a planner over the protocol), when there are some, go before
+  // the counts by status as a negative number, -1 - count, where those have a count (never
+  // negative): the checkpoints of every other run keep the bytes of the format without them,
+  // so that the scenarios cut before still restore.
+  constexpr long kMaxCycles = std::numeric_limits<long>::max();
+  long first = unknown_status_cycles_ > 0 ? -1 - unknown_status_cycles_ : status_cycles_[0];
+  ar.io_range(first, std::numeric_limits<long>::min(), kMaxCycles, "cycles");
+  std::size_t next = 0;
+  if (first < 0) {
+    unknown_status_cycles_ = -1 - first;
+  } else {
+    unknown_status_cycles_ = 0;
+    status_cycles_[0] = first;
+    next = 1;
+  }
+  for (; next < status_cycles_.size(); ++next)
+    ar.io_range(status_cycles_[next], 0, kMaxCycles, "cycles");
   ar.io(first_reason_, 4096, "first plan reason");
 }
 

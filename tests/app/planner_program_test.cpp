@@ -11,6 +11,10 @@
 #include <sys/socket.h>
 #include <unistd.h>
 
+#include <sys/wait.h>
+
+#include <algorithm>
+#include <csignal>
 #include <fstream>
 #include <map>
 #include <sstream>
@@ -53,9 +57,10 @@ std::vector<json> read_rows(const fs::path& file) {
 }
 
 // The report without what may differ between a program and an in-process policy: the time
-// figures and the run's configuration (name, provenance).
+// figures, the run's configuration (name, provenance), and the plan status (which only a
+// planner in the process can tell).
 json stable(json row) {
-  for (const char* k : {"timing", "config", "index", "provenance"}) row.erase(k);
+  for (const char* k : {"timing", "config", "index", "provenance", "plan_status"}) row.erase(k);
   return row;
 }
 
@@ -85,14 +90,14 @@ class PlannerProgramTest : public ::testing::Test {
 };
 
 TEST(PlannerCatalogTest, NamesFromFlagsAndTheirErrors) {
-  EXPECT_EQ(app::split_named("course=./planner --fast"),
-            (std::pair<std::string, std::string>{"course", "./planner --fast"}));
-  EXPECT_EQ(app::split_named("env X=1 ./planner").first, "");  // a space before '=': no name
+  EXPECT_EQ(app::split_named("course=./planner.so"),
+            (std::pair<std::string, std::string>{"course", "./planner.so"}));
   EXPECT_EQ(app::split_named("./build/planner").first, "");
 
   app::PlannerFlags flags;
-  flags.commands = {"./build/path_planning", "mine=./other --x"};
-  const auto catalog = app::catalog_from_flags(flags);
+  flags.commands = {"./build/path_planning", "./other --x"};
+  flags.names = {"", "mine"};  // "": the program's own name
+  auto catalog = app::catalog_from_flags(flags);
   EXPECT_EQ(catalog->added_names(), (std::vector<std::string>{"path_planning", "mine"}));
   const app::PlannerEntry* e = catalog->find("mine");
   ASSERT_NE(e, nullptr);
@@ -103,11 +108,33 @@ TEST(PlannerCatalogTest, NamesFromFlagsAndTheirErrors) {
   EXPECT_EQ(catalog->find("reference")->kind, app::PlannerKind::builtin);
   EXPECT_EQ(catalog->find("nobody"), nullptr);
 
-  flags.commands = {"reference=./planner"};  // a built-in policy's name
+  // A command is a shell command, whole: a variable before the program is a variable, and the
+  // name comes from the program it runs.
+  flags.names.clear();
+  flags.commands = {"OMP_NUM_THREADS=1 ./build/path_planning --fast", "exec 'my dir/planner'",
+                    "A=\"x y\" env B=2 ./third"};
+  catalog = app::catalog_from_flags(flags);
+  EXPECT_EQ(catalog->added_names(),
+            (std::vector<std::string>{"path_planning", "planner", "third"}));
+  EXPECT_EQ(catalog->find("path_planning")->program->command,
+            "OMP_NUM_THREADS=1 ./build/path_planning --fast");
+
+  flags.commands = {"mine=./path_planning"};  // the old NAME=CMD: a variable, and no program
+  try {
+    (void)app::catalog_from_flags(flags);
+    ADD_FAILURE() << "an assignment alone was taken for a program";
+  } catch (const app::UsageError& err) {
+    EXPECT_NE(std::string(err.what()).find("--planner-name"), std::string::npos) << err.what();
+  }
+  flags.commands = {"./p", "./q"};
+  flags.names = {"only-one"};
   EXPECT_THROW((void)app::catalog_from_flags(flags), app::UsageError);
-  flags.commands = {"a=./p", "a=./q"};
+  flags.names = {"reference", "q"};  // a built-in policy's name
   EXPECT_THROW((void)app::catalog_from_flags(flags), app::UsageError);
-  flags.commands = {"a=   "};
+  flags.names = {"a", "a"};
+  EXPECT_THROW((void)app::catalog_from_flags(flags), app::UsageError);
+  flags.commands = {"   "};
+  flags.names.clear();
   EXPECT_THROW((void)app::catalog_from_flags(flags), app::UsageError);
 }
 
@@ -170,28 +197,54 @@ TEST(PlannerProcessTest, AProgramThatExitsSaysHow) {
   fs::remove(log);
 }
 
-// Two programs on the same fixed port at once, each in its own network; the host's port
-// stays closed, so nothing else on the machine reaches them.
-TEST(PlannerProcessTest, IsolatedProgramsShareTheFixedPortAndNobodyElseReachesThem) {
+// A TCP port on the host's loopback that is free now (the tests never count on a fixed one).
+int free_port() {
+  const int fd = ::socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC, 0);
+  sockaddr_in at{};
+  at.sin_family = AF_INET;
+  at.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  socklen_t len = sizeof at;
+  EXPECT_EQ(::bind(fd, reinterpret_cast<const sockaddr*>(&at), sizeof at), 0);
+  EXPECT_EQ(::getsockname(fd, reinterpret_cast<sockaddr*>(&at), &len), 0);
+  ::close(fd);
+  return ntohs(at.sin_port);
+}
+
+sockaddr_in loopback(int port) {
+  sockaddr_in to{};
+  to.sin_family = AF_INET;
+  to.sin_port = htons(static_cast<std::uint16_t>(port));
+  to.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  return to;
+}
+
+// Two programs on the same port at once, each in its own network, while a listener of the
+// test holds that very port on the host: the programs still start, and a connection on the
+// host reaches the test's listener, never a planner. (Any port does: the test takes a free
+// one and holds it, so that whatever else runs on this machine, 4567 included, plays no part.)
+TEST(PlannerProcessTest, IsolatedProgramsShareOnePortAndNobodyElseReachesThem) {
   std::string why;
   if (!app::private_network_available(&why)) GTEST_SKIP() << why;
   const fs::path dir = fs::temp_directory_path() / ("overtake-iso-" + std::to_string(::getpid()));
   fs::create_directories(dir);
+  const int port = free_port();
+  const int host = ::socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC, 0);
+  const sockaddr_in at = loopback(port);
+  ASSERT_EQ(::bind(host, reinterpret_cast<const sockaddr*>(&at), sizeof at), 0);
+  ASSERT_EQ(::listen(host, 4), 0);
+
   app::PlannerProcessOptions o;
-  o.command = course_planner().string();
+  o.command = course_planner().string() + " --port " + std::to_string(port);
   o.isolated = true;
   o.log = dir / "a.log";
   app::PlannerProcess a(o);
   o.log = dir / "b.log";
   app::PlannerProcess b(o);
-  const auto connect_in = [](app::PlannerProcess& p) {
+  const auto connect_in = [port](app::PlannerProcess& p) {
     for (int i = 0; i < 500; ++i) {
       const int fd = p.open_socket();
       if (fd < 0) return false;
-      sockaddr_in to{};
-      to.sin_family = AF_INET;
-      to.sin_port = htons(4567);
-      to.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+      const sockaddr_in to = loopback(port);
       const bool ok = ::connect(fd, reinterpret_cast<const sockaddr*>(&to), sizeof to) == 0;
       ::close(fd);
       if (ok) return true;
@@ -201,29 +254,288 @@ TEST(PlannerProcessTest, IsolatedProgramsShareTheFixedPortAndNobodyElseReachesTh
   };
   EXPECT_TRUE(connect_in(a));
   EXPECT_TRUE(connect_in(b));
-  // Both listened on 4567 at once (each then aborts on the disconnect, as such programs do).
-  EXPECT_NE(read_text(dir / "a.log").find("Listening to port 4567"), std::string::npos);
-  EXPECT_NE(read_text(dir / "b.log").find("Listening to port 4567"), std::string::npos);
-  const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
-  sockaddr_in to{};
-  to.sin_family = AF_INET;
-  to.sin_port = htons(4567);
-  to.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-  EXPECT_NE(::connect(fd, reinterpret_cast<const sockaddr*>(&to), sizeof to), 0)
-      << "the host's port 4567 answered: the planner is not isolated";
+  const std::string listening = "Listening to port " + std::to_string(port);
+  EXPECT_NE(read_text(dir / "a.log").find(listening), std::string::npos)
+      << read_text(dir / "a.log");
+  EXPECT_NE(read_text(dir / "b.log").find(listening), std::string::npos)
+      << read_text(dir / "b.log");
+  // On the host, the port is the test's: the connection is accepted by the test's listener.
+  const int fd = ::socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC, 0);
+  const sockaddr_in to = loopback(port);
+  ASSERT_EQ(::connect(fd, reinterpret_cast<const sockaddr*>(&to), sizeof to), 0);
+  const int accepted = ::accept4(host, nullptr, nullptr, SOCK_CLOEXEC);
+  EXPECT_GE(accepted, 0) << "the host's connection did not reach the host's listener";
+  if (accepted >= 0) ::close(accepted);
   ::close(fd);
+  ::close(host);
   a.stop();
   b.stop();
   fs::remove_all(dir);
+}
+
+// The processes whose command line holds `marker` (a daemon a program started, say).
+std::vector<pid_t> processes_with(const std::string& marker) {
+  std::vector<pid_t> found;
+  for (const auto& entry : fs::directory_iterator("/proc")) {
+    const std::string name = entry.path().filename().string();
+    if (name.empty() || name.find_first_not_of("0123456789") != std::string::npos) continue;
+    std::string cmdline = read_text(entry.path() / "cmdline");
+    std::replace(cmdline.begin(), cmdline.end(), '\0', ' ');
+    if (cmdline.find(marker) != std::string::npos) found.push_back(std::stoi(name));
+  }
+  return found;
+}
+
+// Waits up to `timeout` for `done()`.
+template <class Done>
+bool eventually(const Done& done, std::chrono::milliseconds timeout) {
+  const auto until = std::chrono::steady_clock::now() + timeout;
+  while (!done()) {
+    if (std::chrono::steady_clock::now() > until) return false;
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  return true;
+}
+
+// A command that starts two daemons (a new session, a double fork), each marked with `tag`
+// in its command line, then goes on running as the planner would.
+std::string daemonising(const std::string& tag) {
+  return "setsid sleep 777." + tag + " & (sleep 778." + tag + " &); exec sleep 30";
+}
+
+// Only standard input, output and error reach the program: not a file the parent holds open
+// without close-on-exec (as a bench's results file is).
+TEST(PlannerProcessTest, OnlyStandardInputOutputAndErrorReachTheProgram) {
+  const fs::path dir = fs::temp_directory_path() / ("overtake-fds-" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  std::ofstream held(dir / "results.jsonl");  // open, inheritable
+  for (const bool isolated : {false, true}) {
+    if (isolated && !app::private_network_available()) continue;
+    app::PlannerProcessOptions o;
+    o.command = "exec ls -l /proc/self/fd";
+    o.log = dir / "fds.log";
+    o.isolated = isolated;
+    app::PlannerProcess p(o);
+    ASSERT_TRUE(eventually([&] { return !p.ended().empty(); }, std::chrono::seconds(10)));
+    p.stop();
+    const std::string text = read_text(o.log);
+    std::istringstream lines(text);
+    std::string line;
+    int descriptors = 0;
+    while (std::getline(lines, line)) {
+      const std::size_t arrow = line.find(" -> ");
+      if (arrow == std::string::npos) continue;
+      ++descriptors;
+      const std::string target = line.substr(arrow + 4);
+      const bool allowed = target == "/dev/null" || target.rfind("pipe:", 0) == 0 ||
+                           target.find("/fd") != std::string::npos;  // ls's own listing
+      EXPECT_TRUE(allowed) << "isolated " << isolated << ": " << line;
+    }
+    EXPECT_EQ(descriptors, 4) << text;  // 0, 1, 2 and the folder ls reads
+    EXPECT_EQ(text.find("results.jsonl"), std::string::npos) << text;
+  }
+  fs::remove_all(dir);
+}
+
+// What a program starts, daemons included, ends with its run: after a normal stop, and after
+// the process that started it is killed with SIGKILL (no destructor, no clean-up of its own).
+// Both ways of holding the processes together: a PID namespace, and the subreaper used where
+// namespaces cannot be had.
+TEST(PlannerProcessTest, WhatAProgramStartsEndsWithItsRunEvenWhenOvertakeIsKilled) {
+  const fs::path dir =
+      fs::temp_directory_path() / ("overtake-daemons-" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  for (const bool namespaces : {true, false}) {
+    if (namespaces && !app::private_network_available()) continue;
+    SCOPED_TRACE(namespaces ? "PID namespace" : "subreaper");
+    const std::string tag = std::to_string(::getpid()) + (namespaces ? "1" : "2");
+    app::PlannerProcessOptions o;
+    o.command = daemonising(tag);
+    o.log = dir / "daemons.log";
+    o.isolated = false;
+    o.namespaces = namespaces;
+    {
+      app::PlannerProcess p(o);
+      EXPECT_EQ(p.containment(),
+                namespaces ? app::Containment::pid_namespace : app::Containment::subreaper);
+      ASSERT_TRUE(
+          eventually([&] { return processes_with(tag).size() == 2; }, std::chrono::seconds(10)));
+      p.stop(0.2);
+    }
+    EXPECT_TRUE(eventually([&] { return processes_with(tag).empty(); }, std::chrono::seconds(3)))
+        << processes_with(tag).size() << " left after a normal stop";
+
+    // The same in a child process that is killed while the program runs.
+    const std::string killed_tag = tag + "9";
+    o.command = daemonising(killed_tag);
+    const pid_t child = ::fork();
+    if (child == 0) {
+      app::PlannerProcess p(o);
+      ::pause();
+      _exit(0);
+    }
+    ASSERT_GT(child, 0);
+    EXPECT_TRUE(eventually([&] { return processes_with(killed_tag).size() == 2; },
+                           std::chrono::seconds(10)));
+    ::kill(child, SIGKILL);
+    ::waitpid(child, nullptr, 0);
+    EXPECT_TRUE(
+        eventually([&] { return processes_with(killed_tag).empty(); }, std::chrono::seconds(3)))
+        << processes_with(killed_tag).size() << " left after SIGKILL of their starter";
+    for (const pid_t left : processes_with(killed_tag)) ::kill(left, SIGKILL);
+  }
+  fs::remove_all(dir);
+}
+
+// A process that ignores SIGCHLD (its children are reaped by the kernel, so waitpid cannot
+// tell how they ended) still learns how the program ended, and stops it promptly.
+TEST(PlannerProcessTest, AProcessThatIgnoresSigchldStillStopsItsProgram) {
+  const fs::path log =
+      fs::temp_directory_path() / ("overtake-sigchld-" + std::to_string(::getpid()) + ".log");
+  struct sigaction ignore {
+  }, old{};
+  ignore.sa_handler = SIG_IGN;
+  ::sigaction(SIGCHLD, &ignore, &old);
+  {
+    app::PlannerProcessOptions o;
+    o.command = "exit 7";
+    o.log = log;
+    o.isolated = false;
+    app::PlannerProcess p(o);
+    EXPECT_TRUE(eventually([&] { return !p.ended().empty(); }, std::chrono::seconds(5)));
+    EXPECT_EQ(p.ended(), "exited with status 7");
+    const auto t0 = std::chrono::steady_clock::now();
+    p.stop();
+    EXPECT_LT(std::chrono::steady_clock::now() - t0, std::chrono::seconds(2));
+  }
+  ::sigaction(SIGCHLD, &old, nullptr);
+  fs::remove(log);
+}
+
+// The program runs as the user who runs overtake, not as root of its user namespace. (As
+// root, the test runs overtake as the user nobody, to go through the user namespace.)
+TEST_F(PlannerProgramTest, TheProgramRunsAsTheUserNotAsRoot) {
+  if (!app::private_network_available()) GTEST_SKIP() << "no namespaces on this machine";
+  std::vector<std::string> prefix;
+  std::string uid = std::to_string(::getuid());
+  if (::getuid() == 0) {
+    if (!fs::exists("/usr/bin/setpriv")) GTEST_SKIP() << "no setpriv to run as another user";
+    prefix = {"/usr/bin/setpriv", "--reuid=65534", "--regid=65534", "--clear-groups"};
+    uid = "65534";
+    fs::permissions(root_, fs::perms::all);
+  }
+  const fs::path log = root_ / "planner.log";
+  std::vector<std::string> args = prefix;
+  args.push_back(test::overtake_binary().string());
+  for (const std::string& a :
+       {std::string("sim"), std::string("--planner-cmd"),
+        "echo uid $(id -u) gid $(id -g); exec " + course_planner().string(),
+        std::string("--minutes"), std::string("0.05"), std::string("--planner-log"), log.string(),
+        std::string("--planner-network"), std::string("isolated"), std::string("--quiet")}) {
+    args.push_back(a);
+  }
+  const pid_t pid = test::start_command(args, root_ / "stdout", root_ / "stderr");
+  const auto status = test::exit_status(pid, std::chrono::seconds(120));
+  const std::string text = read_text(log);
+  if (status != 0 && read_text(root_ / "stderr").find("namespace") != std::string::npos)
+    GTEST_SKIP() << "no user namespaces for this user: " << read_text(root_ / "stderr");
+  ASSERT_EQ(status, 0) << read_text(root_ / "stderr");
+  EXPECT_NE(text.find("uid " + uid + " gid " + uid), std::string::npos) << text;
+}
+
+// Ctrl-C while a program has not yet started listening stops at once, not after the start
+// timeout.
+TEST_F(PlannerProgramTest, CtrlCWhileAProgramStartsStopsAtOnce) {
+  const pid_t pid = test::start_overtake(
+      {"sim", "--planner-cmd", course_planner().string() + " --never-listen", "--connect-timeout",
+       "60", "--minutes", "1", "--planner-log", (root_ / "planner.log").string()},
+      root_ / "stdout", root_ / "stderr");
+  std::this_thread::sleep_for(std::chrono::milliseconds(1500));
+  const auto t0 = std::chrono::steady_clock::now();
+  ::kill(pid, SIGINT);
+  const auto status = test::exit_status(pid, std::chrono::seconds(10));
+  const auto waited = std::chrono::steady_clock::now() - t0;
+  EXPECT_EQ(status, 130) << read_text(root_ / "stderr");
+  EXPECT_LT(waited, std::chrono::milliseconds(1500));
+  EXPECT_NE(read_text(root_ / "stdout").find("stopped"), std::string::npos)
+      << read_text(root_ / "stdout");
+}
+
+// A bench's open results file does not reach its programs, and a daemon a program starts
+// does not outlive its run; a run whose program cannot even be started fails alone.
+TEST_F(PlannerProgramTest, ABenchKeepsItsFilesAndEndsWhatItsProgramsStart) {
+  const fs::path out = root_ / "bench";
+  const std::string tag = "31" + std::to_string(::getpid());
+  ASSERT_EQ(
+      run({"bench", "--planner-cmd",
+           "ls -l /proc/self/fd; setsid sleep 779." + tag + " & exec " + course_planner().string(),
+           "--planner-name", "course", "--seeds", "1-2", "--minutes", "0.2", "--traffic", "calm",
+           "--jobs", "2", "--out", out.string(), "--quiet"}),
+      0)
+      << err_;
+  const auto rows = read_rows(out / "runs.jsonl");
+  ASSERT_EQ(rows.size(), 2u);
+  for (const json& r : rows) EXPECT_EQ(r["end"], "completed") << r["ended_early"];
+  for (const char* log : {"course-calm-seed1.log", "course-calm-seed2.log"}) {
+    const std::string text = read_text(out / "logs" / log);
+    EXPECT_NE(text.find("/dev/null"), std::string::npos) << text;
+    EXPECT_EQ(text.find("runs.jsonl"), std::string::npos) << text;
+    EXPECT_EQ(text.find("socket:"), std::string::npos) << text;
+  }
+  EXPECT_TRUE(
+      eventually([&] { return processes_with("779." + tag).empty(); }, std::chrono::seconds(3)));
+}
+
+// A program that cannot even be started (here its log cannot be written) fails its own run,
+// and the bench goes on with the others.
+TEST_F(PlannerProgramTest, AProgramThatCannotBeStartedFailsItsRunOnly) {
+  const fs::path out = root_ / "bench";
+  fs::create_directories(out);
+  std::ofstream(out / "logs") << "a file where the logs' folder would be\n";
+  ASSERT_EQ(run({"bench", "--planner-cmd", course_planner().string(), "--planner-name", "course",
+                 "--policies", "walkthrough", "--seeds", "1", "--minutes", "0.1", "--traffic",
+                 "calm", "--out", out.string(), "--quiet"}),
+            0)
+      << err_;
+  std::map<std::string, json> by;
+  for (const json& r : read_rows(out / "runs.jsonl")) by[r["config"]["policy"]] = r;
+  ASSERT_EQ(by.size(), 2u);
+  EXPECT_EQ(by["walkthrough"]["end"], "completed");
+  EXPECT_EQ(by["course"]["end"], "planner_failed");
+  EXPECT_NE(by["course"]["ended_early"].get<std::string>().find(
+                "cannot start the planner program: " + (out / "logs").string()),
+            std::string::npos)
+      << by["course"]["ended_early"];
+}
+
+// On the host's network, the scorecard says so: whatever listened on the port was trusted.
+TEST_F(PlannerProgramTest, TheScorecardSaysWhenTheHostsNetworkWasUsed) {
+  const int port = free_port();
+  ASSERT_EQ(
+      run({"sim", "--planner-cmd", course_planner().string() + " --port " + std::to_string(port),
+           "--planner-port", std::to_string(port), "--planner-network", "host", "--minutes", "0.05",
+           "--planner-log", (root_ / "planner.log").string()}),
+      0)
+      << err_;
+  EXPECT_NE(out_.find("the host's: whatever listened on port " + std::to_string(port)),
+            std::string::npos)
+      << out_;
+  ASSERT_EQ(run({"sim", "--planner-cmd", course_planner().string(), "--minutes", "0.05",
+                 "--planner-log", (root_ / "planner.log").string()}),
+            0)
+      << err_;
+  if (app::private_network_available()) {
+    EXPECT_EQ(out_.find("the host's"), std::string::npos) << out_;
+  }
 }
 
 // The course-like program beside the built-in walkthrough it wraps, on 2 jobs: the program's
 // reports equal the in-process ones, and each run's output is in its own log.
 TEST_F(PlannerProgramTest, BenchRunsProgramsInParallelWithTheSameReportsAsInProcess) {
   const fs::path out = root_ / "bench";
-  ASSERT_EQ(run({"bench", "--policies", "walkthrough", "--planner-cmd",
-                 "course=" + course_planner().string(), "--seeds", "1-3", "--minutes", "1",
-                 "--traffic", "faithful", "--jobs", "2", "--out", out.string(), "--quiet"}),
+  ASSERT_EQ(run({"bench", "--policies", "walkthrough", "--planner-cmd", course_planner().string(),
+                 "--planner-name", "course", "--seeds", "1-3", "--minutes", "1", "--traffic",
+                 "faithful", "--jobs", "2", "--out", out.string(), "--quiet"}),
             0)
       << err_;
   const auto rows = read_rows(out / "runs.jsonl");
@@ -256,15 +568,25 @@ TEST_F(PlannerProgramTest, CrashesHangsAndSilentProgramsEndTheirRunsWithTheReaso
   const fs::path out = root_ / "bench";
   ASSERT_EQ(run({"bench",
                  "--planner-cmd",
-                 "crash=" + p + " --crash-after 30",
+                 p + " --crash-after 30",
                  "--planner-cmd",
-                 "hang=" + p + " --hang-after 30",
+                 p + " --hang-after 30",
                  "--planner-cmd",
-                 "silent=" + p + " --never-listen",
+                 p + " --never-listen",
                  "--planner-cmd",
-                 "quits=" + p + " --exit-at-start",
+                 p + " --exit-at-start",
                  "--planner-cmd",
-                 "good=" + p,
+                 p,
+                 "--planner-name",
+                 "crash",
+                 "--planner-name",
+                 "hang",
+                 "--planner-name",
+                 "silent",
+                 "--planner-name",
+                 "quits",
+                 "--planner-name",
+                 "good",
                  "--planner-start-timeout",
                  "1",
                  "--planner-reply-timeout",
@@ -325,11 +647,28 @@ TEST_F(PlannerProgramTest, SimStartsTheProgramDrivesItAndStopsIt) {
 // On the host's network the runs take turns on the port, and still give the same reports.
 TEST_F(PlannerProgramTest, OnTheHostNetworkRunsTakeTurns) {
   const fs::path out = root_ / "bench";
-  ASSERT_EQ(
-      run({"bench", "--planner-cmd", "course=" + course_planner().string() + " --port 45871",
-           "--planner-port", "45871", "--planner-network", "host", "--seeds", "1-2", "--minutes",
-           "0.5", "--traffic", "calm", "--jobs", "2", "--out", out.string(), "--quiet"}),
-      0)
+  const int port = free_port();
+  ASSERT_EQ(run({"bench",
+                 "--planner-cmd",
+                 course_planner().string() + " --port " + std::to_string(port),
+                 "--planner-name",
+                 "course",
+                 "--planner-port",
+                 std::to_string(port),
+                 "--planner-network",
+                 "host",
+                 "--seeds",
+                 "1-2",
+                 "--minutes",
+                 "0.5",
+                 "--traffic",
+                 "calm",
+                 "--jobs",
+                 "2",
+                 "--out",
+                 out.string(),
+                 "--quiet"}),
+            0)
       << err_;
   const auto rows = read_rows(out / "runs.jsonl");
   ASSERT_EQ(rows.size(), 2u);
@@ -342,9 +681,10 @@ TEST_F(PlannerProgramTest, TheExampleProgramDrivesWithoutIncidents) {
   const fs::path program = fs::path(OVERTAKE_BINARY_DIR) / "tests" / "overtake_example_program";
   const std::string map = (fs::path(OVERTAKE_SOURCE_DIR) / "data/tracks/default.csv").string();
   const fs::path out = root_ / "bench";
-  ASSERT_EQ(run({"bench", "--planner-cmd", "example=" + program.string() + " " + map, "--seeds",
-                 "1-2", "--minutes", "4", "--jobs", "2", "--out", out.string(), "--quiet"}),
-            0)
+  ASSERT_EQ(
+      run({"bench", "--planner-cmd", program.string() + " " + map, "--planner-name", "example",
+           "--seeds", "1-2", "--minutes", "4", "--jobs", "2", "--out", out.string(), "--quiet"}),
+      0)
       << err_;
   const auto rows = read_rows(out / "runs.jsonl");
   ASSERT_EQ(rows.size(), 4u);

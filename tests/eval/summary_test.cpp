@@ -6,6 +6,8 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <string>
 #include <vector>
@@ -163,6 +165,73 @@ TEST(Summary, TheSameRunsGiveTheSameBytes) {
   EXPECT_EQ(summary_markdown(s1, p1),
             summary_markdown(summarize(runs, {"a", "b"}, {"faithful"}),
                              pair_policies(runs, {"a", "b"}, {"faithful"})));
+}
+
+/// A CSV line's fields.
+std::vector<std::string> fields_of(const std::string& line) {
+  std::vector<std::string> out(1);
+  for (const char ch : line) {
+    if (ch == ',') {
+      out.emplace_back();
+    } else {
+      out.back() += ch;
+    }
+  }
+  return out;
+}
+
+// A planner over the protocol does not say how it planned: its rows' plan_status is null, and
+// its share of cycles by status is unknown (null, "–", empty), not all normal. Rows with
+// statuses are summed as before; a policy that mixes both gets the shares of the runs that say.
+TEST(Summary, PlanStatusSharesAreNullWhenNoRunSaysHowItPlanned) {
+  std::vector<json> rows;
+  for (std::uint64_t s = 1; s <= 4; ++s) {
+    json known = row("builtin", "faithful", s, 44.0);
+    known["plan_status"] = {{"cycles", {{"normal", 29000}, {"least_bad", 400}, {"fallback", 600}}},
+                            {"first_reason", "braking in the lane"}};
+    rows.push_back(known);
+    json remote = row("remote", "faithful", s, 44.0);
+    remote["plan_status"] = nullptr;
+    rows.push_back(remote);
+    rows.push_back(s % 2 == 0 ? known : remote);
+    rows.back()["config"]["policy"] = "mixed";
+  }
+  const auto runs = rows_of(rows);
+  EXPECT_FALSE(runs[1].plan_status_known);
+  EXPECT_EQ(runs[1].plan_status_cycles, (std::array<double, core::kPlanStatusCount>{}));
+  EXPECT_TRUE(runs[0].plan_status_known);
+  const json summary = summarize(runs, {"builtin", "remote", "mixed"}, {"faithful"});
+  ASSERT_EQ(summary.size(), 3u);
+  const json& builtin = summary[0]["plan_status_share"];
+  EXPECT_DOUBLE_EQ(builtin["least_bad"].get<double>(), 400.0 / 30000.0);
+  EXPECT_DOUBLE_EQ(builtin["fallback"].get<double>(), 600.0 / 30000.0);
+  EXPECT_NEAR(builtin["normal"].get<double>(), 29000.0 / 30000.0, 1e-12);
+  EXPECT_TRUE(summary[1]["plan_status_share"].is_null());
+  EXPECT_EQ(summary[2]["plan_status_share"], builtin);  // the two runs that say
+
+  const std::string md = summary_markdown(summary, json::array());
+  EXPECT_THAT(
+      md, HasSubstr("| builtin | faithful | 5.0 / 3.0 | 6.0 / 8.0 | 50 / 150 | 1.3% / 2.0% | 0 |"));
+  EXPECT_THAT(md, HasSubstr("| remote | faithful | 5.0 / 3.0 | 6.0 / 8.0 | 50 / 150 | – | 0 |"));
+  const std::string csv = summary_csv(summary);
+  std::vector<std::vector<std::string>> lines;
+  for (std::size_t at = 0, end = 0; at < csv.size(); at = end + 1) {
+    end = csv.find('\n', at);
+    lines.push_back(fields_of(csv.substr(at, end - at)));
+  }
+  ASSERT_EQ(lines.size(), 4u);
+  const auto column = [&](const std::string& name) {
+    const auto& h = lines[0];
+    return static_cast<std::size_t>(std::find(h.begin(), h.end(), name) - h.begin());
+  };
+  const std::size_t least_bad = column("least_bad_cycle_share");
+  const std::size_t fallback = column("fallback_cycle_share");
+  ASSERT_LT(fallback, lines[0].size());
+  EXPECT_EQ(lines[1][least_bad], "0.01333");
+  EXPECT_EQ(lines[1][fallback], "0.02000");
+  EXPECT_EQ(lines[2][0], "remote");
+  EXPECT_EQ(lines[2][least_bad], "");
+  EXPECT_EQ(lines[2][fallback], "");
 }
 
 /// 20 seeds of two policies: b's speed on each seed is a's plus `delta` plus noise of `sd`.

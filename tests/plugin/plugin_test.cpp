@@ -1,23 +1,28 @@
-// C++ planner plugins (overtake/planner_plugin.h): loading and its refusals, what a plugin
-// is told and in which units, plugins that fail while driving (the run ends planner_failed
-// with the reason, nothing crashes), the example plugin driving without collisions, and
-// `drive`/`bench --policy-lib` through the binary.
+// C++ planner plugins (overtake/planner_plugin.h): loading and its refusals (versions: the
+// same major and an older or equal minor load, anything else is refused saying both), what a
+// plugin is told and in which units, plugins built against the frozen 2.0 header reading and
+// driving in this overtake, plugins that fail while driving or starting (the run ends
+// planner_failed with the reason, nothing crashes), the example plugin driving without
+// collisions, and `drive`/`bench --policy-lib` through the binary.
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include <cstddef>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <string>
 
+#include <dlfcn.h>
 #include <unistd.h>
 
 #include "overtake/app/commands.hpp"
 #include "overtake/app/io.hpp"
 #include "overtake/app/planners.hpp"
 #include "overtake/core/units.hpp"
+#include "overtake/planner_plugin.h"
 #include "overtake/plugin/plugin.hpp"
 #include "overtake/protocol/codec.hpp"
 #include "overtake/protocol/server.hpp"
@@ -29,12 +34,20 @@ namespace {
 using nlohmann::json;
 using ::testing::AllOf;
 using ::testing::HasSubstr;
+using ::testing::Not;
 namespace fs = std::filesystem;
 
-/// The test plugin built from tests/plugin/plugins/misbehaving.cpp with MISBEHAVE=mode.
+/// The test plugin built from tests/plugin/plugins/misbehaving.cpp with MISBEHAVE=mode (or
+/// another test plugin, by the end of its target's name).
 std::string misbehaving(const std::string& mode) {
   return std::string(OVERTAKE_PLUGIN_DIR) + "/libovertake_test_plugin_" + mode + ".so";
 }
+
+/// "major.minor", as the loader's messages write a version.
+std::string abi(int major, int minor) {
+  return std::to_string(major) + "." + std::to_string(minor);
+}
+const std::string kOurVersion = abi(OVERTAKE_PLUGIN_ABI_MAJOR, OVERTAKE_PLUGIN_ABI_MINOR);
 
 /// PluginError's message when loading `path`, or "" when it loads.
 std::string load_error(const std::string& path) {
@@ -86,11 +99,35 @@ TEST(PluginLoad, AFileThatIsNoLibraryIsRefused) {
   fs::remove(f);
 }
 
-TEST(PluginLoad, AWrongVersionSaysBothVersions) {
-  const std::string e = load_error(misbehaving("wrong_version"));
-  EXPECT_THAT(e, HasSubstr("libovertake_test_plugin_wrong_version.so"));
-  EXPECT_THAT(e, HasSubstr("ABI version 99"));
-  EXPECT_THAT(e, HasSubstr("speaks version 1"));
+TEST(PluginLoad, AVersion1PluginIsRefusedSayingToRebuildIt) {
+  const std::string e = load_error(misbehaving("old_major"));
+  EXPECT_THAT(e, HasSubstr("libovertake_test_plugin_old_major.so"));
+  EXPECT_THAT(e, HasSubstr("built for plugin ABI version 1, but this overtake speaks version " +
+                           kOurVersion));
+  EXPECT_THAT(e, HasSubstr("no longer loads version 1 plugins"));
+  EXPECT_THAT(e, HasSubstr("rebuild it against this overtake's overtake/planner_plugin.h"));
+}
+
+TEST(PluginLoad, ANewerMinorIsRefusedNamingBothVersions) {
+  const std::string e = load_error(misbehaving("newer_minor"));
+  const std::string theirs = abi(OVERTAKE_PLUGIN_ABI_MAJOR, OVERTAKE_PLUGIN_ABI_MINOR + 1);
+  EXPECT_THAT(e, HasSubstr("libovertake_test_plugin_newer_minor.so"));
+  EXPECT_THAT(e, HasSubstr("built for plugin ABI version " + theirs +
+                           ", but this overtake speaks version " + kOurVersion));
+  EXPECT_THAT(e, HasSubstr("use an overtake of plugin ABI version " + theirs + " or later"));
+  EXPECT_THAT(e, HasSubstr("or rebuild it"));
+}
+
+TEST(PluginLoad, AnotherMajorIsRefusedNamingBothVersions) {
+  const std::string e = load_error(misbehaving("newer_major"));
+  EXPECT_THAT(e, HasSubstr("built for plugin ABI version " + abi(OVERTAKE_PLUGIN_ABI_MAJOR + 1, 0) +
+                           ", but this overtake speaks version " + kOurVersion));
+}
+
+TEST(PluginLoad, AnOlderMinorLoads) {
+  // Built against the frozen 2.0 header (tests/plugin/abi/v2_0).
+  EXPECT_EQ(load_error(misbehaving("echo_v2_0")), "");
+  EXPECT_EQ(load_error(misbehaving("keep_lane_v2_0")), "");
 }
 
 TEST(PluginLoad, AMissingFunctionIsNamedWithTheFile) {
@@ -101,7 +138,7 @@ TEST(PluginLoad, AMissingFunctionIsNamedWithTheFile) {
 
 TEST(PluginLoad, TheCatalogTurnsARefusalIntoAUsageError) {
   app::PlannerFlags flags;
-  flags.libs = {misbehaving("wrong_version")};
+  flags.libs = {misbehaving("old_major")};
   EXPECT_THROW((void)app::catalog_from_flags(flags), app::UsageError);
 }
 
@@ -120,11 +157,34 @@ TEST(PluginLoad, TheLibraryStaysLoadedWhileAPolicyLives) {
   EXPECT_EQ(r.path.size(), 50U);
 }
 
+TEST(PluginLoad, APluginMayGiveNoSummary) {
+  const LoadedPlugin p = load_plugin(misbehaving("quiet"));
+  EXPECT_EQ(p.name, "misbehaving_quiet");
+  EXPECT_EQ(p.summary, "");
+}
+
+TEST(PluginLoad, TheWatchdogsTestPluginLoads) {
+  const LoadedPlugin p = load_plugin(OVERTAKE_NEVER_RETURNS_PLUGIN);
+  EXPECT_EQ(p.name, "never_returns");
+}
+
+TEST(PluginLoad, TheCodeStaysMappedAfterTheLastHandleIsGone) {
+  // A plugin's thread may still be finishing, or a plan call abandoned, when overtake closes
+  // the library: its code must stay where it is. No other test loads this plugin.
+  {
+    const LoadedPlugin p = load_plugin(OVERTAKE_NEVER_RETURNS_PLUGIN);
+    const auto policy = p.make(track().line, planner::PlannerParams{});
+    ASSERT_TRUE(policy);
+  }
+  void* still = ::dlopen(OVERTAKE_NEVER_RETURNS_PLUGIN, RTLD_NOW | RTLD_NOLOAD);
+  EXPECT_NE(still, nullptr) << "the library was unloaded";
+  if (still != nullptr) ::dlclose(still);
+}
+
 // ---- what the plugin is told ----------------------------------------------------------
 
-TEST(PluginTelemetry, TheOriginalsUnitsAndFieldsReachThePlugin) {
-  const LoadedPlugin p = load_plugin(misbehaving("echo"));
-  auto policy = p.make(track().line, planner::PlannerParams{});
+/// A telemetry with every field set, a previous path of two points and one car.
+core::Telemetry full_telemetry() {
   core::Telemetry t;
   t.ego.position = {909.48, 1128.67};
   t.ego.s_m = 124.8336;
@@ -140,8 +200,13 @@ TEST(PluginTelemetry, TheOriginalsUnitsAndFieldsReachThePlugin) {
   car.s_m = 85.3;
   car.d_m = 2.012;
   t.cars = {car};
-  const std::vector<core::Vec2> e = policy->plan(t).path;
-  ASSERT_EQ(e.size(), 5U + 2U + 4U);
+  return t;
+}
+
+/// Checks the points the echo plugin answers for full_telemetry(), up to the sensor fusion
+/// (the fields every 2.x has), in the order tests/plugin/plugins/misbehaving.cpp writes them.
+void expect_echo_of_full_telemetry(const std::vector<core::Vec2>& e) {
+  ASSERT_GE(e.size(), 8U + 2U + 4U);
   EXPECT_EQ(e[0], (core::Vec2{909.48, 1128.67}));
   EXPECT_EQ(e[1], (core::Vec2{124.8336, 6.164833}));
   // Yaw in degrees and speed in mph, exactly as the original's wire prints them.
@@ -149,13 +214,60 @@ TEST(PluginTelemetry, TheOriginalsUnitsAndFieldsReachThePlugin) {
   EXPECT_EQ(e[2].y, 49.5);
   EXPECT_EQ(e[3], (core::Vec2{2.0, 126.5}));
   EXPECT_EQ(e[4], (core::Vec2{6.25, 1.0}));
-  EXPECT_EQ(e[5], (core::Vec2{910.0, 1128.5}));
-  EXPECT_EQ(e[6], (core::Vec2{911.0, 1128.25}));
+  // The sizes of setup, telemetry and path as this overtake has them.
+  EXPECT_EQ(e[5], (core::Vec2{static_cast<double>(sizeof(overtake_plugin_setup)),
+                              static_cast<double>(sizeof(overtake_telemetry))}));
+  EXPECT_EQ(e[6].x, static_cast<double>(sizeof(overtake_path)));
+  EXPECT_EQ(e[7], (core::Vec2{0.0, 0.0}));  // arrays with elements are not NULL
+  EXPECT_EQ(e[8], (core::Vec2{910.0, 1128.5}));
+  EXPECT_EQ(e[9], (core::Vec2{911.0, 1128.25}));
   // Sensor fusion: [id, x, y, vx, vy, s, d], velocity in m/s.
-  EXPECT_EQ(e[7], (core::Vec2{4.0, 775.99}));
-  EXPECT_EQ(e[8], (core::Vec2{1132.11, 22.1}));
-  EXPECT_EQ(e[9], (core::Vec2{-0.3651, 85.3}));
-  EXPECT_EQ(e[10], (core::Vec2{2.012, 0.0}));
+  EXPECT_EQ(e[10], (core::Vec2{4.0, 775.99}));
+  EXPECT_EQ(e[11], (core::Vec2{1132.11, 22.1}));
+  EXPECT_EQ(e[12], (core::Vec2{-0.3651, 85.3}));
+  EXPECT_EQ(e[13], (core::Vec2{2.012, 0.0}));
+}
+
+TEST(PluginTelemetry, TheOriginalsUnitsAndFieldsReachThePlugin) {
+  const LoadedPlugin p = load_plugin(misbehaving("echo"));
+  auto policy = p.make(track().line, planner::PlannerParams{});
+  const core::Telemetry t = full_telemetry();
+  const std::vector<core::Vec2> e = policy->plan(t).path;
+  ASSERT_EQ(e.size(), 8U + 2U + 4U + 1U);
+  expect_echo_of_full_telemetry(e);
+  EXPECT_EQ(e[6].y, static_cast<double>(sizeof(overtake_telemetry)));  // built against this
+  // 2.1: the speed in m/s as well.
+  EXPECT_EQ(e[14], (core::Vec2{t.ego.speed_mps, 0.0}));
+}
+
+TEST(PluginTelemetry, EmptyArraysAreNull) {
+  const LoadedPlugin p = load_plugin(misbehaving("echo"));
+  auto policy = p.make(track().line, planner::PlannerParams{});
+  const core::Vec2 both_null{1.0, 1.0};
+  core::Telemetry empty;
+  EXPECT_EQ(policy->plan(empty).path.at(7), both_null);
+  EXPECT_EQ(policy->plan(full_telemetry()).path.at(7), (core::Vec2{0.0, 0.0}));
+  // Again empty, now that the arrays behind them have had storage.
+  EXPECT_EQ(policy->plan(empty).path.at(7), both_null);
+}
+
+TEST(PluginTelemetry, APluginBuiltAgainst2_0ReadsTheFieldsItKnows) {
+  const LoadedPlugin p = load_plugin(misbehaving("echo_v2_0"));
+  auto policy = p.make(track().line, planner::PlannerParams{});
+  const std::vector<core::Vec2> e = policy->plan(full_telemetry()).path;
+  // Every field of 2.0 where 2.0 put it, and nothing after the sensor fusion: the plugin
+  // knows no speed_mps. It was built with a shorter telemetry: 2.1 appended one double.
+  ASSERT_EQ(e.size(), 8U + 2U + 4U);
+  expect_echo_of_full_telemetry(e);
+  EXPECT_EQ(e[6].y, static_cast<double>(offsetof(overtake_telemetry, speed_mps)));
+}
+
+TEST(PluginTelemetry, APluginBuiltAgainst2_0Drives) {
+  const app::DriveResult r = drive_plugin(misbehaving("keep_lane_v2_0"), 2.0, 1);
+  const json j = app::report_to_json(r.report, r.provenance);
+  EXPECT_EQ(j["end"], "completed") << j["ended_early"];
+  EXPECT_EQ(j["incident_counts"]["collision"], 0);
+  EXPECT_GT(j["distance_miles"].get<double>(), 1.0);
 }
 
 // ---- plugins that fail while driving --------------------------------------------------
@@ -181,9 +293,20 @@ INSTANTIATE_TEST_SUITE_P(
                       Failure{"nan", "non-finite point (index 0)"},
                       Failure{"status", "failed (status 7): lost track of the lane"},
                       Failure{"too_many", "more than the buffers'"},
-                      Failure{"create_fails", "create failed: no config given"},
+                      Failure{"struct_size", "wrote over the path's struct_size"},
+                      Failure{"quiet", "failed (status 3): no reason given"},
+                      Failure{"create_fails", "create failed: no config given for 3 lanes"},
                       Failure{"create_throws", "create threw an exception: cannot start"}),
     [](const ::testing::TestParamInfo<Failure>& p) { return std::string(p.param.mode); });
+
+TEST(FailingPlugin, AReasonThatFillsCreatesBufferIsCutShort) {
+  const app::DriveResult r = drive_plugin(misbehaving("create_unterminated"), 0.5, 1);
+  EXPECT_EQ(r.report.outcome.end, sim::RunEnd::planner_failed);
+  // The loader's buffer is 1024 bytes: 1023 characters and the NUL it puts at the end.
+  const std::string reason = r.report.outcome.reason;
+  EXPECT_THAT(reason, HasSubstr("create failed: " + std::string(1023, 'x')));
+  EXPECT_THAT(reason, Not(HasSubstr(std::string(1024, 'x'))));
+}
 
 TEST(FailingPluginServe, ASessionRepliesManualAndGoesOn) {
   const LoadedPlugin p = load_plugin(misbehaving("status"));
@@ -267,6 +390,7 @@ TEST_F(PluginCli, DriveRunsThePlugin) {
   const json j = json::parse(read(report));
   EXPECT_EQ(j["config"]["policy"], "keep_lane");
   EXPECT_EQ(j["incident_counts"]["collision"], 0);
+  EXPECT_TRUE(j["plan_status"].is_null()) << j["plan_status"];  // the ABI carries points only
 }
 
 TEST_F(PluginCli, DriveWithAFailingPluginEndsCleanlyWithTheReason) {
@@ -279,9 +403,11 @@ TEST_F(PluginCli, DriveWithAFailingPluginEndsCleanlyWithTheReason) {
 
 TEST_F(PluginCli, DriveRefusesABadPluginBeforeRunning) {
   const auto [status, out, err] =
-      run({"drive", "--policy-lib", misbehaving("wrong_version"), "--minutes", "1"});
+      run({"drive", "--policy-lib", misbehaving("newer_minor"), "--minutes", "1"});
   EXPECT_EQ(status, 2);
-  EXPECT_THAT(err, AllOf(HasSubstr("--policy-lib"), HasSubstr("ABI version 99")));
+  EXPECT_THAT(err, AllOf(HasSubstr("--policy-lib"),
+                         HasSubstr("ABI version " +
+                                   abi(OVERTAKE_PLUGIN_ABI_MAJOR, OVERTAKE_PLUGIN_ABI_MINOR + 1))));
 }
 
 TEST_F(PluginCli, BenchRunsPluginsBesideEachOtherAndSurvivesAFailingOne) {

@@ -412,6 +412,60 @@ TEST(ProtocolClient, RejectsBadPlannerUrls) {
   EXPECT_EQ(run_cli({"sim", "--planner", "http://127.0.0.1:1", "--quiet"}), app::kExitUsage);
 }
 
+// A planner over the protocol answers points only: overtake cannot know how it planned, so
+// its cycles are counted by no plan status, its report's plan_status is null (not "normal"),
+// and the scorecard prints no plan status line; in lock-step and in real time (where a manual
+// reply to a full telemetry counts as a cycle too).
+TEST(ProtocolClient, ARemotePlannersPlanStatusIsUnknown) {
+  {
+    FakePlanner planner(walkthrough_planner());
+    const auto json_path = temp_file("unknown-status");
+    ::testing::internal::CaptureStdout();
+    const int rc = run_cli({"sim", "--planner", planner.url(), "--minutes", "0.1", "--json",
+                            json_path.string(), "--quiet"});
+    const std::string text = ::testing::internal::GetCapturedStdout();
+    ASSERT_EQ(rc, app::kExitOk);
+    const auto j = nlohmann::json::parse(app::read_file(json_path));
+    std::filesystem::remove(json_path);
+    ASSERT_TRUE(j.contains("plan_status"));
+    EXPECT_TRUE(j["plan_status"].is_null()) << j["plan_status"];
+    EXPECT_GT(j["planner_cycles"].get<long>(), 100);
+    EXPECT_THAT(text, HasSubstr("planner time"));
+    EXPECT_THAT(text, Not(HasSubstr("plan status")));
+  }
+  {
+    FakePlanner planner(walkthrough_planner());
+    LogCapture log;
+    const auto report = lock_step(planner.url(), 3.0, log);
+    EXPECT_EQ(sim::ended_early_text(report.outcome), "") << log.dump();
+    EXPECT_GT(report.planner_cycles, 50);
+    EXPECT_EQ(report.plan_status_unknown_cycles, report.planner_cycles);
+    EXPECT_EQ(report.plan_status_cycles, core::PlanStatusCounts{});
+    EXPECT_FALSE(report.plan_status_known());
+  }
+  {
+    FakePlanner planner(
+        walkthrough_planner([](int index, const std::string&) -> std::optional<FakeAction> {
+          if (index == 10) return FakeAction{{std::string(kManual)}};
+          return std::nullopt;
+        }));
+    const auto track = default_track();
+    sim::World world(track->map, track->line, app::default_config().world,
+                     sim::TrafficProfile::faithful, 3);
+    LogCapture log;
+    const ClientOptions o = quick_client(&log);
+    PlannerConnection c(parse_planner_url(planner.url()).value(), o);
+    sim::RunOptions run;
+    run.duration_s = 1.0;
+    const sim::RunReport report = run_realtime(world, c, o, run);
+    c.close();
+    EXPECT_EQ(sim::ended_early_text(report.outcome), "") << log.dump();
+    EXPECT_GT(report.planner_cycles, 10);
+    EXPECT_EQ(report.plan_status_unknown_cycles, report.planner_cycles);
+    EXPECT_FALSE(report.plan_status_known());
+  }
+}
+
 // The old-style planner (tests/protocol/original_planner.hpp) reads every full telemetry our
 // client sends, in lock-step, and recognises the null ones of a real-time run.
 TEST(ProtocolOriginalConvention, OldStylePlannerReadsOurClientInLockStep) {

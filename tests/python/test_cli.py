@@ -14,6 +14,7 @@ def test_drive_with_a_python_planner_reports_as_the_builtin(run_binary):
     assert code == 0, err
     assert report["config"]["policy"] == "delegate"
     assert report["config"]["planner"] == {"kind": "python", "source": "delegate:plan"}
+    assert report["plan_status"] is None  # it answers points only: how it planned is unknown
     code, builtin, err = run_binary("drive", "--policy", "walkthrough", "--seed", "3",
                                     "--minutes", "1")
     assert code == 0, err
@@ -85,3 +86,50 @@ def test_bench_runs_python_planners_on_several_threads(binary, tmp_path):
         assert python["end"] == "completed"
         python.pop("index", None), builtin.pop("index", None)  # the row number in the bench
         assert comparable(python) == comparable(builtin)
+
+
+# A planner file that imports a module beside it, and says whose it is and whether its folder
+# is still on sys.path when it plans (by failing with that message).
+PLANNER_WITH_A_SIBLING = """import os
+import sys
+
+import {sibling}
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+
+
+def plan(telemetry):
+    raise ValueError("the planner of %s; its folder on sys.path: %s" % ({sibling}.WHO,
+                                                                          HERE in sys.path))
+"""
+
+
+def test_two_planner_files_of_one_name_each_run_their_own_code(run_binary, tmp_path):
+    files = {}
+    for who in ("a", "b"):
+        folder = tmp_path / who
+        folder.mkdir()
+        (folder / f"sibling_{who}.py").write_text(f"WHO = {who!r}\n")
+        files[who] = folder / "planner.py"
+        files[who].write_text(PLANNER_WITH_A_SIBLING.format(sibling=f"sibling_{who}"))
+    for chosen in ("a", "b"):
+        code, report, err = run_binary("drive", "--policy-py", f"A={files['a']}:plan",
+                                       "--policy-py", f"B={files['b']}:plan", "--policy",
+                                       chosen.upper(), "--minutes", "0.1", cwd=tmp_path)
+        assert code == 1, err
+        assert report["config"]["policy"] == chosen.upper()
+        assert f"the planner of {chosen}; its folder on sys.path: False" in report["ended_early"]
+    # Unnamed, a planner file is named after its stem.
+    code, report, err = run_binary("drive", "--policy-py", f"{files['b']}:plan", "--minutes",
+                                   "0.1", cwd=tmp_path)
+    assert report["config"]["policy"] == "planner", err
+    assert "the planner of b" in report["ended_early"]
+
+
+def test_a_planner_that_never_answers_is_interrupted(run_binary):
+    code, report, err = run_binary("drive", "--policy-py", "interruptible.py:spin", "--minutes",
+                                   "0.1", "--planner-reply-timeout", "1", cwd=PLANNERS)
+    assert code == 1, err
+    assert report["end"] == "planner_failed"
+    assert ("did not answer in time and was interrupted (TimeoutError at interruptible.py, line"
+            in report["ended_early"])

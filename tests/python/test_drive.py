@@ -1,6 +1,9 @@
 """overtake.drive: a whole drive in C++ with a Python callable as the planner."""
 import importlib.util
+import signal
+import subprocess
 import sys
+import time
 
 import pytest
 
@@ -75,3 +78,62 @@ def test_the_example_planner_drives_a_lap_without_an_incident(traffic):
     assert report["end"] == "completed"
     assert sum(report["incident_counts"].values()) == 0, report["incidents"]
     assert report["distance_miles"] > 4.32  # the built-in loop is 6945.554 m
+
+
+@pytest.mark.parametrize("stop", [KeyboardInterrupt("at the 10th call"), SystemExit(3)],
+                         ids=["KeyboardInterrupt", "SystemExit"])
+def test_keyboard_interrupt_and_system_exit_stop_the_drive_and_come_back(stop):
+    walkthrough = overtake.builtin_policy("walkthrough")
+    calls = []
+
+    def plan(telemetry):
+        calls.append(telemetry["s"])
+        if len(calls) == 10:
+            raise stop
+        return walkthrough(telemetry)
+
+    driven = []
+    with pytest.raises(type(stop)) as raised:
+        for seed in (1, 2):  # a loop over seeds ends at the first
+            overtake.drive(policy=plan, seed=seed, minutes=1)
+            driven.append(seed)
+    assert raised.value is stop
+    assert driven == [] and len(calls) == 10
+
+
+def test_a_class_that_raises_keyboard_interrupt_when_made_stops_the_drive():
+    class Planner:
+        def __init__(self):
+            raise KeyboardInterrupt
+
+        def __call__(self, telemetry):
+            return [], []
+
+    with pytest.raises(KeyboardInterrupt):
+        overtake.drive(policy=Planner, minutes=1)
+
+
+def test_ctrl_c_stops_a_long_drive_of_a_builtin_policy():
+    # Python's own handler (a shell may start a background process with SIGINT ignored).
+    code = """if True:
+        import signal
+        signal.signal(signal.SIGINT, signal.default_int_handler)
+        import overtake
+        print("driving", flush=True)
+        overtake.drive("reference", minutes=60)
+        print("finished", flush=True)
+    """
+    p = subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.PIPE,
+                         stderr=subprocess.PIPE, text=True)
+    try:
+        assert p.stdout.readline() == "driving\n"
+        time.sleep(1.0)
+        sent = time.monotonic()
+        p.send_signal(signal.SIGINT)
+        out, err = p.communicate(timeout=300)
+        waited_s = time.monotonic() - sent
+    finally:
+        p.kill()
+    assert "KeyboardInterrupt" in err and "finished" not in out, err[-2000:]
+    assert p.returncode != 0
+    assert waited_s < 2.0, f"the drive went on for {waited_s:.1f} s after Ctrl-C"

@@ -1,5 +1,7 @@
 """overtake.World: the telemetry as the original sends it, steps, incidents, the report."""
 import math
+import subprocess
+import sys
 
 import numpy as np
 import pytest
@@ -148,3 +150,77 @@ def test_bad_arguments_are_value_errors(tmp_path):
         overtake.World(map=tmp_path / "missing.csv")
     with pytest.raises(ValueError, match="unknown policy"):
         overtake.builtin_policy("nope")
+
+
+def test_a_call_from_inside_a_step_is_refused_not_run_under_it():
+    w = overtake.World(seed=1, steps_per_call=2)
+    t = w.reset()
+    refused = []
+
+    class ResetsTheWorld:
+        """A path coordinate whose conversion to a number resets the world being stepped."""
+
+        def __float__(self):
+            try:
+                w.reset()
+            except RuntimeError as e:
+                refused.append(str(e))
+            return t["x"] + 0.8
+
+    t2, info = w.step([t["x"] + 0.4, ResetsTheWorld()], [t["y"], t["y"]])
+    assert len(refused) == 1 and "World.reset()" in refused[0]
+    assert "another call of this object has not returned" in refused[0]
+    assert info["steps"] == 2 and info["end"] == "running"
+    assert w.report()["duration_s"] == pytest.approx(0.04)
+
+
+def test_two_threads_on_one_world_do_not_crash_it():
+    # In a process of its own: a crash fails this test, not the whole file.
+    code = """if True:
+        import math, threading, time
+        import overtake
+
+        w = overtake.World(seed=1, minutes=0.5, steps_per_call=1)
+        w.reset()
+        # Until both have gone round often (however busy the machine), or a minute at most.
+        limit = time.monotonic() + 60.0
+        refused, counts = [], {"steps": 0, "resets": 0}
+
+        def going():
+            enough = counts["steps"] > 100 and counts["resets"] > 100
+            return not enough and time.monotonic() < limit
+
+        def stepping():
+            while going():
+                try:
+                    t = w.telemetry()
+                    yaw = math.radians(t["yaw"])
+                    w.step([t["x"] + 0.2 * (i + 1) * math.cos(yaw) for i in range(50)],
+                           [t["y"] + 0.2 * (i + 1) * math.sin(yaw) for i in range(50)])
+                    counts["steps"] += 1
+                    if w.done:
+                        w.reset()
+                except RuntimeError as e:
+                    refused.append(str(e))
+
+        def resetting():
+            while going():
+                try:
+                    w.reset()
+                    counts["resets"] += 1
+                except RuntimeError as e:
+                    refused.append(str(e))
+
+        threads = [threading.Thread(target=f) for f in (stepping, resetting)]
+        for th in threads:
+            th.start()
+        for th in threads:
+            th.join()
+        bad = [r for r in refused if "another call of this object has not returned" not in r]
+        assert not bad, bad[:3]
+        assert counts["steps"] > 100 and counts["resets"] > 100, counts
+        print("ok", counts, len(refused))
+    """
+    p = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300)
+    assert p.returncode == 0, p.stderr[-3000:]
+    assert p.stdout.startswith("ok"), p.stdout

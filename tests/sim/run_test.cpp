@@ -9,6 +9,7 @@
 #include <atomic>
 #include <cmath>
 
+#include "overtake/core/state_archive.hpp"
 #include "overtake/sim/scorecard.hpp"
 #include "sim/test_maps.hpp"
 
@@ -72,6 +73,65 @@ TEST_F(RunTest, EveryCycleIsCountedByItsPlanStatus) {
   EXPECT_EQ(r.outcome.end, RunEnd::completed);
   EXPECT_FALSE(r.outcome.ended_early());
   EXPECT_EQ(ended_early_text(r.outcome), "");
+}
+
+// A planner that does not say how it planned (a program over the protocol): its cycles are
+// counted, but by no status; the run's statuses are unknown, not normal. A run that mixes
+// both keeps the known counts. A checkpoint keeps the unknown ones.
+TEST_F(RunTest, CyclesWhoseStatusIsUnknownAreCountedApart) {
+  World world = make_world();
+  RunOptions opts;
+  opts.duration_s = 4.0;
+  opts.steps_per_call = 2;
+  int cycle = 0;
+  const PlannerFn inner = cruise_with_statuses(cycle);
+  const RunReport unknown = run_drive(
+      world,
+      [&](const core::Telemetry& t) {
+        core::PlanResult r = inner(t);
+        r.status_known = false;
+        return r;
+      },
+      opts);
+  EXPECT_EQ(unknown.planner_cycles, 100);
+  EXPECT_EQ(unknown.plan_status_unknown_cycles, 100);
+  EXPECT_EQ(unknown.plan_status_cycles, core::PlanStatusCounts{});
+  EXPECT_EQ(unknown.first_plan_reason, "");
+  EXPECT_FALSE(unknown.plan_status_known());
+
+  World again = make_world();
+  cycle = 0;
+  const RunReport mixed = run_drive(
+      again,
+      [&](const core::Telemetry& t) {
+        core::PlanResult r = inner(t);
+        r.status_known = cycle > 50;
+        return r;
+      },
+      opts);
+  EXPECT_EQ(mixed.planner_cycles, 100);
+  EXPECT_EQ(mixed.plan_status_unknown_cycles, 50);
+  EXPECT_EQ(mixed.plan_status_cycles[static_cast<std::size_t>(core::PlanStatus::fallback)], 10);
+  EXPECT_EQ(mixed.first_plan_reason, "fallback at cycle 55");
+  EXPECT_TRUE(mixed.plan_status_known());
+
+  World w = make_world();
+  Scorecard card(w);
+  core::PlanResult remote = core::normal_plan({});
+  remote.status_known = false;
+  for (int i = 0; i < 3; ++i) card.count_cycle(remote, 1.0, 1.0);
+  card.count_cycle(core::normal_plan({}), 1.0, 1.0);
+  core::StateArchive out;
+  card.archive(out);
+  const std::string bytes = out.take();
+  Scorecard restored(w);
+  core::StateArchive in(bytes, "scorecard");
+  restored.archive(in);
+  in.expect_end();
+  const RunReport r = restored.report(w, {}, CycleClock::round_trip);
+  EXPECT_EQ(r.planner_cycles, 4);
+  EXPECT_EQ(r.plan_status_unknown_cycles, 3);
+  EXPECT_EQ(r.plan_status_cycles[static_cast<std::size_t>(core::PlanStatus::normal)], 1);
 }
 
 TEST_F(RunTest, APlannerThatThrowsEndsTheRunWithItsReasonAndTheReportSoFar) {

@@ -7,7 +7,7 @@
 #include <cmath>
 
 namespace {
-const overtake_plugin_info_t kInfo = {"minimal", "extends the previous path straight ahead"};
+const overtake_plugin_info kInfo = {"minimal", "extends the previous path straight ahead"};
 }
 
 struct overtake_plugin_handle {
@@ -17,12 +17,12 @@ struct overtake_plugin_handle {
 int overtake_plugin_abi_version(void) {
   return OVERTAKE_PLUGIN_ABI_VERSION;
 }
-const overtake_plugin_info_t* overtake_plugin_info(void) {
+const overtake_plugin_info* overtake_plugin_get_info(void) {
   return &kInfo;
 }
 
-overtake_plugin_handle* overtake_plugin_create(const overtake_plugin_setup* setup,
-                                               const char** /*error*/) {
+overtake_plugin_handle* overtake_plugin_create(const overtake_plugin_setup* setup, char* /*error*/,
+                                               size_t /*error_size*/) {
   auto* h = new overtake_plugin_handle;
   h->dt = setup->step_time;
   return h;

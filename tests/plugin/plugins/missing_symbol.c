@@ -8,20 +8,21 @@ struct overtake_plugin_handle {
   int unused;
 };
 
-static const overtake_plugin_info_t kInfo = {"missing_symbol", "has no destroy"};
+static const overtake_plugin_info kInfo = {"missing_symbol", "has no destroy"};
 
 int overtake_plugin_abi_version(void) {
   return OVERTAKE_PLUGIN_ABI_VERSION;
 }
 
-const overtake_plugin_info_t* overtake_plugin_info(void) {
+const overtake_plugin_info* overtake_plugin_get_info(void) {
   return &kInfo;
 }
 
-overtake_plugin_handle* overtake_plugin_create(const overtake_plugin_setup* setup,
-                                               const char** error) {
+overtake_plugin_handle* overtake_plugin_create(const overtake_plugin_setup* setup, char* error,
+                                               size_t error_size) {
   (void)setup;
   (void)error;
+  (void)error_size;
   return calloc(1, sizeof(overtake_plugin_handle));
 }
 

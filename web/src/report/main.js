@@ -270,8 +270,10 @@ function renderCharts(rows, runs) {
 }
 
 // The share of a run's cycles in which its planner left normal planning (0 for a report from
-// before plan statuses were kept).
+// before plan statuses were kept; null when its planner does not say how it planned: a
+// plan_status of null, a planner over the protocol).
 function unusualShare(r) {
+  if (r.plan_status === null) return null;
   const c = (r.plan_status || {}).cycles || {};
   const total = Number(r.planner_cycles) || 0;
   return total > 0 ? ((Number(c.least_bad) || 0) + (Number(c.fallback) || 0)) / total : 0;
@@ -287,7 +289,7 @@ const COLUMNS = [
   { key: 'free', label: 'best incident-free mi', num: true, get: (r) => r.best_incident_free_miles, fmt: (v) => fix(v, 2) },
   { key: 'acc', label: 'peak acc (strict)', num: true, get: (r) => (r.peak || {}).strict_acceleration_mps2, fmt: (v) => fix(v, 1) },
   { key: 'jerk', label: 'peak jerk (strict)', num: true, get: (r) => (r.peak || {}).strict_jerk_mps3, fmt: (v) => fix(v, 1) },
-  { key: 'fallback', label: 'least-bad + fallback cycles', num: true, get: (r) => unusualShare(r), fmt: (v) => `${fix(100 * v, 1)}%` },
+  { key: 'fallback', label: 'least-bad + fallback cycles', num: true, get: (r) => unusualShare(r), fmt: (v) => (v == null ? '–' : `${fix(100 * v, 1)}%`) },
   { key: 'fault', label: 'at-fault collisions', num: true, get: (r) => (r.collisions || {}).at_fault, fmt: (v) => fix(v, 0) },
   // a least TTC of null: the run measured none (no car ahead closed in); '–': not measured
   { key: 'ttc', label: 'least TTC ahead s', num: true, get: (r) => (r.safety || {}).min_ttc_ahead_s,

@@ -47,8 +47,17 @@ struct PlannerEntry {
   std::string source;           ///< the plugin's path, module:function, or the command
   planner::PolicyFactory make;  ///< builtin, plugin and python
   std::optional<ProgramSpec> program;
+  /// A plugin's or Python planner's longest plan() call: past it the call is interrupted (a
+  /// Python planner) or overtake ends (a plugin: code in this process cannot be stopped).
+  double reply_timeout_s = 5.0;
   /// What the run's provenance records of it (kind, source, ...): a JSON object's text.
   [[nodiscard]] std::string describe() const;
+  /// How messages name it: "the plugin NAME (SOURCE)", "the Python planner NAME (SOURCE)".
+  [[nodiscard]] std::string label() const;
+  /// Whether its plan() calls are watched (a planner from outside in this process).
+  [[nodiscard]] bool watched() const {
+    return kind == PlannerKind::plugin || kind == PlannerKind::python;
+  }
 };
 
 /// The planners a command knows: the built-in policies and those its flags brought.
@@ -73,13 +82,15 @@ class PlannerCatalog {
   std::deque<PlannerEntry> added_;  ///< a deque: entries found stay where they are
 };
 
-/// The flags that bring planners: --policy-lib, --policy-py, and (`programs`) --planner-cmd
-/// with --planner-cwd and --planner-port. Each may be given more than once, as `NAME=VALUE`
-/// or `VALUE` (the name then comes from the value).
+/// The flags that bring planners: --policy-lib and --policy-py (each `NAME=VALUE` or
+/// `VALUE`, the name then coming from the value), and (`programs`) --planner-cmd with
+/// --planner-name, --planner-cwd and --planner-port. A command is never split at `=`: a
+/// shell command may start with a variable (`OMP_NUM_THREADS=1 ./planner`).
 struct PlannerFlags {
   std::vector<std::string> libs;
   std::vector<std::string> python;
   std::vector<std::string> commands;
+  std::vector<std::string> names;  ///< --planner-name: none, or one per command
   std::string cwd;
   int port = 4567;
   double start_timeout_s = 20.0;

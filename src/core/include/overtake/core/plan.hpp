@@ -35,6 +35,12 @@ inline constexpr std::size_t kPlanStatusCount = 3;
   return "unknown";
 }
 
+/// Why a running plan() is asked to give up (planner::Policy::interrupt).
+enum class PlanInterruption : std::uint8_t {
+  timeout,    ///< it took longer than its reply timeout
+  user_stop,  ///< the user stopped the run (Ctrl-C, SIGTERM)
+};
+
 /// Cycles per status, indexed by PlanStatus.
 using PlanStatusCounts = std::array<long, kPlanStatusCount>;
 
@@ -45,6 +51,9 @@ struct PlanResult {
   /// Why the status is not normal (empty when it is): e.g. "every candidate collides; car 7
   /// at 1.2 s".
   std::string reason;
+  /// False when the planner does not say how it planned (a program over the protocol, which
+  /// answers points only): `status` then means nothing, and reports show it as unknown.
+  bool status_known = true;
 };
 
 /// A path planned as meant (status normal).

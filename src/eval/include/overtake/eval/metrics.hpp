@@ -55,7 +55,14 @@ struct RunRow {
   double planner_p99_us = 0.0;
   double planner_wall_p99_us = 0.0;
   double planner_cycles = 0.0;
+  /// Cycles by plan status (indexed by core::PlanStatus), of the cycles whose status is known.
   std::array<double, core::kPlanStatusCount> plan_status_cycles{};
+  /// False for a row whose plan_status is null: its planner does not say how it planned (a
+  /// program over the protocol), so its statuses are unknown, not normal.
+  bool plan_status_known = true;
+  /// Cycles whose status is unknown: all of them when plan_status is null, else those the row
+  /// counts as `unknown` (none but in a run that mixes both).
+  double plan_status_unknown_cycles = 0.0;
   bool ended_early = false;
 };
 

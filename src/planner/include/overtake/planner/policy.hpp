@@ -27,6 +27,12 @@ class Policy {
   /// scenarios), and says whether it did: false for a policy whose state overtake cannot
   /// see (a plugin, a Python planner), which then starts afresh from a checkpoint.
   virtual bool archive_state(core::StateArchive& /*ar*/) { return false; }
+  /// Asks a plan() that is running on another thread right now to give up soon, by throwing
+  /// from it (`why` says what its message should tell). Called from a watchdog thread, at any
+  /// time, also when no plan() runs (then it must do nothing harmful). Returns whether this
+  /// policy can be interrupted at all: false (the default) for code overtake cannot stop
+  /// from outside (a C++ plugin), which the caller must then end some other way.
+  virtual bool interrupt(core::PlanInterruption /*why*/) noexcept { return false; }
 };
 
 /// The policy's state as bytes (empty when it keeps none overtake can see).

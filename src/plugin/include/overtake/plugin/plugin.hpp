@@ -28,7 +28,9 @@ struct LoadedPlugin {
   planner::PolicyFactory make;
 };
 
-/// Loads the plugin at `path` and checks its version and symbols. Throws PluginError.
+/// Loads the plugin at `path` (RTLD_NODELETE: its code stays mapped for good, for the threads
+/// it may leave finishing) and checks its version (the same major, a minor up to this
+/// overtake's) and symbols. Throws PluginError.
 /// The policies it makes throw PluginError from plan() when the plugin fails (a nonzero
 /// status, an exception, a non-finite point, more points than its buffers hold), naming the
 /// plugin and the reason: the run then ends as planner_failed.

@@ -7,7 +7,10 @@
 
 #include <pybind11/pybind11.h>
 
+#include <atomic>
 #include <memory>
+#include <mutex>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -44,12 +47,35 @@ inline constexpr std::size_t kMaxPathPoints = 10'000;
 using SharedObject = std::shared_ptr<pybind11::object>;
 [[nodiscard]] SharedObject share(pybind11::object object);
 
+/// A KeyboardInterrupt or SystemExit met in Python during a drive that Python started
+/// (raised by the planner, or by Python's own Ctrl-C handler): it means "stop", not "the
+/// planner failed", so it sets the run's stop flag and is kept, to be raised again to the
+/// drive's caller once the run has stopped. Thread-safe.
+class DriveInterruption {
+ public:
+  /// Whether `e` is such an exception (KeyboardInterrupt, SystemExit). Needs the GIL.
+  [[nodiscard]] static bool stops_the_drive(const pybind11::error_already_set& e);
+  /// Keeps `e` (the first one kept wins) and sets the stop flag. Needs the GIL.
+  void keep(const pybind11::error_already_set& e);
+  /// The flag to give the run as its stop flag; set by keep().
+  [[nodiscard]] const std::atomic<bool>* stop_flag() const { return &stop_; }
+  /// Throws the kept exception (the same Python object) when there is one. Needs the GIL.
+  void raise_if_kept();
+
+ private:
+  std::mutex mutex_;
+  std::optional<pybind11::error_already_set> kept_;
+  std::atomic<bool> stop_{false};
+};
+
 /// A factory of policies that call `callable` with the telemetry dict each cycle, under the
 /// GIL (taken for the call, released otherwise; any thread). A Python exception, a wrong
 /// answer or a NaN ends the run as planner_failed with the Python error's text. When
-/// `callable` is a class, each policy calls a new instance of it (state per run). Needs no
-/// GIL.
-[[nodiscard]] planner::PolicyFactory callable_policy_factory(SharedObject callable,
-                                                             std::string label);
+/// `callable` is a class, each policy calls a new instance of it (state per run). With
+/// `stops` (may be null), a KeyboardInterrupt or SystemExit goes there instead of being a
+/// failure. The policies can be interrupted (planner::Policy::interrupt): the running call
+/// then raises TimeoutError or KeyboardInterrupt. Needs no GIL.
+[[nodiscard]] planner::PolicyFactory callable_policy_factory(
+    SharedObject callable, std::string label, std::shared_ptr<DriveInterruption> stops = nullptr);
 
 }  // namespace overtake::python

@@ -87,9 +87,18 @@ struct RunReport {
   PlannerTiming timing;
   long planner_cycles = 0;
   /// Cycles by how the planner found its path (indexed by core::PlanStatus), and the reason
-  /// the planner gave the first time it left normal planning.
+  /// the planner gave the first time it left normal planning. Only the cycles whose status
+  /// is known count here.
   core::PlanStatusCounts plan_status_cycles{};
   std::string first_plan_reason;
+  /// Cycles whose planner did not say how it planned (a program over the protocol answers
+  /// points only). They count in planner_cycles, not in plan_status_cycles.
+  long plan_status_unknown_cycles = 0;
+  /// False when no cycle said how it was planned, though some were counted: the run's plan
+  /// statuses are unknown (not all normal), and reports show none.
+  [[nodiscard]] bool plan_status_known() const {
+    return plan_status_unknown_cycles == 0 || planner_cycles > plan_status_unknown_cycles;
+  }
   RunOutcome outcome;
 };
 
@@ -120,7 +129,8 @@ class Scorecard {
   /// After each world step: the safety monitor sees the ego and the cars (and classifies a
   /// contact), then the referee and the lane tracker see the ego.
   void observe_step(const World& world);
-  /// After each planner cycle: its status, its time on the run's clock and on the wall clock.
+  /// After each planner cycle: its status (or that it is unknown), its time on the run's clock
+  /// and on the wall clock.
   void count_cycle(const core::PlanResult& plan, double cycle_us, double wall_us);
 
   [[nodiscard]] const Referee& referee() const { return referee_; }
@@ -148,6 +158,7 @@ class Scorecard {
   core::QuantileSketch wall_us_;
   core::PlanStatusCounts status_cycles_{};
   std::string first_reason_;
+  long unknown_status_cycles_ = 0;  // cycles whose planner did not say how it planned
 };
 
 }  // namespace overtake::sim
