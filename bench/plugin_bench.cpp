@@ -8,6 +8,8 @@
 // - PluginBoundary/Plugin: the same planner as a plugin (tests/plugin/plugins/minimal.cpp):
 //   the difference is the boundary's cost (the telemetry converted to the original's units
 //   and arrays, the call through the library, the answer checked and copied back);
+// - PluginBoundary/PluginWatched: the plugin as drive and bench run it, each call watched
+//   for its reply timeout (app::watch_policy): the difference is the watchdog's cost;
 // - PluginPolicies/Walkthrough and PluginPolicies/KeepLane: a built-in policy and the
 //   example plugin (examples/plugin), for scale.
 // The plugins are the modules the tests build (OVERTAKE_BUILD_TESTS).
@@ -19,6 +21,7 @@
 #include <string>
 #include <vector>
 
+#include "overtake/app/plan_watch.hpp"
 #include "overtake/planner/policy.hpp"
 #include "overtake/plugin/plugin.hpp"
 #include "overtake/sim/world.hpp"
@@ -100,6 +103,15 @@ void BM_PluginBoundary_Plugin(benchmark::State& state) {
   replay(state, [&p] { return p.make(track().line, config().planner); });
 }
 BENCHMARK(BM_PluginBoundary_Plugin)->Name("PluginBoundary/Plugin");
+
+void BM_PluginBoundary_PluginWatched(benchmark::State& state) {
+  const plugin::LoadedPlugin p = plugin::load_plugin(OVERTAKE_MINIMAL_PLUGIN);
+  replay(state, [&p] {
+    return app::watch_policy(p.make(track().line, config().planner), "the plugin minimal", 5.0,
+                             nullptr);
+  });
+}
+BENCHMARK(BM_PluginBoundary_PluginWatched)->Name("PluginBoundary/PluginWatched");
 
 void BM_PluginPolicies_KeepLane(benchmark::State& state) {
   const plugin::LoadedPlugin p = plugin::load_plugin(OVERTAKE_KEEP_LANE_PLUGIN);
