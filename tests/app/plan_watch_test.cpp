@@ -17,11 +17,11 @@
 #include <csignal>
 #include <filesystem>
 #include <fstream>
-#include <sstream>
 #include <vector>
 
 #include <nlohmann/json.hpp>
 
+#include "overtake/app/io.hpp"
 #include "overtake/app/plan_watch.hpp"
 #include "process_support.hpp"
 
@@ -148,13 +148,6 @@ TEST(PlanWatch, APlannerThatCannotBeInterruptedEndsTheProcess) {
 
 namespace fs = std::filesystem;
 
-std::string read_text(const fs::path& p) {
-  std::ifstream in(p);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
-
 class PlanWatchCli : public ::testing::Test {
  protected:
   void SetUp() override {
@@ -180,7 +173,7 @@ TEST_F(PlanWatchCli, APluginThatNeverReturnsEndsTheBenchKeepingFinishedRuns) {
       root_ / "stdout", root_ / "stderr");
   EXPECT_EQ(test::exit_status(pid, std::chrono::seconds(60)), app::kExitPlannerStuck);
   EXPECT_LT(std::chrono::steady_clock::now() - t0, 30s);
-  const std::string err = read_text(root_ / "stderr");
+  const std::string err = app::read_file(root_ / "stderr");
   EXPECT_NE(err.find("the plugin never_returns ("), std::string::npos) << err;
   EXPECT_NE(err.find("has not returned from plan() in 0.50 s"), std::string::npos) << err;
   std::ifstream rows(out / "runs.jsonl");
@@ -203,12 +196,13 @@ TEST_F(PlanWatchCli, CtrlCEndsADriveWhosePluginNeverReturnsWithinASecond) {
   std::this_thread::sleep_for(1s);
   const auto t0 = std::chrono::steady_clock::now();
   ::kill(pid, SIGINT);
-  EXPECT_EQ(test::exit_status(pid, std::chrono::seconds(10)), 130) << read_text(root_ / "stderr");
+  EXPECT_EQ(test::exit_status(pid, std::chrono::seconds(10)), 130)
+      << app::read_file(root_ / "stderr");
   EXPECT_LT(std::chrono::steady_clock::now() - t0,
             1500ms);  // within a second by design (a 0.5 s grace), with room for a loaded machine
-  EXPECT_NE(read_text(root_ / "stderr").find("stopped while the plugin never_returns"),
+  EXPECT_NE(app::read_file(root_ / "stderr").find("stopped while the plugin never_returns"),
             std::string::npos)
-      << read_text(root_ / "stderr");
+      << app::read_file(root_ / "stderr");
 }
 
 // `serve` with a plugin that never returns: the one thread that serves is stuck in it, yet
@@ -216,7 +210,7 @@ TEST_F(PlanWatchCli, CtrlCEndsADriveWhosePluginNeverReturnsWithinASecond) {
 TEST_F(PlanWatchCli, CtrlCEndsServeEvenWhenItsPluginNeverReturns) {
   const auto listening_port = [this]() -> std::string {
     for (int i = 0; i < 500; ++i) {
-      const std::string err = read_text(root_ / "serve.err");
+      const std::string err = app::read_file(root_ / "serve.err");
       const std::size_t at = err.find("listening on ws://127.0.0.1:");
       if (at != std::string::npos) {
         const std::size_t from = at + std::string("listening on ws://127.0.0.1:").size();
@@ -233,7 +227,7 @@ TEST_F(PlanWatchCli, CtrlCEndsServeEvenWhenItsPluginNeverReturns) {
          "--port", "0", "--planner-reply-timeout", "600"},
         root_ / "serve.out", root_ / "serve.err");
     const std::string port = listening_port();
-    ASSERT_FALSE(port.empty()) << read_text(root_ / "serve.err");
+    ASSERT_FALSE(port.empty()) << app::read_file(root_ / "serve.err");
     const pid_t client =
         test::start_overtake({"sim", "--planner", "ws://127.0.0.1:" + port, "--minutes", "1",
                               "--reply-timeout", "600", "--quiet"},
@@ -243,11 +237,11 @@ TEST_F(PlanWatchCli, CtrlCEndsServeEvenWhenItsPluginNeverReturns) {
     ::kill(server, SIGINT);
     const auto status = test::exit_status(server, std::chrono::seconds(10));
     EXPECT_LT(std::chrono::steady_clock::now() - t0, 1500ms);
-    EXPECT_EQ(status, stuck ? 130 : 0) << read_text(root_ / "serve.err");
+    EXPECT_EQ(status, stuck ? 130 : 0) << app::read_file(root_ / "serve.err");
     if (stuck) {
-      EXPECT_NE(read_text(root_ / "serve.err").find("stopped while the plugin never_returns"),
+      EXPECT_NE(app::read_file(root_ / "serve.err").find("stopped while the plugin never_returns"),
                 std::string::npos)
-          << read_text(root_ / "serve.err");
+          << app::read_file(root_ / "serve.err");
     }
     (void)test::exit_status(client, std::chrono::seconds(20));
   }
