@@ -25,6 +25,8 @@ packages=(
   clang libclang-rt-dev
   # make format-check, make format and make tidy.
   clang-format clang-tidy
+  # The `cluster` tests: `bench --slurm` on a Slurm cluster of their own (scripts/local-slurm.sh).
+  slurmctld slurmd slurm-client munge
 )
 if $web_pages; then
   packages+=(chromium)

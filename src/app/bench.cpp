@@ -324,9 +324,17 @@ std::vector<BenchCombo> bench_combinations(const BenchSpec& spec) {
   return out;
 }
 
-BenchOutcome run_bench(const BenchSpec& spec, const std::atomic<bool>* stop,
-                       const std::function<void(const BenchProgress&)>& progress) {
-  // Everything is checked before the first run.
+namespace {
+
+// What a bench needs before its first run, every input checked.
+struct PreparedBench {
+  Config config;
+  std::shared_ptr<const Track> track;
+  std::vector<BenchCombo> all;
+  json manifest;
+};
+
+PreparedBench prepare_bench(const BenchSpec& spec) {
   if (spec.policies.empty()) throw UsageError("--policies: no policy given");
   if (spec.traffic.empty()) throw UsageError("--traffic: no traffic profile given");
   if (spec.seeds.empty()) throw UsageError("--seeds: no seeds given");
@@ -359,10 +367,28 @@ BenchOutcome run_bench(const BenchSpec& spec, const std::atomic<bool>* stop,
     const PlannerEntry* e = spec.planners ? spec.planners->find(p) : nullptr;
     if (e && e->program) (void)program_isolated(*e);
   }
-  const Config config = load_config(spec.config);
-  const auto track = load_track(spec.map);
-  const auto all = bench_combinations(spec);
-  const json manifest = manifest_of(spec, *track, config, all.size());
+  PreparedBench p;
+  p.config = load_config(spec.config);
+  p.track = load_track(spec.map);
+  p.all = bench_combinations(spec);
+  p.manifest = manifest_of(spec, *p.track, p.config, p.all.size());
+  return p;
+}
+
+}  // namespace
+
+void check_bench_spec(const BenchSpec& spec) {
+  (void)prepare_bench(spec);
+}
+
+BenchOutcome run_bench(const BenchSpec& spec, const std::atomic<bool>* stop,
+                       const std::function<void(const BenchProgress&)>& progress) {
+  // Everything is checked before the first run.
+  const PreparedBench prepared = prepare_bench(spec);
+  const Config& config = prepared.config;
+  const auto& track = prepared.track;
+  const auto& all = prepared.all;
+  const json& manifest = prepared.manifest;
 
   std::error_code ec;
   std::filesystem::create_directories(spec.out, ec);
@@ -556,6 +582,7 @@ BenchOutcome merge_bench(const std::vector<std::filesystem::path>& dirs,
   json manifest;
   std::vector<json> runs;
   std::set<std::size_t> seen;
+  std::optional<std::pair<std::string, std::filesystem::path>> revision;  // the first, and where
   for (const auto& dir : dirs) {
     json m;
     try {
@@ -577,6 +604,18 @@ BenchOutcome merge_bench(const std::vector<std::filesystem::path>& dirs,
       if (!seen.insert(idx).second) {
         throw UsageError("merge: run " + std::to_string(idx) + " appears twice (in " +
                          dir.string() + " and another folder)");
+      }
+      // Runs of one sweep come from one build: another revision may drive differently.
+      const json* prov = r.contains("provenance") ? &r["provenance"] : nullptr;
+      if (prov && prov->contains("git_revision") && (*prov)["git_revision"].is_string()) {
+        const auto rev = (*prov)["git_revision"].get<std::string>();
+        if (!revision) {
+          revision.emplace(rev, dir);
+        } else if (rev != revision->first) {
+          throw UsageError("merge: the runs come from different builds of overtake: " +
+                           revision->first + " (in " + revision->second.string() + ") and " + rev +
+                           " (in " + dir.string() + "); run every shard with the same binary");
+        }
       }
       runs.push_back(std::move(r));
     }

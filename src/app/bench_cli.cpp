@@ -2,7 +2,10 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <fstream>
 #include <iostream>
+#include <optional>
+#include <set>
 #include <thread>
 
 #include "overtake/app/bench.hpp"
@@ -10,6 +13,7 @@
 #include "overtake/app/commands.hpp"
 #include "overtake/app/interrupt.hpp"
 #include "overtake/app/planner_process.hpp"
+#include "overtake/app/slurm.hpp"
 #include "overtake/app/suite.hpp"
 #include "overtake/app/viewer.hpp"
 #include "overtake/core/units.hpp"
@@ -47,6 +51,77 @@ void draw_progress(const BenchProgress& p, double total_sim_s) {
   std::fflush(stderr);
 }
 
+// Complete lines (runs written) in a shard's runs.jsonl: a cheap count for the progress line.
+std::size_t lines_in(const std::filesystem::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  std::size_t n = 0;
+  char buf[1 << 16];
+  while (in.read(buf, sizeof buf) || in.gcount() > 0) {
+    n += static_cast<std::size_t>(std::count(buf, buf + in.gcount(), '\n'));
+  }
+  return n;
+}
+
+// A bench as a Slurm array of `tasks`: task I runs shard I with --resume; a shard is finished
+// when it holds every run of its slice and its summary; the shards merge as `bench merge`.
+SlurmArray bench_array(const BenchSpec& spec, int tasks, std::vector<std::string> args,
+                       std::optional<std::filesystem::path> html, bool quiet) {
+  namespace fs = std::filesystem;
+  SlurmArray a = slurm_array_here("bench", spec.out);
+  if (fs::exists(a.out / kBenchRunsFile) || fs::exists(a.out / kBenchManifestFile)) {
+    throw UsageError("--out: " + a.out.string() +
+                     " already holds bench results (merged, or a local bench); choose another "
+                     "--out");
+  }
+  a.args = std::move(args);
+  a.task_flags = {"--resume", "--quiet"};
+  a.runs = bench_combinations(spec).size();
+  a.resume = spec.resume;
+  a.quiet = quiet;
+  const std::size_t runs = a.runs;
+  const auto slice = [runs, tasks](int task) {
+    return tasks > 0 ? slurm_shard_runs(runs, tasks, task) : 0;
+  };
+  a.shard_state = [slice](const fs::path& shard, int task) {
+    SlurmShardState st;
+    const std::size_t want = slice(task);
+    const std::size_t have = fs::exists(shard / kBenchRunsFile) ? load_bench_runs(shard).size() : 0;
+    st.finished = have == want && fs::exists(shard / "summary.json");
+    st.so_far = std::to_string(have) + " of " + std::to_string(want) + " runs";
+    return st;
+  };
+  a.progress = [slice, runs](const std::vector<fs::path>& shards) {
+    std::size_t have = 0;
+    for (std::size_t i = 0; i < shards.size(); ++i) {
+      have += std::min(lines_in(shards[i] / kBenchRunsFile), slice(static_cast<int>(i) + 1));
+    }
+    return std::to_string(have) + "/" + std::to_string(runs) + " runs";
+  };
+  const fs::path out = a.out;
+  a.merge = [out, html, quiet](const std::vector<fs::path>& shards, double wall_s,
+                               int resubmitted) {
+    const BenchOutcome o = merge_bench(shards, out);
+    if (!quiet) {
+      std::cout << o.summary_markdown << "\n";
+      std::printf("%zu runs in %zu Slurm tasks (%d submitted again) in %.1f s\n", o.runs_done,
+                  shards.size(), resubmitted, wall_s);
+      std::cout << "written: " << out.string()
+                << "/{runs.jsonl,summary.md,summary.csv,summary.json,pairs.csv,bench.json}\n";
+      for (const auto& r : o.replays) std::cout << "replay: " << r.string() << "\n";
+    }
+    if (html) {
+      const auto pages = write_bench_report(out, *html, embedded_page(kReportPageName),
+                                            embedded_page(kViewerPageName));
+      if (!quiet) {
+        std::cout << "report: " << html->string() << " (" << pages.size() << " replay page"
+                  << (pages.size() == 1 ? "" : "s") << " linked)\n";
+      }
+    }
+    return kExitOk;
+  };
+  return a;
+}
+
 }  // namespace
 
 Subcommand register_bench(CLI::App& app) {
@@ -64,6 +139,7 @@ Subcommand register_bench(CLI::App& app) {
     std::string scenarios;
     std::vector<CLI::Option*> sweep_opts;  // flags a scenario suite does not take
     CLI::Option* out_opt = nullptr;
+    SlurmOptions slurm;
   };
   auto st = std::make_shared<State>();
   st->spec.jobs = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
@@ -118,6 +194,7 @@ Subcommand register_bench(CLI::App& app) {
       "linked to its replay when recorded) to this file, and each recorded replay's\n"
       "self-contained page beside it (replays/*.html)");
   cmd->add_flag("--quiet,-q", st->quiet, "No progress bar or summary");
+  add_slurm_flags(*cmd, st->slurm, "bench");
   auto* merge = cmd->add_subcommand(
       "merge", "Join the output folders of the shards of one bench into --out.");
   merge->add_option("dirs", st->merge_dirs, "Shard output folders")
@@ -134,7 +211,7 @@ Subcommand register_bench(CLI::App& app) {
       "linked to its replay when a shard recorded it (pages written into --out/replays/)");
 
   return {
-      cmd, [st, merge] {
+      cmd, [st, merge, cmd] {
         if (merge->parsed()) {
           if (!st->merge_html.empty()) {  // the pages come from the binary: check first
             (void)embedded_page(kReportPageName);
@@ -155,6 +232,11 @@ Subcommand register_bench(CLI::App& app) {
           }
           return kExitOk;
         }
+        const bool on_slurm = slurm_requested(*cmd);
+        if (on_slurm && !st->scenarios.empty())
+          throw UsageError("--slurm: a scenario suite (--scenarios) runs here, not on Slurm");
+        if (on_slurm && !st->shard.empty())
+          throw UsageError("--slurm makes the shards itself; --shard is for arrays of your own");
         if (!st->scenarios.empty()) {
           for (const CLI::Option* o : st->sweep_opts) {
             if (o->count() > 0) {
@@ -215,6 +297,23 @@ Subcommand register_bench(CLI::App& app) {
         spec.out = st->out;
         if (!st->shard.empty())
           std::tie(spec.shard_index, spec.shard_count) = parse_shard(st->shard);
+        if (on_slurm) {
+          // Everything the tasks would refuse is refused here, before anything is submitted.
+          check_bench_spec(spec);
+          check_programs_for_slurm(*spec.planners, st->planners.network);
+          std::optional<std::filesystem::path> html;
+          if (!st->html.empty()) {
+            (void)embedded_page(kReportPageName);
+            (void)embedded_page(kViewerPageName);
+            html = st->html;
+          }
+          const SlurmArray array =
+              bench_array(spec, st->slurm.tasks,
+                          task_arguments(*cmd, {"out", "jobs", "resume", "quiet", "html", "shard"}),
+                          html, st->quiet);
+          const InterruptScope interrupt;
+          return run_slurm_array(array, st->slurm, &InterruptScope::flag());
+        }
         if (spec.planners->has_programs() && !st->quiet) {
           std::string why;
           if (!private_network_available(&why) && st->planners.network == "auto") {

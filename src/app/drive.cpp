@@ -20,6 +20,7 @@ namespace overtake::app {
 namespace {
 
 constexpr double kMaxMinutes = 7.0 * 24.0 * 60.0;
+static_assert(kMaxMinutes * 60.0 < sim::kMaxCheckpointRunS, "every drive must checkpoint");
 constexpr const char* kDefaultTrackName = "tracks/default.csv";
 
 const PlannerCatalog& builtin_catalog() {

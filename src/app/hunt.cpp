@@ -7,15 +7,20 @@
 #include <iostream>
 #include <map>
 #include <mutex>
+#include <set>
 #include <sstream>
 #include <thread>
 
+#include "overtake/app/bench.hpp"
+#include "overtake/app/build_info.hpp"
 #include "overtake/app/cli.hpp"
 #include "overtake/app/commands.hpp"
+#include "overtake/app/config.hpp"
 #include "overtake/app/cut.hpp"
 #include "overtake/app/interrupt.hpp"
 #include "overtake/app/io.hpp"
 #include "overtake/app/report.hpp"
+#include "overtake/app/slurm.hpp"
 #include "overtake/core/road.hpp"
 #include "overtake/replay/replay.hpp"
 
@@ -148,6 +153,15 @@ struct RunResult {
   std::filesystem::path replay;
 };
 
+}  // namespace
+
+std::size_t hunt_max_runs(const HuntSpec& spec) {
+  return static_cast<std::size_t>(
+      std::max(1.0, std::floor(spec.budget_hours * 60.0 / spec.minutes + 1e-9)));
+}
+
+namespace {
+
 void check_spec(const HuntSpec& spec) {
   if (spec.jobs < 1 || spec.jobs > kMaxJobs) {
     throw UsageError("--jobs must be between 1 and " + std::to_string(kMaxJobs));
@@ -172,9 +186,46 @@ void check_spec(const HuntSpec& spec) {
   if (!(spec.before_s >= 0.0) || !(spec.after_s >= 0.0)) {
     throw UsageError("--before and --after must be at least 0");
   }
+  if (spec.shard_count < 1 || spec.shard_index < 1 || spec.shard_index > spec.shard_count) {
+    throw UsageError("--shard: " + std::to_string(spec.shard_index) + "/" +
+                     std::to_string(spec.shard_count) + " is out of range");
+  }
+  if (static_cast<std::size_t>(spec.shard_count) > hunt_max_runs(spec)) {
+    throw UsageError("--shard: " + std::to_string(spec.shard_count) + " shards of a hunt of " +
+                     std::to_string(hunt_max_runs(spec)) +
+                     " runs (--budget-hours over --minutes); a shard needs at least one run");
+  }
+}
+
+// What makes the shards of a hunt one hunt: every flag that changes what it finds.
+json hunt_sweep(const HuntSpec& spec, const Config& config) {
+  std::vector<std::string> maps;
+  for (const auto& m : spec.maps) maps.push_back(map_name(m));
+  json planner = nullptr;
+  const PlannerEntry* e = spec.planners ? spec.planners->find(spec.policy) : nullptr;
+  if (e && e->kind != PlannerKind::builtin) planner = json::parse(e->describe());
+  return {{"policy", spec.policy},
+          {"planner", planner},
+          {"minutes", spec.minutes},
+          {"failures", spec.failures},
+          {"budget_hours", spec.budget_hours},
+          {"find", static_cast<int>(spec.target)},
+          {"traffic", spec.traffic},
+          {"maps", maps},
+          {"first_seed", spec.first_seed},
+          {"before_s", spec.before_s},
+          {"after_s", spec.after_s},
+          {"params_hash", config_hash(config)},
+          {"shards", spec.shard_count}};
 }
 
 }  // namespace
+
+void check_hunt_spec(const HuntSpec& spec) {
+  check_spec(spec);
+  (void)load_config(spec.config);
+  for (const auto& m : spec.maps) (void)load_track(m);
+}
 
 HuntOutcome run_hunt(const HuntSpec& spec, const std::atomic<bool>* stop,
                      const std::function<void(const HuntProgress&)>& progress) {
@@ -189,8 +240,12 @@ HuntOutcome run_hunt(const HuntSpec& spec, const std::atomic<bool>* stop,
       throw std::runtime_error((spec.out / sub).string() + ": cannot create (" + ec.message() +
                                ")");
   }
-  const auto max_runs = static_cast<std::size_t>(
-      std::max(1.0, std::floor(spec.budget_hours * 60.0 / spec.minutes + 1e-9)));
+  const std::size_t max_runs = hunt_max_runs(spec);
+  // This shard's runs: the j-th is run offset + stride * j of the hunt.
+  const auto offset = static_cast<std::size_t>(spec.shard_index - 1);
+  const auto stride = static_cast<std::size_t>(spec.shard_count);
+  const std::size_t shard_runs = max_runs > offset ? (max_runs - offset + stride - 1) / stride : 0;
+  const auto run_of = [&](std::size_t j) { return offset + stride * j; };
 
   std::mutex mu;
   std::condition_variable cv;
@@ -204,8 +259,9 @@ HuntOutcome run_hunt(const HuntSpec& spec, const std::atomic<bool>* stop,
 
   const auto worker = [&] {
     while (!stopping()) {
-      const std::size_t k = next.fetch_add(1);
-      if (k >= max_runs) return;
+      const std::size_t j = next.fetch_add(1);
+      if (j >= shard_runs) return;
+      const std::size_t k = run_of(j);
       const Combo c = combo_of(spec, k);
       RunResult res;
       DriveOptions o;
@@ -228,18 +284,24 @@ HuntOutcome run_hunt(const HuntSpec& spec, const std::atomic<bool>* stop,
         res.error = e.what();
       }
       std::lock_guard lock(mu);
-      results.emplace(k, std::move(res));
+      results.emplace(j, std::move(res));
       cv.notify_all();
     }
   };
-  const int threads = std::min<int>(spec.jobs, static_cast<int>(max_runs));
+  const int threads = std::min<int>(spec.jobs, static_cast<int>(shard_runs));
   std::vector<std::thread> pool;
   for (int t = 0; t < threads; ++t) pool.emplace_back(worker);
 
   HuntOutcome out;
+  if (spec.shard_count > 1) {
+    out.shard.emplace();
+    out.shard->max_runs = max_runs;
+    out.shard->sweep = hunt_sweep(spec, config);
+    out.shard->revision = std::string(build_revision());
+  }
   std::map<std::string, std::size_t> group_of;
   HuntProgress prog;
-  prog.budget_s = static_cast<double>(max_runs) * spec.minutes * 60.0;
+  prog.budget_s = static_cast<double>(shard_runs) * spec.minutes * 60.0;
   std::string failure;
   const auto write_reports = [&] {
     out.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
@@ -247,7 +309,7 @@ HuntOutcome run_hunt(const HuntSpec& spec, const std::atomic<bool>* stop,
     write_file_atomic(spec.out / "hunt.json", hunt_json(spec, out).dump(2) + "\n");
   };
   std::size_t taken = 0;
-  while (taken < max_runs) {
+  while (taken < shard_runs) {
     RunResult res;
     {
       std::unique_lock lock(mu);
@@ -266,7 +328,7 @@ HuntOutcome run_hunt(const HuntSpec& spec, const std::atomic<bool>* stop,
       res = std::move(results[taken]);
       results.erase(taken);
     }
-    const std::size_t k = taken++;
+    const std::size_t k = run_of(taken++);
     if (res.stopped) break;  // interrupted mid-run: not a finished run
     if (!res.error.empty()) {
       failure = "run " + std::to_string(k) + ": " + res.error;
@@ -275,6 +337,7 @@ HuntOutcome run_hunt(const HuntSpec& spec, const std::atomic<bool>* stop,
     }
     ++out.runs;
     out.simulated_s += res.report.duration_s;
+    if (out.shard) out.shard->run_seconds.emplace_back(k, res.report.duration_s);
     prog.runs = out.runs;
     prog.simulated_s = out.simulated_s;
     const Combo c = combo_of(spec, k);
@@ -378,7 +441,8 @@ HuntOutcome run_hunt(const HuntSpec& spec, const std::atomic<bool>* stop,
   }
   if (!failure.empty()) throw std::runtime_error(failure);
   out.interrupted = stop && stop->load() && static_cast<int>(out.failures.size()) < spec.failures &&
-                    taken < max_runs;
+                    taken < shard_runs;
+  if (out.shard) out.shard->finished = !out.interrupted;
   write_reports();
   if (progress) {
     prog.wall_s = out.wall_s;
@@ -436,19 +500,288 @@ nlohmann::json hunt_json(const HuntSpec& spec, const HuntOutcome& o) {
                       {"cut_error", g.cut_error},
                       {"repro", g.repro}});
   }
-  return {{"policy", spec.policy},
-          {"minutes", spec.minutes},
-          {"runs", o.runs},
-          {"simulated_hours", o.simulated_s / 3600.0},
-          {"interrupted", o.interrupted},
-          {"failures", failures},
-          {"groups", groups},
-          {"timing", {{"wall_s", o.wall_s}}}};
+  json j = {{"policy", spec.policy},
+            {"minutes", spec.minutes},
+            {"runs", o.runs},
+            {"simulated_hours", o.simulated_s / 3600.0},
+            {"interrupted", o.interrupted},
+            {"failures", failures},
+            {"groups", groups},
+            {"timing", {{"wall_s", o.wall_s}}}};
+  if (o.shard) {
+    j["shard"] = {{"index", spec.shard_index},           {"count", spec.shard_count},
+                  {"finished", o.shard->finished},       {"max_runs", o.shard->max_runs},
+                  {"run_seconds", o.shard->run_seconds}, {"sweep", o.shard->sweep},
+                  {"revision", o.shard->revision}};
+  }
+  return j;
+}
+
+namespace {
+
+// One shard's hunt.json, read for merge_hunt.
+struct HuntShard {
+  std::filesystem::path dir;
+  json report;
+  std::vector<HuntFailure> failures;
+  std::map<std::string, HuntGroup> groups;  ///< by situation
+};
+
+HuntShard read_hunt_shard(const std::filesystem::path& dir) {
+  HuntShard h;
+  h.dir = dir;
+  const std::filesystem::path file = dir / "hunt.json";
+  try {
+    h.report = json::parse(read_file(file));
+    for (const json& f : h.report.at("failures")) {
+      HuntFailure x;
+      x.run = f.at("run").get<std::size_t>();
+      x.seed = f.at("seed").get<std::uint64_t>();
+      x.traffic = f.at("traffic").get<std::string>();
+      x.map = f.at("map").get<std::string>();
+      x.t_s = f.at("t_s").get<double>();
+      x.what = f.at("what").get<std::string>();
+      x.situation = f.at("situation").get<std::string>();
+      x.replay = f.at("replay").get<std::string>();
+      x.rerun = f.at("rerun").get<std::string>();
+      h.failures.push_back(std::move(x));
+    }
+    for (const json& g : h.report.at("groups")) {
+      HuntGroup x;
+      x.situation = g.at("situation").get<std::string>();
+      x.reactive = g.at("reactive").get<std::string>();
+      x.replayed = g.at("replayed").get<std::string>();
+      x.cut_error = g.at("cut_error").get<std::string>();
+      h.groups.emplace(x.situation, std::move(x));
+    }
+    (void)h.report.at("shard").at("sweep");
+  } catch (const std::exception& e) {
+    throw UsageError("merge: " + file.string() + " is not the report of a hunt shard (" + e.what() +
+                     "); run each shard with hunt --shard I/N");
+  }
+  return h;
+}
+
+// Copies `rel` of `from` to the same place under `to` (the merge's replays and scenarios).
+void copy_into(const std::filesystem::path& from, const std::filesystem::path& to,
+               const std::string& rel) {
+  if (rel.empty()) return;
+  std::error_code ec;
+  const std::filesystem::path dest = to / rel;
+  std::filesystem::create_directories(dest.parent_path(), ec);
+  if (!std::filesystem::copy_file(from / rel, dest,
+                                  std::filesystem::copy_options::overwrite_existing, ec) ||
+      ec) {
+    throw std::runtime_error(dest.string() + ": cannot copy " + (from / rel).string() + " here (" +
+                             ec.message() + ")");
+  }
+}
+
+// Copies a cut scenario of a shard (`rel` of `from`) into `to`, naming the replay it was cut
+// from where the merge put that replay: the merged folder stands alone.
+void copy_scenario(const std::filesystem::path& from, const std::filesystem::path& to,
+                   const std::string& rel) {
+  if (rel.empty()) return;
+  nlohmann::ordered_json j;
+  try {
+    j = nlohmann::ordered_json::parse(read_file(from / rel));
+  } catch (const nlohmann::json::exception& e) {
+    throw UsageError("merge: " + (from / rel).string() + " is not a scenario (" + e.what() + ")");
+  }
+  if (j.contains("cut") && j["cut"].contains("from") && j["cut"]["from"].contains("replay")) {
+    const std::filesystem::path replay = j["cut"]["from"]["replay"].get<std::string>();
+    j["cut"]["from"]["replay"] = (to / "replays" / replay.filename()).string();
+  }
+  std::error_code ec;
+  std::filesystem::create_directories((to / rel).parent_path(), ec);
+  write_file_atomic(to / rel, j.dump(2) + "\n");
+}
+
+}  // namespace
+
+HuntOutcome merge_hunt(const std::vector<std::filesystem::path>& dirs,
+                       const std::filesystem::path& out) {
+  if (dirs.empty()) throw UsageError("merge: name the hunt folders to join");
+  std::vector<HuntShard> shards;
+  for (const auto& dir : dirs) shards.push_back(read_hunt_shard(dir));
+  const json& first = shards.front().report["shard"];
+  const json sweep = first["sweep"];
+  const int count = first["count"].get<int>();
+  std::set<int> seen;
+  for (const HuntShard& h : shards) {
+    const json& sh = h.report["shard"];
+    if (same_file(h.dir, out)) {
+      throw UsageError("merge: --out " + out.string() + " is one of the folders being joined (" +
+                       h.dir.string() + "); merge into a new folder");
+    }
+    if (sh["sweep"] != sweep) {
+      throw UsageError("merge: " + h.dir.string() + " is a shard of another hunt than " +
+                       shards.front().dir.string() +
+                       " (policy, minutes, failures, budget, traffic, maps, seeds or parameters "
+                       "differ)");
+    }
+    if (sh["revision"] != first["revision"]) {
+      throw UsageError("merge: the shards come from different builds of overtake: " +
+                       first["revision"].get<std::string>() + " (in " +
+                       shards.front().dir.string() + ") and " + sh["revision"].get<std::string>() +
+                       " (in " + h.dir.string() + "); run every shard with the same binary");
+    }
+    const int index = sh["index"].get<int>();
+    if (!seen.insert(index).second) {
+      throw UsageError("merge: shard " + std::to_string(index) + " of " + std::to_string(count) +
+                       " appears twice (" + h.dir.string() + ")");
+    }
+    if (!sh["finished"].get<bool>()) {
+      throw UsageError("merge: " + h.dir.string() + " holds an unfinished shard (shard " +
+                       std::to_string(index) + " was interrupted); run it again");
+    }
+  }
+  if (static_cast<int>(seen.size()) != count) {
+    throw UsageError("merge: the folders hold " + std::to_string(seen.size()) + " of the hunt's " +
+                     std::to_string(count) + " shards; a shard is missing");
+  }
+  if (std::filesystem::exists(out / "hunt.json")) {
+    throw UsageError("merge: --out " + out.string() +
+                     " already holds a hunt; merge into a new "
+                     "folder");
+  }
+
+  // The first `failures` failures in run order (a shard keeps a run's failures in order).
+  struct Found {
+    const HuntShard* from;
+    const HuntFailure* failure;
+  };
+  std::vector<Found> all;
+  for (const HuntShard& h : shards) {
+    for (const HuntFailure& f : h.failures) all.push_back({&h, &f});
+  }
+  std::stable_sort(all.begin(), all.end(),
+                   [](const Found& a, const Found& b) { return a.failure->run < b.failure->run; });
+  const auto wanted = sweep["failures"].get<std::size_t>();
+  const auto max_runs = first["max_runs"].get<std::size_t>();
+  if (all.size() > wanted) all.resize(wanted);
+  // The runs one hunt would have taken: up to the run of the last failure it kept, or all.
+  const std::size_t last_run = all.size() == wanted ? all.back().failure->run : max_runs - 1;
+
+  HuntOutcome o;
+  for (const HuntShard& h : shards) {
+    for (const json& r : h.report["shard"]["run_seconds"]) {
+      if (r[0].get<std::size_t>() > last_run) continue;
+      ++o.runs;
+      o.simulated_s += r[1].get<double>();
+    }
+    o.wall_s = std::max(o.wall_s, h.report["timing"].value("wall_s", 0.0));
+  }
+  std::error_code ec;
+  std::filesystem::create_directories(out, ec);
+  if (ec) {
+    throw std::runtime_error(out.string() + ": cannot create the output folder (" + ec.message() +
+                             ")");
+  }
+  HuntSpec spec;
+  spec.policy = sweep["policy"].get<std::string>();
+  spec.minutes = sweep["minutes"].get<double>();
+  std::map<std::string, std::size_t> group_of;
+  for (const Found& f : all) {
+    copy_into(f.from->dir, out, f.failure->replay);
+    const std::size_t index = o.failures.size();
+    o.failures.push_back(*f.failure);
+    auto [it, is_new] = group_of.emplace(f.failure->situation, o.groups.size());
+    if (is_new) {
+      // The shard's group of this situation began with this failure: none came before it.
+      const auto g = f.from->groups.find(f.failure->situation);
+      if (g == f.from->groups.end()) {
+        throw UsageError("merge: " + f.from->dir.string() + "/hunt.json lists a failure in '" +
+                         f.failure->situation + "' but no group of it");
+      }
+      HuntGroup group = g->second;
+      group.failures.clear();
+      copy_scenario(f.from->dir, out, group.reactive);
+      copy_scenario(f.from->dir, out, group.replayed);
+      if (!group.reactive.empty()) {
+        group.repro = "overtake drive --scenario " + (out / group.reactive).string() +
+                      " --policy " + spec.policy;
+      }
+      o.groups.push_back(std::move(group));
+    }
+    o.groups[it->second].failures.push_back(index);
+  }
+  write_file_atomic(out / "hunt.md", hunt_markdown(spec, o));
+  write_file_atomic(out / "hunt.json", hunt_json(spec, o).dump(2) + "\n");
+  return o;
 }
 
 }  // namespace overtake::app
 
 namespace overtake::app {
+namespace {
+
+// A shard's hunt.json, or null while there is none that can be read.
+json shard_report(const std::filesystem::path& shard) {
+  try {
+    return json::parse(read_file(shard / "hunt.json"));
+  } catch (const std::exception&) {
+    return nullptr;
+  }
+}
+
+// A hunt as a Slurm array: task I hunts slice I (starting over when submitted again: the same
+// runs find the same failures); a shard is finished when its hunt.json says so; the shards
+// merge as `hunt merge`.
+SlurmArray hunt_array(const HuntSpec& spec, std::vector<std::string> args, bool resume,
+                      bool quiet) {
+  namespace fs = std::filesystem;
+  SlurmArray a = slurm_array_here("hunt", spec.out);
+  if (fs::exists(a.out / "hunt.json")) {
+    throw UsageError("--out: " + a.out.string() +
+                     " already holds a hunt (merged, or a local hunt); choose another --out");
+  }
+  a.args = std::move(args);
+  a.task_flags = {"--quiet"};
+  a.runs = hunt_max_runs(spec);
+  a.resume = resume;
+  a.quiet = quiet;
+  a.shard_state = [](const fs::path& shard, int) {
+    SlurmShardState st;
+    const json j = shard_report(shard);
+    if (j.is_object()) {
+      st.finished = j.contains("shard") && j["shard"].value("finished", false);
+      st.so_far = std::to_string(j.value("runs", 0)) + " runs and " +
+                  std::to_string(j.value("failures", json::array()).size()) + " failures";
+    }
+    return st;
+  };
+  a.progress = [](const std::vector<fs::path>& shards) {
+    std::size_t runs = 0, failures = 0;
+    for (const auto& shard : shards) {
+      const json j = shard_report(shard);
+      if (!j.is_object()) continue;
+      runs += j.value("runs", std::size_t{0});
+      failures += j.value("failures", json::array()).size();
+    }
+    return std::to_string(runs) + " runs, " + std::to_string(failures) + " failures found";
+  };
+  const fs::path out = a.out;
+  const std::string policy = spec.policy;
+  const double minutes = spec.minutes;
+  a.merge = [out, quiet, policy, minutes](const std::vector<fs::path>& shards, double wall_s,
+                                          int resubmitted) {
+    const HuntOutcome o = merge_hunt(shards, out);
+    if (!quiet) {
+      HuntSpec s;
+      s.policy = policy;
+      s.minutes = minutes;
+      std::cout << hunt_markdown(s, o);
+      std::printf("%zu Slurm tasks (%d submitted again) in %.1f s\n", shards.size(), resubmitted,
+                  wall_s);
+      std::cout << "written: " << out.string() << "/{hunt.md,hunt.json,replays,scenarios}\n";
+    }
+    return kExitOk;
+  };
+  return a;
+}
+
+}  // namespace
 
 Subcommand register_hunt(CLI::App& app) {
   struct State {
@@ -457,6 +790,11 @@ Subcommand register_hunt(CLI::App& app) {
     std::string maps, traffic = "faithful,calm", find = "collisions", config, out = "hunt-out";
     CLI::Option* policy_opt = nullptr;
     bool quiet = false;
+    bool resume = false;
+    std::string shard;
+    SlurmOptions slurm;
+    std::vector<std::string> merge_dirs;
+    std::string merge_out;
   };
   auto st = std::make_shared<State>();
   st->spec.jobs = static_cast<int>(std::max(1U, std::thread::hardware_concurrency()));
@@ -496,8 +834,37 @@ Subcommand register_hunt(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--out,-o", st->out, "Output folder")->capture_default_str();
   cmd->add_flag("--quiet,-q", st->quiet, "No progress line or table");
+  cmd->add_option("--shard", st->shard,
+                  "Hunt only slice I of N (e.g. 3/8) of the runs, until this slice has found\n"
+                  "--failures; `overtake hunt merge` of all N finds what one hunt would");
+  add_slurm_flags(*cmd, st->slurm, "hunt");
+  cmd->add_flag("--resume", st->resume,
+                "With --slurm: take up the array submitted into --out before (follow it,\n"
+                "submit again what did not finish, merge)");
+  auto* merge = cmd->add_subcommand(
+      "merge", "Join the folders of the shards of one hunt (--shard I/N) into --out.");
+  merge->add_option("dirs", st->merge_dirs, "Shard folders")
+      ->required()
+      ->check(CLI::ExistingDirectory);
+  merge->add_option("--out,-o", st->merge_out, "Folder for the joined hunt")->required();
   return {
-      cmd, [st] {
+      cmd, [st, cmd, merge] {
+        if (merge->parsed()) {
+          const HuntOutcome o = merge_hunt(
+              std::vector<std::filesystem::path>(st->merge_dirs.begin(), st->merge_dirs.end()),
+              st->merge_out);
+          HuntSpec spec;
+          const json j = json::parse(read_file(std::filesystem::path(st->merge_out) / "hunt.json"));
+          spec.policy = j["policy"].get<std::string>();
+          spec.minutes = j["minutes"].get<double>();
+          std::cout << hunt_markdown(spec, o) << "written: " << st->merge_out
+                    << "/{hunt.md,hunt.json,replays,scenarios}\n";
+          return kExitOk;
+        }
+        const bool on_slurm = slurm_requested(*cmd);
+        if (st->resume && !on_slurm) throw UsageError("--resume goes with --slurm TASKS");
+        if (on_slurm && !st->shard.empty())
+          throw UsageError("--slurm makes the shards itself; --shard is for arrays of your own");
         HuntSpec spec = st->spec;
         spec.planners = catalog_from_flags(st->planners);
         spec.policy = chosen_policy(*spec.planners, spec.policy, st->policy_opt->count() > 0);
@@ -529,6 +896,17 @@ Subcommand register_hunt(CLI::App& app) {
         spec.traffic = split_list(st->traffic);
         if (!st->config.empty()) spec.config = st->config;
         spec.out = st->out;
+        if (!st->shard.empty())
+          std::tie(spec.shard_index, spec.shard_count) = parse_shard(st->shard);
+        if (on_slurm) {
+          check_hunt_spec(spec);
+          check_programs_for_slurm(*spec.planners, st->planners.network);
+          const SlurmArray array =
+              hunt_array(spec, task_arguments(*cmd, {"out", "jobs", "resume", "quiet", "shard"}),
+                         st->resume, st->quiet);
+          const InterruptScope interrupt;
+          return run_slurm_array(array, st->slurm, &InterruptScope::flag());
+        }
         const bool draw = !st->quiet && stderr_is_terminal();
         HuntOutcome o;
         {

@@ -3,9 +3,11 @@
 #include <algorithm>
 #include <cassert>
 #include <cmath>
+#include <sstream>
 
 #include "overtake/core/road.hpp"
 #include "overtake/core/units.hpp"
+#include "overtake/sim/checkpoint.hpp"
 
 namespace overtake::sim {
 namespace {
@@ -498,9 +500,9 @@ void FaithfulTraffic::on_contact(std::size_t i, core::Vec2 shift_m, double speed
 
 namespace overtake::sim {
 
-void SmoothNoise::archive(core::StateArchive& ar) {
+void SmoothNoise::archive(core::StateArchive& ar, long max_cell) {
   ar.io(rng_, "noise stream");
-  ar.io(cell_, "noise cell");
+  ar.io_range(cell_, 0, max_cell, "noise cell");
   ar.io(v0_, "noise value");
   ar.io(v1_, "noise value");
 }
@@ -510,6 +512,8 @@ void FaithfulTraffic::archive(core::StateArchive& ar) {
   const std::size_t n = cars_.size();
   const int lanes = road_.lane_count;
   const std::size_t waypoints = chords_.size();
+  // The noise is sampled at time * rate, and time never passes kMaxCheckpointRunS.
+  const auto max_cell = static_cast<long>(std::floor(kMaxCheckpointRunS * f_.wander_rate_hz)) + 1;
   ar.io(spawn_rng_, "spawn stream");
   ar.require(ar.io_length(n, n, "cars") == n, "the checkpoint has another number of cars");
   for (std::size_t i = 0; i < n; ++i) {
@@ -527,7 +531,7 @@ void FaithfulTraffic::archive(core::StateArchive& ar) {
     ar.io(d.avoid_until_s, "avoid until");
     ar.io(d.avoid_slowdown, "avoid slowdown");
     ar.io_metres(d.avoid_offset_m, "avoid offset");
-    d.noise.archive(ar);
+    d.noise.archive(ar, max_cell);
     ar.io_enum(d.sight, SightKind::ego, "sight");
     ar.io_range(d.sight_car, -1, static_cast<int>(n) - 1, "sight car");
     ar.io_metres(d.sight_distance_m, "sight distance");
@@ -544,6 +548,11 @@ void FaithfulTraffic::archive(core::StateArchive& ar) {
   ar.io(frame_counter_, "frame counter");
   ar.io(frames_to_batch_, "frames to batch");
   ar.io(time_s_, "time");
+  if (ar.loading() && !(time_s_ >= 0.0 && time_s_ <= kMaxCheckpointRunS)) {
+    std::ostringstream os;
+    os << "time: " << time_s_ << " s is outside [0, " << kMaxCheckpointRunS << "] s";
+    ar.require(false, os.str());
+  }
 }
 
 }  // namespace overtake::sim

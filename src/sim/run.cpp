@@ -92,7 +92,8 @@ Stepper::Stepper(World& world, const RunOptions& options)
 
 void Stepper::archive(core::StateArchive& ar) {
   ar.part("stepper");
-  ar.io_range(total_steps_, 0, std::numeric_limits<long>::max() / 2, "end step");
+  ar.io_range(total_steps_, 0, std::lround(kMaxCheckpointRunS / world_.params().step_s),
+              "end step");
   ar.io(latency_, "latency stream");
 }
 

@@ -5,6 +5,7 @@
 
 #include "overtake/core/random.hpp"
 #include "overtake/core/units.hpp"
+#include "overtake/sim/checkpoint.hpp"
 #include "overtake/sim/path_queue.hpp"
 
 namespace overtake::sim {
@@ -143,7 +144,7 @@ void World::archive(core::StateArchive& ar) {
   // hundred points).
   constexpr std::size_t kMaxQueue = 1U << 20U;
   ar.part("world");
-  ar.io_range(steps_, 0, std::numeric_limits<long>::max() / 2, "step");
+  ar.io_range(steps_, 0, std::lround(kMaxCheckpointRunS / params_.step_s), "step");
   ar.io(ego_.position, "ego position");
   ar.io(ego_.yaw_rad, "ego heading");
   ar.io_speed(ego_.speed_mps, "ego speed");

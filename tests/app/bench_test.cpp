@@ -224,6 +224,34 @@ TEST_F(BenchTest, MergeRefusesDifferentConfigurationsAndMissingShards) {
   }
 }
 
+// Shards run by two builds (another node's binary, a rebuild between arrays) may drive
+// differently: their rows do not make one sweep.
+TEST_F(BenchTest, MergeRefusesRowsOfTwoRevisions) {
+  BenchSpec s1 = shard("s1", 1, 2);
+  BenchSpec s2 = shard("s2", 2, 2);
+  (void)run_bench(s1, nullptr, {});
+  (void)run_bench(s2, nullptr, {});
+  std::string rows;
+  {
+    std::ifstream in(s2.out / "runs.jsonl");
+    std::string line;
+    while (std::getline(in, line)) {
+      json j = json::parse(line);
+      j["provenance"]["git_revision"] = "0123abc";
+      rows += j.dump() + "\n";
+    }
+  }
+  write_file_atomic(s2.out / "runs.jsonl", rows);
+  try {
+    (void)merge_bench({s1.out, s2.out}, root_ / "m");
+    FAIL() << "merged rows of two builds";
+  } catch (const UsageError& e) {
+    EXPECT_THAT(std::string(e.what()), HasSubstr("different builds of overtake"));
+    EXPECT_THAT(std::string(e.what()), HasSubstr("0123abc (in " + s2.out.string() + ")"));
+  }
+  EXPECT_FALSE(fs::exists(root_ / "m" / "runs.jsonl"));
+}
+
 TEST_F(BenchTest, ResumeSkipsFinishedRunsAndDropsACutOffLine) {
   BenchSpec s = spec("r");
   s.policies = {"walkthrough"};

@@ -203,6 +203,99 @@ TEST(Hunt, FindsTheSameFailuresWhateverTheJobsAndEachScenarioReproducesIt) {
   }
 }
 
+HuntSpec small_hunt(const fs::path& out) {
+  HuntSpec spec;
+  spec.policy = "seed001";
+  spec.traffic = {"faithful"};
+  spec.minutes = 2.0;
+  spec.failures = 3;
+  spec.budget_hours = 1.0;
+  spec.jobs = 2;
+  spec.out = out;
+  return spec;
+}
+
+// A file of a hunt's folder with the folder named OUT.
+std::string comparable(const fs::path& dir, const std::string& file) {
+  std::string text = read_file(dir / file);
+  for (std::size_t at = text.find(dir.string()); at != std::string::npos;
+       at = text.find(dir.string())) {
+    text.replace(at, dir.string().size(), "OUT");
+  }
+  return text;
+}
+
+// hunt.json with its timing left out and the folder it was written in named OUT.
+std::string comparable(const fs::path& dir) {
+  json j = json::parse(comparable(dir, "hunt.json"));
+  j.erase("timing");
+  return j.dump(1);
+}
+
+// Each shard hunts its slice until it has found --failures of its own; the first failures of
+// all slices in run order are those one hunt finds, and the runs one hunt would have driven
+// are counted from each shard's runs.
+TEST(Hunt, ShardsMergeIntoWhatOneHuntFinds) {
+  TempDir dir;
+  const HuntSpec whole = small_hunt(dir.path() / "whole");
+  const HuntOutcome local = run_hunt(whole, nullptr, {});
+  ASSERT_EQ(local.failures.size(), 3U);
+  std::vector<fs::path> shards;
+  for (int i = 1; i <= 3; ++i) {
+    HuntSpec s = small_hunt(dir.path() / ("shard" + std::to_string(i)));
+    s.shard_index = i;
+    s.shard_count = 3;
+    s.jobs = 1;
+    const HuntOutcome o = run_hunt(s, nullptr, {});
+    ASSERT_TRUE(o.shard);
+    EXPECT_TRUE(o.shard->finished);
+    for (const HuntFailure& f : o.failures) EXPECT_EQ(f.run % 3, static_cast<std::size_t>(i - 1));
+    shards.push_back(s.out);
+  }
+  const fs::path merged = dir.path() / "merged";
+  const HuntOutcome m = merge_hunt({shards[2], shards[0], shards[1]}, merged);
+  EXPECT_EQ(m.runs, local.runs);
+  EXPECT_DOUBLE_EQ(m.simulated_s, local.simulated_s);
+  EXPECT_EQ(comparable(merged), comparable(whole.out));
+  for (const HuntFailure& f : m.failures) {
+    EXPECT_EQ(read_file(merged / f.replay), read_file(whole.out / f.replay)) << f.replay;
+  }
+  for (const HuntGroup& g : m.groups) {
+    EXPECT_EQ(comparable(merged, g.reactive), comparable(whole.out, g.reactive));
+    EXPECT_EQ(comparable(merged, g.replayed), comparable(whole.out, g.replayed));
+  }
+
+  const auto refused = [&](const std::vector<fs::path>& dirs, const std::string& what) {
+    try {
+      (void)merge_hunt(dirs, dir.path() / "refused");
+      ADD_FAILURE() << "merged: " << what;
+    } catch (const UsageError& e) {
+      EXPECT_THAT(e.what(), HasSubstr(what));
+    }
+  };
+  refused({shards[0], shards[1]}, "2 of the hunt's 3 shards; a shard is missing");
+  refused({shards[0], shards[0], shards[1]}, "shard 1 of 3 appears twice");
+  refused({shards[0], shards[1], shards[2], whole.out}, "is not the report of a hunt shard");
+  const fs::path cut_short = dir.path() / "cut-short";
+  fs::copy(shards[1], cut_short, fs::copy_options::recursive);
+  json report = read_json_file(cut_short / "hunt.json");
+  report["shard"]["finished"] = false;
+  write_file_atomic(cut_short / "hunt.json", report.dump());
+  refused({shards[0], cut_short, shards[2]}, "holds an unfinished shard (shard 2 was interrupted)");
+  HuntSpec other = small_hunt(dir.path() / "other");
+  other.minutes = 1.0;
+  other.shard_index = 3;
+  other.shard_count = 3;
+  (void)run_hunt(other, nullptr, {});
+  refused({shards[0], shards[1], other.out}, "is a shard of another hunt");
+  try {
+    (void)merge_hunt(shards, merged);
+    ADD_FAILURE() << "merged into a folder that holds a hunt";
+  } catch (const UsageError& e) {
+    EXPECT_THAT(e.what(), HasSubstr("already holds a hunt"));
+  }
+}
+
 }  // namespace
 }  // namespace overtake::app
 

@@ -6,11 +6,13 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstring>
 #include <limits>
 
 #include "overtake/core/reference_line.hpp"
 #include "overtake/core/state_archive.hpp"
 #include "overtake/sim/checkpoint.hpp"
+#include "overtake/sim/faithful_traffic.hpp"
 #include "overtake/sim/recorded_traffic.hpp"
 #include "overtake/sim/run.hpp"
 #include "overtake/sim/world.hpp"
@@ -229,6 +231,43 @@ TEST(CheckpointFile, ARunStateRestoresOnlyIntoAWorldMadeTheSameWay) {
     o.restore = part;
     if (part.empty()) continue;  // empty: nothing to restore
     EXPECT_THROW(Stepper(w, o), core::StateError) << n;
+  }
+}
+
+// A run's state that says its traffic has run for longer than any run does is refused: catching
+// the cars' wander up to it would take as long as that run (a state made to hang a restore).
+TEST(CheckpointFile, ATrafficTimeBeyondAnyRunIsRefused) {
+  const Fixture f;
+  World world(f.map, f.line, WorldParams{}, TrafficProfile::faithful, 3);
+  RunOptions opts;
+  opts.steps_per_call = 1;
+  Stepper run(world, opts);
+  for (int k = 0; k < 137; ++k) run.step();
+  const auto* traffic = dynamic_cast<const FaithfulTraffic*>(&world.traffic().model());
+  ASSERT_NE(traffic, nullptr);
+  const std::string state = run.save();
+  // The traffic's clock is its last field, just before the referee's part begins.
+  const double t = traffic->time_s();
+  std::string bits(sizeof t, '\0');
+  std::memcpy(bits.data(), &t, sizeof t);
+  const std::size_t referee = state.find("\x07referee");
+  ASSERT_NE(referee, std::string::npos);
+  const std::size_t at = referee - sizeof t;
+  ASSERT_EQ(state.substr(at, sizeof t), bits);
+  for (const double bad : {1e9, -1.0, std::numeric_limits<double>::infinity()}) {
+    std::string tampered = state;
+    std::memcpy(tampered.data() + at, &bad, sizeof bad);
+    World w(f.map, f.line, WorldParams{}, TrafficProfile::faithful, 3);
+    RunOptions o;
+    o.restore = tampered;
+    try {
+      Stepper(w, o);
+      ADD_FAILURE() << "a traffic time of " << bad << " s restored";
+    } catch (const core::StateError& e) {
+      EXPECT_THAT(e.what(), HasSubstr("in part 'faithful traffic'"));
+      EXPECT_THAT(e.what(), HasSubstr("time: "));
+      EXPECT_THAT(e.what(), HasSubstr("is outside [0, 1e+06] s"));
+    }
   }
 }
 

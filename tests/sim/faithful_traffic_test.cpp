@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "overtake/core/road.hpp"
+#include "overtake/core/state_archive.hpp"
 #include "overtake/core/units.hpp"
 #include "sim/test_maps.hpp"
 
@@ -89,6 +90,30 @@ TEST(SmoothNoise, StaysInTheUnitRangeAndMovesSmoothly) {
   EXPECT_GT(hi, 0.7);
   SmoothNoise again(7);
   EXPECT_EQ(again.at(123.4), SmoothNoise(7).at(123.4));
+}
+
+// A checkpoint's lattice cell is bounded: from a cell far behind, the next sample would draw
+// once per cell passed (a state made to hang a restore).
+TEST(SmoothNoise, ACheckpointRestoresTheSignalAndRefusesACellOutOfRange) {
+  SmoothNoise n(7);
+  (void)n.at(1234.5);
+  core::StateArchive out;
+  n.archive(out, 2000);
+  const std::string bytes = out.take();
+  SmoothNoise back(1);
+  core::StateArchive in(bytes, "noise");
+  back.archive(in, 2000);
+  EXPECT_EQ(back.at(1300.25), n.at(1300.25));
+  SmoothNoise tight(1);
+  core::StateArchive small(bytes, "noise");
+  try {
+    tight.archive(small, 1000);
+    FAIL() << "a cell beyond the bound restored";
+  } catch (const core::StateError& e) {
+    EXPECT_NE(std::string(e.what()).find("noise cell: 1234 is outside [0, 1000]"),
+              std::string::npos)
+        << e.what();
+  }
 }
 
 // --- start and placement -----------------------------------------------------------------

@@ -91,6 +91,10 @@ struct BenchOutcome {
   std::vector<std::filesystem::path> replays;  ///< recorded by record_worst (merge: copied)
 };
 
+/// Checks everything run_bench checks before its first run (UsageError / ConfigError /
+/// MapError), and runs nothing: for a bench that runs elsewhere (`--slurm`).
+void check_bench_spec(const BenchSpec& spec);
+
 /// Checks everything before any run starts (UsageError / ConfigError / MapError), then runs
 /// the spec's shard on `jobs` threads, writing out/runs.jsonl as runs finish (so an
 /// interrupted bench keeps every finished run) and, at the end, runs.jsonl in sweep order,

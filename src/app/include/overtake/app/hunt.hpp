@@ -38,6 +38,11 @@ struct HuntSpec {
   std::optional<std::filesystem::path> config;
   int jobs = 1;
   std::filesystem::path out = "hunt-out";
+  /// Hunt only the runs k with k mod shard_count == shard_index - 1, each shard until it has
+  /// found `failures` of its own (or spent the budget's runs of its slice): `merge_hunt` of
+  /// all shards then finds what one hunt would (the first failures in run order).
+  int shard_index = 1;  ///< 1-based
+  int shard_count = 1;
 };
 
 /// One failure found.
@@ -73,6 +78,16 @@ struct HuntProgress {
   double wall_s = 0.0;
 };
 
+/// What merge_hunt needs of a shard besides its failures.
+struct HuntShardInfo {
+  bool finished = false;
+  std::size_t max_runs = 0;  ///< of the whole hunt (its budget in runs)
+  /// The simulated seconds of each run taken, by run index.
+  std::vector<std::pair<std::size_t, double>> run_seconds;
+  nlohmann::json sweep;  ///< what makes shards one hunt (flags, parameters' hash)
+  std::string revision;
+};
+
 struct HuntOutcome {
   std::size_t runs = 0;
   double simulated_s = 0.0;
@@ -80,7 +95,14 @@ struct HuntOutcome {
   bool interrupted = false;
   std::vector<HuntFailure> failures;
   std::vector<HuntGroup> groups;
+  std::optional<HuntShardInfo> shard;  ///< a shard's (shard_count > 1)
 };
+
+/// The runs the budget allows (--budget-hours over --minutes, at least one).
+[[nodiscard]] std::size_t hunt_max_runs(const HuntSpec& spec);
+/// Checks everything run_hunt checks before its first run (flags, parameters, maps), and
+/// runs nothing: for a hunt that runs elsewhere (`--slurm`).
+void check_hunt_spec(const HuntSpec& spec);
 
 /// Runs the hunt (UsageError for bad flags before any run). Runs are taken in a fixed order
 /// (seed, then map, then traffic) and their results in that order, so the same options find
@@ -88,6 +110,14 @@ struct HuntOutcome {
 /// each failure (Ctrl-C keeps what was found), out/replays/ and out/scenarios/.
 [[nodiscard]] HuntOutcome run_hunt(const HuntSpec& spec, const std::atomic<bool>* stop,
                                    const std::function<void(const HuntProgress&)>& progress);
+
+/// Joins the folders of the shards of one hunt into `out`: the first `failures` failures of
+/// all shards in run order, grouped as one hunt groups them, with their replays and cut
+/// scenarios copied, and hunt.md and hunt.json as one unsharded hunt writes them (timing
+/// aside). Throws UsageError when a shard is missing, unfinished, doubled, of another hunt or
+/// of another build, or when `out` is one of them or holds a hunt.
+[[nodiscard]] HuntOutcome merge_hunt(const std::vector<std::filesystem::path>& dirs,
+                                     const std::filesystem::path& out);
 
 [[nodiscard]] std::string hunt_markdown(const HuntSpec& spec, const HuntOutcome& outcome);
 [[nodiscard]] nlohmann::json hunt_json(const HuntSpec& spec, const HuntOutcome& outcome);

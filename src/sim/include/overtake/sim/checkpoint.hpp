@@ -17,6 +17,9 @@ namespace overtake::sim {
 inline constexpr std::string_view kCheckpointMagic = "OVTKCKPT";
 /// Bumped whenever a part's fields change: a checkpoint of another version is refused.
 inline constexpr std::uint32_t kCheckpointVersion = 1;
+/// No checkpoint is of a run longer than this (about 11.6 days; the longest drive is a week).
+/// A state past it is refused: restoring it would mean catching up that much traffic.
+inline constexpr double kMaxCheckpointRunS = 1e6;
 
 /// What a checkpoint is of, so that it is restored into a world made the same way.
 struct CheckpointInfo {

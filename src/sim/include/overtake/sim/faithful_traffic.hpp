@@ -38,7 +38,9 @@ class SmoothNoise {
   explicit SmoothNoise(std::uint64_t seed = 0);
   /// The signal at `x` (x must not go back).
   [[nodiscard]] double at(double x);
-  void archive(core::StateArchive& ar);
+  /// Through a checkpoint; a lattice cell outside [0, max_cell] is refused (catching up to
+  /// it would take that many draws).
+  void archive(core::StateArchive& ar, long max_cell);
 
  private:
   [[nodiscard]] double draw();
