@@ -5,12 +5,15 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <csignal>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <thread>
 
 #include "bench_support.hpp"
 #include "overtake/app/cli.hpp"
+#include "overtake/app/interrupt.hpp"
 #include "overtake/app/io.hpp"
 #include "overtake/app/slurm.hpp"
 #include "process_support.hpp"
@@ -193,7 +196,9 @@ for range in $(echo "$array" | tr ',' ' '); do
   hi=${range#*-}
   for t in $(seq "$lo" "$hi"); do
     log=$(echo "$output" | sed "s/%a/$t/; s/%A/$job/")
-    if [ -f "$state/fail" ]; then
+    if [ -f "$state/hold" ]; then
+      echo "${job}_$t" >> "$state/held"
+    elif [ -f "$state/fail" ]; then
       echo "overtake: error: the node said no" > "$log"
       echo "FAILED 2:0" > "$state/job-${job}_$t"
     else
@@ -213,7 +218,8 @@ echo "$job"
 )sh";
 
 constexpr const char* kFakeSqueue = R"sh(#!/bin/sh
-# Every task has run by the time sbatch answers: nothing is queued.
+# Every task has run by the time sbatch answers, but those held (a file `hold`): they run on.
+if [ -f "$FAKE_SLURM_DIR/held" ]; then sed 's/$/ RUNNING/' "$FAKE_SLURM_DIR/held"; fi
 exit 0
 )sh";
 
@@ -380,6 +386,35 @@ TEST_F(SlurmCli, ATaskSlurmStillHoldsIsNotSubmittedAgain) {
   EXPECT_EQ(sbatch_calls(), 1);
   EXPECT_THAT(err(), HasSubstr("0/2 tasks done, 2 running"));
   EXPECT_THAT(out(), HasSubstr("6 runs in 2 Slurm tasks (0 submitted again)"));
+}
+
+// Ctrl-C stops following, not the tasks: they are named, and --resume follows them again.
+TEST_F(SlurmCli, CtrlCStopsFollowingAndLeavesTheTasksRunning) {
+  write_file_atomic(fake() / "hold", "");
+  const pid_t pid = test::start_overtake(
+      with(sweep(), {"--slurm", "2", "--slurm-poll", "0.1", "--out", path("cluster").string()}),
+      path("out.txt"), path("err.txt"));
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+  while (!fs::exists(fake() / "held") && std::chrono::steady_clock::now() < deadline) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));  // following by now
+  ::kill(pid, SIGINT);
+  const auto t0 = std::chrono::steady_clock::now();
+  EXPECT_EQ(test::exit_status(pid, std::chrono::seconds(30)), kExitInterrupted);
+  EXPECT_LT(std::chrono::steady_clock::now() - t0, std::chrono::seconds(5));
+  EXPECT_THAT(err(), HasSubstr("0/2 tasks done, 2 running"));
+  EXPECT_THAT(err(), HasSubstr("stopped following; the tasks go on in Slurm (jobs 100)"));
+  EXPECT_THAT(err(), HasSubstr("scancel 100 cancels them"));
+  // Taken up again: the held tasks end (here: they ran), overtake merges.
+  fs::remove(fake() / "hold");
+  fs::remove(fake() / "held");
+  EXPECT_EQ(run(with(sweep(), {"--slurm", "2", "--slurm-poll", "0.1", "--resume", "--out",
+                               path("cluster").string()})),
+            0)
+      << err();
+  EXPECT_EQ(sbatch_calls(), 2);  // the held tasks never ran: both submitted again
+  EXPECT_THAT(out(), HasSubstr("6 runs in 2 Slurm tasks (2 submitted again)"));
 }
 
 TEST_F(SlurmCli, SubmitOnlyReturnsAtOnceSayingHowToFollow) {
