@@ -1,5 +1,6 @@
 # overtake: the two commands of the README, and a few more for development.
-#   make demo   install what is missing, build (Release), drive the built-in track, print the scorecard
+#   make demo   install what is missing, build the binary (Release), drive the built-in track, print
+#               the scorecard and write the drive as a page to open in a browser
 #   make check  install what is missing, build, run every test (also under ASan + UBSan), fuzz every parser briefly
 #   make fuzz   the libFuzzer harnesses (fuzz/) for FUZZ_SECONDS each; findings in build/fuzz/findings
 #   make format-check  the C++ sources against .clang-format (make format fixes them)
@@ -18,8 +19,17 @@ build: deps
 	@cmake --preset release >/dev/null
 	@cmake --build --preset release
 
-demo: build
-	./build/release/overtake drive --minutes 10
+# Only the binary is built (not the tests and benchmarks): the drive, its scorecard, and the
+# drive as one self-contained page to open in a browser.
+demo: deps
+	@cmake --preset release >/dev/null
+	@cmake --build --preset release --target overtake
+	@mkdir -p build/demo
+	./build/release/overtake drive --minutes 10 --record build/demo/drive.otr
+	@./build/release/overtake view build/demo/drive.otr --html build/demo/drive.html --quiet
+	@echo
+	@echo "Watch the drive: open build/demo/drive.html in a browser (one self-contained file),"
+	@echo "or serve it with: ./build/release/overtake view build/demo/drive.otr"
 
 test: build
 	ctest --preset release
