@@ -7,7 +7,10 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <sys/wait.h>
 #include <unistd.h>
+
+#include <csignal>
 
 #include <cstdlib>
 #include <filesystem>
@@ -123,6 +126,21 @@ TEST_F(SlurmCluster, ABenchCancelledPartWayIsSubmittedAgainAndMergesIntoTheLocal
   for (const char* a : {"--slurm", "4", "--slurm-poll", "0.2", "--out"}) slurm.emplace_back(a);
   slurm.push_back(path("cluster-out").string());
   const pid_t bench = test::start_overtake(slurm, path("bench.out"), path("bench.err"));
+  // Whatever happens below, the bench does not outlive the test (it would follow a cluster
+  // that is gone, looking at its queue for ever).
+  struct Reap {
+    explicit Reap(pid_t p) : pid(p) {}
+    pid_t pid;
+    bool reaped = false;
+    Reap(const Reap&) = delete;
+    Reap& operator=(const Reap&) = delete;
+    ~Reap() {
+      if (reaped) return;
+      ::kill(pid, SIGKILL);
+      int status = 0;
+      ::waitpid(pid, &status, 0);
+    }
+  } reap{bench};
 
   // Task 2 (reference seeds 2 and 6, walkthrough seeds 2 and 6): cancelled once it has written
   // a run of its four, or as soon as it runs if it is gone by then.
@@ -146,6 +164,7 @@ TEST_F(SlurmCluster, ABenchCancelledPartWayIsSubmittedAgainAndMergesIntoTheLocal
       << app::read_file(path("scancel.err"));
 
   const auto status = test::exit_status(bench, 600s);
+  reap.reaped = true;  // waited for (and killed, past the time)
   const std::string err = app::read_file(path("bench.err"));
   ASSERT_EQ(status, 0) << err;
   // It was running when cancelled, with `written` of its 4 runs: overtake submits it again,
