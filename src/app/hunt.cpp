@@ -110,18 +110,12 @@ Combo combo_of(const HuntSpec& spec, std::size_t k) {
           spec.traffic[within % spec.traffic.size()]};
 }
 
-std::string shell_quoted(const std::string& text) {
-  std::string out = "'";
-  for (const char ch : text) out += ch == '\'' ? std::string("'\\''") : std::string(1, ch);
-  return out + "'";
-}
-
 /// The command and flags that give a run the hunt's planner: `drive --policy P` for a
 /// built-in policy, the flag that brings a plugin or a Python planner, `sim --planner-cmd`
 /// for a planner program.
 std::string planner_command(const HuntSpec& spec) {
   const PlannerEntry* e = spec.planners ? spec.planners->find(spec.policy) : nullptr;
-  const std::string named = e ? shell_quoted(e->name + "=" + e->source) : std::string();
+  const std::string named = e ? shell_quote(e->name + "=" + e->source) : std::string();
   if (!e || e->kind == PlannerKind::builtin) return "overtake drive --policy " + spec.policy;
   switch (e->kind) {
     case PlannerKind::plugin:
@@ -129,8 +123,8 @@ std::string planner_command(const HuntSpec& spec) {
     case PlannerKind::python:
       return "overtake drive --policy-py " + named;
     case PlannerKind::program:
-      return "overtake sim --planner-cmd " + shell_quoted(e->source) + " --planner-name " +
-             shell_quoted(e->name);
+      return "overtake sim --planner-cmd " + shell_quote(e->source) + " --planner-name " +
+             shell_quote(e->name);
     case PlannerKind::builtin:
       break;
   }
@@ -762,16 +756,10 @@ SlurmArray hunt_array(const HuntSpec& spec, std::vector<std::string> args, bool 
     return std::to_string(runs) + " runs, " + std::to_string(failures) + " failures found";
   };
   const fs::path out = a.out;
-  const std::string policy = spec.policy;
-  const double minutes = spec.minutes;
-  a.merge = [out, quiet, policy, minutes](const std::vector<fs::path>& shards, double wall_s,
-                                          int resubmitted) {
-    const HuntOutcome o = merge_hunt(shards, out);
+  a.merge = [out, quiet](const std::vector<fs::path>& shards, double wall_s, int resubmitted) {
+    (void)merge_hunt(shards, out);
     if (!quiet) {
-      HuntSpec s;
-      s.policy = policy;
-      s.minutes = minutes;
-      std::cout << hunt_markdown(s, o);
+      std::cout << read_file(out / "hunt.md");
       std::printf("%zu Slurm tasks (%d submitted again) in %.1f s\n", shards.size(), resubmitted,
                   wall_s);
       std::cout << "written: " << out.string() << "/{hunt.md,hunt.json,replays,scenarios}\n";
@@ -850,14 +838,11 @@ Subcommand register_hunt(CLI::App& app) {
   return {
       cmd, [st, cmd, merge] {
         if (merge->parsed()) {
-          const HuntOutcome o = merge_hunt(
+          const std::filesystem::path out = st->merge_out;
+          (void)merge_hunt(
               std::vector<std::filesystem::path>(st->merge_dirs.begin(), st->merge_dirs.end()),
-              st->merge_out);
-          HuntSpec spec;
-          const json j = json::parse(read_file(std::filesystem::path(st->merge_out) / "hunt.json"));
-          spec.policy = j["policy"].get<std::string>();
-          spec.minutes = j["minutes"].get<double>();
-          std::cout << hunt_markdown(spec, o) << "written: " << st->merge_out
+              out);
+          std::cout << read_file(out / "hunt.md") << "written: " << st->merge_out
                     << "/{hunt.md,hunt.json,replays,scenarios}\n";
           return kExitOk;
         }

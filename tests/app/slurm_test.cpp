@@ -24,7 +24,6 @@ namespace {
 
 using nlohmann::json;
 using ::testing::HasSubstr;
-using ::testing::Not;
 namespace fs = std::filesystem;
 
 // What `sh -c 'printf %s "$0"' WORD` prints for the word `quoted` (parsed by a real shell).
