@@ -1,7 +1,10 @@
 #include "overtake/core/wire_number.hpp"
 
+#include <array>
+#include <bit>
 #include <charconv>
 #include <cmath>
+#include <cstdint>
 #include <system_error>
 
 #include "overtake/core/telemetry.hpp"
@@ -9,14 +12,85 @@
 
 namespace overtake::core {
 
-double wire_round(double value) {
-  if (!std::isfinite(value)) return value;
-  const auto f = static_cast<float>(value);
+namespace {
+
+// What the text says: the float printed with 7 significant digits, read back as a double.
+double wire_round_by_text(float f) {
   char buf[32];
   const auto printed = std::to_chars(buf, buf + sizeof buf, f, std::chars_format::general, 7);
   double out = 0.0;
   std::from_chars(buf, printed.ptr, out);
   return out;
+}
+
+// 10^k for k in [0, 22]: each exact in a double.
+constexpr std::array<double, 23> kPowersOfTen = [] {
+  std::array<double, 23> p{};
+  double v = 1.0;
+  for (double& x : p) {
+    x = v;
+    v *= 10.0;
+  }
+  return p;
+}();
+
+// 5^k for k in [0, 22] (below 2^52).
+constexpr std::array<std::uint64_t, 23> kPowersOfFive = [] {
+  std::array<std::uint64_t, 23> p{};
+  std::uint64_t v = 1;
+  for (std::uint64_t& x : p) {
+    x = v;
+    v *= 5;
+  }
+  return p;
+}();
+
+// 128-bit integers (GCC and Clang): the exact products below need 76 bits.
+__extension__ using U128 = unsigned __int128;
+
+}  // namespace
+
+double wire_round(double value) {
+  if (!std::isfinite(value)) return value;
+  const auto f = static_cast<float>(value);
+  const float a = std::abs(f);
+  // The same number without text, for 1e-16 <= |f| < 1e6 (every figure of a run): the float
+  // is M * 2^E exactly; times 10^k it is N * 2^(E + k) with N = M * 5^k, which is rounded to
+  // the integer m of 7 digits (ties to even, as the printing does) in 128-bit integers; m and
+  // 10^k are exact doubles, so m / 10^k is the double nearest the printed decimal, which is
+  // what reading it gives. Elsewhere (tiny or huge): the text.
+  if (a == 0.0F) return static_cast<double>(f);  // "0" or "-0"
+  if (!(a >= 1e-16F && a < 1e6F)) return wire_round_by_text(f);
+  // a = m24 * 2^e2 exactly (a is a normal float here).
+  const auto bits = std::bit_cast<std::uint32_t>(a);
+  const std::uint64_t m24 = (bits & 0x7FFFFFU) | 0x800000U;
+  const int e2 = static_cast<int>((bits >> 23U) & 0xFFU) - 127 - 23;
+  // The decimal exponent d with 10^d <= a < 10^(d + 1): log2(a) is in [e2 + 23, e2 + 24), so
+  // d is floor((e2 + 23) * log10(2)) or one more.
+  int d = static_cast<int>(std::floor((e2 + 23) * 0.30102999566398120));
+  const auto at_least_ten_to = [&](int p) {  // a >= 10^p (exact: 10^p is not a float)
+    return p >= 0 ? static_cast<double>(a) >= kPowersOfTen[static_cast<std::size_t>(p)]
+                  : static_cast<double>(a) * kPowersOfTen[static_cast<std::size_t>(-p)] >= 1.0;
+  };
+  if (at_least_ten_to(d + 1)) ++d;
+  const int k = 6 - d;  // in [1, 22]
+  if (k < 0 || k > 22) return wire_round_by_text(f);
+  const U128 n = static_cast<U128>(m24) * kPowersOfFive[static_cast<std::size_t>(k)];
+  const int shift = e2 + k;
+  U128 m = 0;
+  if (shift >= 0) {
+    m = n << shift;
+  } else {
+    const int s = -shift;
+    if (s >= 127) return wire_round_by_text(f);
+    m = n >> s;
+    const U128 rest = n - (m << s);
+    const U128 half = static_cast<U128>(1) << (s - 1);
+    if (rest > half || (rest == half && (m & 1U) != 0)) ++m;
+  }
+  const double out = static_cast<double>(static_cast<std::uint64_t>(m)) /
+                     kPowersOfTen[static_cast<std::size_t>(k)];
+  return f < 0.0F ? -out : out;
 }
 
 namespace {

@@ -101,7 +101,13 @@ core::Telemetry World::telemetry() const {
   }
   t.cars.reserve(traffic_.cars().size());
   for (const TrafficCar& c : traffic_.cars()) t.cars.push_back(traffic_.observe(c));
-  if (params_.wire_rounding) t = core::round_like_wire(std::move(t));
+  if (params_.wire_rounding) {
+    // The queue holds points rounded already (apply_path): rounding is idempotent, so only
+    // the rest is rounded here.
+    std::vector<core::Vec2> path = std::move(t.previous_path);
+    t = core::round_like_wire(std::move(t));
+    t.previous_path = std::move(path);
+  }
   return t;
 }
 

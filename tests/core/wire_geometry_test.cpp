@@ -2,8 +2,13 @@
 
 #include <gtest/gtest.h>
 
+#include <bit>
+#include <charconv>
 #include <cmath>
+#include <cstdint>
+#include <iomanip>
 #include <limits>
+#include <random>
 
 #include "overtake/core/geometry.hpp"
 #include "overtake/core/telemetry.hpp"
@@ -28,6 +33,48 @@ TEST(WireRound, IsIdempotent) {
   for (double v = -2500.0; v < 2500.0; v += 13.3713371337) {
     const double once = wire_round(v);
     EXPECT_EQ(wire_round(once), once) << v;
+  }
+}
+
+// The definition: the float printed with 7 significant digits and read back.
+double through_text(double value) {
+  const auto f = static_cast<float>(value);
+  char buf[32];
+  const auto printed = std::to_chars(buf, buf + sizeof buf, f, std::chars_format::general, 7);
+  double out = 0.0;
+  std::from_chars(buf, printed.ptr, out);
+  return out;
+}
+
+// wire_round computes without text; it must give the text's double, bit for bit, for every
+// magnitude, sign and tie (a float exactly halfway between two 7-digit decimals rounds to the
+// even one).
+TEST(WireRound, GivesWhatTheTextGivesBitForBit) {
+  const auto same = [](double v) {
+    const double a = wire_round(v);
+    const double b = through_text(v);
+    EXPECT_EQ(std::bit_cast<std::uint64_t>(a), std::bit_cast<std::uint64_t>(b))
+        << std::setprecision(17) << v << ": " << a << " vs " << b;
+  };
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> unit(1.0, 10.0);
+  std::uniform_int_distribution<int> exponent(-40, 40);
+  for (int i = 0; i < 2000000; ++i) {
+    const double v = unit(rng) * std::pow(10.0, exponent(rng));
+    same(i % 2 == 0 ? v : -v);
+  }
+  // Every float in decades where figures live, stepping through their bits.
+  for (const float start : {0.001F, 1.0F, 99.0F, 6900.0F, 524287.0F}) {
+    std::uint32_t bits = std::bit_cast<std::uint32_t>(start);
+    for (int i = 0; i < 300000; ++i) same(static_cast<double>(std::bit_cast<float>(bits++)));
+  }
+  // Exact ties: floats with 8 significant digits ending in 5.
+  for (double base = 1000000.5; base < 1000100.0; base += 1.0) same(base / 10.0);
+  for (double v = 1048576.5; v < 1048676.0; v += 1.0) same(v);
+  for (const double v : {0.0, -0.0, 1e-16, 9.9999999e-17, 999999.94, 999999.96, 1e6, 3.4e38, 1e-45,
+                         1e-38, 123456.75, 0.5, 0.25, 0.125, 9999999.5}) {
+    same(v);
+    same(-v);
   }
 }
 
