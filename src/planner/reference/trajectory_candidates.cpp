@@ -238,9 +238,9 @@ std::vector<LatCandidate> lateral_candidates(const std::vector<int>& lanes,
       LatCandidate c;
       c.poly = quintic(x0.d_m, x0.d_dot_mps, x0.d_ddot_mps2, target, 0.0, 0.0, t_min * f);
       c.end_lane = l;
-      const auto at = [&](double t) { return c.poly.at(t); };
-      if (!axis_ok(g, at, tp.max_accel_mps2, tp.max_jerk_mps3, false)) continue;
-      c.samples = sample(g, at);
+      if (!sample_within(g, PolynomialSampler{c.poly}, tp.max_accel_mps2, tp.max_jerk_mps3, false,
+                         c.samples))
+        continue;
       if (!on_road(c.samples, g, line, x0, tp, road)) continue;
       c.terms.lateral_jerk = tp.lat_jerk_weight * c.poly.jerk_cost();
       c.terms.lateral_time = hold ? 0.0 : tp.lat_time_weight * c.poly.duration_s;
@@ -284,9 +284,9 @@ std::vector<LonCandidate> longitudinal_candidates(const TrajectoryRequest& req,
   const auto add_lon = [&](Longitudinal m) {
     LonCandidate c;
     c.motion = m;
-    const auto at = [&](double t) { return c.motion.at(t); };
-    if (!axis_ok(g, at, tp.max_accel_mps2, tp.max_jerk_mps3, true)) return;
-    c.samples = sample(g, at);
+    if (!sample_within(g, LongitudinalSampler{c.motion}, tp.max_accel_mps2, tp.max_jerk_mps3, true,
+                       c.samples))
+      return;
     const double travelled = (c.samples.x.back() - x0.s_m) * m_per_unit_s;
     const double deficit = req.wanted_speed_mps * tp.horizon_s - travelled;
     const double jerk = m.braking ? m.brake.jerk_cost() : m.poly.jerk_cost();

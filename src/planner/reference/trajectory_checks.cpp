@@ -172,8 +172,8 @@ using namespace trajectory_detail;
 KinematicReport check_kinematics(const Trajectory& t, const LaneFrame& line,
                                  const ReferenceTrajectoryParams& p) {
   const Grid g = grid_of(p);
-  const Track1d lon = sample(g, [&](double x) { return t.longitudinal.at(x); });
-  const Track1d lat = sample(g, [&](double x) { return t.lateral.at(x); });
+  const Track1d lon = sample(g, LongitudinalSampler{t.longitudinal});
+  const Track1d lat = sample(g, PolynomialSampler{t.lateral});
   return kinematics(lon, lat, g, line, p, false);
 }
 
@@ -182,8 +182,8 @@ CollisionReport check_collisions(const Trajectory& t, const std::vector<CarPredi
                                  const ReferenceParams& p, const core::RoadParams& road,
                                  const core::CarFootprint& car) {
   const Grid g = grid_of(p.trajectory);
-  const Track1d lon = sample(g, [&](double x) { return t.longitudinal.at(x); });
-  const Track1d lat = sample(g, [&](double x) { return t.lateral.at(x); });
+  const Track1d lon = sample(g, LongitudinalSampler{t.longitudinal});
+  const Track1d lat = sample(g, PolynomialSampler{t.lateral});
   const double d0 = lat.x[kBack];
   const bool changing = core::lane_of(d0, road) != t.end_lane;
   const bool sideways =

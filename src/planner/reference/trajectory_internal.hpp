@@ -74,17 +74,41 @@ template <class F>
   return out;
 }
 
-/// Whether a motion stays within the limits along one axis (no reversing for s).
+/// `motion_at(t)` sampled over the grid into `out` if it stays within the limits along one
+/// axis (no reversing for s) from t = 0 on; false (and `out` unfinished) at the first sample
+/// over one. Each grid time is evaluated once, for the check and the samples both.
 template <class F>
-[[nodiscard]] bool axis_ok(const Grid& g, F&& motion_at, double max_accel, double max_jerk,
-                           bool forward) {
-  for (int k = 0; k <= g.n; ++k) {
+[[nodiscard]] bool sample_within(const Grid& g, F&& motion_at, double max_accel, double max_jerk,
+                                 bool forward, Track1d& out) {
+  out.x.resize(g.size());
+  out.v.resize(g.size());
+  for (int k = -kBack; k <= g.n; ++k) {
     const Motion1d m = motion_at(g.t(k));
-    if (forward && m.v < kReverseTolerance) return false;
-    if (std::abs(m.a) > max_accel || std::abs(m.j) > max_jerk) return false;
+    if (k >= 0) {
+      if (forward && m.v < kReverseTolerance) return false;
+      if (std::abs(m.a) > max_accel || std::abs(m.j) > max_jerk) return false;
+    }
+    out.x[static_cast<std::size_t>(k + kBack)] = m.x;
+    out.v[static_cast<std::size_t>(k + kBack)] = m.v;
   }
   return true;
 }
+
+/// A longitudinal motion's `at`, with a polynomial's end state worked out once.
+struct LongitudinalSampler {
+  const Longitudinal& m;
+  Motion1d end = m.braking ? Motion1d{} : m.poly.raw(m.poly.duration_s);
+  [[nodiscard]] Motion1d operator()(double t) const {
+    return m.braking ? m.brake.at(t) : m.poly.at(t, end);
+  }
+};
+
+/// A polynomial's `at`, its end state worked out once.
+struct PolynomialSampler {
+  const Polynomial1d& p;
+  Motion1d end = p.raw(p.duration_s);
+  [[nodiscard]] Motion1d operator()(double t) const { return p.at(t, end); }
+};
 
 /// One predicted car over the grid (k = 0 .. n).
 struct CarSamples {
