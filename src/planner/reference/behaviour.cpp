@@ -32,13 +32,19 @@ double jerk_limited_stop_distance(double v, double brake, double jerk) {
   return ramp_d + rest * rest / (2.0 * brake);
 }
 
-double rss_front_gap(double rear_mps, double front_mps, const ReferenceBehaviourParams& p) {
+double rss_rear_reach(double rear_mps, const ReferenceBehaviourParams& p) {
   const double rear = std::max(0.0, rear_mps);
+  return rear * p.response_time_s +
+         jerk_limited_stop_distance(rear, p.ego_brake_mps2, p.ego_brake_jerk_mps3);
+}
+
+double rss_front_reach(double front_mps, const ReferenceBehaviourParams& p) {
   const double front = std::max(0.0, front_mps);
-  const double d = rear * p.response_time_s +
-                   jerk_limited_stop_distance(rear, p.ego_brake_mps2, p.ego_brake_jerk_mps3) -
-                   front * front / (2.0 * p.lead_brake_mps2);
-  return std::max(d, p.min_gap_m);
+  return front * front / (2.0 * p.lead_brake_mps2);
+}
+
+double rss_front_gap(double rear_mps, double front_mps, const ReferenceBehaviourParams& p) {
+  return rss_gap_of(rss_rear_reach(rear_mps, p), rss_front_reach(front_mps, p), p);
 }
 
 double rear_room(double centre_gap_m, double closing_mps, double car_length_m,

@@ -56,9 +56,20 @@ ScaleRange lane_scale(const LaneFrame& line, double s0, double s1, double d) {
   return r;
 }
 
-/// The soft costs of longitudinal samples `lon` in a lane with cars `ahead` and `behind`.
-LaneCost lane_cost(const Track1d& lon, const Grid& g, const std::vector<const CarSamples*>& ahead,
-                   const CarSamples* behind, double m_per_unit_s, const ReferenceParams& p,
+/// A car ahead in a lane, with how far it goes braking as hard as it can from each of its
+/// samples (rss_front_reach, in metres of road).
+struct AheadCar {
+  const CarSamples* car = nullptr;
+  std::vector<double> reach_m;
+};
+
+/// The soft costs of longitudinal samples `lon` in a lane with cars `ahead` and `behind`;
+/// `rear_reach_m[k]` is rss_rear_reach of the ego's speed at sample k, so that the RSS gap
+/// wanted behind each car is rss_gap_of the two reaches (rss_front_gap's number, worked out
+/// once per sample instead of once per car and lane).
+LaneCost lane_cost(const Track1d& lon, const std::vector<double>& rear_reach_m, const Grid& g,
+                   const std::vector<AheadCar>& ahead, const CarSamples* behind,
+                   double m_per_unit_s, const ReferenceParams& p,
                    const core::CarFootprint& footprint) {
   const auto& b = p.behaviour;
   const auto& tp = p.trajectory;
@@ -67,12 +78,13 @@ LaneCost lane_cost(const Track1d& lon, const Grid& g, const std::vector<const Ca
   for (int k = 0; k <= g.n; ++k) {
     const auto e = static_cast<std::size_t>(k + kBack);
     const auto i = static_cast<std::size_t>(k);
-    const double ve = lon.v[e] * m_per_unit_s;
     double step = 0.0;
-    for (const CarSamples* car : ahead) {
-      const double gap = (car->s[i] - lon.x[e]) * m_per_unit_s - footprint.length_m;
-      const double want = rss_front_gap(ve, car->s_dot[i] * m_per_unit_s, b);
-      const double short_by = std::max(0.0, want - gap) / want;
+    for (const AheadCar& a : ahead) {
+      const double gap = (a.car->s[i] - lon.x[e]) * m_per_unit_s - footprint.length_m;
+      const double want = rss_gap_of(rear_reach_m[i], a.reach_m[i], b);
+      // Not short of the gap: the term is 0 and adding it changes nothing.
+      if (!(want - gap > 0.0)) continue;
+      const double short_by = (want - gap) / want;
       step += tp.proximity_weight * short_by * short_by;
     }
     if (behind) {
@@ -341,14 +353,33 @@ SoftLaneCosts soft_lane_costs(const std::vector<LonCandidate>& lons, const std::
                               const std::vector<LaneCars>& lane_cars, const Grid& g,
                               double m_per_unit_s, const ReferenceParams& params,
                               const core::CarFootprint& car) {
+  const auto& b = params.behaviour;
+  const auto n = static_cast<std::size_t>(g.n + 1);
+  // The cars ahead in each lane in play, with their halves of the RSS gap.
+  std::vector<std::vector<AheadCar>> ahead(lane_cars.size());
+  for (const int l : lanes) {
+    const auto li = static_cast<std::size_t>(l);
+    for (const CarSamples* c : lane_cars[li].ahead) {
+      AheadCar a;
+      a.car = c;
+      a.reach_m.resize(n);
+      for (std::size_t i = 0; i < n; ++i)
+        a.reach_m[i] = rss_front_reach(c->s_dot[i] * m_per_unit_s, b);
+      ahead[li].push_back(std::move(a));
+    }
+  }
   SoftLaneCosts soft;
   soft.lane_count = lane_cars.size();
   soft.costs.resize(lons.size() * soft.lane_count);
+  std::vector<double> rear_reach(n);
   for (std::size_t j = 0; j < lons.size(); ++j) {
+    const Track1d& lon = lons[j].samples;
+    for (std::size_t i = 0; i < n; ++i)
+      rear_reach[i] = rss_rear_reach(lon.v[i + static_cast<std::size_t>(kBack)] * m_per_unit_s, b);
     for (const int l : lanes) {
-      const LaneCars& lc = lane_cars[static_cast<std::size_t>(l)];
-      soft.costs[j * soft.lane_count + static_cast<std::size_t>(l)] =
-          lane_cost(lons[j].samples, g, lc.ahead, lc.behind, m_per_unit_s, params, car);
+      const auto li = static_cast<std::size_t>(l);
+      soft.costs[j * soft.lane_count + li] =
+          lane_cost(lon, rear_reach, g, ahead[li], lane_cars[li].behind, m_per_unit_s, params, car);
     }
   }
   return soft;

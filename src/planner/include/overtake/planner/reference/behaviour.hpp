@@ -24,6 +24,17 @@ namespace overtake::planner::reference {
 /// limited jerk; the car ahead brakes as hard as it can. Never less than min_gap_m.
 [[nodiscard]] double rss_front_gap(double rear_mps, double front_mps,
                                    const ReferenceBehaviourParams& p);
+/// The two halves of rss_front_gap, for many pairs of speeds: how far the car behind goes
+/// before it stands (response time, then braking) ...
+[[nodiscard]] double rss_rear_reach(double rear_mps, const ReferenceBehaviourParams& p);
+/// ... and how far the car ahead goes braking as hard as it can.
+[[nodiscard]] double rss_front_reach(double front_mps, const ReferenceBehaviourParams& p);
+/// rss_front_gap from the halves (exactly the same number).
+[[nodiscard]] inline double rss_gap_of(double rear_reach_m, double front_reach_m,
+                                       const ReferenceBehaviourParams& p) {
+  const double d = rear_reach_m - front_reach_m;
+  return d < p.min_gap_m ? p.min_gap_m : d;
+}
 
 /// Room (m) left, bumper to bumper beyond the margin, when a car behind at centre distance
 /// `centre_gap_m` closes at `closing_mps` on the ego and reacts as late as followers do
