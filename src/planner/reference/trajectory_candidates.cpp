@@ -102,22 +102,49 @@ LaneCost lane_cost(const Track1d& lon, const std::vector<double>& rear_reach_m, 
   return c;
 }
 
+/// What the lateral candidates' checks read along a steady motion from the start (s at grid
+/// time t: x0.s + x0.s_dot t): the original's reading of d there, and the bounds on_road
+/// keeps the ego's middle within. The same for every lateral candidate, so read once.
+struct SteadyReadings {
+  std::vector<LaneFrame::Reading> at;  // k = 0 .. n
+  std::vector<double> lo, hi;          // on_road's bounds on the original's d
+};
+
+SteadyReadings steady_readings(const Grid& g, const LaneFrame& frame, const FrenetState& x0,
+                               const ReferenceTrajectoryParams& tp, const core::RoadParams& road) {
+  const double first = core::lane_center_d(0, road);
+  const double last = core::lane_center_d(road.lane_count - 1, road);
+  const auto n = static_cast<std::size_t>(g.n + 1);
+  SteadyReadings r;
+  r.at.resize(n);
+  r.lo.resize(n);
+  r.hi.resize(n);
+  for (int k = 0; k <= g.n; ++k) {
+    const auto i = static_cast<std::size_t>(k);
+    const double s = x0.s_m + x0.s_dot * g.t(k);
+    r.at[i] = frame.reading(s);
+    r.lo[i] = std::min(tp.road_edge_margin_m, LaneFrame::original_d(r.at[i], first) - kOvershootM);
+    r.hi[i] = std::max(core::road_width_m(road) - tp.road_edge_margin_m,
+                       LaneFrame::original_d(r.at[i], last) + kOvershootM);
+  }
+  return r;
+}
+
 /// A lateral motion's time in lane-line bands over the grid (the first stretch extended by
-/// `already_s`), d read as the original reads it, at s along a steady motion from `x0`.
+/// `already_s`), d read as the original reads it, at s along a steady motion from the start.
 struct BandTime {
   double longest_s = 0.0;  ///< the longest stretch without a break
   double overstay_s = std::numeric_limits<double>::infinity();  ///< when one passes `limit_s`
 };
 
 BandTime band_time(const Track1d& lat, const Grid& g, double already_s, double half_width,
-                   double limit_s, const LaneFrame& frame, const FrenetState& x0,
-                   const core::RoadParams& road) {
+                   double limit_s, const SteadyReadings& steady, const core::RoadParams& road) {
   BandTime b;
   double run = already_s;
   for (int k = 0; k <= g.n; ++k) {
-    const double s = x0.s_m + x0.s_dot * g.t(k);
-    if (in_line_band(frame.original_d(s, lat.x[static_cast<std::size_t>(k + kBack)]), half_width,
-                     road)) {
+    const double d = LaneFrame::original_d(steady.at[static_cast<std::size_t>(k)],
+                                           lat.x[static_cast<std::size_t>(k + kBack)]);
+    if (in_line_band(d, half_width, road)) {
       run += k == 0 ? 0.0 : g.h;
       b.longest_s = std::max(b.longest_s, run);
       if (run > limit_s && b.overstay_s == kInf) b.overstay_s = g.t(k);
@@ -133,17 +160,12 @@ BandTime band_time(const Track1d& lat, const Grid& g, double already_s, double h
 /// are far apart on a bend the outer lanes' centres themselves read close to the edge; there
 /// the bound is the centre's reading less the overshoot allowed, so that keeping a lane is
 /// never ruled out.
-bool on_road(const Track1d& lat, const Grid& g, const LaneFrame& frame, const FrenetState& x0,
-             const ReferenceTrajectoryParams& tp, const core::RoadParams& road) {
-  const double first = core::lane_center_d(0, road);
-  const double last = core::lane_center_d(road.lane_count - 1, road);
+bool on_road(const Track1d& lat, const Grid& g, const SteadyReadings& steady) {
   for (int k = 0; k <= g.n; ++k) {
-    const double s = x0.s_m + x0.s_dot * g.t(k);
-    const double d = frame.original_d(s, lat.x[static_cast<std::size_t>(k + kBack)]);
-    const double lo = std::min(tp.road_edge_margin_m, frame.original_d(s, first) - kOvershootM);
-    const double hi = std::max(core::road_width_m(road) - tp.road_edge_margin_m,
-                               frame.original_d(s, last) + kOvershootM);
-    if (d < lo || d > hi) return false;
+    const auto i = static_cast<std::size_t>(k);
+    const double d =
+        LaneFrame::original_d(steady.at[i], lat.x[i + static_cast<std::size_t>(kBack)]);
+    if (d < steady.lo[i] || d > steady.hi[i]) return false;
   }
   return true;
 }
@@ -240,6 +262,7 @@ std::vector<LatCandidate> lateral_candidates(const std::vector<int>& lanes,
                                              const core::RoadParams& road) {
   const FrenetState& x0 = req.start;
   std::vector<LatCandidate> lats;
+  const SteadyReadings steady = steady_readings(g, line, x0, tp, road);
   for (const int l : lanes) {
     const double target = core::lane_center_d(l, road);
     const double dist = std::abs(target - x0.d_m);
@@ -253,7 +276,7 @@ std::vector<LatCandidate> lateral_candidates(const std::vector<int>& lanes,
       if (!sample_within(g, PolynomialSampler{c.poly}, tp.max_accel_mps2, tp.max_jerk_mps3, false,
                          c.samples))
         continue;
-      if (!on_road(c.samples, g, line, x0, tp, road)) continue;
+      if (!on_road(c.samples, g, steady)) continue;
       c.terms.lateral_jerk = tp.lat_jerk_weight * c.poly.jerk_cost();
       c.terms.lateral_time = hold ? 0.0 : tp.lat_time_weight * c.poly.duration_s;
       c.terms.off_target_lane = tp.lane_weight * std::abs(l - req.target_lane);
@@ -261,7 +284,7 @@ std::vector<LatCandidate> lateral_candidates(const std::vector<int>& lanes,
       // Longer than the budget on a lane line costs; as long as the original counts as an
       // incident is an incident.
       const BandTime band = band_time(c.samples, g, req.band_time_s, tp.line_band_m,
-                                      tp.band_incident_s, line, x0, road);
+                                      tp.band_incident_s, steady, road);
       // (Of two that overstay as soon, the one that leaves the line sooner is less bad.)
       c.overstay_s = band.overstay_s - kOverstayTieBreak * band.longest_s;
       c.terms.linger = tp.linger_weight * std::max(0.0, band.longest_s - tp.max_band_time_s);

@@ -49,7 +49,27 @@ class LaneFrame {
   /// d(offset)/ds at s.
   [[nodiscard]] double slope(double s_m) const;
   /// The original's reading of a frame d at s (the chords' d itself, before averaging).
-  [[nodiscard]] double original_d(double s_m, double d_m) const;
+  [[nodiscard]] double original_d(double s_m, double d_m) const {
+    return original_d(reading(s_m), d_m);
+  }
+
+  /// What original_d reads at one s, for reading many d there.
+  struct Reading {
+    bool shifted = false;  ///< false: the frame has no offset, d reads as it is
+    double offset_m = 0.0;
+    double chord_m = 0.0;  ///< the chords' d minus the line's
+  };
+  [[nodiscard]] Reading reading(double s_m) const;
+  /// original_d at the s of `r` (the same number).
+  [[nodiscard]] static double original_d(const Reading& r, double d_m) {
+    return r.shifted ? d_m - r.offset_m + r.chord_m : d_m;
+  }
+  /// offset and slope at s from one lookup of the offset's spline.
+  struct OffsetSlope {
+    double offset_m = 0.0;
+    double slope = 0.0;
+  };
+  [[nodiscard]] OffsetSlope offset_slope(double s_m) const;
 
  private:
   const core::ReferenceLine* line_;
