@@ -108,9 +108,10 @@ double LaneFrame::slope(double s_m) const {
 }
 
 RoadPoint road_point(const LaneFrame& frame, double s_m, double d_m) {
-  const core::ReferenceLine& line = frame.line();
-  const core::RoadFrame f = line.frame(s_m);
-  const LaneFrame::OffsetSlope o = frame.offset_slope(s_m);
+  return road_point(frame.line().frame(s_m), frame.offset_slope(s_m), d_m);
+}
+
+RoadPoint road_point(const core::RoadFrame& f, const LaneFrame::OffsetSlope& o, double d_m) {
   const double d_line = d_m - o.offset_m;
   // +1 when the normal points to the right of travel; the line's curvature-at-offset rule
   // depends on it.
@@ -127,10 +128,12 @@ RoadPoint road_point(const LaneFrame& frame, double s_m, double d_m) {
 }
 
 FrenetState frenet_from_cartesian(const LaneFrame& frame, core::Vec2 position, core::Vec2 velocity,
-                                  double s_hint_m) {
+                                  double s_hint_m, RoadPoint* at_out) {
   const core::FrenetPoint f = frame.line().to_frenet(position, s_hint_m);
-  const double d = f.d_m + frame.offset(f.s_m);
-  const RoadPoint at = road_point(frame, f.s_m, d);
+  const LaneFrame::OffsetSlope o = frame.offset_slope(f.s_m);
+  const double d = f.d_m + o.offset_m;
+  const RoadPoint at = road_point(frame.line().frame(f.s_m), o, d);
+  if (at_out) *at_out = at;
   FrenetState x;
   x.s_m = f.s_m;
   x.d_m = d;

@@ -182,11 +182,11 @@ std::vector<CarPrediction> predict_cars(const core::Telemetry& telemetry, const 
     core::Vec2 velocity = car.velocity_mps;
     if (core::norm(velocity) > params.max_plausible_speed_mps)
       velocity = (1.0 / core::kMphPerMps) * velocity;
-    const FrenetState x = frenet_from_cartesian(frame, car.position, velocity, car.s_m);
+    RoadPoint at;  // the frame's geometry where the car is
+    const FrenetState x = frenet_from_cartesian(frame, car.position, velocity, car.s_m, &at);
     // Cars waiting off the road (the original parks them far beside it) are no traffic.
     if (x.d_m < -params.off_road_margin_m || x.d_m > road_width + params.off_road_margin_m)
       continue;
-    const RoadPoint at = road_point(frame, x.s_m, x.d_m);
     const double speed = x.s_dot * at.along_scale;
     double accel = 0.0;
     double top_speed = speed;

@@ -38,24 +38,6 @@ constexpr double kLevelOffMps2 = 1.0;
 /// itself reads closer to the edge than the road margin.
 constexpr double kOvershootM = 0.2;
 
-/// Largest and smallest along-road scale of a lane over s in [s0, s1].
-struct ScaleRange {
-  double max = 1.0;
-  double min = 1.0;
-};
-
-ScaleRange lane_scale(const LaneFrame& line, double s0, double s1, double d) {
-  ScaleRange r{0.0, kInf};
-  const int n = std::max(1, static_cast<int>(std::ceil((s1 - s0) / kScaleSampleM)));
-  for (int i = 0; i <= n; ++i) {
-    const double s = s0 + (s1 - s0) * i / n;
-    const double k = road_point(line, s, d).along_scale;
-    r.max = std::max(r.max, k);
-    r.min = std::min(r.min, k);
-  }
-  return r;
-}
-
 /// A car ahead in a lane, with how far it goes braking as hard as it can from each of its
 /// samples (rss_front_reach, in metres of road).
 struct AheadCar {
@@ -190,19 +172,25 @@ std::vector<int> lanes_in_play(const FrenetState& x0, int target_lane, double li
 AlongRoadScale along_road_scale(const LaneFrame& line, const FrenetState& x0,
                                 double wanted_speed_mps, const std::vector<int>& lanes,
                                 const ReferenceTrajectoryParams& tp, const core::RoadParams& road) {
-  // Over the stretch the wanted speed (or the present one) reaches within the horizon.
+  // Over the stretch the wanted speed (or the present one) reaches within the horizon, every
+  // kScaleSampleM or less, in each lane in play, and where the ego is. The line and the frame's
+  // offset are read once per s for all of them.
   const double reach = std::max(x0.s_dot, wanted_speed_mps) * tp.horizon_s + kScaleSampleM;
+  const double s0 = x0.s_m;
+  const double s1 = x0.s_m + reach;
+  const int n = std::max(1, static_cast<int>(std::ceil((s1 - s0) / kScaleSampleM)));
   double max_scale = 0.0;
   double m_per_unit_s = kInf;
-  for (const int l : lanes) {
-    const ScaleRange r = lane_scale(line, x0.s_m, x0.s_m + reach, core::lane_center_d(l, road));
-    max_scale = std::max(max_scale, r.max);
-    m_per_unit_s = std::min(m_per_unit_s, r.min);
-  }
-  {
-    const ScaleRange here = lane_scale(line, x0.s_m, x0.s_m, x0.d_m);
-    max_scale = std::max(max_scale, here.max);
-    m_per_unit_s = std::min(m_per_unit_s, here.min);
+  const auto take = [&](double k) {
+    max_scale = std::max(max_scale, k);
+    m_per_unit_s = std::min(m_per_unit_s, k);
+  };
+  for (int i = 0; i <= n; ++i) {
+    const double s = s0 + (s1 - s0) * i / n;
+    const core::RoadFrame f = line.line().frame(s);
+    const LaneFrame::OffsetSlope o = line.offset_slope(s);
+    for (const int l : lanes) take(road_point(f, o, core::lane_center_d(l, road)).along_scale);
+    if (i == 0) take(road_point(f, o, x0.d_m).along_scale);
   }
   AlongRoadScale out;
   out.m_per_unit_s = m_per_unit_s;

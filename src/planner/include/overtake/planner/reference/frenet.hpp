@@ -89,6 +89,10 @@ struct RoadPoint {
 
 /// The frame's geometry at (s, d) with one evaluation of the line.
 [[nodiscard]] RoadPoint road_point(const LaneFrame& frame, double s_m, double d_m);
+/// The same from the line's frame `f` and the frame's offset and slope `o` at s (for several
+/// d at one s, read once).
+[[nodiscard]] RoadPoint road_point(const core::RoadFrame& f, const LaneFrame::OffsetSlope& o,
+                                   double d_m);
 
 /// Map velocity of a Frenet state (its position given by `at`).
 [[nodiscard]] inline core::Vec2 cartesian_velocity(const RoadPoint& at, const FrenetState& x) {
@@ -102,8 +106,10 @@ struct RoadPoint {
 }
 
 /// The Frenet state of a car at `position` with map velocity `velocity` (acceleration 0);
-/// `s_hint_m` as for ReferenceLine::to_frenet.
+/// `s_hint_m` as for ReferenceLine::to_frenet. `at`, when given, receives the frame's
+/// geometry there (road_point at the state's s and d).
 [[nodiscard]] FrenetState frenet_from_cartesian(const LaneFrame& frame, core::Vec2 position,
-                                                core::Vec2 velocity, double s_hint_m);
+                                                core::Vec2 velocity, double s_hint_m,
+                                                RoadPoint* at = nullptr);
 
 }  // namespace overtake::planner::reference
