@@ -385,8 +385,18 @@ SoftLaneCosts soft_lane_costs(const std::vector<LonCandidate>& lons, const std::
   std::vector<double> rear_reach(n);
   for (std::size_t j = 0; j < lons.size(); ++j) {
     const Track1d& lon = lons[j].samples;
-    for (std::size_t i = 0; i < n; ++i)
-      rear_reach[i] = rss_rear_reach(lon.v[i + static_cast<std::size_t>(kBack)] * m_per_unit_s, b);
+    // (After a polynomial's end, or once braking stands, the speed holds: its reach is
+    // worked out once.)
+    double last_v = kInf;
+    double last_reach = 0.0;
+    for (std::size_t i = 0; i < n; ++i) {
+      const double v = lon.v[i + static_cast<std::size_t>(kBack)] * m_per_unit_s;
+      if (v != last_v) {
+        last_v = v;
+        last_reach = rss_rear_reach(v, b);
+      }
+      rear_reach[i] = last_reach;
+    }
     for (const int l : lanes) {
       const auto li = static_cast<std::size_t>(l);
       soft.costs[j * soft.lane_count + li] =
