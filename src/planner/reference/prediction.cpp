@@ -34,26 +34,6 @@ double min_jerk_progress(double fraction) {
   return 0.5 * (lo + hi);
 }
 
-double CarPrediction::s_at(double t) const {
-  if (s_ddot == 0.0 || t <= 0.0) return s_m + s_dot * t;
-  // Braking (or speeding up) for brake_time_s, then steady, or back up to the speed it had;
-  // the speed never goes below zero.
-  const double tb = std::min(t, brake_time_s);
-  const double t_stop = s_ddot < 0.0 ? s_dot / -s_ddot : tb + 1.0;
-  if (t_stop <= tb) return s_m + 0.5 * s_dot * t_stop;
-  const double v = s_dot + s_ddot * tb;
-  const double s_b = s_m + s_dot * tb + 0.5 * s_ddot * tb * tb;
-  if (t <= brake_time_s || recover_s_ddot <= 0.0 || v >= s_dot) return s_b + v * (t - tb);
-  const double tr = std::min(t - brake_time_s, (s_dot - v) / recover_s_ddot);
-  return s_b + v * tr + 0.5 * recover_s_ddot * tr * tr + s_dot * (t - brake_time_s - tr);
-}
-
-double CarPrediction::s_dot_at(double t) const {
-  const double v = std::max(0.0, s_dot + s_ddot * std::clamp(t, 0.0, brake_time_s));
-  if (t <= brake_time_s || recover_s_ddot <= 0.0 || v >= s_dot) return v;
-  return std::min(s_dot, v + recover_s_ddot * (t - brake_time_s));
-}
-
 double CarPrediction::d_at(double t) const {
   if (!changing) return d_m;
   const double tau = change_progress + t / change_duration_s;

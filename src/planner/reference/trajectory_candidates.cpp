@@ -250,6 +250,8 @@ std::vector<LatCandidate> lateral_candidates(const std::vector<int>& lanes,
                                              const core::RoadParams& road) {
   const FrenetState& x0 = req.start;
   std::vector<LatCandidate> lats;
+  lats.reserve(lanes.size() * tp.lateral_time_factors.size());
+  Track1d scratch;  // the samples of a refused candidate's buffers serve the next
   const SteadyReadings steady = steady_readings(g, line, x0, tp, road);
   for (const int l : lanes) {
     const double target = core::lane_center_d(l, road);
@@ -258,13 +260,16 @@ std::vector<LatCandidate> lateral_candidates(const std::vector<int>& lanes,
     const double t_min =
         std::max(tp.min_lateral_time_s, std::cbrt(60.0 * dist / tp.lateral_jerk_mps3));
     for (const double f : tp.lateral_time_factors) {
-      LatCandidate c;
-      c.poly = quintic(x0.d_m, x0.d_dot_mps, x0.d_ddot_mps2, target, 0.0, 0.0, t_min * f);
-      c.end_lane = l;
-      if (!sample_within(g, PolynomialSampler{c.poly}, tp.max_accel_mps2, tp.max_jerk_mps3, false,
-                         c.samples))
+      const Polynomial1d poly =
+          quintic(x0.d_m, x0.d_dot_mps, x0.d_ddot_mps2, target, 0.0, 0.0, t_min * f);
+      if (!sample_within(g, PolynomialSampler{poly}, tp.max_accel_mps2, tp.max_jerk_mps3, false,
+                         scratch) ||
+          !on_road(scratch, g, steady))
         continue;
-      if (!on_road(c.samples, g, steady)) continue;
+      LatCandidate c;
+      c.poly = poly;
+      c.end_lane = l;
+      c.samples = std::exchange(scratch, Track1d{});
       c.terms.lateral_jerk = tp.lat_jerk_weight * c.poly.jerk_cost();
       c.terms.lateral_time = hold ? 0.0 : tp.lat_time_weight * c.poly.duration_s;
       c.terms.off_target_lane = tp.lane_weight * std::abs(l - req.target_lane);
@@ -304,12 +309,16 @@ std::vector<LonCandidate> longitudinal_candidates(const TrajectoryRequest& req,
   const double m_per_unit_s = scale.m_per_unit_s;
   const double s_dot_cap = scale.s_dot_cap;
   std::vector<LonCandidate> lons;
-  const auto add_lon = [&](Longitudinal m) {
+  lons.reserve(tp.cruise_times_s.size() * (tp.speed_offsets_mps.size() + 1) +
+               leaders.size() * tp.follow_times_s.size() + 2 + tp.brake_levels_mps2.size());
+  Track1d scratch;  // the samples of a refused candidate's buffers serve the next
+  const auto add_lon = [&](const Longitudinal& m) {
+    if (!sample_within(g, LongitudinalSampler{m}, tp.max_accel_mps2, tp.max_jerk_mps3, true,
+                       scratch))
+      return;
     LonCandidate c;
     c.motion = m;
-    if (!sample_within(g, LongitudinalSampler{c.motion}, tp.max_accel_mps2, tp.max_jerk_mps3, true,
-                       c.samples))
-      return;
+    c.samples = std::exchange(scratch, Track1d{});
     const double travelled = (c.samples.x.back() - x0.s_m) * m_per_unit_s;
     const double deficit = req.wanted_speed_mps * tp.horizon_s - travelled;
     const double jerk = m.braking ? m.brake.jerk_cost() : m.poly.jerk_cost();
