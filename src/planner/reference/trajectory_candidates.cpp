@@ -55,7 +55,11 @@ LaneCost lane_cost(const Track1d& lon, const std::vector<double>& rear_reach_m, 
                    const core::CarFootprint& footprint) {
   const auto& b = p.behaviour;
   const auto& tp = p.trajectory;
-  LaneCost c;
+  // A step of 0 adds nothing to the sums (they start at +0), so it is skipped; without cars
+  // every step is 0.
+  if (ahead.empty() && !behind) return {};
+  double full = 0.0;
+  double early = 0.0;
   const int early_n = static_cast<int>(std::lround(tp.change_early_window_s / g.h));
   for (int k = 0; k <= g.n; ++k) {
     const auto e = static_cast<std::size_t>(k + kBack);
@@ -78,10 +82,11 @@ LaneCost lane_cost(const Track1d& lon, const std::vector<double>& rear_reach_m, 
         step += tp.rear_weight * short_by * short_by;
       }
     }
-    c.full += step * g.h;
-    if (k <= early_n) c.early += step * g.h;
+    if (step == 0.0) continue;
+    full += step * g.h;
+    if (k <= early_n) early += step * g.h;
   }
-  return c;
+  return {full, early};
 }
 
 /// What the lateral candidates' checks read along a steady motion from the start (s at grid
