@@ -45,8 +45,18 @@ std::vector<CarSamples> sample_cars(const std::vector<CarPrediction>& cars, doub
       const auto i = static_cast<std::size_t>(k);
       cs.s[i] = c.s_at(t);
       cs.s_dot[i] = c.s_dot_at(t);
-      cs.d[i] = c.d_at(t);
-      cs.d_dot[i] = c.d_dot_at(t);
+    }
+    if (c.changing) {
+      for (int k = 0; k <= g.n; ++k) {
+        const double t = delay + g.t(k);
+        const auto i = static_cast<std::size_t>(k);
+        cs.d[i] = c.d_at(t);
+        cs.d_dot[i] = c.d_dot_at(t);
+      }
+    } else {
+      // Keeping its lane: the same d (and no lateral speed) at every time.
+      std::fill(cs.d.begin(), cs.d.end(), c.d_at(0.0));
+      std::fill(cs.d_dot.begin(), cs.d_dot.end(), c.d_dot_at(0.0));
     }
     out.push_back(std::move(cs));
   }
@@ -136,6 +146,13 @@ KinematicReport kinematics(const Track1d& lon, const Track1d& lat, const Grid& g
   KinematicReport r;
   const double h2 = g.h * g.h;
   const double h3 = h2 * g.h;
+  // Stopping at the first sample over a limit, a sample whose squared figures are well within
+  // the limits squared (by far more than any rounding of the squares, norms and divisions) is
+  // within them: its norms are left out. (So the peaks are those of the samples not left out.)
+  constexpr double kClearShare = 1.0 - 1e-9;
+  const double speed_clear = p.max_speed_mps * p.max_speed_mps * kClearShare;
+  const double accel_clear = (p.max_accel_mps2 * h2) * (p.max_accel_mps2 * h2) * kClearShare;
+  const double jerk_clear = (p.max_jerk_mps3 * h3) * (p.max_jerk_mps3 * h3) * kClearShare;
   core::Vec2 back[4];  // positions k, k-1, k-2, k-3
   for (int k = -kBack; k <= g.n; ++k) {
     const auto e = static_cast<std::size_t>(k + kBack);
@@ -149,10 +166,16 @@ KinematicReport kinematics(const Track1d& lon, const Track1d& lat, const Grid& g
     back[0] = at.position;
     if (k < 0) continue;
     const double t = g.t(k);
-    const double speed =
-        std::hypot(lon.v[e] * at.along_scale, lat.v[e] - at.offset_slope * lon.v[e]);
-    const double accel = core::norm(back[0] - 2.0 * back[1] + back[2]) / h2;
-    const double jerk = core::norm(back[0] - 3.0 * back[1] + 3.0 * back[2] - back[3]) / h3;
+    const double along = lon.v[e] * at.along_scale;
+    const double across = lat.v[e] - at.offset_slope * lon.v[e];
+    const core::Vec2 accel_h2 = back[0] - 2.0 * back[1] + back[2];
+    const core::Vec2 jerk_h3 = back[0] - 3.0 * back[1] + 3.0 * back[2] - back[3];
+    if (stop_at_first && along * along + across * across < speed_clear &&
+        core::dot(accel_h2, accel_h2) < accel_clear && core::dot(jerk_h3, jerk_h3) < jerk_clear)
+      continue;
+    const double speed = std::hypot(along, across);
+    const double accel = core::norm(accel_h2) / h2;
+    const double jerk = core::norm(jerk_h3) / h3;
     r.peak_speed_mps = std::max(r.peak_speed_mps, speed);
     r.peak_accel_mps2 = std::max(r.peak_accel_mps2, accel);
     r.peak_jerk_mps3 = std::max(r.peak_jerk_mps3, jerk);

@@ -133,7 +133,8 @@ struct CarSamples {
                                       const ReferenceParams& p, const core::CarFootprint& car);
 
 /// The Cartesian check over samples; before t = 0, the positions driven (`history`, newest
-/// first) where given. `stop_at_first`: return at the first sample over a limit.
+/// first) where given. `stop_at_first`: return at the first sample over a limit (then only
+/// `ok` and `first_violation_s` are the whole check's; the peaks leave samples out).
 [[nodiscard]] KinematicReport kinematics(const Track1d& lon, const Track1d& lat, const Grid& g,
                                          const LaneFrame& line, const ReferenceTrajectoryParams& p,
                                          bool stop_at_first,
