@@ -22,6 +22,8 @@ constexpr double kRelevantM = 200.0;
 constexpr double kSpeedingUpMps2 = 1.0;
 /// A follower's sensor meets the ego once the ego's middle is this close sideways to its own.
 constexpr double kSensorCoverM = 0.8;
+/// Margin (m) of a bound on the lateral clearance needed, far beyond its rounding.
+constexpr double kClearSidewaysM = 1e-6;
 
 }  // namespace
 
@@ -75,6 +77,7 @@ CollisionReport collide(const Track1d& lon, const Track1d& lat, bool ego_changin
   const double lon_need = length + p.trajectory.lon_margin_m;
   const double lat_base = car.width_m + p.trajectory.lat_margin_m;
   const double react_gap = p.behaviour.follower_reaction_gap_m;
+  const double lat_need_per_mps = 0.5 * length / kMinHeadingSpeedMps;
   CollisionReport r;
   for (const CarSamples& c : cars) {
     bool seen = false;
@@ -84,12 +87,20 @@ CollisionReport collide(const Track1d& lon, const Track1d& lat, bool ego_changin
       const auto i = static_cast<std::size_t>(k);
       const double t = g.t(k);
       if (t >= r.first_collision_s) break;
-      const double ve = std::max(lon.v[e] * m_per_unit_s, kMinHeadingSpeedMps);
-      const double vc = std::max(c.s_dot[i] * m_per_unit_s, kMinHeadingSpeedMps);
       const double side_gap = std::abs(lat.x[e] - c.d[i]);
-      const double lat_need =
-          lat_base + 0.5 * length * (std::abs(lat.v[e]) / ve + std::abs(c.d_dot[i]) / vc);
-      if (side_gap >= lat_need) {
+      // Clear sideways by more than the most lat_need can be (both headings at their slowest
+      // speed, and a margin far beyond rounding): no need to work it out.
+      bool clear_sideways =
+          side_gap >= lat_base + lat_need_per_mps * (std::abs(lat.v[e]) + std::abs(c.d_dot[i])) +
+                          kClearSidewaysM;
+      if (!clear_sideways) {
+        const double ve = std::max(lon.v[e] * m_per_unit_s, kMinHeadingSpeedMps);
+        const double vc = std::max(c.s_dot[i] * m_per_unit_s, kMinHeadingSpeedMps);
+        const double lat_need =
+            lat_base + 0.5 * length * (std::abs(lat.v[e]) / ve + std::abs(c.d_dot[i]) / vc);
+        clear_sideways = side_gap >= lat_need;
+      }
+      if (clear_sideways) {
         if (follower) break;  // the ego has left its path
         continue;
       }
