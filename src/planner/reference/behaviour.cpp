@@ -47,20 +47,6 @@ double rss_front_gap(double rear_mps, double front_mps, const ReferenceBehaviour
   return rss_gap_of(rss_rear_reach(rear_mps, p), rss_front_reach(front_mps, p), p);
 }
 
-double rear_room(double centre_gap_m, double closing_mps, double car_length_m,
-                 const ReferenceBehaviourParams& p) {
-  return rear_room(centre_gap_m, closing_mps, car_length_m, p, p.follower_reaction_gap_m);
-}
-
-double rear_room(double centre_gap_m, double closing_mps, double car_length_m,
-                 const ReferenceBehaviourParams& p, double reaction_gap_m) {
-  const double floor_m = car_length_m + p.follower_margin_m;
-  if (closing_mps <= 0.0) return centre_gap_m - floor_m;
-  const double react_at = std::min(centre_gap_m, reaction_gap_m);
-  return react_at - closing_mps * p.follower_response_s -
-         closing_mps * closing_mps / (2.0 * p.follower_brake_mps2) - floor_m;
-}
-
 std::vector<LaneView> assess_lanes(const std::vector<CarPrediction>& cars, const EgoSnapshot& ego,
                                    double car_length_m, const ReferenceBehaviourParams& p,
                                    const core::RoadParams& road) {

@@ -55,8 +55,7 @@ LaneCost lane_cost(const Track1d& lon, const std::vector<double>& rear_reach_m, 
                    const core::CarFootprint& footprint) {
   const auto& b = p.behaviour;
   const auto& tp = p.trajectory;
-  // A step of 0 adds nothing to the sums (they start at +0), so it is skipped; without cars
-  // every step is 0.
+  // Without cars every step is 0, and adding 0 to the sums (from +0) leaves them 0.
   if (ahead.empty() && !behind) return {};
   double full = 0.0;
   double early = 0.0;
@@ -68,9 +67,7 @@ LaneCost lane_cost(const Track1d& lon, const std::vector<double>& rear_reach_m, 
     for (const AheadCar& a : ahead) {
       const double gap = (a.car->s[i] - lon.x[e]) * m_per_unit_s - footprint.length_m;
       const double want = rss_gap_of(rear_reach_m[i], a.reach_m[i], b);
-      // Not short of the gap: the term is 0 and adding it changes nothing.
-      if (!(want - gap > 0.0)) continue;
-      const double short_by = (want - gap) / want;
+      const double short_by = std::max(0.0, want - gap) / want;
       step += tp.proximity_weight * short_by * short_by;
     }
     if (behind) {
@@ -82,7 +79,6 @@ LaneCost lane_cost(const Track1d& lon, const std::vector<double>& rear_reach_m, 
         step += tp.rear_weight * short_by * short_by;
       }
     }
-    if (step == 0.0) continue;
     full += step * g.h;
     if (k <= early_n) early += step * g.h;
   }

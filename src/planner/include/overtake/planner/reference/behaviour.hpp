@@ -6,6 +6,7 @@
 // limited in jerk) and behind (a follower that reacts late and brakes hard), and hysteresis
 // so that it never weaves between lanes.
 
+#include <algorithm>
 #include <vector>
 
 #include "overtake/core/road.hpp"
@@ -38,12 +39,22 @@ namespace overtake::planner::reference {
 
 /// Room (m) left, bumper to bumper beyond the margin, when a car behind at centre distance
 /// `centre_gap_m` closes at `closing_mps` on the ego and reacts as late as followers do
-/// (within follower_reaction_gap_m) and then brakes; negative: it would come too close.
-[[nodiscard]] double rear_room(double centre_gap_m, double closing_mps, double car_length_m,
-                               const ReferenceBehaviourParams& p);
-/// The same with the follower's reaction gap (centre to centre) given.
-[[nodiscard]] double rear_room(double centre_gap_m, double closing_mps, double car_length_m,
-                               const ReferenceBehaviourParams& p, double reaction_gap_m);
+/// (within the follower's reaction gap `reaction_gap_m`, centre to centre) and then brakes;
+/// negative: it would come too close. (Inline: the soft lane costs and the collision check
+/// call it in their inner loops.)
+[[nodiscard]] inline double rear_room(double centre_gap_m, double closing_mps, double car_length_m,
+                                      const ReferenceBehaviourParams& p, double reaction_gap_m) {
+  const double floor_m = car_length_m + p.follower_margin_m;
+  if (closing_mps <= 0.0) return centre_gap_m - floor_m;
+  const double react_at = std::min(centre_gap_m, reaction_gap_m);
+  return react_at - closing_mps * p.follower_response_s -
+         closing_mps * closing_mps / (2.0 * p.follower_brake_mps2) - floor_m;
+}
+/// The same with the behaviour's follower_reaction_gap_m.
+[[nodiscard]] inline double rear_room(double centre_gap_m, double closing_mps, double car_length_m,
+                                      const ReferenceBehaviourParams& p) {
+  return rear_room(centre_gap_m, closing_mps, car_length_m, p, p.follower_reaction_gap_m);
+}
 
 /// The ego as behaviour sees it.
 struct EgoSnapshot {
