@@ -18,31 +18,6 @@ constexpr double kAlongsideM = 1.5;
 
 }  // namespace
 
-double jerk_limited_stop_distance(double v, double brake, double jerk) {
-  if (!(v > 0.0)) return 0.0;
-  const double ramp_t = brake / jerk;
-  const double ramp_dv = 0.5 * brake * ramp_t;
-  if (v <= ramp_dv) {
-    // Stops before the full braking is reached: v = jerk t^2 / 2.
-    const double t = std::sqrt(2.0 * v / jerk);
-    return v * t - jerk * t * t * t / 6.0;
-  }
-  const double ramp_d = v * ramp_t - jerk * ramp_t * ramp_t * ramp_t / 6.0;
-  const double rest = v - ramp_dv;
-  return ramp_d + rest * rest / (2.0 * brake);
-}
-
-double rss_rear_reach(double rear_mps, const ReferenceBehaviourParams& p) {
-  const double rear = std::max(0.0, rear_mps);
-  return rear * p.response_time_s +
-         jerk_limited_stop_distance(rear, p.ego_brake_mps2, p.ego_brake_jerk_mps3);
-}
-
-double rss_front_reach(double front_mps, const ReferenceBehaviourParams& p) {
-  const double front = std::max(0.0, front_mps);
-  return front * front / (2.0 * p.lead_brake_mps2);
-}
-
 double rss_front_gap(double rear_mps, double front_mps, const ReferenceBehaviourParams& p) {
   return rss_gap_of(rss_rear_reach(rear_mps, p), rss_front_reach(front_mps, p), p);
 }

@@ -7,6 +7,7 @@
 // so that it never weaves between lanes.
 
 #include <algorithm>
+#include <cmath>
 #include <vector>
 
 #include "overtake/core/road.hpp"
@@ -16,9 +17,25 @@
 namespace overtake::planner::reference {
 
 /// Distance (m) to stop from `speed_mps` braking at up to `brake_mps2`, reached at `jerk_mps3`
-/// from zero acceleration.
-[[nodiscard]] double jerk_limited_stop_distance(double speed_mps, double brake_mps2,
-                                                double jerk_mps3);
+/// from zero acceleration. (Inline, as the RSS reaches below: the soft lane costs work them
+/// out for every sample of every longitudinal candidate.)
+[[nodiscard]] inline double jerk_limited_stop_distance(double speed_mps, double brake_mps2,
+                                                       double jerk_mps3) {
+  const double v = speed_mps;
+  const double brake = brake_mps2;
+  const double jerk = jerk_mps3;
+  if (!(v > 0.0)) return 0.0;
+  const double ramp_t = brake / jerk;
+  const double ramp_dv = 0.5 * brake * ramp_t;
+  if (v <= ramp_dv) {
+    // Stops before the full braking is reached: v = jerk t^2 / 2.
+    const double t = std::sqrt(2.0 * v / jerk);
+    return v * t - jerk * t * t * t / 6.0;
+  }
+  const double ramp_d = v * ramp_t - jerk * ramp_t * ramp_t * ramp_t / 6.0;
+  const double rest = v - ramp_dv;
+  return ramp_d + rest * rest / (2.0 * brake);
+}
 
 /// RSS minimum bumper-to-bumper distance (m) from the ego, behind at `rear_mps`, to a car
 /// ahead at `front_mps`: the ego keeps its speed for the response time, then brakes with
@@ -27,9 +44,16 @@ namespace overtake::planner::reference {
                                    const ReferenceBehaviourParams& p);
 /// The two halves of rss_front_gap, for many pairs of speeds: how far the car behind goes
 /// before it stands (response time, then braking) ...
-[[nodiscard]] double rss_rear_reach(double rear_mps, const ReferenceBehaviourParams& p);
+[[nodiscard]] inline double rss_rear_reach(double rear_mps, const ReferenceBehaviourParams& p) {
+  const double rear = std::max(0.0, rear_mps);
+  return rear * p.response_time_s +
+         jerk_limited_stop_distance(rear, p.ego_brake_mps2, p.ego_brake_jerk_mps3);
+}
 /// ... and how far the car ahead goes braking as hard as it can.
-[[nodiscard]] double rss_front_reach(double front_mps, const ReferenceBehaviourParams& p);
+[[nodiscard]] inline double rss_front_reach(double front_mps, const ReferenceBehaviourParams& p) {
+  const double front = std::max(0.0, front_mps);
+  return front * front / (2.0 * p.lead_brake_mps2);
+}
 /// rss_front_gap from the halves (exactly the same number).
 [[nodiscard]] inline double rss_gap_of(double rear_reach_m, double front_reach_m,
                                        const ReferenceBehaviourParams& p) {
