@@ -38,10 +38,7 @@ std::vector<CarSamples> sample_cars(const std::vector<CarPrediction>& cars, doub
     cs.cap_mps = c.cap_mps;
     cs.speeding_up = c.observed_accel_mps2 > kSpeedingUpMps2;
     const auto n = static_cast<std::size_t>(g.n + 1);
-    cs.s.resize(n);
-    cs.s_dot.resize(n);
-    cs.d.resize(n);
-    cs.d_dot.resize(n);
+    cs.resize(n);
     for (int k = 0; k <= g.n; ++k) {
       const double t = delay + g.t(k);
       const auto i = static_cast<std::size_t>(k);

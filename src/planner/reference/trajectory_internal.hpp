@@ -14,6 +14,7 @@
 #include <cmath>
 #include <cstddef>
 #include <limits>
+#include <span>
 #include <vector>
 
 #include "overtake/core/road.hpp"
@@ -112,10 +113,28 @@ struct PolynomialSampler {
 
 /// One predicted car over the grid (k = 0 .. n).
 struct CarSamples {
+  CarSamples() = default;
+  // Moved, the views keep pointing into the buffer that moves with them; a copy's would not.
+  CarSamples(CarSamples&&) noexcept = default;
+  CarSamples& operator=(CarSamples&&) noexcept = default;
+  CarSamples(const CarSamples&) = delete;
+  CarSamples& operator=(const CarSamples&) = delete;
+  ~CarSamples() = default;
+
+  /// `n` samples of each, in one allocation.
+  void resize(std::size_t n) {
+    buffer.assign(4 * n, 0.0);
+    s = {buffer.data(), n};
+    s_dot = {buffer.data() + n, n};
+    d = {buffer.data() + 2 * n, n};
+    d_dot = {buffer.data() + 3 * n, n};
+  }
+
   int id = 0;
-  double cap_mps = 0.0;                    // estimated speed cap
-  bool speeding_up = false;                // accelerating now: not a car that brakes for the ego
-  std::vector<double> s, s_dot, d, d_dot;  // k = 0 .. n
+  double cap_mps = 0.0;                  // estimated speed cap
+  bool speeding_up = false;              // accelerating now: not a car that brakes for the ego
+  std::span<double> s, s_dot, d, d_dot;  // k = 0 .. n, views of `buffer`
+  std::vector<double> buffer;
 };
 
 // ---- The checks (trajectory_checks.cpp) ----
