@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
+#include <limits>
 #include <utility>
 #include <vector>
 
@@ -252,7 +253,7 @@ std::vector<LatCandidate> lateral_candidates(const std::vector<int>& lanes,
   const FrenetState& x0 = req.start;
   std::vector<LatCandidate> lats;
   lats.reserve(lanes.size() * tp.lateral_time_factors.size());
-  Track1d scratch;  // the samples of a refused candidate's buffers serve the next
+  Track1d scratch;  // a refused candidate's sample buffers serve the next one
   const SteadyReadings steady = steady_readings(g, line, x0, tp, road);
   for (const int l : lanes) {
     const double target = core::lane_center_d(l, road);
@@ -312,7 +313,7 @@ std::vector<LonCandidate> longitudinal_candidates(const TrajectoryRequest& req,
   std::vector<LonCandidate> lons;
   lons.reserve(tp.cruise_times_s.size() * (tp.speed_offsets_mps.size() + 1) +
                leaders.size() * tp.follow_times_s.size() + 2 + tp.brake_levels_mps2.size());
-  Track1d scratch;  // the samples of a refused candidate's buffers serve the next
+  Track1d scratch;  // a refused candidate's sample buffers serve the next one
   const auto add_lon = [&](const Longitudinal& m) {
     if (!sample_within(g, LongitudinalSampler{m}, tp.max_accel_mps2, tp.max_jerk_mps3, true,
                        scratch))
@@ -397,7 +398,7 @@ SoftLaneCosts soft_lane_costs(const std::vector<LonCandidate>& lons, const std::
     const Track1d& lon = lons[j].samples;
     // (After a polynomial's end, or once braking stands, the speed holds: its reach is
     // worked out once.)
-    double last_v = kInf;
+    double last_v = std::numeric_limits<double>::quiet_NaN();  // equal to no speed
     double last_reach = 0.0;
     for (std::size_t i = 0; i < n; ++i) {
       const double v = lon.v[i + static_cast<std::size_t>(kBack)] * m_per_unit_s;

@@ -157,10 +157,14 @@ KinematicReport kinematics(const Track1d& lon, const Track1d& lat, const Grid& g
   // Stopping at the first sample over a limit, a sample whose squared figures are well within
   // the limits squared (by far more than any rounding of the squares, norms and divisions) is
   // within them: its norms are left out. (So the peaks are those of the samples not left out.)
+  // (A limit that is not positive leaves out nothing.)
   constexpr double kClearShare = 1.0 - 1e-9;
-  const double speed_clear = p.max_speed_mps * p.max_speed_mps * kClearShare;
-  const double accel_clear = (p.max_accel_mps2 * h2) * (p.max_accel_mps2 * h2) * kClearShare;
-  const double jerk_clear = (p.max_jerk_mps3 * h3) * (p.max_jerk_mps3 * h3) * kClearShare;
+  const auto clear_below = [](double limit) {
+    return limit > 0.0 ? limit * limit * kClearShare : 0.0;
+  };
+  const double speed_clear = clear_below(p.max_speed_mps);
+  const double accel_clear = clear_below(p.max_accel_mps2 * h2);
+  const double jerk_clear = clear_below(p.max_jerk_mps3 * h3);
   core::Vec2 back[4];  // positions k, k-1, k-2, k-3
   for (int k = -kBack; k <= g.n; ++k) {
     const auto e = static_cast<std::size_t>(k + kBack);
