@@ -18,41 +18,8 @@ constexpr double kAlongsideM = 1.5;
 
 }  // namespace
 
-double jerk_limited_stop_distance(double v, double brake, double jerk) {
-  if (!(v > 0.0)) return 0.0;
-  const double ramp_t = brake / jerk;
-  const double ramp_dv = 0.5 * brake * ramp_t;
-  if (v <= ramp_dv) {
-    // Stops before the full braking is reached: v = jerk t^2 / 2.
-    const double t = std::sqrt(2.0 * v / jerk);
-    return v * t - jerk * t * t * t / 6.0;
-  }
-  const double ramp_d = v * ramp_t - jerk * ramp_t * ramp_t * ramp_t / 6.0;
-  const double rest = v - ramp_dv;
-  return ramp_d + rest * rest / (2.0 * brake);
-}
-
 double rss_front_gap(double rear_mps, double front_mps, const ReferenceBehaviourParams& p) {
-  const double rear = std::max(0.0, rear_mps);
-  const double front = std::max(0.0, front_mps);
-  const double d = rear * p.response_time_s +
-                   jerk_limited_stop_distance(rear, p.ego_brake_mps2, p.ego_brake_jerk_mps3) -
-                   front * front / (2.0 * p.lead_brake_mps2);
-  return std::max(d, p.min_gap_m);
-}
-
-double rear_room(double centre_gap_m, double closing_mps, double car_length_m,
-                 const ReferenceBehaviourParams& p) {
-  return rear_room(centre_gap_m, closing_mps, car_length_m, p, p.follower_reaction_gap_m);
-}
-
-double rear_room(double centre_gap_m, double closing_mps, double car_length_m,
-                 const ReferenceBehaviourParams& p, double reaction_gap_m) {
-  const double floor_m = car_length_m + p.follower_margin_m;
-  if (closing_mps <= 0.0) return centre_gap_m - floor_m;
-  const double react_at = std::min(centre_gap_m, reaction_gap_m);
-  return react_at - closing_mps * p.follower_response_s -
-         closing_mps * closing_mps / (2.0 * p.follower_brake_mps2) - floor_m;
+  return rss_gap_of(rss_rear_reach(rear_mps, p), rss_front_reach(front_mps, p), p);
 }
 
 std::vector<LaneView> assess_lanes(const std::vector<CarPrediction>& cars, const EgoSnapshot& ego,

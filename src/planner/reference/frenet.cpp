@@ -80,15 +80,21 @@ LaneFrame LaneFrame::chord_aligned(const core::ReferenceLine& line, const core::
   return f;
 }
 
-double LaneFrame::original_d(double s_m, double d_m) const {
-  if (!offset_ || reading_.empty()) return d_m;
+LaneFrame::Reading LaneFrame::reading(double s_m) const {
+  if (!offset_ || reading_.empty()) return {};
   double x = std::fmod(s_m - line_->start_s_m(), line_->length_m());
   if (x < 0.0) x += line_->length_m();
   const auto i = static_cast<std::size_t>(x);
   const double f = x - static_cast<double>(i);
   const std::size_t n = reading_.size();
   const double raw = reading_[i % n] * (1.0 - f) + reading_[(i + 1) % n] * f;
-  return d_m - offset(s_m) + raw;
+  return {true, offset(s_m), raw};
+}
+
+LaneFrame::OffsetSlope LaneFrame::offset_slope(double s_m) const {
+  if (!offset_) return {};
+  const core::SplineSample o = offset_->eval(line_->wrap_s(s_m));
+  return {o.value, o.d1};
 }
 
 double LaneFrame::offset(double s_m) const {
@@ -102,9 +108,11 @@ double LaneFrame::slope(double s_m) const {
 }
 
 RoadPoint road_point(const LaneFrame& frame, double s_m, double d_m) {
-  const core::ReferenceLine& line = frame.line();
-  const core::RoadFrame f = line.frame(s_m);
-  const double d_line = d_m - frame.offset(s_m);
+  return road_point(frame.line().frame(s_m), frame.offset_slope(s_m), d_m);
+}
+
+RoadPoint road_point(const core::RoadFrame& f, const LaneFrame::OffsetSlope& o, double d_m) {
+  const double d_line = d_m - o.offset_m;
   // +1 when the normal points to the right of travel; the line's curvature-at-offset rule
   // depends on it.
   const double side = core::dot(f.normal, core::right_of(f.tangent)) >= 0.0 ? 1.0 : -1.0;
@@ -115,15 +123,17 @@ RoadPoint road_point(const LaneFrame& frame, double s_m, double d_m) {
   p.normal = f.normal;
   p.along_scale = f.ds_scale * stretch;
   p.curvature_1pm = f.curvature_1pm / stretch;
-  p.offset_slope = frame.slope(s_m);
+  p.offset_slope = o.slope;
   return p;
 }
 
 FrenetState frenet_from_cartesian(const LaneFrame& frame, core::Vec2 position, core::Vec2 velocity,
-                                  double s_hint_m) {
+                                  double s_hint_m, RoadPoint* at_out) {
   const core::FrenetPoint f = frame.line().to_frenet(position, s_hint_m);
-  const double d = f.d_m + frame.offset(f.s_m);
-  const RoadPoint at = road_point(frame, f.s_m, d);
+  const LaneFrame::OffsetSlope o = frame.offset_slope(f.s_m);
+  const double d = f.d_m + o.offset_m;
+  const RoadPoint at = road_point(frame.line().frame(f.s_m), o, d);
+  if (at_out) *at_out = at;
   FrenetState x;
   x.s_m = f.s_m;
   x.d_m = d;

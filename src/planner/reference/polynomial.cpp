@@ -15,20 +15,6 @@ Motion1d advance(const Motion1d& m, double dt) {
 
 }  // namespace
 
-Motion1d Polynomial1d::raw(double t) const {
-  const auto& k = c;
-  return {k[0] + t * (k[1] + t * (k[2] + t * (k[3] + t * (k[4] + t * k[5])))),
-          k[1] + t * (2.0 * k[2] + t * (3.0 * k[3] + t * (4.0 * k[4] + t * 5.0 * k[5]))),
-          2.0 * k[2] + t * (6.0 * k[3] + t * (12.0 * k[4] + t * 20.0 * k[5])),
-          6.0 * k[3] + t * (24.0 * k[4] + t * 60.0 * k[5])};
-}
-
-Motion1d Polynomial1d::at(double t) const {
-  if (t <= duration_s) return raw(t);
-  const Motion1d end = raw(duration_s);
-  return {end.x + end.v * (t - duration_s), end.v, 0.0, 0.0};
-}
-
 double Polynomial1d::jerk_cost() const {
   // jerk = a + b t + g t^2
   const double a = 6.0 * c[3];

@@ -34,26 +34,6 @@ double min_jerk_progress(double fraction) {
   return 0.5 * (lo + hi);
 }
 
-double CarPrediction::s_at(double t) const {
-  if (s_ddot == 0.0 || t <= 0.0) return s_m + s_dot * t;
-  // Braking (or speeding up) for brake_time_s, then steady, or back up to the speed it had;
-  // the speed never goes below zero.
-  const double tb = std::min(t, brake_time_s);
-  const double t_stop = s_ddot < 0.0 ? s_dot / -s_ddot : tb + 1.0;
-  if (t_stop <= tb) return s_m + 0.5 * s_dot * t_stop;
-  const double v = s_dot + s_ddot * tb;
-  const double s_b = s_m + s_dot * tb + 0.5 * s_ddot * tb * tb;
-  if (t <= brake_time_s || recover_s_ddot <= 0.0 || v >= s_dot) return s_b + v * (t - tb);
-  const double tr = std::min(t - brake_time_s, (s_dot - v) / recover_s_ddot);
-  return s_b + v * tr + 0.5 * recover_s_ddot * tr * tr + s_dot * (t - brake_time_s - tr);
-}
-
-double CarPrediction::s_dot_at(double t) const {
-  const double v = std::max(0.0, s_dot + s_ddot * std::clamp(t, 0.0, brake_time_s));
-  if (t <= brake_time_s || recover_s_ddot <= 0.0 || v >= s_dot) return v;
-  return std::min(s_dot, v + recover_s_ddot * (t - brake_time_s));
-}
-
 double CarPrediction::d_at(double t) const {
   if (!changing) return d_m;
   const double tau = change_progress + t / change_duration_s;
@@ -182,11 +162,11 @@ std::vector<CarPrediction> predict_cars(const core::Telemetry& telemetry, const 
     core::Vec2 velocity = car.velocity_mps;
     if (core::norm(velocity) > params.max_plausible_speed_mps)
       velocity = (1.0 / core::kMphPerMps) * velocity;
-    const FrenetState x = frenet_from_cartesian(frame, car.position, velocity, car.s_m);
+    RoadPoint at;  // the frame's geometry where the car is
+    const FrenetState x = frenet_from_cartesian(frame, car.position, velocity, car.s_m, &at);
     // Cars waiting off the road (the original parks them far beside it) are no traffic.
     if (x.d_m < -params.off_road_margin_m || x.d_m > road_width + params.off_road_margin_m)
       continue;
-    const RoadPoint at = road_point(frame, x.s_m, x.d_m);
     const double speed = x.s_dot * at.along_scale;
     double accel = 0.0;
     double top_speed = speed;

@@ -85,6 +85,11 @@ FrenetState ReferencePolicy::observed_state(const core::Telemetry& t) const {
   return frenet_from_cartesian(frame_, t.ego.position, v, t.ego.s_m);
 }
 
+core::Vec2 ReferencePolicy::sent_as_read(std::size_t i) const {
+  return sent_rounded_ ? sent_[i]
+                       : core::round_like_wire(std::vector<core::Vec2>{sent_[i]}).front();
+}
+
 core::PlanResult ReferencePolicy::plan(const core::Telemetry& t) {
   const auto& tp = p_.trajectory;
   const double dt = step_s_;
@@ -97,9 +102,10 @@ core::PlanResult ReferencePolicy::plan(const core::Telemetry& t) {
   if (have_plan_ && remaining >= 2 && remaining <= sent_.size()) {
     consumed = sent_.size() - remaining;
     const bool queue_matches =
-        core::distance(t.previous_path.front(), sent_[consumed]) < kSyncToleranceM;
+        core::distance(t.previous_path.front(), sent_as_read(consumed)) < kSyncToleranceM;
     const bool car_matches =
-        consumed == 0 || core::distance(t.ego.position, sent_[consumed - 1]) < kSyncToleranceM;
+        consumed == 0 ||
+        core::distance(t.ego.position, sent_as_read(consumed - 1)) < kSyncToleranceM;
     if (queue_matches && car_matches) {
       car = consumed == 0 ? origin_ : states_[consumed - 1];
       synced_ = true;
@@ -202,7 +208,8 @@ core::PlanResult ReferencePolicy::plan(const core::Telemetry& t) {
     states.push_back(x);
     points.push_back(road_point(frame_, x.s_m, x.d_m).position);
   }
-  sent_ = core::round_like_wire(points);
+  sent_.assign(points.begin(), points.end());
+  sent_rounded_ = false;
   states_ = std::move(states);
   origin_ = car;
   have_plan_ = true;
@@ -247,6 +254,9 @@ bool ReferencePolicy::archive_state(core::StateArchive& ar) {
   ar.part("reference");
   archive_states(ar, states_, "states sent");
   archive_states(ar, driven_, "states driven");
+  // The points as the simulator read them (what a cycle compares).
+  if (!sent_rounded_) sent_ = core::round_like_wire(std::move(sent_));
+  sent_rounded_ = true;
   const std::size_t sent = ar.io_length(sent_.size(), kMaxPoints, "points sent");
   if (ar.loading()) sent_.assign(sent, core::Vec2{});
   std::uint64_t x_bits = 0, y_bits = 0;

@@ -192,7 +192,8 @@ Fallback choose_fallback(const std::vector<LatCandidate>& lats, const Trajectory
   double pick_collision = -kInf;
   for (const LatCandidate& c : lats) {
     double lat_jerk = 0.0;
-    for (int k = 0; k <= g.n; ++k) lat_jerk = std::max(lat_jerk, std::abs(c.poly.at(g.t(k)).j));
+    const PolynomialSampler lat_at{c.poly};
+    for (int k = 0; k <= g.n; ++k) lat_jerk = std::max(lat_jerk, std::abs(lat_at(g.t(k)).j));
     const double room =
         tp.fallback_total_jerk_mps3 * tp.fallback_total_jerk_mps3 - lat_jerk * lat_jerk;
     const double brake_jerk =

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
+#include <limits>
 #include <utility>
 #include <vector>
 
@@ -38,40 +39,35 @@ constexpr double kLevelOffMps2 = 1.0;
 /// itself reads closer to the edge than the road margin.
 constexpr double kOvershootM = 0.2;
 
-/// Largest and smallest along-road scale of a lane over s in [s0, s1].
-struct ScaleRange {
-  double max = 1.0;
-  double min = 1.0;
+/// A car ahead in a lane, with how far it goes braking as hard as it can from each of its
+/// samples (rss_front_reach, in metres of road).
+struct AheadCar {
+  const CarSamples* car = nullptr;
+  std::vector<double> reach_m;
 };
 
-ScaleRange lane_scale(const LaneFrame& line, double s0, double s1, double d) {
-  ScaleRange r{0.0, kInf};
-  const int n = std::max(1, static_cast<int>(std::ceil((s1 - s0) / kScaleSampleM)));
-  for (int i = 0; i <= n; ++i) {
-    const double s = s0 + (s1 - s0) * i / n;
-    const double k = road_point(line, s, d).along_scale;
-    r.max = std::max(r.max, k);
-    r.min = std::min(r.min, k);
-  }
-  return r;
-}
-
-/// The soft costs of longitudinal samples `lon` in a lane with cars `ahead` and `behind`.
-LaneCost lane_cost(const Track1d& lon, const Grid& g, const std::vector<const CarSamples*>& ahead,
-                   const CarSamples* behind, double m_per_unit_s, const ReferenceParams& p,
+/// The soft costs of longitudinal samples `lon` in a lane with cars `ahead` and `behind`;
+/// `rear_reach_m[k]` is rss_rear_reach of the ego's speed at sample k, so that the RSS gap
+/// wanted behind each car is rss_gap_of the two reaches (rss_front_gap's number, worked out
+/// once per sample instead of once per car and lane).
+LaneCost lane_cost(const Track1d& lon, const std::vector<double>& rear_reach_m, const Grid& g,
+                   const std::vector<AheadCar>& ahead, const CarSamples* behind,
+                   double m_per_unit_s, const ReferenceParams& p,
                    const core::CarFootprint& footprint) {
   const auto& b = p.behaviour;
   const auto& tp = p.trajectory;
-  LaneCost c;
+  // Without cars every step is 0, and adding 0 to the sums (from +0) leaves them 0.
+  if (ahead.empty() && !behind) return {};
+  double full = 0.0;
+  double early = 0.0;
   const int early_n = static_cast<int>(std::lround(tp.change_early_window_s / g.h));
   for (int k = 0; k <= g.n; ++k) {
     const auto e = static_cast<std::size_t>(k + kBack);
     const auto i = static_cast<std::size_t>(k);
-    const double ve = lon.v[e] * m_per_unit_s;
     double step = 0.0;
-    for (const CarSamples* car : ahead) {
-      const double gap = (car->s[i] - lon.x[e]) * m_per_unit_s - footprint.length_m;
-      const double want = rss_front_gap(ve, car->s_dot[i] * m_per_unit_s, b);
+    for (const AheadCar& a : ahead) {
+      const double gap = (a.car->s[i] - lon.x[e]) * m_per_unit_s - footprint.length_m;
+      const double want = rss_gap_of(rear_reach_m[i], a.reach_m[i], b);
       const double short_by = std::max(0.0, want - gap) / want;
       step += tp.proximity_weight * short_by * short_by;
     }
@@ -84,28 +80,55 @@ LaneCost lane_cost(const Track1d& lon, const Grid& g, const std::vector<const Ca
         step += tp.rear_weight * short_by * short_by;
       }
     }
-    c.full += step * g.h;
-    if (k <= early_n) c.early += step * g.h;
+    full += step * g.h;
+    if (k <= early_n) early += step * g.h;
   }
-  return c;
+  return {full, early};
+}
+
+/// What the lateral candidates' checks read along a steady motion from the start (s at grid
+/// time t: x0.s + x0.s_dot t): the original's reading of d there, and the bounds on_road
+/// keeps the ego's middle within. The same for every lateral candidate, so read once.
+struct SteadyReadings {
+  std::vector<LaneFrame::Reading> at;  // k = 0 .. n
+  std::vector<double> lo, hi;          // on_road's bounds on the original's d
+};
+
+SteadyReadings steady_readings(const Grid& g, const LaneFrame& frame, const FrenetState& x0,
+                               const ReferenceTrajectoryParams& tp, const core::RoadParams& road) {
+  const double first = core::lane_center_d(0, road);
+  const double last = core::lane_center_d(road.lane_count - 1, road);
+  const auto n = static_cast<std::size_t>(g.n + 1);
+  SteadyReadings r;
+  r.at.resize(n);
+  r.lo.resize(n);
+  r.hi.resize(n);
+  for (int k = 0; k <= g.n; ++k) {
+    const auto i = static_cast<std::size_t>(k);
+    const double s = x0.s_m + x0.s_dot * g.t(k);
+    r.at[i] = frame.reading(s);
+    r.lo[i] = std::min(tp.road_edge_margin_m, LaneFrame::original_d(r.at[i], first) - kOvershootM);
+    r.hi[i] = std::max(core::road_width_m(road) - tp.road_edge_margin_m,
+                       LaneFrame::original_d(r.at[i], last) + kOvershootM);
+  }
+  return r;
 }
 
 /// A lateral motion's time in lane-line bands over the grid (the first stretch extended by
-/// `already_s`), d read as the original reads it, at s along a steady motion from `x0`.
+/// `already_s`), d read as the original reads it, at s along a steady motion from the start.
 struct BandTime {
   double longest_s = 0.0;  ///< the longest stretch without a break
   double overstay_s = std::numeric_limits<double>::infinity();  ///< when one passes `limit_s`
 };
 
 BandTime band_time(const Track1d& lat, const Grid& g, double already_s, double half_width,
-                   double limit_s, const LaneFrame& frame, const FrenetState& x0,
-                   const core::RoadParams& road) {
+                   double limit_s, const SteadyReadings& steady, const core::RoadParams& road) {
   BandTime b;
   double run = already_s;
   for (int k = 0; k <= g.n; ++k) {
-    const double s = x0.s_m + x0.s_dot * g.t(k);
-    if (in_line_band(frame.original_d(s, lat.x[static_cast<std::size_t>(k + kBack)]), half_width,
-                     road)) {
+    const double d = LaneFrame::original_d(steady.at[static_cast<std::size_t>(k)],
+                                           lat.x[static_cast<std::size_t>(k + kBack)]);
+    if (in_line_band(d, half_width, road)) {
       run += k == 0 ? 0.0 : g.h;
       b.longest_s = std::max(b.longest_s, run);
       if (run > limit_s && b.overstay_s == kInf) b.overstay_s = g.t(k);
@@ -121,17 +144,12 @@ BandTime band_time(const Track1d& lat, const Grid& g, double already_s, double h
 /// are far apart on a bend the outer lanes' centres themselves read close to the edge; there
 /// the bound is the centre's reading less the overshoot allowed, so that keeping a lane is
 /// never ruled out.
-bool on_road(const Track1d& lat, const Grid& g, const LaneFrame& frame, const FrenetState& x0,
-             const ReferenceTrajectoryParams& tp, const core::RoadParams& road) {
-  const double first = core::lane_center_d(0, road);
-  const double last = core::lane_center_d(road.lane_count - 1, road);
+bool on_road(const Track1d& lat, const Grid& g, const SteadyReadings& steady) {
   for (int k = 0; k <= g.n; ++k) {
-    const double s = x0.s_m + x0.s_dot * g.t(k);
-    const double d = frame.original_d(s, lat.x[static_cast<std::size_t>(k + kBack)]);
-    const double lo = std::min(tp.road_edge_margin_m, frame.original_d(s, first) - kOvershootM);
-    const double hi = std::max(core::road_width_m(road) - tp.road_edge_margin_m,
-                               frame.original_d(s, last) + kOvershootM);
-    if (d < lo || d > hi) return false;
+    const auto i = static_cast<std::size_t>(k);
+    const double d =
+        LaneFrame::original_d(steady.at[i], lat.x[i + static_cast<std::size_t>(kBack)]);
+    if (d < steady.lo[i] || d > steady.hi[i]) return false;
   }
   return true;
 }
@@ -156,19 +174,25 @@ std::vector<int> lanes_in_play(const FrenetState& x0, int target_lane, double li
 AlongRoadScale along_road_scale(const LaneFrame& line, const FrenetState& x0,
                                 double wanted_speed_mps, const std::vector<int>& lanes,
                                 const ReferenceTrajectoryParams& tp, const core::RoadParams& road) {
-  // Over the stretch the wanted speed (or the present one) reaches within the horizon.
+  // Over the stretch the wanted speed (or the present one) reaches within the horizon, every
+  // kScaleSampleM or less, in each lane in play, and where the ego is. The line and the frame's
+  // offset are read once per s for all of them.
   const double reach = std::max(x0.s_dot, wanted_speed_mps) * tp.horizon_s + kScaleSampleM;
+  const double s0 = x0.s_m;
+  const double s1 = x0.s_m + reach;
+  const int n = std::max(1, static_cast<int>(std::ceil((s1 - s0) / kScaleSampleM)));
   double max_scale = 0.0;
   double m_per_unit_s = kInf;
-  for (const int l : lanes) {
-    const ScaleRange r = lane_scale(line, x0.s_m, x0.s_m + reach, core::lane_center_d(l, road));
-    max_scale = std::max(max_scale, r.max);
-    m_per_unit_s = std::min(m_per_unit_s, r.min);
-  }
-  {
-    const ScaleRange here = lane_scale(line, x0.s_m, x0.s_m, x0.d_m);
-    max_scale = std::max(max_scale, here.max);
-    m_per_unit_s = std::min(m_per_unit_s, here.min);
+  const auto take = [&](double k) {
+    max_scale = std::max(max_scale, k);
+    m_per_unit_s = std::min(m_per_unit_s, k);
+  };
+  for (int i = 0; i <= n; ++i) {
+    const double s = s0 + (s1 - s0) * i / n;
+    const core::RoadFrame f = line.line().frame(s);
+    const LaneFrame::OffsetSlope o = line.offset_slope(s);
+    for (const int l : lanes) take(road_point(f, o, core::lane_center_d(l, road)).along_scale);
+    if (i == 0) take(road_point(f, o, x0.d_m).along_scale);
   }
   AlongRoadScale out;
   out.m_per_unit_s = m_per_unit_s;
@@ -228,6 +252,9 @@ std::vector<LatCandidate> lateral_candidates(const std::vector<int>& lanes,
                                              const core::RoadParams& road) {
   const FrenetState& x0 = req.start;
   std::vector<LatCandidate> lats;
+  lats.reserve(lanes.size() * tp.lateral_time_factors.size());
+  Track1d scratch;  // a refused candidate's sample buffers serve the next one
+  const SteadyReadings steady = steady_readings(g, line, x0, tp, road);
   for (const int l : lanes) {
     const double target = core::lane_center_d(l, road);
     const double dist = std::abs(target - x0.d_m);
@@ -235,13 +262,16 @@ std::vector<LatCandidate> lateral_candidates(const std::vector<int>& lanes,
     const double t_min =
         std::max(tp.min_lateral_time_s, std::cbrt(60.0 * dist / tp.lateral_jerk_mps3));
     for (const double f : tp.lateral_time_factors) {
+      const Polynomial1d poly =
+          quintic(x0.d_m, x0.d_dot_mps, x0.d_ddot_mps2, target, 0.0, 0.0, t_min * f);
+      if (!sample_within(g, PolynomialSampler{poly}, tp.max_accel_mps2, tp.max_jerk_mps3, false,
+                         scratch) ||
+          !on_road(scratch, g, steady))
+        continue;
       LatCandidate c;
-      c.poly = quintic(x0.d_m, x0.d_dot_mps, x0.d_ddot_mps2, target, 0.0, 0.0, t_min * f);
+      c.poly = poly;
       c.end_lane = l;
-      const auto at = [&](double t) { return c.poly.at(t); };
-      if (!axis_ok(g, at, tp.max_accel_mps2, tp.max_jerk_mps3, false)) continue;
-      c.samples = sample(g, at);
-      if (!on_road(c.samples, g, line, x0, tp, road)) continue;
+      c.samples = std::exchange(scratch, Track1d{});
       c.terms.lateral_jerk = tp.lat_jerk_weight * c.poly.jerk_cost();
       c.terms.lateral_time = hold ? 0.0 : tp.lat_time_weight * c.poly.duration_s;
       c.terms.off_target_lane = tp.lane_weight * std::abs(l - req.target_lane);
@@ -249,7 +279,7 @@ std::vector<LatCandidate> lateral_candidates(const std::vector<int>& lanes,
       // Longer than the budget on a lane line costs; as long as the original counts as an
       // incident is an incident.
       const BandTime band = band_time(c.samples, g, req.band_time_s, tp.line_band_m,
-                                      tp.band_incident_s, line, x0, road);
+                                      tp.band_incident_s, steady, road);
       // (Of two that overstay as soon, the one that leaves the line sooner is less bad.)
       c.overstay_s = band.overstay_s - kOverstayTieBreak * band.longest_s;
       c.terms.linger = tp.linger_weight * std::max(0.0, band.longest_s - tp.max_band_time_s);
@@ -281,12 +311,16 @@ std::vector<LonCandidate> longitudinal_candidates(const TrajectoryRequest& req,
   const double m_per_unit_s = scale.m_per_unit_s;
   const double s_dot_cap = scale.s_dot_cap;
   std::vector<LonCandidate> lons;
-  const auto add_lon = [&](Longitudinal m) {
+  lons.reserve(tp.cruise_times_s.size() * (tp.speed_offsets_mps.size() + 1) +
+               leaders.size() * tp.follow_times_s.size() + 2 + tp.brake_levels_mps2.size());
+  Track1d scratch;  // a refused candidate's sample buffers serve the next one
+  const auto add_lon = [&](const Longitudinal& m) {
+    if (!sample_within(g, LongitudinalSampler{m}, tp.max_accel_mps2, tp.max_jerk_mps3, true,
+                       scratch))
+      return;
     LonCandidate c;
     c.motion = m;
-    const auto at = [&](double t) { return c.motion.at(t); };
-    if (!axis_ok(g, at, tp.max_accel_mps2, tp.max_jerk_mps3, true)) return;
-    c.samples = sample(g, at);
+    c.samples = std::exchange(scratch, Track1d{});
     const double travelled = (c.samples.x.back() - x0.s_m) * m_per_unit_s;
     const double deficit = req.wanted_speed_mps * tp.horizon_s - travelled;
     const double jerk = m.braking ? m.brake.jerk_cost() : m.poly.jerk_cost();
@@ -341,14 +375,43 @@ SoftLaneCosts soft_lane_costs(const std::vector<LonCandidate>& lons, const std::
                               const std::vector<LaneCars>& lane_cars, const Grid& g,
                               double m_per_unit_s, const ReferenceParams& params,
                               const core::CarFootprint& car) {
+  const auto& b = params.behaviour;
+  const auto n = static_cast<std::size_t>(g.n + 1);
+  // The cars ahead in each lane in play, with their halves of the RSS gap.
+  std::vector<std::vector<AheadCar>> ahead(lane_cars.size());
+  for (const int l : lanes) {
+    const auto li = static_cast<std::size_t>(l);
+    for (const CarSamples* c : lane_cars[li].ahead) {
+      AheadCar a;
+      a.car = c;
+      a.reach_m.resize(n);
+      for (std::size_t i = 0; i < n; ++i)
+        a.reach_m[i] = rss_front_reach(c->s_dot[i] * m_per_unit_s, b);
+      ahead[li].push_back(std::move(a));
+    }
+  }
   SoftLaneCosts soft;
   soft.lane_count = lane_cars.size();
   soft.costs.resize(lons.size() * soft.lane_count);
+  std::vector<double> rear_reach(n);
   for (std::size_t j = 0; j < lons.size(); ++j) {
+    const Track1d& lon = lons[j].samples;
+    // (After a polynomial's end, or once braking stands, the speed holds: its reach is
+    // worked out once.)
+    double last_v = std::numeric_limits<double>::quiet_NaN();  // equal to no speed
+    double last_reach = 0.0;
+    for (std::size_t i = 0; i < n; ++i) {
+      const double v = lon.v[i + static_cast<std::size_t>(kBack)] * m_per_unit_s;
+      if (v != last_v) {
+        last_v = v;
+        last_reach = rss_rear_reach(v, b);
+      }
+      rear_reach[i] = last_reach;
+    }
     for (const int l : lanes) {
-      const LaneCars& lc = lane_cars[static_cast<std::size_t>(l)];
-      soft.costs[j * soft.lane_count + static_cast<std::size_t>(l)] =
-          lane_cost(lons[j].samples, g, lc.ahead, lc.behind, m_per_unit_s, params, car);
+      const auto li = static_cast<std::size_t>(l);
+      soft.costs[j * soft.lane_count + li] =
+          lane_cost(lon, rear_reach, g, ahead[li], lane_cars[li].behind, m_per_unit_s, params, car);
     }
   }
   return soft;

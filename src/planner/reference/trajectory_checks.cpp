@@ -22,6 +22,8 @@ constexpr double kRelevantM = 200.0;
 constexpr double kSpeedingUpMps2 = 1.0;
 /// A follower's sensor meets the ego once the ego's middle is this close sideways to its own.
 constexpr double kSensorCoverM = 0.8;
+/// Margin (m) of a bound on the lateral clearance needed, far beyond its rounding.
+constexpr double kClearSidewaysM = 1e-6;
 
 }  // namespace
 
@@ -36,17 +38,24 @@ std::vector<CarSamples> sample_cars(const std::vector<CarPrediction>& cars, doub
     cs.cap_mps = c.cap_mps;
     cs.speeding_up = c.observed_accel_mps2 > kSpeedingUpMps2;
     const auto n = static_cast<std::size_t>(g.n + 1);
-    cs.s.resize(n);
-    cs.s_dot.resize(n);
-    cs.d.resize(n);
-    cs.d_dot.resize(n);
+    cs.resize(n);
     for (int k = 0; k <= g.n; ++k) {
       const double t = delay + g.t(k);
       const auto i = static_cast<std::size_t>(k);
       cs.s[i] = c.s_at(t);
       cs.s_dot[i] = c.s_dot_at(t);
-      cs.d[i] = c.d_at(t);
-      cs.d_dot[i] = c.d_dot_at(t);
+    }
+    if (c.changing) {
+      for (int k = 0; k <= g.n; ++k) {
+        const double t = delay + g.t(k);
+        const auto i = static_cast<std::size_t>(k);
+        cs.d[i] = c.d_at(t);
+        cs.d_dot[i] = c.d_dot_at(t);
+      }
+    } else {
+      // Keeping its lane: the same d (and no lateral speed) at every time.
+      std::fill(cs.d.begin(), cs.d.end(), c.d_at(0.0));
+      std::fill(cs.d_dot.begin(), cs.d_dot.end(), c.d_dot_at(0.0));
     }
     out.push_back(std::move(cs));
   }
@@ -65,6 +74,7 @@ CollisionReport collide(const Track1d& lon, const Track1d& lat, bool ego_changin
   const double lon_need = length + p.trajectory.lon_margin_m;
   const double lat_base = car.width_m + p.trajectory.lat_margin_m;
   const double react_gap = p.behaviour.follower_reaction_gap_m;
+  const double lat_need_per_mps = 0.5 * length / kMinHeadingSpeedMps;
   CollisionReport r;
   for (const CarSamples& c : cars) {
     bool seen = false;
@@ -74,12 +84,20 @@ CollisionReport collide(const Track1d& lon, const Track1d& lat, bool ego_changin
       const auto i = static_cast<std::size_t>(k);
       const double t = g.t(k);
       if (t >= r.first_collision_s) break;
-      const double ve = std::max(lon.v[e] * m_per_unit_s, kMinHeadingSpeedMps);
-      const double vc = std::max(c.s_dot[i] * m_per_unit_s, kMinHeadingSpeedMps);
       const double side_gap = std::abs(lat.x[e] - c.d[i]);
-      const double lat_need =
-          lat_base + 0.5 * length * (std::abs(lat.v[e]) / ve + std::abs(c.d_dot[i]) / vc);
-      if (side_gap >= lat_need) {
+      // Clear sideways by more than the most lat_need can be (both headings at their slowest
+      // speed, and a margin far beyond rounding): no need to work it out.
+      bool clear_sideways =
+          side_gap >= lat_base + lat_need_per_mps * (std::abs(lat.v[e]) + std::abs(c.d_dot[i])) +
+                          kClearSidewaysM;
+      if (!clear_sideways) {
+        const double ve = std::max(lon.v[e] * m_per_unit_s, kMinHeadingSpeedMps);
+        const double vc = std::max(c.s_dot[i] * m_per_unit_s, kMinHeadingSpeedMps);
+        const double lat_need =
+            lat_base + 0.5 * length * (std::abs(lat.v[e]) / ve + std::abs(c.d_dot[i]) / vc);
+        clear_sideways = side_gap >= lat_need;
+      }
+      if (clear_sideways) {
         if (follower) break;  // the ego has left its path
         continue;
       }
@@ -136,6 +154,17 @@ KinematicReport kinematics(const Track1d& lon, const Track1d& lat, const Grid& g
   KinematicReport r;
   const double h2 = g.h * g.h;
   const double h3 = h2 * g.h;
+  // Stopping at the first sample over a limit, a sample whose squared figures are well within
+  // the limits squared (by far more than any rounding of the squares, norms and divisions) is
+  // within them: its norms are left out. (So the peaks are those of the samples not left out.)
+  // (A limit that is not positive leaves out nothing.)
+  constexpr double kClearShare = 1.0 - 1e-9;
+  const auto clear_below = [](double limit) {
+    return limit > 0.0 ? limit * limit * kClearShare : 0.0;
+  };
+  const double speed_clear = clear_below(p.max_speed_mps);
+  const double accel_clear = clear_below(p.max_accel_mps2 * h2);
+  const double jerk_clear = clear_below(p.max_jerk_mps3 * h3);
   core::Vec2 back[4];  // positions k, k-1, k-2, k-3
   for (int k = -kBack; k <= g.n; ++k) {
     const auto e = static_cast<std::size_t>(k + kBack);
@@ -149,10 +178,16 @@ KinematicReport kinematics(const Track1d& lon, const Track1d& lat, const Grid& g
     back[0] = at.position;
     if (k < 0) continue;
     const double t = g.t(k);
-    const double speed =
-        std::hypot(lon.v[e] * at.along_scale, lat.v[e] - at.offset_slope * lon.v[e]);
-    const double accel = core::norm(back[0] - 2.0 * back[1] + back[2]) / h2;
-    const double jerk = core::norm(back[0] - 3.0 * back[1] + 3.0 * back[2] - back[3]) / h3;
+    const double along = lon.v[e] * at.along_scale;
+    const double across = lat.v[e] - at.offset_slope * lon.v[e];
+    const core::Vec2 accel_h2 = back[0] - 2.0 * back[1] + back[2];
+    const core::Vec2 jerk_h3 = back[0] - 3.0 * back[1] + 3.0 * back[2] - back[3];
+    if (stop_at_first && along * along + across * across < speed_clear &&
+        core::dot(accel_h2, accel_h2) < accel_clear && core::dot(jerk_h3, jerk_h3) < jerk_clear)
+      continue;
+    const double speed = std::hypot(along, across);
+    const double accel = core::norm(accel_h2) / h2;
+    const double jerk = core::norm(jerk_h3) / h3;
     r.peak_speed_mps = std::max(r.peak_speed_mps, speed);
     r.peak_accel_mps2 = std::max(r.peak_accel_mps2, accel);
     r.peak_jerk_mps3 = std::max(r.peak_jerk_mps3, jerk);
@@ -172,8 +207,8 @@ using namespace trajectory_detail;
 KinematicReport check_kinematics(const Trajectory& t, const LaneFrame& line,
                                  const ReferenceTrajectoryParams& p) {
   const Grid g = grid_of(p);
-  const Track1d lon = sample(g, [&](double x) { return t.longitudinal.at(x); });
-  const Track1d lat = sample(g, [&](double x) { return t.lateral.at(x); });
+  const Track1d lon = sample(g, LongitudinalSampler{t.longitudinal});
+  const Track1d lat = sample(g, PolynomialSampler{t.lateral});
   return kinematics(lon, lat, g, line, p, false);
 }
 
@@ -182,8 +217,8 @@ CollisionReport check_collisions(const Trajectory& t, const std::vector<CarPredi
                                  const ReferenceParams& p, const core::RoadParams& road,
                                  const core::CarFootprint& car) {
   const Grid g = grid_of(p.trajectory);
-  const Track1d lon = sample(g, [&](double x) { return t.longitudinal.at(x); });
-  const Track1d lat = sample(g, [&](double x) { return t.lateral.at(x); });
+  const Track1d lon = sample(g, LongitudinalSampler{t.longitudinal});
+  const Track1d lat = sample(g, PolynomialSampler{t.lateral});
   const double d0 = lat.x[kBack];
   const bool changing = core::lane_of(d0, road) != t.end_lane;
   const bool sideways =

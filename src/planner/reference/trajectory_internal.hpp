@@ -14,6 +14,7 @@
 #include <cmath>
 #include <cstddef>
 #include <limits>
+#include <span>
 #include <vector>
 
 #include "overtake/core/road.hpp"
@@ -74,24 +75,66 @@ template <class F>
   return out;
 }
 
-/// Whether a motion stays within the limits along one axis (no reversing for s).
+/// `motion_at(t)` sampled over the grid into `out` if it stays within the limits along one
+/// axis (no reversing for s) from t = 0 on; false (and `out` unfinished) at the first sample
+/// over one. Each grid time is evaluated once, for the check and the samples both.
 template <class F>
-[[nodiscard]] bool axis_ok(const Grid& g, F&& motion_at, double max_accel, double max_jerk,
-                           bool forward) {
-  for (int k = 0; k <= g.n; ++k) {
+[[nodiscard]] bool sample_within(const Grid& g, F&& motion_at, double max_accel, double max_jerk,
+                                 bool forward, Track1d& out) {
+  out.x.resize(g.size());
+  out.v.resize(g.size());
+  for (int k = -kBack; k <= g.n; ++k) {
     const Motion1d m = motion_at(g.t(k));
-    if (forward && m.v < kReverseTolerance) return false;
-    if (std::abs(m.a) > max_accel || std::abs(m.j) > max_jerk) return false;
+    if (k >= 0) {
+      if (forward && m.v < kReverseTolerance) return false;
+      if (std::abs(m.a) > max_accel || std::abs(m.j) > max_jerk) return false;
+    }
+    out.x[static_cast<std::size_t>(k + kBack)] = m.x;
+    out.v[static_cast<std::size_t>(k + kBack)] = m.v;
   }
   return true;
 }
 
+/// A longitudinal motion's `at`, with a polynomial's end state worked out once.
+struct LongitudinalSampler {
+  const Longitudinal& m;
+  Motion1d end = m.braking ? Motion1d{} : m.poly.raw(m.poly.duration_s);
+  [[nodiscard]] Motion1d operator()(double t) const {
+    return m.braking ? m.brake.at(t) : m.poly.at(t, end);
+  }
+};
+
+/// A polynomial's `at`, its end state worked out once.
+struct PolynomialSampler {
+  const Polynomial1d& p;
+  Motion1d end = p.raw(p.duration_s);
+  [[nodiscard]] Motion1d operator()(double t) const { return p.at(t, end); }
+};
+
 /// One predicted car over the grid (k = 0 .. n).
 struct CarSamples {
+  CarSamples() = default;
+  // Moved, the views keep pointing into the buffer that moves with them; a copy's would not.
+  CarSamples(CarSamples&&) noexcept = default;
+  CarSamples& operator=(CarSamples&&) noexcept = default;
+  CarSamples(const CarSamples&) = delete;
+  CarSamples& operator=(const CarSamples&) = delete;
+  ~CarSamples() = default;
+
+  /// `n` samples of each, in one allocation.
+  void resize(std::size_t n) {
+    buffer.assign(4 * n, 0.0);
+    s = {buffer.data(), n};
+    s_dot = {buffer.data() + n, n};
+    d = {buffer.data() + 2 * n, n};
+    d_dot = {buffer.data() + 3 * n, n};
+  }
+
   int id = 0;
-  double cap_mps = 0.0;                    // estimated speed cap
-  bool speeding_up = false;                // accelerating now: not a car that brakes for the ego
-  std::vector<double> s, s_dot, d, d_dot;  // k = 0 .. n
+  double cap_mps = 0.0;                  // estimated speed cap
+  bool speeding_up = false;              // accelerating now: not a car that brakes for the ego
+  std::span<double> s, s_dot, d, d_dot;  // k = 0 .. n, views of `buffer`
+  std::vector<double> buffer;
 };
 
 // ---- The checks (trajectory_checks.cpp) ----
@@ -109,7 +152,8 @@ struct CarSamples {
                                       const ReferenceParams& p, const core::CarFootprint& car);
 
 /// The Cartesian check over samples; before t = 0, the positions driven (`history`, newest
-/// first) where given. `stop_at_first`: return at the first sample over a limit.
+/// first) where given. `stop_at_first`: return at the first sample over a limit (then only
+/// `ok` and `first_violation_s` are the whole check's; the peaks leave samples out).
 [[nodiscard]] KinematicReport kinematics(const Track1d& lon, const Track1d& lat, const Grid& g,
                                          const LaneFrame& line, const ReferenceTrajectoryParams& p,
                                          bool stop_at_first,

@@ -6,6 +6,8 @@
 // limited in jerk) and behind (a follower that reacts late and brakes hard), and hysteresis
 // so that it never weaves between lanes.
 
+#include <algorithm>
+#include <cmath>
 #include <vector>
 
 #include "overtake/core/road.hpp"
@@ -15,24 +17,68 @@
 namespace overtake::planner::reference {
 
 /// Distance (m) to stop from `speed_mps` braking at up to `brake_mps2`, reached at `jerk_mps3`
-/// from zero acceleration.
-[[nodiscard]] double jerk_limited_stop_distance(double speed_mps, double brake_mps2,
-                                                double jerk_mps3);
+/// from zero acceleration. (Inline, as the RSS reaches below: the soft lane costs work them
+/// out for every sample of every longitudinal candidate.)
+[[nodiscard]] inline double jerk_limited_stop_distance(double speed_mps, double brake_mps2,
+                                                       double jerk_mps3) {
+  const double v = speed_mps;
+  const double brake = brake_mps2;
+  const double jerk = jerk_mps3;
+  if (!(v > 0.0)) return 0.0;
+  const double ramp_t = brake / jerk;
+  const double ramp_dv = 0.5 * brake * ramp_t;
+  if (v <= ramp_dv) {
+    // Stops before the full braking is reached: v = jerk t^2 / 2.
+    const double t = std::sqrt(2.0 * v / jerk);
+    return v * t - jerk * t * t * t / 6.0;
+  }
+  const double ramp_d = v * ramp_t - jerk * ramp_t * ramp_t * ramp_t / 6.0;
+  const double rest = v - ramp_dv;
+  return ramp_d + rest * rest / (2.0 * brake);
+}
 
 /// RSS minimum bumper-to-bumper distance (m) from the ego, behind at `rear_mps`, to a car
 /// ahead at `front_mps`: the ego keeps its speed for the response time, then brakes with
 /// limited jerk; the car ahead brakes as hard as it can. Never less than min_gap_m.
 [[nodiscard]] double rss_front_gap(double rear_mps, double front_mps,
                                    const ReferenceBehaviourParams& p);
+/// The two halves of rss_front_gap, for many pairs of speeds: how far the car behind goes
+/// before it stands (response time, then braking) ...
+[[nodiscard]] inline double rss_rear_reach(double rear_mps, const ReferenceBehaviourParams& p) {
+  const double rear = std::max(0.0, rear_mps);
+  return rear * p.response_time_s +
+         jerk_limited_stop_distance(rear, p.ego_brake_mps2, p.ego_brake_jerk_mps3);
+}
+/// ... and how far the car ahead goes braking as hard as it can.
+[[nodiscard]] inline double rss_front_reach(double front_mps, const ReferenceBehaviourParams& p) {
+  const double front = std::max(0.0, front_mps);
+  return front * front / (2.0 * p.lead_brake_mps2);
+}
+/// rss_front_gap from the halves (exactly the same number).
+[[nodiscard]] inline double rss_gap_of(double rear_reach_m, double front_reach_m,
+                                       const ReferenceBehaviourParams& p) {
+  const double d = rear_reach_m - front_reach_m;
+  return d < p.min_gap_m ? p.min_gap_m : d;
+}
 
 /// Room (m) left, bumper to bumper beyond the margin, when a car behind at centre distance
 /// `centre_gap_m` closes at `closing_mps` on the ego and reacts as late as followers do
-/// (within follower_reaction_gap_m) and then brakes; negative: it would come too close.
-[[nodiscard]] double rear_room(double centre_gap_m, double closing_mps, double car_length_m,
-                               const ReferenceBehaviourParams& p);
-/// The same with the follower's reaction gap (centre to centre) given.
-[[nodiscard]] double rear_room(double centre_gap_m, double closing_mps, double car_length_m,
-                               const ReferenceBehaviourParams& p, double reaction_gap_m);
+/// (within the follower's reaction gap `reaction_gap_m`, centre to centre) and then brakes;
+/// negative: it would come too close. (Inline: the soft lane costs and the collision check
+/// call it in their inner loops.)
+[[nodiscard]] inline double rear_room(double centre_gap_m, double closing_mps, double car_length_m,
+                                      const ReferenceBehaviourParams& p, double reaction_gap_m) {
+  const double floor_m = car_length_m + p.follower_margin_m;
+  if (closing_mps <= 0.0) return centre_gap_m - floor_m;
+  const double react_at = std::min(centre_gap_m, reaction_gap_m);
+  return react_at - closing_mps * p.follower_response_s -
+         closing_mps * closing_mps / (2.0 * p.follower_brake_mps2) - floor_m;
+}
+/// The same with the behaviour's follower_reaction_gap_m.
+[[nodiscard]] inline double rear_room(double centre_gap_m, double closing_mps, double car_length_m,
+                                      const ReferenceBehaviourParams& p) {
+  return rear_room(centre_gap_m, closing_mps, car_length_m, p, p.follower_reaction_gap_m);
+}
 
 /// The ego as behaviour sees it.
 struct EgoSnapshot {

@@ -49,7 +49,27 @@ class LaneFrame {
   /// d(offset)/ds at s.
   [[nodiscard]] double slope(double s_m) const;
   /// The original's reading of a frame d at s (the chords' d itself, before averaging).
-  [[nodiscard]] double original_d(double s_m, double d_m) const;
+  [[nodiscard]] double original_d(double s_m, double d_m) const {
+    return original_d(reading(s_m), d_m);
+  }
+
+  /// What original_d reads at one s, for reading many d there.
+  struct Reading {
+    bool shifted = false;  ///< false: the frame has no offset, d reads as it is
+    double offset_m = 0.0;
+    double chord_m = 0.0;  ///< the chords' d minus the line's
+  };
+  [[nodiscard]] Reading reading(double s_m) const;
+  /// original_d at the s of `r` (the same number).
+  [[nodiscard]] static double original_d(const Reading& r, double d_m) {
+    return r.shifted ? d_m - r.offset_m + r.chord_m : d_m;
+  }
+  /// offset and slope at s from one lookup of the offset's spline.
+  struct OffsetSlope {
+    double offset_m = 0.0;
+    double slope = 0.0;
+  };
+  [[nodiscard]] OffsetSlope offset_slope(double s_m) const;
 
  private:
   const core::ReferenceLine* line_;
@@ -69,6 +89,10 @@ struct RoadPoint {
 
 /// The frame's geometry at (s, d) with one evaluation of the line.
 [[nodiscard]] RoadPoint road_point(const LaneFrame& frame, double s_m, double d_m);
+/// The same from the line's frame `f` and the frame's offset and slope `o` at s (for several
+/// d at one s, read once).
+[[nodiscard]] RoadPoint road_point(const core::RoadFrame& f, const LaneFrame::OffsetSlope& o,
+                                   double d_m);
 
 /// Map velocity of a Frenet state (its position given by `at`).
 [[nodiscard]] inline core::Vec2 cartesian_velocity(const RoadPoint& at, const FrenetState& x) {
@@ -82,8 +106,10 @@ struct RoadPoint {
 }
 
 /// The Frenet state of a car at `position` with map velocity `velocity` (acceleration 0);
-/// `s_hint_m` as for ReferenceLine::to_frenet.
+/// `s_hint_m` as for ReferenceLine::to_frenet. `at`, when given, receives the frame's
+/// geometry there (road_point at the state's s and d).
 [[nodiscard]] FrenetState frenet_from_cartesian(const LaneFrame& frame, core::Vec2 position,
-                                                core::Vec2 velocity, double s_hint_m);
+                                                core::Vec2 velocity, double s_hint_m,
+                                                RoadPoint* at = nullptr);
 
 }  // namespace overtake::planner::reference

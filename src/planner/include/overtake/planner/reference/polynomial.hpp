@@ -22,10 +22,24 @@ struct Polynomial1d {
   std::array<double, 6> c{};
   double duration_s = 0.0;
 
-  /// The polynomial itself at t (no extension).
-  [[nodiscard]] Motion1d raw(double t) const;
+  /// The polynomial itself at t (no extension). Inline: the planner samples it thousands of
+  /// times a cycle.
+  [[nodiscard]] Motion1d raw(double t) const {
+    const auto& k = c;
+    return {k[0] + t * (k[1] + t * (k[2] + t * (k[3] + t * (k[4] + t * k[5])))),
+            k[1] + t * (2.0 * k[2] + t * (3.0 * k[3] + t * (4.0 * k[4] + t * 5.0 * k[5]))),
+            2.0 * k[2] + t * (6.0 * k[3] + t * (12.0 * k[4] + t * 20.0 * k[5])),
+            6.0 * k[3] + t * (24.0 * k[4] + t * 60.0 * k[5])};
+  }
   /// The motion at t, continued at constant velocity after duration_s.
-  [[nodiscard]] Motion1d at(double t) const;
+  [[nodiscard]] Motion1d at(double t) const {
+    return t <= duration_s ? raw(t) : at(t, raw(duration_s));
+  }
+  /// The same, given `end` = raw(duration_s) (sampling a grid, it is worked out once).
+  [[nodiscard]] Motion1d at(double t, const Motion1d& end) const {
+    if (t <= duration_s) return raw(t);
+    return {end.x + end.v * (t - duration_s), end.v, 0.0, 0.0};
+  }
   /// Integral of the squared jerk over [0, duration_s] (units^2 / s^5).
   [[nodiscard]] double jerk_cost() const;
 };

@@ -6,6 +6,7 @@
 // lane keeping or a constant lane change (a minimum-jerk lateral profile to the next lane's
 // centre).
 
+#include <algorithm>
 #include <vector>
 
 #include "overtake/core/reference_line.hpp"
@@ -49,10 +50,29 @@ struct CarPrediction {
   double change_progress = 0.0;  ///< ... and the share of its time already done, in [0, 1]
   double change_duration_s = 3.0;
 
-  /// s at `t_s` after the observation.
-  [[nodiscard]] double s_at(double t_s) const;
+  /// s at `t_s` after the observation. (Inline, as s_dot_at: the planner samples every car
+  /// near over its horizon each cycle.)
+  [[nodiscard]] double s_at(double t_s) const {
+    const double t = t_s;
+    if (s_ddot == 0.0 || t <= 0.0) return s_m + s_dot * t;
+    // Braking (or speeding up) for brake_time_s, then steady, or back up to the speed it had;
+    // the speed never goes below zero.
+    const double tb = std::min(t, brake_time_s);
+    const double t_stop = s_ddot < 0.0 ? s_dot / -s_ddot : tb + 1.0;
+    if (t_stop <= tb) return s_m + 0.5 * s_dot * t_stop;
+    const double v = s_dot + s_ddot * tb;
+    const double s_b = s_m + s_dot * tb + 0.5 * s_ddot * tb * tb;
+    if (t <= brake_time_s || recover_s_ddot <= 0.0 || v >= s_dot) return s_b + v * (t - tb);
+    const double tr = std::min(t - brake_time_s, (s_dot - v) / recover_s_ddot);
+    return s_b + v * tr + 0.5 * recover_s_ddot * tr * tr + s_dot * (t - brake_time_s - tr);
+  }
   /// ds/dt at `t_s`.
-  [[nodiscard]] double s_dot_at(double t_s) const;
+  [[nodiscard]] double s_dot_at(double t_s) const {
+    const double t = t_s;
+    const double v = std::max(0.0, s_dot + s_ddot * std::clamp(t, 0.0, brake_time_s));
+    if (t <= brake_time_s || recover_s_ddot <= 0.0 || v >= s_dot) return v;
+    return std::min(s_dot, v + recover_s_ddot * (t - brake_time_s));
+  }
   /// d at `t_s`.
   [[nodiscard]] double d_at(double t_s) const;
   /// dd/dt at `t_s`.

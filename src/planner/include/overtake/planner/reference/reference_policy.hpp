@@ -50,6 +50,8 @@ class ReferencePolicy final : public Policy {
 
  private:
   [[nodiscard]] FrenetState observed_state(const core::Telemetry& t) const;
+  /// Sent point `i` as the simulator read it.
+  [[nodiscard]] core::Vec2 sent_as_read(std::size_t i) const;
 
   const core::ReferenceLine& line_;  // the map's line (the loop's s)
   // The planner's own line, near the waypoints (shared and immutable: copies of the policy
@@ -62,8 +64,12 @@ class ReferencePolicy final : public Policy {
   ReferenceParams p_;
   std::vector<FrenetState> states_;  // state at each point sent last cycle
   std::vector<FrenetState> driven_;  // the last states the car went through, oldest first
-  std::vector<core::Vec2> sent_;     // those points as the simulator read them
-  FrenetState origin_;               // the car's state when they were sent
+  // Those points as sent; as the simulator read them (rounded like the wire) once
+  // sent_rounded_. Of all of them the next cycle reads only the one or two where the car is, so
+  // they are rounded when read (or archived), not all when sent.
+  std::vector<core::Vec2> sent_;
+  bool sent_rounded_ = true;
+  FrenetState origin_;  // the car's state when they were sent
   bool have_plan_ = false;
   double band_time_s_ = 0.0;  // time in a lane-line band without a break, at the car
   bool synced_ = false;
