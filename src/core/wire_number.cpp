@@ -53,21 +53,22 @@ __extension__ using U128 = unsigned __int128;
 double wire_round(double value) {
   if (!std::isfinite(value)) return value;
   const auto f = static_cast<float>(value);
-  const float a = std::abs(f);
+  const auto abs_bits = std::bit_cast<std::uint32_t>(f) & 0x7FFFFFFFU;
   // The same number without text, for 1e-16 <= |f| < 1e6 (every figure of a run): the float
   // is M * 2^E exactly; times 10^k it is N * 2^(E + k) with N = M * 5^k, which is rounded to
-  // the integer m of 7 digits (ties to even, as the printing does) in 128-bit integers; m and
-  // 10^k are exact doubles, so m / 10^k is the double nearest the printed decimal, which is
-  // what reading it gives. Elsewhere (tiny or huge): the text.
-  if (a == 0.0F) return static_cast<double>(f);  // "0" or "-0"
+  // the integer m of 7 digits (ties to even, as the printing does); m and 10^k are exact
+  // doubles, so m / 10^k is the double nearest the printed decimal, which is what reading it
+  // gives. Elsewhere (tiny or huge): the text.
+  if (abs_bits == 0) return static_cast<double>(f);  // "0" or "-0"
+  const float a = std::bit_cast<float>(abs_bits);
   if (!(a >= 1e-16F && a < 1e6F)) return wire_round_by_text(f);
   // a = m24 * 2^e2 exactly (a is a normal float here).
-  const auto bits = std::bit_cast<std::uint32_t>(a);
-  const std::uint64_t m24 = (bits & 0x7FFFFFU) | 0x800000U;
-  const int e2 = static_cast<int>((bits >> 23U) & 0xFFU) - 127 - 23;
+  const std::uint64_t m24 = (abs_bits & 0x7FFFFFU) | 0x800000U;
+  const int e2 = static_cast<int>(abs_bits >> 23U) - 127 - 23;
   // The decimal exponent d with 10^d <= a < 10^(d + 1): log2(a) is in [e2 + 23, e2 + 24), so
-  // d is floor((e2 + 23) * log10(2)) or one more.
-  int d = static_cast<int>(std::floor((e2 + 23) * 0.30102999566398120));
+  // d is floor((e2 + 23) * log10(2)) or one more. (x * 1233) >> 12 is floor(x * log10(2)) for
+  // every |x| < 200 (here -54 <= x < 20), without a call to floor.
+  int d = ((e2 + 23) * 1233) >> 12;
   const auto at_least_ten_to = [&](int p) {  // a >= 10^p (exact: 10^p is not a float)
     return p >= 0 ? static_cast<double>(a) >= kPowersOfTen[static_cast<std::size_t>(p)]
                   : static_cast<double>(a) * kPowersOfTen[static_cast<std::size_t>(-p)] >= 1.0;
@@ -75,21 +76,34 @@ double wire_round(double value) {
   if (at_least_ten_to(d + 1)) ++d;
   const int k = 6 - d;  // in [1, 22]
   if (k < 0 || k > 22) return wire_round_by_text(f);
-  const U128 n = static_cast<U128>(m24) * kPowersOfFive[static_cast<std::size_t>(k)];
   const int shift = e2 + k;
-  U128 m = 0;
-  if (shift >= 0) {
-    m = n << shift;
-  } else {
+  std::uint64_t m = 0;
+  if (k <= 16 && shift < 0 && shift > -64) {
+    // The common case (|f| >= 1e-10, and in this range always a right shift): N < 2^24 * 5^16
+    // < 2^62, so 64 bits hold it.
+    const std::uint64_t n = m24 * kPowersOfFive[static_cast<std::size_t>(k)];
     const int s = -shift;
-    if (s >= 127) return wire_round_by_text(f);
     m = n >> s;
-    const U128 rest = n - (m << s);
-    const U128 half = static_cast<U128>(1) << (s - 1);
+    const std::uint64_t rest = n & ((std::uint64_t{1} << s) - 1U);
+    const std::uint64_t half = std::uint64_t{1} << (s - 1);
     if (rest > half || (rest == half && (m & 1U) != 0)) ++m;
+  } else {
+    // The same in 128-bit integers: the products need up to 76 bits.
+    const U128 n = static_cast<U128>(m24) * kPowersOfFive[static_cast<std::size_t>(k)];
+    U128 wide = 0;
+    if (shift >= 0) {
+      wide = n << shift;
+    } else {
+      const int s = -shift;
+      if (s >= 127) return wire_round_by_text(f);
+      wide = n >> s;
+      const U128 rest = n - (wide << s);
+      const U128 half = static_cast<U128>(1) << (s - 1);
+      if (rest > half || (rest == half && (wide & 1U) != 0)) ++wide;
+    }
+    m = static_cast<std::uint64_t>(wide);
   }
-  const double out = static_cast<double>(static_cast<std::uint64_t>(m)) /
-                     kPowersOfTen[static_cast<std::size_t>(k)];
+  const double out = static_cast<double>(m) / kPowersOfTen[static_cast<std::size_t>(k)];
   return f < 0.0F ? -out : out;
 }
 
