@@ -116,10 +116,13 @@ void Traffic::step(const EgoView& ego, double dt_s) {
 std::optional<int> Traffic::resolve_contacts(const EgoView& ego) {
   std::optional<int> touched;
   const std::vector<TrafficCar>& cars = model_->cars();
-  units_.resize(cars.size());
+  // Faithful traffic has its cars' units cached already, for the headings they moved to.
+  auto* faithful = dynamic_cast<FaithfulTraffic*>(model_.get());
+  std::vector<core::HeadingUnit>& units = faithful != nullptr ? faithful->heading_units() : units_;
+  units.resize(cars.size());
   // A contact may move the cars (and calm traffic turns them), so each unit is asked for
   // with the heading of the moment; the cache only saves the sine and cosine.
-  const auto unit = [&](std::size_t i) { return units_[i].of(cars[i].heading_rad); };
+  const auto unit = [&](std::size_t i) { return units[i].of(cars[i].heading_rad); };
   const core::Vec2 ego_axis = ego_unit_.of(ego.body.heading_rad);
   const core::Vec2 ego_v = ego.speed_mps * ego_axis;
   const double cull_sq = kContactCullM * kContactCullM;

@@ -96,6 +96,9 @@ class FaithfulTraffic final : public TrafficModel {
   /// driving at `speed_mps` with cap `cap_mps`, settled (its last lane change long ago).
   void put_on_road_for_testing(std::size_t i, double s_m, int lane, double speed_mps,
                                double cap_mps);
+  /// Each car's heading as a unit vector, cached (core::HeadingUnit gives the exact unit of
+  /// any heading asked for): the contact checks share it.
+  [[nodiscard]] std::vector<core::HeadingUnit>& heading_units() { return units_; }
   /// Testing: no more batches; cars stay where they are.
   void hold_batches_for_testing() { batches_held_ = true; }
 
