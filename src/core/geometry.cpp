@@ -13,9 +13,12 @@ struct Axes {
   Vec2 v;  // across
 };
 
-Axes axes_of(const OrientedBox& b) {
-  const Vec2 u{std::cos(b.heading_rad), std::sin(b.heading_rad)};
+Axes axes_of(Vec2 u) {
   return {u, {-u.y, u.x}};
+}
+
+Axes axes_of(const OrientedBox& b) {
+  return axes_of(heading_unit(b.heading_rad));
 }
 
 // Half the extent of box `b` projected on unit axis `n`.
@@ -38,8 +41,13 @@ bool boxes_overlap(const OrientedBox& a, const OrientedBox& b) {
 }
 
 std::optional<Penetration> box_penetration(const OrientedBox& a, const OrientedBox& b) {
-  const Axes aa = axes_of(a);
-  const Axes ab = axes_of(b);
+  return box_penetration(a, heading_unit(a.heading_rad), b, heading_unit(b.heading_rad));
+}
+
+std::optional<Penetration> box_penetration(const OrientedBox& a, Vec2 a_axis, const OrientedBox& b,
+                                           Vec2 b_axis) {
+  const Axes aa = axes_of(a_axis);
+  const Axes ab = axes_of(b_axis);
   const Vec2 delta = b.center - a.center;
   const std::array<Vec2, 4> axes{aa.u, aa.v, ab.u, ab.v};
   Penetration best{{}, std::numeric_limits<double>::infinity()};
@@ -53,8 +61,13 @@ std::optional<Penetration> box_penetration(const OrientedBox& a, const OrientedB
 }
 
 std::optional<double> ray_box_distance(Vec2 origin, Vec2 direction, const OrientedBox& box) {
+  return ray_box_distance(origin, direction, box, heading_unit(box.heading_rad));
+}
+
+std::optional<double> ray_box_distance(Vec2 origin, Vec2 direction, const OrientedBox& box,
+                                       Vec2 box_axis) {
   // In the box's own axes: a slab test on each axis.
-  const Axes ax = axes_of(box);
+  const Axes ax = axes_of(box_axis);
   const Vec2 rel = origin - box.center;
   const std::array<double, 2> o{dot(rel, ax.u), dot(rel, ax.v)};
   const std::array<double, 2> d{dot(direction, ax.u), dot(direction, ax.v)};

@@ -16,6 +16,31 @@ constexpr int kMaxNewtonIterations = 30;
 constexpr double kNewtonMaxStepM = 20.0;
 constexpr double kNewtonToleranceM = 1e-10;
 
+/// A frame at a wrapped s without its heading (an atan2 most queries do not read), and the
+/// derivative it would be taken from.
+struct FrameParts {
+  RoadFrame frame;
+  Vec2 d1;
+};
+
+FrameParts frame_parts(const SplineSample& ex, const SplineSample& ey, double side) {
+  const Vec2 d1{ex.d1, ey.d1};
+  const Vec2 d2{ex.d2, ey.d2};
+  const double speed = norm(d1);
+  RoadFrame f;
+  f.position = {ex.value, ey.value};
+  f.tangent = (1.0 / speed) * d1;
+  f.normal = side * right_of(f.tangent);
+  f.curvature_1pm = cross(d1, d2) / (speed * speed * speed);
+  f.ds_scale = speed;
+  return {f, d1};
+}
+
+FrameParts frame_parts(const PiecewiseCubic& x, const PiecewiseCubic& y, double side, double s) {
+  const std::size_t i = x.piece(s);
+  return frame_parts(x.eval_piece(i, s), y.eval_piece(i, s), side);
+}
+
 }  // namespace
 
 ReferenceLine::ReferenceLine(const Map& map, double smoothing_m3) : map_(map) {
@@ -97,26 +122,13 @@ double ReferenceLine::s_ahead(double from_s_m, double to_s_m) const {
 }
 
 RoadFrame ReferenceLine::frame(double s_m) const {
-  const double s = wrap_s(s_m);
-  const std::size_t i = x_.piece(s);
-  const SplineSample ex = x_.eval_piece(i, s);
-  const SplineSample ey = y_.eval_piece(i, s);
-  const Vec2 d1{ex.d1, ey.d1};
-  const Vec2 d2{ex.d2, ey.d2};
-  const double speed = norm(d1);
-  RoadFrame f;
-  f.position = {ex.value, ey.value};
-  f.tangent = (1.0 / speed) * d1;
-  f.normal = side_ * right_of(f.tangent);
-  f.heading_rad = std::atan2(d1.y, d1.x);
-  f.curvature_1pm = cross(d1, d2) / (speed * speed * speed);
-  f.ds_scale = speed;
-  return f;
+  FrameParts p = frame_parts(x_, y_, side_, wrap_s(s_m));
+  p.frame.heading_rad = std::atan2(p.d1.y, p.d1.x);
+  return p.frame;
 }
 
 Vec2 ReferenceLine::to_cartesian(FrenetPoint p) const {
-  const RoadFrame f = frame(p.s_m);
-  return f.position + p.d_m * f.normal;
+  return to_cartesian(sample(p.s_m), p.d_m);
 }
 
 double ReferenceLine::refine(Vec2 p, double s0) const {
@@ -142,7 +154,7 @@ double ReferenceLine::refine(Vec2 p, double s0) const {
 
 FrenetPoint ReferenceLine::to_frenet(Vec2 p, std::optional<double> s_hint_m) const {
   auto result_at = [&](double s) {
-    const RoadFrame f = frame(s);
+    const RoadFrame f = frame_parts(x_, y_, side_, wrap_s(s)).frame;
     return FrenetPoint{s, dot(p - f.position, f.normal)};
   };
   if (s_hint_m && std::isfinite(*s_hint_m)) {
@@ -164,26 +176,43 @@ FrenetPoint ReferenceLine::to_frenet(Vec2 p, std::optional<double> s_hint_m) con
 }
 
 double ReferenceLine::curvature_at(double s_m, double d_m) const {
-  const RoadFrame f = frame(s_m);
+  const RoadFrame f = frame_parts(x_, y_, side_, wrap_s(s_m)).frame;
   return f.curvature_1pm / (1.0 + side_ * f.curvature_1pm * d_m);
 }
 
 Vec2 ReferenceLine::velocity(FrenetPoint p, double s_dot, double d_dot) const {
-  const RoadFrame f = frame(p.s_m);
-  const double along = f.ds_scale * (1.0 + side_ * f.curvature_1pm * p.d_m);
-  return (s_dot * along) * f.tangent + d_dot * f.normal;
+  return velocity(sample(p.s_m), p.d_m, s_dot, d_dot);
 }
 
 double ReferenceLine::s_rate(FrenetPoint p, double speed_mps) const {
   // The hot path of traffic motion: the same as from frame(), without heading or tangent.
-  const double s = wrap_s(p.s_m);
+  return speed_mps / metres_per_s(sample(p.s_m), p.d_m);
+}
+
+ReferenceLine::Sample ReferenceLine::sample(double s_m) const {
+  const double s = wrap_s(s_m);
   const std::size_t i = x_.piece(s);
-  const SplineSample ex = x_.eval_piece(i, s);
-  const SplineSample ey = y_.eval_piece(i, s);
+  return {s, x_.eval_piece(i, s), y_.eval_piece(i, s)};
+}
+
+double ReferenceLine::metres_per_s(const Sample& at, double d_m) const {
+  const SplineSample& ex = at.x;
+  const SplineSample& ey = at.y;
   const double speed_sq = ex.d1 * ex.d1 + ey.d1 * ey.d1;
   const double speed = std::sqrt(speed_sq);
   const double curvature = (ex.d1 * ey.d2 - ey.d1 * ex.d2) / (speed_sq * speed);
-  return speed_mps / (speed * (1.0 + side_ * curvature * p.d_m));
+  return speed * (1.0 + side_ * curvature * d_m);
+}
+
+Vec2 ReferenceLine::velocity(const Sample& at, double d_m, double s_dot, double d_dot) const {
+  const RoadFrame f = frame_parts(at.x, at.y, side_).frame;
+  const double along = f.ds_scale * (1.0 + side_ * f.curvature_1pm * d_m);
+  return (s_dot * along) * f.tangent + d_dot * f.normal;
+}
+
+Vec2 ReferenceLine::to_cartesian(const Sample& at, double d_m) const {
+  const RoadFrame f = frame_parts(at.x, at.y, side_).frame;
+  return f.position + d_m * f.normal;
 }
 
 }  // namespace overtake::core

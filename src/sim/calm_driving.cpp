@@ -3,6 +3,7 @@
 // and each car's motion along and across its lane.
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <cstddef>
 #include <optional>
@@ -245,7 +246,19 @@ void CalmImpl::decide_calm(CalmTraffic& t, double dt) {
   }
 }
 
-void CalmImpl::move(CalmTraffic& t, CalmCar& c, const Decision& dec, double dt) {
+double CalmImpl::lane_metres_per_s(const CalmTraffic& t, std::size_t i, double s, double d) {
+  if (i < t.lane_scales_.size()) {
+    const CalmTraffic::LaneScale& k = t.lane_scales_[i];
+    if (k.valid && k.s_bits == std::bit_cast<std::uint64_t>(s) &&
+        k.d_bits == std::bit_cast<std::uint64_t>(d)) {
+      return k.metres_per_s;
+    }
+  }
+  return t.line_.metres_per_s(t.line_.sample(s), d);
+}
+
+void CalmImpl::move(CalmTraffic& t, std::size_t i, const Decision& dec, double dt) {
+  CalmCar& c = t.cars_[i];
   const TrafficParams& p = t.params_;
   const double d_before = c.d_m;
   c.accel_mps2 = (dec.new_speed_mps - c.speed_mps) / dt;
@@ -284,7 +297,8 @@ void CalmImpl::move(CalmTraffic& t, CalmCar& c, const Decision& dec, double dt) 
     c.d_rate_mps =
         p.calm.wander_amplitude_m * c.wander_omega_rps * pace * std::cos(c.wander_phase_rad);
   }
-  const double ds = t.line_.s_rate({c.s_m, d_before}, c.speed_mps) * dt;
+  // line_.s_rate({c.s_m, d_before}, c.speed_mps), the scale most often cached.
+  const double ds = c.speed_mps / lane_metres_per_s(t, i, c.s_m, d_before) * dt;
   c.s_m = t.line_.wrap_s(c.s_m + ds);
 }
 

@@ -168,9 +168,17 @@ struct CalmImpl {
 
   // ----- motion ----------------------------------------------------------------------------
 
-  /// Moves a car one step by its decision: speed, lane change (minimum-jerk lateral profile)
+  /// Moves car i one step by its decision: speed, lane change (minimum-jerk lateral profile)
   /// or wander about its lane centre, then along the line.
-  static void move(CalmTraffic& t, CalmCar& c, const Decision& dec, double dt);
+  static void move(CalmTraffic& t, std::size_t i, const Decision& dec, double dt);
+
+  /// Car i's body from its state (bodies_ and lane_scales_ sized to the cars).
+  static void publish_car(CalmTraffic& t, std::size_t i);
+
+  /// line.metres_per_s(line.sample(s), d) for car i, from publish()'s cache when it asked
+  /// at the same s and d.
+  [[nodiscard]] static double lane_metres_per_s(const CalmTraffic& t, std::size_t i, double s,
+                                                double d);
 
   // ----- placement -------------------------------------------------------------------------
 

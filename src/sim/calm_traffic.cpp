@@ -5,6 +5,7 @@
 #include "overtake/sim/calm_traffic.hpp"
 
 #include <algorithm>
+#include <bit>
 #include <cassert>
 #include <cmath>
 
@@ -84,7 +85,7 @@ void CalmTraffic::step(const EgoView& ego, double dt_s) {
       dec.change_to_lane = m.change_to_lane;
       m.change_to_lane = -1;
     }
-    for (std::size_t i = 0; i < n; ++i) CalmImpl::move(*this, cars_[i], decisions_[i], dt_s);
+    for (std::size_t i = 0; i < n; ++i) CalmImpl::move(*this, i, decisions_[i], dt_s);
     ego_prev_speed_mps_ = ego.speed_mps;
     publish();
     return;
@@ -93,7 +94,7 @@ void CalmTraffic::step(const EgoView& ego, double dt_s) {
   CalmImpl::build_vehicles(*this, ego, ego_s, dt_s);
   decisions_.resize(n);
   CalmImpl::decide_calm(*this, dt_s);
-  for (std::size_t i = 0; i < n; ++i) CalmImpl::move(*this, cars_[i], decisions_[i], dt_s);
+  for (std::size_t i = 0; i < n; ++i) CalmImpl::move(*this, i, decisions_[i], dt_s);
   ego_prev_speed_mps_ = ego.speed_mps;
 
   for (CalmCar& c : cars_) {
@@ -117,22 +118,32 @@ void CalmTraffic::step(const EgoView& ego, double dt_s) {
 
 void CalmTraffic::publish() {
   bodies_.resize(cars_.size());
-  for (std::size_t i = 0; i < cars_.size(); ++i) {
-    const CalmCar& c = cars_[i];
-    TrafficCar& b = bodies_[i];
-    const core::FrenetPoint p{line_.wrap_s(c.s_m), c.d_m};
-    const core::Vec2 v = line_.velocity(p, line_.s_rate(p, c.speed_mps), c.d_rate_mps);
-    b.id = static_cast<int>(i);
-    b.position = line_.to_cartesian(p);
-    b.heading_rad =
-        core::norm(v) < kStationaryMps ? line_.frame(p.s_m).heading_rad : std::atan2(v.y, v.x);
-    b.speed_mps = c.speed_mps;
-    b.reported_velocity_mps = v;
-    b.closest_waypoint = chords_.closest(b.position, b.closest_waypoint);
-    b.map_frenet = chords_.to_frenet(b.position, b.closest_waypoint);
-    b.lane = c.lane;
-    b.parked = false;
-  }
+  lane_scales_.resize(cars_.size());
+  for (std::size_t i = 0; i < cars_.size(); ++i) CalmImpl::publish_car(*this, i);
+}
+
+void CalmImpl::publish_car(CalmTraffic& t, std::size_t i) {
+  const CalmCar& c = t.cars_[i];
+  TrafficCar& b = t.bodies_[i];
+  const core::ReferenceLine& line = t.line_;
+  const core::FrenetPoint p{line.wrap_s(c.s_m), c.d_m};
+  // line.velocity(p, line.s_rate(p, speed), d_rate) and line.to_cartesian(p), the line
+  // looked up once.
+  const core::ReferenceLine::Sample at = line.sample(p.s_m);
+  const double metres_per_s = line.metres_per_s(at, p.d_m);
+  t.lane_scales_[i] = {std::bit_cast<std::uint64_t>(p.s_m), std::bit_cast<std::uint64_t>(p.d_m),
+                       metres_per_s, true};
+  const core::Vec2 v = line.velocity(at, p.d_m, c.speed_mps / metres_per_s, c.d_rate_mps);
+  b.id = static_cast<int>(i);
+  b.position = line.to_cartesian(at, p.d_m);
+  b.heading_rad =
+      core::norm(v) < kStationaryMps ? line.frame(p.s_m).heading_rad : std::atan2(v.y, v.x);
+  b.speed_mps = c.speed_mps;
+  b.reported_velocity_mps = v;
+  b.closest_waypoint = t.chords_.closest(b.position, b.closest_waypoint);
+  b.map_frenet = t.chords_.to_frenet(b.position, b.closest_waypoint);
+  b.lane = c.lane;
+  b.parked = false;
 }
 
 void CalmTraffic::on_contact(std::size_t i, core::Vec2 shift_m, double speed_mps,
@@ -142,7 +153,9 @@ void CalmTraffic::on_contact(std::size_t i, core::Vec2 shift_m, double speed_mps
   c.s_m = line_.wrap_s(c.s_m + core::dot(shift_m, fr.tangent) / fr.ds_scale);
   c.d_m += core::dot(shift_m, fr.normal);
   c.speed_mps = std::max(0.0, speed_mps);
-  publish();
+  // Only this car's body changes: publishing the others again gives what they have (the
+  // closest waypoint found from the one found before is that one).
+  CalmImpl::publish_car(*this, i);
 }
 
 void CalmTraffic::set_cars(std::vector<CalmCar> cars) {

@@ -82,6 +82,8 @@ FaithfulTraffic::FaithfulTraffic(const core::WaypointFrenet& chords,
     drivers_[i].noise = SmoothNoise(core::derive_seed(seed, kFirstCarStream + i));
     drivers_[i].clear_counts.assign(static_cast<std::size_t>(road.lane_count), 0);
   }
+  units_.resize(n);
+  body_reach_m_ = 0.5 * std::hypot(car_.length_m, car_.width_m) + kRayCullSlackM;
   build_open_road_table();
 }
 
@@ -287,29 +289,53 @@ bool FaithfulTraffic::road_open_ahead(std::size_t i) const {
   return open_road_[lane * open_road_bins_ + bin] != 0;
 }
 
-FaithfulTraffic::Sight FaithfulTraffic::look(std::size_t i, const EgoView& ego) const {
+FaithfulTraffic::Sight FaithfulTraffic::look(std::size_t i, const EgoView& ego, core::Vec2 ego_axis,
+                                             double ego_reach_m) {
   const TrafficCar& self = cars_[i];
-  const core::Vec2 dir = unit(self.heading_rad);
+  const std::size_t n = cars_.size();
+  // The units were refreshed at the start of the step, and headings do not change while
+  // the cars decide.
+  const core::Vec2 dir = units_[i].of_current();
   const core::Vec2 origin = self.position + (0.5 * car_.length_m) * dir;
+  // The ray meets the nearest body it enters (the first in order, cars then the ego, of
+  // equally near ones). A body whose centre is farther than its reach (half its diagonal,
+  // and slack) beside the ray or behind its origin cannot be met; one cannot be met nearer
+  // than its distance along the ray less its reach. Exact tests go nearest-first, so that
+  // once one is met the bodies beyond it are skipped.
+  near_ray_.clear();
+  const auto note = [&](core::Vec2 center, double reach, std::size_t order) {
+    const core::Vec2 rel = center - origin;
+    const double along = core::dot(rel, dir);
+    if (along < -reach) return;
+    if (std::abs(core::cross(dir, rel)) > reach) return;
+    double least = along - reach;
+    if (std::isnan(least)) least = -std::numeric_limits<double>::infinity();  // always tested
+    near_ray_.push_back({least, order});
+  };
+  for (std::size_t j = 0; j < n; ++j) {
+    if (j == i || cars_[j].parked) continue;
+    note(cars_[j].position, body_reach_m_, j);
+  }
+  note(ego.body.center, ego_reach_m, n);
+  std::sort(near_ray_.begin(), near_ray_.end(),
+            [](const NearRay& a, const NearRay& b) { return a.least_t_m < b.least_t_m; });
   Sight best;
   double best_t = std::numeric_limits<double>::infinity();
-  const auto consider = [&](const core::OrientedBox& box, double speed, SightKind kind, int car) {
-    const core::Vec2 rel = box.center - origin;
-    const double along = core::dot(rel, dir);
-    const double reach = 0.5 * std::hypot(box.length_m, box.width_m) + kRayCullSlackM;
-    if (along < -reach || along - reach > best_t) return;
-    if (std::abs(core::cross(dir, rel)) > reach) return;
-    const std::optional<double> t = core::ray_box_distance(origin, dir, box);
-    if (t && *t < best_t) {
+  std::size_t best_order = n + 1;
+  for (const NearRay& c : near_ray_) {
+    if (c.least_t_m > best_t) break;
+    const bool is_ego = c.order == n;
+    const std::optional<double> t =
+        is_ego ? core::ray_box_distance(origin, dir, ego.body, ego_axis)
+               : core::ray_box_distance(origin, dir, body(c.order), units_[c.order].of_current());
+    if (t && (*t < best_t || (*t == best_t && c.order < best_order))) {
       best_t = *t;
-      best = {kind, car, *t, speed};
+      best_order = c.order;
+      best = is_ego
+                 ? Sight{SightKind::ego, -1, *t, ego.speed_mps}
+                 : Sight{SightKind::car, static_cast<int>(c.order), *t, cars_[c.order].speed_mps};
     }
-  };
-  for (std::size_t j = 0; j < cars_.size(); ++j) {
-    if (j == i || cars_[j].parked) continue;
-    consider(body(j), cars_[j].speed_mps, SightKind::car, static_cast<int>(j));
   }
-  consider(ego.body, ego.speed_mps, SightKind::ego, -1);
   if (best.kind != SightKind::nothing) return best;
   // No body: scenery beside the road where the ray leaves it, or nothing at all (the
   // original then reads a distance of 0).
@@ -365,7 +391,8 @@ int FaithfulTraffic::count_lane_change(std::size_t i, const EgoView& ego) {
 
 // ----- one step ----------------------------------------------------------------------------
 
-FaithfulTraffic::Command FaithfulTraffic::decide(std::size_t i, const EgoView& ego) {
+FaithfulTraffic::Command FaithfulTraffic::decide(std::size_t i, const EgoView& ego,
+                                                 core::Vec2 ego_axis, double ego_reach_m) {
   TrafficCar& c = cars_[i];
   Driver& dr = drivers_[i];
   Command cmd;
@@ -381,12 +408,12 @@ FaithfulTraffic::Command FaithfulTraffic::decide(std::size_t i, const EgoView& e
     const double reach = f_.target_reach_m + f_.target_reach_per_lane_m * c.lane;
     const core::Vec2 at = chords_.position(wp);
     const bool passed = core::dot(at - c.position, chords_.forward(wp)) < 0.0;
-    if (core::distance(at, c.position) >= reach && !passed) break;
+    if (core::distance_at_least(at, c.position, reach) && !passed) break;
     dr.target_waypoint = chords_.wrap_index(static_cast<long>(wp) + 1);
   }
 
   // The ray ahead, and the reaction to what it meets.
-  const Sight sight = look(i, ego);
+  const Sight sight = look(i, ego, ego_axis, ego_reach_m);
   const bool body = sight.kind == SightKind::car || sight.kind == SightKind::ego;
   const double reaction_m =
       body ? f_.reaction_gain_m * (cap_mph - sight.body_speed_mps) : f_.no_body_reaction_m;
@@ -421,7 +448,7 @@ FaithfulTraffic::Command FaithfulTraffic::decide(std::size_t i, const EgoView& e
   const int lane = cmd.new_lane >= 0 ? cmd.new_lane : c.lane;
   const core::Vec2 target =
       chords_.offset_point(dr.target_waypoint, core::lane_center_d(lane, road_) + lateral_m);
-  const core::Vec2 fwd = unit(c.heading_rad);
+  const core::Vec2 fwd = units_[i].of_current();
   const core::Vec2 rel = target - c.position;
   const double angle_deg =
       core::rad_to_deg(std::atan2(-core::cross(fwd, rel), core::dot(fwd, rel)));
@@ -458,8 +485,9 @@ void FaithfulTraffic::move(std::size_t i, const Command& cmd, double dt_s) {
   yaw_rate = std::clamp(yaw_rate, -grip, grip);
   c.heading_rad = core::wrap_angle_rad(c.heading_rad + yaw_rate * dt_s);
   c.speed_mps = v;
-  c.position = c.position + (v * dt_s) * unit(c.heading_rad);
-  c.reported_velocity_mps = v * unit(c.heading_rad);
+  const core::Vec2 dir = units_[i].of(c.heading_rad);
+  c.position = c.position + (v * dt_s) * dir;
+  c.reported_velocity_mps = v * dir;
   dr.fresh = false;
   refresh_frenet(i);
 }
@@ -467,7 +495,15 @@ void FaithfulTraffic::move(std::size_t i, const Command& cmd, double dt_s) {
 void FaithfulTraffic::step(const EgoView& ego, double dt_s) {
   const std::size_t n = cars_.size();
   for (std::size_t i = 0; i < n; ++i) {
-    if (!cars_[i].parked) commands_[i] = decide(i, ego);
+    if (!cars_[i].parked) (void)units_[i].of(cars_[i].heading_rad);
+  }
+  const core::Vec2 ego_axis = ego_unit_.of(ego.body.heading_rad);
+  const double ego_reach_m =
+      ego.body.length_m == car_.length_m && ego.body.width_m == car_.width_m
+          ? body_reach_m_
+          : 0.5 * std::hypot(ego.body.length_m, ego.body.width_m) + kRayCullSlackM;
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!cars_[i].parked) commands_[i] = decide(i, ego, ego_axis, ego_reach_m);
   }
   for (std::size_t i = 0; i < n; ++i) {
     if (!cars_[i].parked) move(i, commands_[i], dt_s);

@@ -20,9 +20,9 @@ core::Vec2 after_push(core::Vec2 v, core::Vec2 other_v, core::Vec2 normal, doubl
   return v - (share * closing) * normal;
 }
 
-/// Speed along the heading of a velocity (a body does not slide sideways).
-double speed_along(core::Vec2 v, double heading_rad) {
-  return std::max(0.0, core::dot(v, {std::cos(heading_rad), std::sin(heading_rad)}));
+/// Speed along the heading (`axis`, unit) of a velocity (a body does not slide sideways).
+double speed_along(core::Vec2 v, core::Vec2 axis) {
+  return std::max(0.0, core::dot(v, axis));
 }
 
 /// Traffic that follows recorded bodies step by step, whatever the ego does.
@@ -116,20 +116,27 @@ void Traffic::step(const EgoView& ego, double dt_s) {
 std::optional<int> Traffic::resolve_contacts(const EgoView& ego) {
   std::optional<int> touched;
   const std::vector<TrafficCar>& cars = model_->cars();
-  const core::Vec2 ego_v =
-      ego.speed_mps * core::Vec2{std::cos(ego.body.heading_rad), std::sin(ego.body.heading_rad)};
+  // Faithful traffic has its cars' units cached already, for the headings they moved to.
+  auto* faithful = dynamic_cast<FaithfulTraffic*>(model_.get());
+  std::vector<core::HeadingUnit>& units = faithful != nullptr ? faithful->heading_units() : units_;
+  units.resize(cars.size());
+  // A contact may move the cars (and calm traffic turns them), so each unit is asked for
+  // with the heading of the moment; the cache only saves the sine and cosine.
+  const auto unit = [&](std::size_t i) { return units[i].of(cars[i].heading_rad); };
+  const core::Vec2 ego_axis = ego_unit_.of(ego.body.heading_rad);
+  const core::Vec2 ego_v = ego.speed_mps * ego_axis;
   const double cull_sq = kContactCullM * kContactCullM;
   // The ego first: it is not moved, the car is pushed out of it.
   for (std::size_t i = 0; i < cars.size(); ++i) {
     const TrafficCar& c = cars[i];
     if (c.parked || core::distance_sq(c.position, ego.body.center) > cull_sq) continue;
     const core::OrientedBox box = footprint(c);
-    const std::optional<core::Penetration> pen = core::box_penetration(ego.body, box);
+    const core::Vec2 axis = unit(i);
+    const std::optional<core::Penetration> pen =
+        core::box_penetration(ego.body, ego_axis, box, axis);
     if (!pen || pen->depth_m <= 0.0) continue;
-    const core::Vec2 v =
-        after_push(c.speed_mps * core::Vec2{std::cos(c.heading_rad), std::sin(c.heading_rad)},
-                   ego_v, pen->normal, 1.0);
-    model_->on_contact(i, pen->depth_m * pen->normal, speed_along(v, c.heading_rad), ego.body);
+    const core::Vec2 v = after_push(c.speed_mps * axis, ego_v, pen->normal, 1.0);
+    model_->on_contact(i, pen->depth_m * pen->normal, speed_along(v, axis), ego.body);
     if (!touched) touched = c.id;
   }
   // Then pairs of cars: each moves half the way, and they share what they closed with.
@@ -140,17 +147,18 @@ std::optional<int> Traffic::resolve_contacts(const EgoView& ego) {
       if (a.parked || b.parked || core::distance_sq(a.position, b.position) > cull_sq) continue;
       const core::OrientedBox box_a = footprint(a);
       const core::OrientedBox box_b = footprint(b);
-      const std::optional<core::Penetration> pen = core::box_penetration(box_a, box_b);
+      const core::Vec2 axis_a = unit(i);
+      const core::Vec2 axis_b = unit(j);
+      const std::optional<core::Penetration> pen =
+          core::box_penetration(box_a, axis_a, box_b, axis_b);
       if (!pen || pen->depth_m <= 0.0) continue;
-      const core::Vec2 va =
-          a.speed_mps * core::Vec2{std::cos(a.heading_rad), std::sin(a.heading_rad)};
-      const core::Vec2 vb =
-          b.speed_mps * core::Vec2{std::cos(b.heading_rad), std::sin(b.heading_rad)};
+      const core::Vec2 va = a.speed_mps * axis_a;
+      const core::Vec2 vb = b.speed_mps * axis_b;
       const core::Vec2 new_b = after_push(vb, va, pen->normal, 0.5);
       const core::Vec2 new_a = after_push(va, vb, -1.0 * pen->normal, 0.5);
       const double half = 0.5 * pen->depth_m;
-      const double speed_a = speed_along(new_a, a.heading_rad);
-      const double speed_b = speed_along(new_b, b.heading_rad);
+      const double speed_a = speed_along(new_a, axis_a);
+      const double speed_b = speed_along(new_b, axis_b);
       model_->on_contact(i, -half * pen->normal, speed_a, box_b);
       model_->on_contact(j, half * pen->normal, speed_b, box_a);
     }

@@ -5,6 +5,7 @@
 
 #include "overtake/core/random.hpp"
 #include "overtake/core/units.hpp"
+#include "overtake/core/wire_number.hpp"
 #include "overtake/sim/checkpoint.hpp"
 #include "overtake/sim/path_queue.hpp"
 
@@ -24,6 +25,29 @@ double yaw_0_2pi(double yaw) {
 
 double round_to(double v, double step) {
   return std::round(v / step) * step;
+}
+
+/// Rounds `path` as the wire does (core::round_like_wire), the points it shares with `queue`
+/// (rounded already) kept as they are.
+void round_new_points(std::vector<core::Vec2>& path, const std::deque<core::Vec2>& queue) {
+  // A planner sends back the points of the path it was given (the queue's, from where the
+  // path's first point is in it) before its new ones. The queue holds rounded points and
+  // rounding is idempotent, so a point equal to its queue point would round to itself: only
+  // the others are rounded (as core::round_like_wire rounds each point).
+  std::size_t from = queue.size();
+  if (!path.empty()) {
+    for (std::size_t q = 0; q < queue.size(); ++q) {
+      if (queue[q] == path.front()) {
+        from = q;
+        break;
+      }
+    }
+  }
+  for (std::size_t j = 0; j < path.size(); ++j) {
+    core::Vec2& p = path[j];
+    if (from + j < queue.size() && p == queue[from + j]) continue;
+    p = {core::wire_round(p.x), core::wire_round(p.y)};
+  }
 }
 
 }  // namespace
@@ -112,7 +136,7 @@ core::Telemetry World::telemetry() const {
 }
 
 void World::apply_path(std::vector<core::Vec2> path) {
-  if (params_.wire_rounding) path = core::round_like_wire(std::move(path));
+  if (params_.wire_rounding) round_new_points(path, queue_);
   const auto kept = trim_new_path(path, ego_.position, params_.ego.stand_on_tolerance_m);
   queue_.assign(kept.begin(), kept.end());
 }

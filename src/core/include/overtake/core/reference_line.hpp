@@ -64,6 +64,21 @@ class ReferenceLine {
   /// ds/dt of a point at (s, d) moving along the lane at `speed_mps`.
   [[nodiscard]] double s_rate(FrenetPoint p, double speed_mps) const;
 
+  /// The line at one s (wrapped, its piece found, the splines evaluated) for several of the
+  /// queries below at that s: the same results as the calls above with that s, each of
+  /// which would look it up again.
+  struct Sample {
+    double s_m = 0.0;  ///< wrapped
+    SplineSample x;
+    SplineSample y;
+  };
+  [[nodiscard]] Sample sample(double s_m) const;
+  /// Metres travelled at lateral offset d per unit of s: s_rate(p, v) is v / this.
+  [[nodiscard]] double metres_per_s(const Sample& at, double d_m) const;
+  /// velocity(p, s_dot, d_dot) and to_cartesian(p) at sample(p.s_m).
+  [[nodiscard]] Vec2 velocity(const Sample& at, double d_m, double s_dot, double d_dot) const;
+  [[nodiscard]] Vec2 to_cartesian(const Sample& at, double d_m) const;
+
  private:
   [[nodiscard]] double refine(Vec2 p, double s0) const;
   Map map_;

@@ -31,7 +31,9 @@ inline constexpr double kPi = std::numbers::pi;
 
 /// Wraps an angle to (-pi, pi].
 [[nodiscard]] inline double wrap_angle_rad(double a) {
-  a = std::remainder(a, 2.0 * kPi);
+  // remainder is exact: within [-pi, pi] (a / 2 pi within [-1/2, 1/2], the tie going to the
+  // even quotient 0) it returns `a` itself, and most angles wrapped are there already.
+  if (!(std::abs(a) <= kPi)) a = std::remainder(a, 2.0 * kPi);
   return a <= -kPi ? a + 2.0 * kPi : a;
 }
 

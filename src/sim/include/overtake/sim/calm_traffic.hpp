@@ -107,6 +107,16 @@ class CalmTraffic final : public TrafficModel {
   std::vector<Decision> decisions_;
   std::vector<core::Vec2> positions_;
   double ego_prev_speed_mps_ = -1.0;  // the ego's speed at the previous step (-1: none yet)
+  // Cache (rebuilt, not saved): the line's metres per unit of s at each car's s and d as
+  // publish() last asked for them (by their bits); a car's next move asks at the same point
+  // unless something moved it in between.
+  struct LaneScale {
+    std::uint64_t s_bits = 0;
+    std::uint64_t d_bits = 0;
+    double metres_per_s = 0.0;
+    bool valid = false;
+  };
+  std::vector<LaneScale> lane_scales_;
   friend struct CalmImpl;
 };
 

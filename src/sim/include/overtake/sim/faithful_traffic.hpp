@@ -96,6 +96,9 @@ class FaithfulTraffic final : public TrafficModel {
   /// driving at `speed_mps` with cap `cap_mps`, settled (its last lane change long ago).
   void put_on_road_for_testing(std::size_t i, double s_m, int lane, double speed_mps,
                                double cap_mps);
+  /// Each car's heading as a unit vector, cached (core::HeadingUnit gives the exact unit of
+  /// any heading asked for): the contact checks share it.
+  [[nodiscard]] std::vector<core::HeadingUnit>& heading_units() { return units_; }
   /// Testing: no more batches; cars stay where they are.
   void hold_batches_for_testing() { batches_held_ = true; }
 
@@ -113,11 +116,15 @@ class FaithfulTraffic final : public TrafficModel {
   };
 
   [[nodiscard]] core::OrientedBox body(std::size_t i) const;
-  [[nodiscard]] Sight look(std::size_t i, const EgoView& ego) const;
+  /// What car i's ray meets; `ego_axis`: heading_unit of the ego's heading; `ego_reach_m`:
+  /// the ego body's reach from a ray (as body_reach_m_).
+  [[nodiscard]] Sight look(std::size_t i, const EgoView& ego, core::Vec2 ego_axis,
+                           double ego_reach_m);
   [[nodiscard]] bool road_open_ahead(std::size_t i) const;
   [[nodiscard]] bool lane_clear(std::size_t i, int lane, const EgoView& ego) const;
   [[nodiscard]] int count_lane_change(std::size_t i, const EgoView& ego);
-  [[nodiscard]] Command decide(std::size_t i, const EgoView& ego);
+  [[nodiscard]] Command decide(std::size_t i, const EgoView& ego, core::Vec2 ego_axis,
+                               double ego_reach_m);
   void move(std::size_t i, const Command& c, double dt_s);
   void batch(const EgoView& ego);
   void spawn(std::size_t i, const EgoView& ego);
@@ -146,6 +153,19 @@ class FaithfulTraffic final : public TrafficModel {
   // horizon (it then meets nothing): lanes * bins of 1 m of s from the line's start.
   std::vector<unsigned char> open_road_;
   std::size_t open_road_bins_ = 0;
+  // Caches, rebuilt from the state above (not saved in checkpoints): each car's heading as
+  // a unit vector (its ray's direction and its body's axis), the ego's, and how far from a
+  // ray a car's body can reach (half its diagonal plus slack).
+  std::vector<core::HeadingUnit> units_;
+  core::HeadingUnit ego_unit_;
+  double body_reach_m_ = 0.0;
+  // Scratch of look(): the bodies near a ray, with the least distance along it at which the
+  // ray could meet each (`order`: the car's index, the ego after the cars).
+  struct NearRay {
+    double least_t_m = 0.0;
+    std::size_t order = 0;
+  };
+  std::vector<NearRay> near_ray_;
 };
 
 }  // namespace overtake::sim

@@ -135,6 +135,10 @@ class Traffic {
   bool scripted_ = false;
   bool replayed_ = false;
   std::unique_ptr<TrafficModel> model_;
+  // Caches for the contact checks (rebuilt from the cars, not saved): each car's heading as
+  // a unit vector, and the ego's.
+  std::vector<core::HeadingUnit> units_;
+  core::HeadingUnit ego_unit_;
 };
 
 }  // namespace overtake::sim
