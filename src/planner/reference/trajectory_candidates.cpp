@@ -49,39 +49,54 @@ struct AheadCar {
 /// The soft costs of longitudinal samples `lon` in a lane with cars `ahead` and `behind`;
 /// `rear_reach_m[k]` is rss_rear_reach of the ego's speed at sample k, so that the RSS gap
 /// wanted behind each car is rss_gap_of the two reaches (rss_front_gap's number, worked out
-/// once per sample instead of once per car and lane).
+/// once per sample instead of once per car and lane). `steps` is scratch of g.n + 1.
+///
+/// Each step's terms are added car by car over all samples, then the rear term: per sample
+/// the same additions in the same order as car by car within one sample, but the loop over
+/// the samples of one car has no dependence between samples and is vectorised (two samples
+/// per division). The steps are then summed in sample order as before.
 LaneCost lane_cost(const Track1d& lon, const std::vector<double>& rear_reach_m, const Grid& g,
                    const std::vector<AheadCar>& ahead, const CarSamples* behind,
                    double m_per_unit_s, const ReferenceParams& p,
-                   const core::CarFootprint& footprint) {
+                   const core::CarFootprint& footprint, std::vector<double>& steps) {
   const auto& b = p.behaviour;
   const auto& tp = p.trajectory;
   // Without cars every step is 0, and adding 0 to the sums (from +0) leaves them 0.
   if (ahead.empty() && !behind) return {};
+  const auto n = static_cast<std::size_t>(g.n + 1);
+  const double* const x = lon.x.data() + kBack;
+  const double* const v = lon.v.data() + kBack;
+  const double* const rear = rear_reach_m.data();
+  double* const step = steps.data();
+  std::fill_n(step, n, 0.0);
+  for (const AheadCar& a : ahead) {
+    const double* const car_s = a.car->s.data();
+    const double* const front = a.reach_m.data();
+    for (std::size_t i = 0; i < n; ++i) {
+      const double gap = (car_s[i] - x[i]) * m_per_unit_s - footprint.length_m;
+      const double want = rss_gap_of(rear[i], front[i], b);
+      const double short_by = std::max(0.0, want - gap) / want;
+      step[i] += tp.proximity_weight * short_by * short_by;
+    }
+  }
+  if (behind) {
+    for (std::size_t i = 0; i < n; ++i) {
+      const double centre_gap = (x[i] - behind->s[i]) * m_per_unit_s;
+      if (centre_gap < b.follower_reaction_gap_m + kRearRoomScaleM * 5.0) {
+        const double closing = (behind->s_dot[i] - v[i]) * m_per_unit_s;
+        const double room = rear_room(b.follower_reaction_gap_m, closing, footprint.length_m, b);
+        const double short_by = std::max(0.0, -room) / kRearRoomScaleM;
+        step[i] += tp.rear_weight * short_by * short_by;
+      }
+    }
+  }
   double full = 0.0;
   double early = 0.0;
   const int early_n = static_cast<int>(std::lround(tp.change_early_window_s / g.h));
   for (int k = 0; k <= g.n; ++k) {
-    const auto e = static_cast<std::size_t>(k + kBack);
-    const auto i = static_cast<std::size_t>(k);
-    double step = 0.0;
-    for (const AheadCar& a : ahead) {
-      const double gap = (a.car->s[i] - lon.x[e]) * m_per_unit_s - footprint.length_m;
-      const double want = rss_gap_of(rear_reach_m[i], a.reach_m[i], b);
-      const double short_by = std::max(0.0, want - gap) / want;
-      step += tp.proximity_weight * short_by * short_by;
-    }
-    if (behind) {
-      const double centre_gap = (lon.x[e] - behind->s[i]) * m_per_unit_s;
-      if (centre_gap < b.follower_reaction_gap_m + kRearRoomScaleM * 5.0) {
-        const double closing = (behind->s_dot[i] - lon.v[e]) * m_per_unit_s;
-        const double room = rear_room(b.follower_reaction_gap_m, closing, footprint.length_m, b);
-        const double short_by = std::max(0.0, -room) / kRearRoomScaleM;
-        step += tp.rear_weight * short_by * short_by;
-      }
-    }
-    full += step * g.h;
-    if (k <= early_n) early += step * g.h;
+    const double term = step[static_cast<std::size_t>(k)] * g.h;
+    full += term;
+    if (k <= early_n) early += term;
   }
   return {full, early};
 }
@@ -394,6 +409,7 @@ SoftLaneCosts soft_lane_costs(const std::vector<LonCandidate>& lons, const std::
   soft.lane_count = lane_cars.size();
   soft.costs.resize(lons.size() * soft.lane_count);
   std::vector<double> rear_reach(n);
+  std::vector<double> steps(n);
   for (std::size_t j = 0; j < lons.size(); ++j) {
     const Track1d& lon = lons[j].samples;
     // (After a polynomial's end, or once braking stands, the speed holds: its reach is
@@ -410,8 +426,8 @@ SoftLaneCosts soft_lane_costs(const std::vector<LonCandidate>& lons, const std::
     }
     for (const int l : lanes) {
       const auto li = static_cast<std::size_t>(l);
-      soft.costs[j * soft.lane_count + li] =
-          lane_cost(lon, rear_reach, g, ahead[li], lane_cars[li].behind, m_per_unit_s, params, car);
+      soft.costs[j * soft.lane_count + li] = lane_cost(
+          lon, rear_reach, g, ahead[li], lane_cars[li].behind, m_per_unit_s, params, car, steps);
     }
   }
   return soft;
