@@ -264,11 +264,12 @@ std::vector<LatCandidate> lateral_candidates(const std::vector<int>& lanes,
                                              const TrajectoryRequest& req, const Grid& g,
                                              const LaneFrame& line,
                                              const ReferenceTrajectoryParams& tp,
-                                             const core::RoadParams& road) {
+                                             const core::RoadParams& road, SpareBuffers& spare) {
   const FrenetState& x0 = req.start;
   std::vector<LatCandidate> lats;
   lats.reserve(lanes.size() * tp.lateral_time_factors.size());
-  Track1d scratch;  // a refused candidate's sample buffers serve the next one
+  // A refused candidate's sample buffers serve the next one.
+  Track1d scratch = take_track(spare);
   const SteadyReadings steady = steady_readings(g, line, x0, tp, road);
   for (const int l : lanes) {
     const double target = core::lane_center_d(l, road);
@@ -286,7 +287,7 @@ std::vector<LatCandidate> lateral_candidates(const std::vector<int>& lanes,
       LatCandidate c;
       c.poly = poly;
       c.end_lane = l;
-      c.samples = std::exchange(scratch, Track1d{});
+      c.samples = std::exchange(scratch, take_track(spare));
       c.terms.lateral_jerk = tp.lat_jerk_weight * c.poly.jerk_cost();
       c.terms.lateral_time = hold ? 0.0 : tp.lat_time_weight * c.poly.duration_s;
       c.terms.off_target_lane = tp.lane_weight * std::abs(l - req.target_lane);
@@ -303,6 +304,8 @@ std::vector<LatCandidate> lateral_candidates(const std::vector<int>& lanes,
       if (hold) break;
     }
   }
+  spare.push_back(std::move(scratch.x));
+  spare.push_back(std::move(scratch.v));
   return lats;
 }
 
@@ -319,7 +322,8 @@ std::vector<LonCandidate> longitudinal_candidates(const TrajectoryRequest& req,
                                                   const std::vector<const CarPrediction*>& leaders,
                                                   const AlongRoadScale& scale, const Grid& g,
                                                   const ReferenceParams& params,
-                                                  const core::CarFootprint& car) {
+                                                  const core::CarFootprint& car,
+                                                  SpareBuffers& spare) {
   const auto& tp = params.trajectory;
   const auto& bp = params.behaviour;
   const FrenetState& x0 = req.start;
@@ -328,14 +332,15 @@ std::vector<LonCandidate> longitudinal_candidates(const TrajectoryRequest& req,
   std::vector<LonCandidate> lons;
   lons.reserve(tp.cruise_times_s.size() * (tp.speed_offsets_mps.size() + 1) +
                leaders.size() * tp.follow_times_s.size() + 2 + tp.brake_levels_mps2.size());
-  Track1d scratch;  // a refused candidate's sample buffers serve the next one
+  // A refused candidate's sample buffers serve the next one.
+  Track1d scratch = take_track(spare);
   const auto add_lon = [&](const Longitudinal& m) {
     if (!sample_within(g, LongitudinalSampler{m}, tp.max_accel_mps2, tp.max_jerk_mps3, true,
                        scratch))
       return;
     LonCandidate c;
     c.motion = m;
-    c.samples = std::exchange(scratch, Track1d{});
+    c.samples = std::exchange(scratch, take_track(spare));
     const double travelled = (c.samples.x.back() - x0.s_m) * m_per_unit_s;
     const double deficit = req.wanted_speed_mps * tp.horizon_s - travelled;
     const double jerk = m.braking ? m.brake.jerk_cost() : m.poly.jerk_cost();
@@ -383,6 +388,8 @@ std::vector<LonCandidate> longitudinal_candidates(const TrajectoryRequest& req,
                                 tp.brake_level_jerk_mps3 / m_per_unit_s);
     add_lon(firm);
   }
+  spare.push_back(std::move(scratch.x));
+  spare.push_back(std::move(scratch.v));
   return lons;
 }
 
