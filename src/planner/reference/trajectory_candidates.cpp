@@ -46,6 +46,45 @@ struct AheadCar {
   std::vector<double> reach_m;
 };
 
+/// rss_rear_reach for one set of parameters, with the parts that do not depend on the speed
+/// (the ramp's time, speed lost and the jerk's share of its distance, each a division) worked
+/// out once: the same expressions on the same numbers as jerk_limited_stop_distance, so the
+/// same reach to the bit.
+class RearReach {
+ public:
+  explicit RearReach(const ReferenceBehaviourParams& p)
+      : response_s_(p.response_time_s),
+        brake_(p.ego_brake_mps2),
+        jerk_(p.ego_brake_jerk_mps3),
+        ramp_t_(brake_ / jerk_),
+        ramp_dv_(0.5 * brake_ * ramp_t_),
+        ramp_jerk_m_(jerk_ * ramp_t_ * ramp_t_ * ramp_t_ / 6.0) {}
+
+  [[nodiscard]] double operator()(double rear_mps) const {
+    const double rear = std::max(0.0, rear_mps);
+    return rear * response_s_ + stop_distance(rear);
+  }
+
+ private:
+  [[nodiscard]] double stop_distance(double v) const {
+    if (!(v > 0.0)) return 0.0;
+    if (v <= ramp_dv_) {
+      const double t = std::sqrt(2.0 * v / jerk_);
+      return v * t - jerk_ * t * t * t / 6.0;
+    }
+    const double ramp_d = v * ramp_t_ - ramp_jerk_m_;
+    const double rest = v - ramp_dv_;
+    return ramp_d + rest * rest / (2.0 * brake_);
+  }
+
+  double response_s_;
+  double brake_;
+  double jerk_;
+  double ramp_t_;
+  double ramp_dv_;
+  double ramp_jerk_m_;
+};
+
 /// The soft costs of longitudinal samples `lon` in a lane with cars `ahead` and `behind`;
 /// `rear_reach_m[k]` is rss_rear_reach of the ego's speed at sample k, so that the RSS gap
 /// wanted behind each car is rss_gap_of the two reaches (rss_front_gap's number, worked out
@@ -417,6 +456,7 @@ SoftLaneCosts soft_lane_costs(const std::vector<LonCandidate>& lons, const std::
   soft.costs.resize(lons.size() * soft.lane_count);
   std::vector<double> rear_reach(n);
   std::vector<double> steps(n);
+  const RearReach rear_reach_of(b);
   for (std::size_t j = 0; j < lons.size(); ++j) {
     const Track1d& lon = lons[j].samples;
     // (After a polynomial's end, or once braking stands, the speed holds: its reach is
@@ -427,7 +467,7 @@ SoftLaneCosts soft_lane_costs(const std::vector<LonCandidate>& lons, const std::
       const double v = lon.v[i + static_cast<std::size_t>(kBack)] * m_per_unit_s;
       if (v != last_v) {
         last_v = v;
-        last_reach = rss_rear_reach(v, b);
+        last_reach = rear_reach_of(v);
       }
       rear_reach[i] = last_reach;
     }
