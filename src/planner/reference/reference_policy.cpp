@@ -193,7 +193,7 @@ core::PlanResult ReferencePolicy::plan(const core::Telemetry& t) {
   req.wanted_speed_mps = decision_.speed_mps;
   req.band_time_s = band_time;
   req.cars = &predictions_;
-  plan_ = plan_trajectory(frame_, req, p_, road_, car_);
+  plan_ = plan_trajectory(frame_, req, p_, road_, car_, &scratch_);
   const TrajectoryPlan& chosen = plan_;
   status_ = chosen.status;
   if (chosen.trajectory.end_lane != behaviour_.target_lane) {

@@ -29,6 +29,33 @@ struct Candidates {
   int start_lane = 0;  ///< the lane the ego starts in
 };
 
+/// Gives a plan's sample buffers back to the spare ones when the plan is done.
+struct SpareReturn {
+  SpareReturn(SpareBuffers& to, std::vector<CarSamples>& from_cars, Candidates& from)
+      : spare(to), cars(from_cars), c(from) {}
+  SpareReturn(const SpareReturn&) = delete;
+  SpareReturn& operator=(const SpareReturn&) = delete;
+  SpareReturn(SpareReturn&&) = delete;
+  SpareReturn& operator=(SpareReturn&&) = delete;
+  ~SpareReturn() {
+    const auto give = [&](std::vector<double>& b) {
+      if (b.capacity() > 0) spare.push_back(std::move(b));
+    };
+    for (CarSamples& car : cars) give(car.buffer);
+    for (LatCandidate& lat : c.lats) {
+      give(lat.samples.x);
+      give(lat.samples.v);
+    }
+    for (LonCandidate& lon : c.lons) {
+      give(lon.samples.x);
+      give(lon.samples.v);
+    }
+  }
+  SpareBuffers& spare;
+  std::vector<CarSamples>& cars;
+  Candidates& c;
+};
+
 /// One combination of a lateral and a longitudinal candidate, with its cost.
 struct Combo {
   double cost;
@@ -270,7 +297,7 @@ FrenetState Trajectory::at(double t) const {
 
 TrajectoryPlan plan_trajectory(const LaneFrame& line, const TrajectoryRequest& req,
                                const ReferenceParams& params, const core::RoadParams& road,
-                               const core::CarFootprint& car) {
+                               const core::CarFootprint& car, TrajectoryScratch* scratch) {
   using namespace trajectory_detail;
   const auto& tp = params.trajectory;
   const Grid g = grid_of(tp);
@@ -280,13 +307,19 @@ TrajectoryPlan plan_trajectory(const LaneFrame& line, const TrajectoryRequest& r
 
   const std::vector<int> lanes = lanes_in_play(x0, req.target_lane, tp.line_band_m, road);
   const AlongRoadScale scale = along_road_scale(line, x0, req.wanted_speed_mps, lanes, tp, road);
-  const std::vector<CarSamples> car_samples = sample_cars(cars, req.start_delay_s, x0.s_m, g);
+  TrajectoryScratch own_scratch;
+  SpareBuffers& spare = scratch ? scratch->spare : own_scratch.spare;
+  std::vector<CarSamples> car_samples = sample_cars(cars, req.start_delay_s, x0.s_m, g, &spare);
   const std::vector<LaneCars> lane_cars = cars_per_lane(lanes, car_samples, cars, x0.s_m, road);
 
   Candidates c;
   c.start_lane = core::lane_of(x0.d_m, road);
-  c.lats = lateral_candidates(lanes, req, g, line, tp, road);
-  c.lons = longitudinal_candidates(req, lane_leaders(lanes, lane_cars), scale, g, params, car);
+  // The samples' buffers go back to `spare` on every way out (declared after what holds
+  // them, this is destroyed before them).
+  const SpareReturn give_back{spare, car_samples, c};
+  c.lats = lateral_candidates(lanes, req, g, line, tp, road, spare);
+  c.lons =
+      longitudinal_candidates(req, lane_leaders(lanes, lane_cars), scale, g, params, car, spare);
   c.soft = soft_lane_costs(c.lons, lanes, lane_cars, g, scale.m_per_unit_s, params, car);
   const std::vector<Combo> combos = rank_combinations(c);
 

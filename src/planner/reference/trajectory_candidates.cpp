@@ -46,42 +46,96 @@ struct AheadCar {
   std::vector<double> reach_m;
 };
 
+/// rss_rear_reach for one set of parameters, with the parts that do not depend on the speed
+/// (the ramp's time, speed lost and the jerk's share of its distance, each a division) worked
+/// out once: the same expressions on the same numbers as jerk_limited_stop_distance, so the
+/// same reach to the bit.
+class RearReach {
+ public:
+  explicit RearReach(const ReferenceBehaviourParams& p)
+      : response_s_(p.response_time_s),
+        brake_(p.ego_brake_mps2),
+        jerk_(p.ego_brake_jerk_mps3),
+        ramp_t_(brake_ / jerk_),
+        ramp_dv_(0.5 * brake_ * ramp_t_),
+        ramp_jerk_m_(jerk_ * ramp_t_ * ramp_t_ * ramp_t_ / 6.0) {}
+
+  [[nodiscard]] double operator()(double rear_mps) const {
+    const double rear = std::max(0.0, rear_mps);
+    return rear * response_s_ + stop_distance(rear);
+  }
+
+ private:
+  [[nodiscard]] double stop_distance(double v) const {
+    if (!(v > 0.0)) return 0.0;
+    if (v <= ramp_dv_) {
+      const double t = std::sqrt(2.0 * v / jerk_);
+      return v * t - jerk_ * t * t * t / 6.0;
+    }
+    const double ramp_d = v * ramp_t_ - ramp_jerk_m_;
+    const double rest = v - ramp_dv_;
+    return ramp_d + rest * rest / (2.0 * brake_);
+  }
+
+  double response_s_;
+  double brake_;
+  double jerk_;
+  double ramp_t_;
+  double ramp_dv_;
+  double ramp_jerk_m_;
+};
+
 /// The soft costs of longitudinal samples `lon` in a lane with cars `ahead` and `behind`;
 /// `rear_reach_m[k]` is rss_rear_reach of the ego's speed at sample k, so that the RSS gap
 /// wanted behind each car is rss_gap_of the two reaches (rss_front_gap's number, worked out
-/// once per sample instead of once per car and lane).
+/// once per sample instead of once per car and lane). `steps` is scratch of g.n + 1.
+///
+/// Each step's terms are added car by car over all samples, then the rear term: per sample
+/// the same additions in the same order as car by car within one sample, but the loop over
+/// the samples of one car has no dependence between samples and is vectorised (two samples
+/// per division). The steps are then summed in sample order as before.
 LaneCost lane_cost(const Track1d& lon, const std::vector<double>& rear_reach_m, const Grid& g,
                    const std::vector<AheadCar>& ahead, const CarSamples* behind,
                    double m_per_unit_s, const ReferenceParams& p,
-                   const core::CarFootprint& footprint) {
+                   const core::CarFootprint& footprint, std::vector<double>& steps) {
   const auto& b = p.behaviour;
   const auto& tp = p.trajectory;
   // Without cars every step is 0, and adding 0 to the sums (from +0) leaves them 0.
   if (ahead.empty() && !behind) return {};
+  const auto n = static_cast<std::size_t>(g.n + 1);
+  const double* const x = lon.x.data() + kBack;
+  const double* const v = lon.v.data() + kBack;
+  const double* const rear = rear_reach_m.data();
+  double* const step = steps.data();
+  std::fill_n(step, n, 0.0);
+  for (const AheadCar& a : ahead) {
+    const double* const car_s = a.car->s.data();
+    const double* const front = a.reach_m.data();
+    for (std::size_t i = 0; i < n; ++i) {
+      const double gap = (car_s[i] - x[i]) * m_per_unit_s - footprint.length_m;
+      const double want = rss_gap_of(rear[i], front[i], b);
+      const double short_by = std::max(0.0, want - gap) / want;
+      step[i] += tp.proximity_weight * short_by * short_by;
+    }
+  }
+  if (behind) {
+    for (std::size_t i = 0; i < n; ++i) {
+      const double centre_gap = (x[i] - behind->s[i]) * m_per_unit_s;
+      if (centre_gap < b.follower_reaction_gap_m + kRearRoomScaleM * 5.0) {
+        const double closing = (behind->s_dot[i] - v[i]) * m_per_unit_s;
+        const double room = rear_room(b.follower_reaction_gap_m, closing, footprint.length_m, b);
+        const double short_by = std::max(0.0, -room) / kRearRoomScaleM;
+        step[i] += tp.rear_weight * short_by * short_by;
+      }
+    }
+  }
   double full = 0.0;
   double early = 0.0;
   const int early_n = static_cast<int>(std::lround(tp.change_early_window_s / g.h));
   for (int k = 0; k <= g.n; ++k) {
-    const auto e = static_cast<std::size_t>(k + kBack);
-    const auto i = static_cast<std::size_t>(k);
-    double step = 0.0;
-    for (const AheadCar& a : ahead) {
-      const double gap = (a.car->s[i] - lon.x[e]) * m_per_unit_s - footprint.length_m;
-      const double want = rss_gap_of(rear_reach_m[i], a.reach_m[i], b);
-      const double short_by = std::max(0.0, want - gap) / want;
-      step += tp.proximity_weight * short_by * short_by;
-    }
-    if (behind) {
-      const double centre_gap = (lon.x[e] - behind->s[i]) * m_per_unit_s;
-      if (centre_gap < b.follower_reaction_gap_m + kRearRoomScaleM * 5.0) {
-        const double closing = (behind->s_dot[i] - lon.v[e]) * m_per_unit_s;
-        const double room = rear_room(b.follower_reaction_gap_m, closing, footprint.length_m, b);
-        const double short_by = std::max(0.0, -room) / kRearRoomScaleM;
-        step += tp.rear_weight * short_by * short_by;
-      }
-    }
-    full += step * g.h;
-    if (k <= early_n) early += step * g.h;
+    const double term = step[static_cast<std::size_t>(k)] * g.h;
+    full += term;
+    if (k <= early_n) early += term;
   }
   return {full, early};
 }
@@ -249,11 +303,12 @@ std::vector<LatCandidate> lateral_candidates(const std::vector<int>& lanes,
                                              const TrajectoryRequest& req, const Grid& g,
                                              const LaneFrame& line,
                                              const ReferenceTrajectoryParams& tp,
-                                             const core::RoadParams& road) {
+                                             const core::RoadParams& road, SpareBuffers& spare) {
   const FrenetState& x0 = req.start;
   std::vector<LatCandidate> lats;
   lats.reserve(lanes.size() * tp.lateral_time_factors.size());
-  Track1d scratch;  // a refused candidate's sample buffers serve the next one
+  // A refused candidate's sample buffers serve the next one.
+  Track1d scratch = take_track(spare);
   const SteadyReadings steady = steady_readings(g, line, x0, tp, road);
   for (const int l : lanes) {
     const double target = core::lane_center_d(l, road);
@@ -271,7 +326,7 @@ std::vector<LatCandidate> lateral_candidates(const std::vector<int>& lanes,
       LatCandidate c;
       c.poly = poly;
       c.end_lane = l;
-      c.samples = std::exchange(scratch, Track1d{});
+      c.samples = std::exchange(scratch, take_track(spare));
       c.terms.lateral_jerk = tp.lat_jerk_weight * c.poly.jerk_cost();
       c.terms.lateral_time = hold ? 0.0 : tp.lat_time_weight * c.poly.duration_s;
       c.terms.off_target_lane = tp.lane_weight * std::abs(l - req.target_lane);
@@ -288,6 +343,8 @@ std::vector<LatCandidate> lateral_candidates(const std::vector<int>& lanes,
       if (hold) break;
     }
   }
+  spare.push_back(std::move(scratch.x));
+  spare.push_back(std::move(scratch.v));
   return lats;
 }
 
@@ -304,7 +361,8 @@ std::vector<LonCandidate> longitudinal_candidates(const TrajectoryRequest& req,
                                                   const std::vector<const CarPrediction*>& leaders,
                                                   const AlongRoadScale& scale, const Grid& g,
                                                   const ReferenceParams& params,
-                                                  const core::CarFootprint& car) {
+                                                  const core::CarFootprint& car,
+                                                  SpareBuffers& spare) {
   const auto& tp = params.trajectory;
   const auto& bp = params.behaviour;
   const FrenetState& x0 = req.start;
@@ -313,14 +371,15 @@ std::vector<LonCandidate> longitudinal_candidates(const TrajectoryRequest& req,
   std::vector<LonCandidate> lons;
   lons.reserve(tp.cruise_times_s.size() * (tp.speed_offsets_mps.size() + 1) +
                leaders.size() * tp.follow_times_s.size() + 2 + tp.brake_levels_mps2.size());
-  Track1d scratch;  // a refused candidate's sample buffers serve the next one
+  // A refused candidate's sample buffers serve the next one.
+  Track1d scratch = take_track(spare);
   const auto add_lon = [&](const Longitudinal& m) {
     if (!sample_within(g, LongitudinalSampler{m}, tp.max_accel_mps2, tp.max_jerk_mps3, true,
                        scratch))
       return;
     LonCandidate c;
     c.motion = m;
-    c.samples = std::exchange(scratch, Track1d{});
+    c.samples = std::exchange(scratch, take_track(spare));
     const double travelled = (c.samples.x.back() - x0.s_m) * m_per_unit_s;
     const double deficit = req.wanted_speed_mps * tp.horizon_s - travelled;
     const double jerk = m.braking ? m.brake.jerk_cost() : m.poly.jerk_cost();
@@ -368,6 +427,8 @@ std::vector<LonCandidate> longitudinal_candidates(const TrajectoryRequest& req,
                                 tp.brake_level_jerk_mps3 / m_per_unit_s);
     add_lon(firm);
   }
+  spare.push_back(std::move(scratch.x));
+  spare.push_back(std::move(scratch.v));
   return lons;
 }
 
@@ -394,6 +455,8 @@ SoftLaneCosts soft_lane_costs(const std::vector<LonCandidate>& lons, const std::
   soft.lane_count = lane_cars.size();
   soft.costs.resize(lons.size() * soft.lane_count);
   std::vector<double> rear_reach(n);
+  std::vector<double> steps(n);
+  const RearReach rear_reach_of(b);
   for (std::size_t j = 0; j < lons.size(); ++j) {
     const Track1d& lon = lons[j].samples;
     // (After a polynomial's end, or once braking stands, the speed holds: its reach is
@@ -404,14 +467,14 @@ SoftLaneCosts soft_lane_costs(const std::vector<LonCandidate>& lons, const std::
       const double v = lon.v[i + static_cast<std::size_t>(kBack)] * m_per_unit_s;
       if (v != last_v) {
         last_v = v;
-        last_reach = rss_rear_reach(v, b);
+        last_reach = rear_reach_of(v);
       }
       rear_reach[i] = last_reach;
     }
     for (const int l : lanes) {
       const auto li = static_cast<std::size_t>(l);
-      soft.costs[j * soft.lane_count + li] =
-          lane_cost(lon, rear_reach, g, ahead[li], lane_cars[li].behind, m_per_unit_s, params, car);
+      soft.costs[j * soft.lane_count + li] = lane_cost(
+          lon, rear_reach, g, ahead[li], lane_cars[li].behind, m_per_unit_s, params, car, steps);
     }
   }
   return soft;

@@ -28,7 +28,7 @@ constexpr double kClearSidewaysM = 1e-6;
 }  // namespace
 
 std::vector<CarSamples> sample_cars(const std::vector<CarPrediction>& cars, double delay, double s0,
-                                    const Grid& g) {
+                                    const Grid& g, SpareBuffers* spare) {
   std::vector<CarSamples> out;
   out.reserve(cars.size());
   for (const CarPrediction& c : cars) {
@@ -38,6 +38,7 @@ std::vector<CarSamples> sample_cars(const std::vector<CarPrediction>& cars, doub
     cs.cap_mps = c.cap_mps;
     cs.speeding_up = c.observed_accel_mps2 > kSpeedingUpMps2;
     const auto n = static_cast<std::size_t>(g.n + 1);
+    if (spare) cs.buffer = take_buffer(*spare);
     cs.resize(n);
     for (int k = 0; k <= g.n; ++k) {
       const double t = delay + g.t(k);

@@ -46,6 +46,25 @@ struct Track1d {
   std::vector<double> v;
 };
 
+/// Buffers to reuse (see TrajectoryScratch).
+using SpareBuffers = std::vector<std::vector<double>>;
+
+/// A buffer from `spare` (its contents whatever they were), or a new one.
+[[nodiscard]] inline std::vector<double> take_buffer(SpareBuffers& spare) {
+  if (spare.empty()) return {};
+  std::vector<double> out = std::move(spare.back());
+  spare.pop_back();
+  return out;
+}
+
+/// Empty samples with buffers from `spare`.
+[[nodiscard]] inline Track1d take_track(SpareBuffers& spare) {
+  Track1d t;
+  t.x = take_buffer(spare);
+  t.v = take_buffer(spare);
+  return t;
+}
+
 /// The check grid: step h over the horizon, n steps.
 struct Grid {
   double h = 0.1;
@@ -140,9 +159,10 @@ struct CarSamples {
 // ---- The checks (trajectory_checks.cpp) ----
 
 /// The cars within reach of `s0` along the road, predicted from `delay` after their
-/// observation, over the grid.
+/// observation, over the grid (their buffers from `spare` where given).
 [[nodiscard]] std::vector<CarSamples> sample_cars(const std::vector<CarPrediction>& cars,
-                                                  double delay, double s0, const Grid& g);
+                                                  double delay, double s0, const Grid& g,
+                                                  SpareBuffers* spare = nullptr);
 
 /// The collision check over samples (indexed k + kBack). `ego_changing`: the ego moves into
 /// another lane; `sideways`: it is off its lane's centre or moving into another lane.
@@ -214,7 +234,8 @@ struct LatCandidate {
                                                            const TrajectoryRequest& req,
                                                            const Grid& g, const LaneFrame& line,
                                                            const ReferenceTrajectoryParams& tp,
-                                                           const core::RoadParams& road);
+                                                           const core::RoadParams& road,
+                                                           SpareBuffers& spare);
 
 /// A longitudinal candidate, sampled, with its cost.
 struct LonCandidate {
@@ -236,7 +257,7 @@ struct LonCandidate {
 [[nodiscard]] std::vector<LonCandidate> longitudinal_candidates(
     const TrajectoryRequest& req, const std::vector<const CarPrediction*>& leaders,
     const AlongRoadScale& scale, const Grid& g, const ReferenceParams& params,
-    const core::CarFootprint& car);
+    const core::CarFootprint& car, SpareBuffers& spare);
 
 /// Soft costs of one longitudinal candidate in one lane: inside the RSS gap of the cars ahead,
 /// and leaving too little room to cars closing from behind; over the whole horizon and over

@@ -79,6 +79,7 @@ class ReferencePolicy final : public Policy {
   BehaviourDecision decision_;
   PlanStatus status_ = PlanStatus::feasible;
   TrajectoryPlan plan_;
+  TrajectoryScratch scratch_;  // buffers one plan leaves for the next; no state
 };
 
 }  // namespace overtake::planner::reference

@@ -98,12 +98,21 @@ struct TrajectoryPlan {
   double blocking_time_s = 0.0;  ///< ... and when
 };
 
+/// Sample buffers one plan leaves for the next: kept by the policy, a cycle's samples reuse
+/// the last cycle's memory instead of asking malloc for about a hundred buffers. It holds no
+/// figure a plan reads: every buffer taken from it is filled before it is read.
+struct TrajectoryScratch {
+  std::vector<std::vector<double>> spare;
+};
+
 /// Chooses this cycle's trajectory. Never fails: the braking fallback always exists.
+/// `scratch`, when given, lends the plan its buffers and gets them back.
 [[nodiscard]] TrajectoryPlan plan_trajectory(const LaneFrame& line,
                                              const TrajectoryRequest& request,
                                              const ReferenceParams& params,
                                              const core::RoadParams& road,
-                                             const core::CarFootprint& car);
+                                             const core::CarFootprint& car,
+                                             TrajectoryScratch* scratch = nullptr);
 
 /// Result of the Cartesian check of one trajectory.
 struct KinematicReport {
