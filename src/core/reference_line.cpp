@@ -127,6 +127,10 @@ RoadFrame ReferenceLine::frame(double s_m) const {
   return p.frame;
 }
 
+RoadFrame ReferenceLine::frame_without_heading(double s_m) const {
+  return frame_parts(x_, y_, side_, wrap_s(s_m)).frame;
+}
+
 Vec2 ReferenceLine::to_cartesian(FrenetPoint p) const {
   return to_cartesian(sample(p.s_m), p.d_m);
 }

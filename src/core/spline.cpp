@@ -20,6 +20,9 @@ bool strictly_increasing(std::span<const double> t) {
   return true;
 }
 
+/// Splines of at least this many pieces get a bucket index for piece lookups.
+constexpr std::size_t kBucketedPieces = 16;
+
 }  // namespace
 
 PiecewiseCubic PiecewiseCubic::from_second_derivatives(std::span<const double> t,
@@ -32,6 +35,17 @@ PiecewiseCubic PiecewiseCubic::from_second_derivatives(std::span<const double> t
     const double h = t[i + 1] - t[i];
     s.pieces_.push_back({y[i], (y[i + 1] - y[i]) / h - h * (2.0 * m[i] + m[i + 1]) / 6.0,
                          0.5 * m[i], (m[i + 1] - m[i]) / (6.0 * h)});
+  }
+  if (s.pieces_.size() >= kBucketedPieces) {
+    const std::size_t buckets = 2 * s.pieces_.size();
+    s.buckets_per_t_ = static_cast<double>(buckets) / (t.back() - t.front());
+    s.bucket_piece_.resize(buckets);
+    std::size_t i = 0;
+    for (std::size_t b = 0; b < buckets; ++b) {
+      const double edge = t.front() + static_cast<double>(b) / s.buckets_per_t_;
+      while (i + 1 < s.pieces_.size() && t[i + 1] <= edge) ++i;
+      s.bucket_piece_[b] = i;
+    }
   }
   return s;
 }
@@ -170,6 +184,17 @@ std::optional<PiecewiseCubic> PiecewiseCubic::periodic_smoothing(std::span<const
 }
 
 std::size_t PiecewiseCubic::piece(double t) const {
+  const std::size_t last = pieces_.size() - 1;
+  if (!bucket_piece_.empty() && t >= knots_.front() && t < knots_[last]) {
+    // The largest i with knots[i] <= t, as the bisection below finds it: the bucket's piece
+    // is a start (its edge may round either way), and the steps make it exact.
+    auto b = static_cast<std::size_t>((t - knots_.front()) * buckets_per_t_);
+    b = std::min(b, bucket_piece_.size() - 1);
+    std::size_t i = bucket_piece_[b];
+    while (knots_[i] > t) --i;
+    while (knots_[i + 1] <= t) ++i;
+    return i;
+  }
   const auto it = std::upper_bound(knots_.begin(), knots_.end(), t);
   if (it == knots_.begin()) return 0;
   return std::min<std::size_t>(static_cast<std::size_t>(it - knots_.begin()) - 1,

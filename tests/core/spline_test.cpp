@@ -4,6 +4,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
+#include <random>
 #include <vector>
 
 #include "overtake/core/map.hpp"
@@ -61,6 +63,36 @@ TEST(NaturalSpline, RejectsBadKnots) {
   EXPECT_FALSE(PiecewiseCubic::natural(nan_t, y3));
   const std::vector<double> short_y{0, 1};
   EXPECT_FALSE(PiecewiseCubic::natural(y3, short_y));
+}
+
+// A long spline finds its pieces through a bucket index: the same piece as a bisection of the
+// knots, for knots spaced very unevenly, at the knots themselves, between them, and outside.
+TEST(NaturalSpline, ALongSplineFindsThePieceABisectionFinds) {
+  std::mt19937_64 rng(3);
+  std::uniform_real_distribution<double> gap(0.0, 1.0);
+  std::vector<double> t{-50.0};
+  for (int i = 0; i < 400; ++i) {
+    const double g = gap(rng);
+    t.push_back(t.back() + (i % 50 == 0 ? 300.0 * g : g * g * g + 1e-6));
+  }
+  const std::vector<double> y(t.size(), 1.0);
+  const auto s = PiecewiseCubic::natural(t, y);
+  ASSERT_TRUE(s);
+  const auto bisection = [&](double x) -> std::size_t {
+    const auto it = std::upper_bound(t.begin(), t.end(), x);
+    if (it == t.begin()) return 0;
+    return std::min<std::size_t>(static_cast<std::size_t>(it - t.begin()) - 1, t.size() - 2);
+  };
+  std::uniform_real_distribution<double> anywhere(t.front() - 10.0, t.back() + 10.0);
+  std::vector<double> probes;
+  for (int i = 0; i < 200000; ++i) probes.push_back(anywhere(rng));
+  for (const double k : t) {
+    probes.push_back(k);
+    probes.push_back(std::nextafter(k, -1e9));
+    probes.push_back(std::nextafter(k, 1e9));
+  }
+  probes.push_back(std::numeric_limits<double>::quiet_NaN());
+  for (const double x : probes) ASSERT_EQ(s->piece(x), bisection(x)) << x;
 }
 
 TEST(PeriodicSpline, ClosesSmoothlyAcrossThePeriod) {

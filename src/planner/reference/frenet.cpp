@@ -108,7 +108,7 @@ double LaneFrame::slope(double s_m) const {
 }
 
 RoadPoint road_point(const LaneFrame& frame, double s_m, double d_m) {
-  return road_point(frame.line().frame(s_m), frame.offset_slope(s_m), d_m);
+  return road_point(frame.line().frame_without_heading(s_m), frame.offset_slope(s_m), d_m);
 }
 
 RoadPoint road_point(const core::RoadFrame& f, const LaneFrame::OffsetSlope& o, double d_m) {
@@ -132,7 +132,7 @@ FrenetState frenet_from_cartesian(const LaneFrame& frame, core::Vec2 position, c
   const core::FrenetPoint f = frame.line().to_frenet(position, s_hint_m);
   const LaneFrame::OffsetSlope o = frame.offset_slope(f.s_m);
   const double d = f.d_m + o.offset_m;
-  const RoadPoint at = road_point(frame.line().frame(f.s_m), o, d);
+  const RoadPoint at = road_point(frame.line().frame_without_heading(f.s_m), o, d);
   if (at_out) *at_out = at;
   FrenetState x;
   x.s_m = f.s_m;

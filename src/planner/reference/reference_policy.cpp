@@ -19,7 +19,7 @@ constexpr double kSyncToleranceM = 0.01;
 double wire_speed_error_mps(const core::ReferenceLine& line, double step_s) {
   double reach = 0.0;
   for (const double s : line.waypoint_s()) {
-    const core::Vec2 p = line.frame(s).position;
+    const core::Vec2 p = line.frame_without_heading(s).position;
     reach = std::max({reach, std::abs(p.x), std::abs(p.y)});
   }
   reach += 20.0;  // the road's width and more

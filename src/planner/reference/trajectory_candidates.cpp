@@ -243,7 +243,7 @@ AlongRoadScale along_road_scale(const LaneFrame& line, const FrenetState& x0,
   };
   for (int i = 0; i <= n; ++i) {
     const double s = s0 + (s1 - s0) * i / n;
-    const core::RoadFrame f = line.line().frame(s);
+    const core::RoadFrame f = line.line().frame_without_heading(s);
     const LaneFrame::OffsetSlope o = line.offset_slope(s);
     for (const int l : lanes) take(road_point(f, o, core::lane_center_d(l, road)).along_scale);
     if (i == 0) take(road_point(f, o, x0.d_m).along_scale);

@@ -52,6 +52,9 @@ class ReferenceLine {
   [[nodiscard]] const Map& map() const { return map_; }
 
   [[nodiscard]] RoadFrame frame(double s_m) const;
+  /// frame(s_m) with heading_rad left at 0, for callers that never read it: its atan2 is
+  /// about a third of a frame's cost. Every other field is the same, bit for bit.
+  [[nodiscard]] RoadFrame frame_without_heading(double s_m) const;
   [[nodiscard]] Vec2 to_cartesian(FrenetPoint p) const;
   /// Projects a point onto the line. `s_hint_m` (a nearby s, e.g. last step's) makes it
   /// faster; without it, or when the hint leads astray, the whole loop is searched.

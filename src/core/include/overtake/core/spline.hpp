@@ -67,6 +67,12 @@ class PiecewiseCubic {
                                                 std::span<const double> m);
   std::vector<double> knots_;  // pieces + 1 entries
   std::vector<Piece> pieces_;
+  // For long splines (a reference line has hundreds of pieces, and is looked up thousands of
+  // times a step): buckets of equal width in t over the knots, each with the last piece that
+  // starts at or before its lower edge. A lookup starts there and steps to the piece; empty
+  // for short splines, which are searched by bisection.
+  std::vector<std::size_t> bucket_piece_;
+  double buckets_per_t_ = 0.0;
 };
 
 }  // namespace overtake::core
