@@ -108,6 +108,10 @@ ReferenceLine::ReferenceLine(const Map& map, double smoothing_m3) : map_(map) {
 }
 
 double ReferenceLine::wrap_s(double s_m) const {
+  // Most s are within the loop already. With the loop starting at 0 (as the built-in track
+  // does), fmod and the sums below give such an s back unchanged, bit for bit, so they are
+  // left out (0 itself goes the long way: -0 comes back as +0).
+  if (start_s_m_ == 0.0 && s_m > 0.0 && s_m < length_m_) return s_m;
   double r = std::fmod(s_m - start_s_m_, length_m_);
   if (r < 0.0) r += length_m_;
   if (r >= length_m_) r = 0.0;

@@ -3,7 +3,9 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <random>
 #include <vector>
@@ -201,6 +203,29 @@ TEST(ReferenceLine, WrapAndSAheadAreCorrectAcrossTheLap) {
   EXPECT_NEAR(line.wrap_s(-5.0), len - 5.0, 1e-9);
   EXPECT_NEAR(line.s_ahead(len - 10.0, 15.0), 25.0, 1e-9);
   EXPECT_NEAR(line.s_ahead(15.0, len - 10.0), -25.0, 1e-9);
+}
+
+// Wrapping gives exactly what fmod gives, within the loop (where it is skipped for a loop
+// starting at 0) and outside it, and +0 for -0.
+TEST(ReferenceLine, WrapGivesWhatFmodGivesBitForBit) {
+  const ReferenceLine line(circle(500.0, 120));
+  ASSERT_EQ(line.start_s_m(), 0.0);
+  const double len = line.length_m();
+  const auto by_fmod = [&](double s) {
+    double r = std::fmod(s, len);
+    if (r < 0.0) r += len;
+    if (r >= len) r = 0.0;
+    return 0.0 + r;
+  };
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> any(-3.0 * len, 3.0 * len);
+  std::vector<double> probes{0.0, -0.0, len, std::nextafter(len, 0.0), 1e-300, -1e-300};
+  for (int i = 0; i < 100000; ++i) probes.push_back(any(rng));
+  for (const double s : probes) {
+    EXPECT_EQ(std::bit_cast<std::uint64_t>(line.wrap_s(s)),
+              std::bit_cast<std::uint64_t>(by_fmod(s)))
+        << s;
+  }
 }
 
 TEST(ReferenceLine, FrenetRoundTripOnACircleAcrossTheWrap) {
