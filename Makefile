@@ -50,7 +50,7 @@ fuzz-build: deps
 	@cmake --preset fuzz >/dev/null
 	@cmake --build --preset fuzz
 
-# The cheap checks first: the format (seconds), clang-tidy (about two minutes on 2 cores).
+# The cheap checks first: the format (seconds), clang-tidy (about a minute on 2 cores).
 check: format-check tidy test test-asan fuzz-smoke
 
 bench: build
