@@ -48,6 +48,15 @@ constexpr std::array<std::uint64_t, 23> kPowersOfFive = [] {
 // 128-bit integers (GCC and Clang): the exact products below need 76 bits.
 __extension__ using U128 = unsigned __int128;
 
+/// n / 2^s rounded to the nearest integer, ties to even (as the printing rounds), for s >= 1.
+template <class U>
+U shift_right_to_even(U n, int s) {
+  const U q = n >> s;
+  const U rest = n - (q << s);
+  const U half = static_cast<U>(1) << (s - 1);
+  return rest > half || (rest == half && (q & 1U) != 0) ? q + 1 : q;
+}
+
 }  // namespace
 
 double wire_round(double value) {
@@ -81,27 +90,17 @@ double wire_round(double value) {
   if (k <= 16 && shift < 0 && shift > -64) {
     // The common case (|f| >= 1e-10, and in this range always a right shift): N < 2^24 * 5^16
     // < 2^62, so 64 bits hold it.
-    const std::uint64_t n = m24 * kPowersOfFive[static_cast<std::size_t>(k)];
-    const int s = -shift;
-    m = n >> s;
-    const std::uint64_t rest = n & ((std::uint64_t{1} << s) - 1U);
-    const std::uint64_t half = std::uint64_t{1} << (s - 1);
-    if (rest > half || (rest == half && (m & 1U) != 0)) ++m;
+    m = shift_right_to_even(m24 * kPowersOfFive[static_cast<std::size_t>(k)], -shift);
   } else {
     // The same in 128-bit integers: the products need up to 76 bits.
     const U128 n = static_cast<U128>(m24) * kPowersOfFive[static_cast<std::size_t>(k)];
-    U128 wide = 0;
     if (shift >= 0) {
-      wide = n << shift;
+      m = static_cast<std::uint64_t>(n << shift);
+    } else if (-shift < 127) {
+      m = static_cast<std::uint64_t>(shift_right_to_even(n, -shift));
     } else {
-      const int s = -shift;
-      if (s >= 127) return wire_round_by_text(f);
-      wide = n >> s;
-      const U128 rest = n - (wide << s);
-      const U128 half = static_cast<U128>(1) << (s - 1);
-      if (rest > half || (rest == half && (wide & 1U) != 0)) ++wide;
+      return wire_round_by_text(f);
     }
-    m = static_cast<std::uint64_t>(wide);
   }
   const double out = static_cast<double>(m) / kPowersOfTen[static_cast<std::size_t>(k)];
   return f < 0.0F ? -out : out;
