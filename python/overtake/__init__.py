@@ -84,9 +84,12 @@ def drive(policy, map=None, seed=1, traffic="faithful", minutes=30.0, config=Non
 def compare(before, after, pairs=None, figures=None):
     """Compares two ``overtake bench --out`` folders as ``overtake compare`` does and returns
     the result as a dict: "comparisons" (per policy and traffic profile: "seeds" paired and
-    "figures", each with "base", "candidate", "difference", "ci" [lo, hi],
-    "probability_of_improvement" and "verdict": "better", "worse" or "no difference"),
-    "worse" (the figures that got significantly worse) and "notes".
+    "figures", each with "base", "candidate", "difference", "ci" [lo, hi] (None below 8
+    seeds), "p_value" and "p_adjusted" (Holm over every figure compared),
+    "probability_of_improvement" (P(after better than before) over all pairs of runs) with
+    "probability_of_improvement_ci", and "verdict": "better", "worse", "no difference" or
+    "too few seeds"), "verdicts" (how they were reached), "worse" (the figures that got
+    significantly worse), "withheld" (comparisons with too few seeds to judge) and "notes".
 
     pairs: {old: new} or ["OLD=NEW", ...] to compare policies of other names (default: every
     policy both ran, by name). figures: names to compare, e.g. ["mean_speed_mph",
@@ -102,9 +105,10 @@ def compare(before, after, pairs=None, figures=None):
 
 def bench_summary(folder):
     """A bench output folder's evaluation, as summary.json holds it: "rows" (per policy and
-    traffic profile, figures with 95% intervals, collisions by kind and at fault, near
-    misses, seeds to halve each interval) and "pairs" (every two policies on the same
-    seeds), computed anew from its runs.jsonl."""
+    traffic profile, figures with 95% intervals over the seeds, collisions as contacts by kind
+    and at fault, near misses, seeds to halve each interval), "pairs" (every two policies on
+    the same seeds, verdicts corrected over the whole table) and "verdicts" (how), computed
+    anew from its runs.jsonl."""
     return _bench_summary(os.fspath(folder))
 
 

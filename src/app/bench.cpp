@@ -176,7 +176,11 @@ void write_outputs(const std::filesystem::path& out, const std::vector<json>& ru
   write_file_atomic(out / "summary.csv", eval::summary_csv(s.rows));
   write_file_atomic(out / "pairs.csv", eval::pairs_csv(s.pairs));
   write_file_atomic(out / "summary.json",
-                    json{{"rows", s.rows}, {"pairs", s.pairs}}.dump(2) + "\n");
+                    json{{"rows", s.rows},
+                         {"pairs", s.pairs},
+                         {"verdicts", eval::verdict_method(eval::family_size(s.pairs))}}
+                            .dump(2) +
+                        "\n");
   outcome.summary_markdown = eval::summary_markdown(s.rows, s.pairs);
   write_file_atomic(out / "summary.md", outcome.summary_markdown);
   outcome.runs_done = runs.size();

@@ -1,6 +1,7 @@
 // `overtake compare BEFORE AFTER`: two bench output folders compared, run for run on the same
-// seeds, with every figure's change, its 95% interval and whether it is beyond noise;
-// `--fail-if-worse` turns a significant worsening into exit status 1 for a planner's CI.
+// seeds, with every figure's change, its 95% interval and whether it is beyond noise (tests
+// corrected for the family of figures compared); `--fail-if-worse` turns a significant
+// worsening into exit status 1 for a planner's CI, and too few seeds to judge into 2.
 
 #include <iostream>
 #include <set>
@@ -24,10 +25,13 @@ Subcommand register_compare(CLI::App& app) {
       "compare",
       "Compare two bench output folders (before and after a change to a planner): the runs\n"
       "of a policy on the same traffic profile and seed are pairs; for each figure, the change\n"
-      "with its 95% bootstrap interval over the seeds, the share of seeds on which the second\n"
-      "did better, and whether the change is beyond noise (docs/evaluation.md).\n"
-      "Exit status: 0, or 1 when a figure got significantly worse and --fail-if-worse is given\n"
-      "(also 1 when a folder cannot be read or its runs cannot be paired; 2 for bad flags).");
+      "with its 95% interval over the seeds, the probability of improvement, and a verdict:\n"
+      "better or worse when its test (paired t-test for mean speed, exact sign-flip test over\n"
+      "seeds for rates) is significant at 5% family-wise, Holm-corrected over every figure,\n"
+      "policy and profile compared; no verdict below 8 seeds (docs/evaluation.md).\n"
+      "Exit status: 0; with --fail-if-worse 1 when a figure got significantly worse, 2 when a\n"
+      "comparison has too few seeds for a verdict (the reason is printed). Also 1 when a folder\n"
+      "cannot be read or its runs cannot be paired; 2 for bad flags.");
   cmd->add_option("before", st->before, "The first bench's --out folder (the base)")->required();
   cmd->add_option("after", st->after, "The second bench's --out folder (the candidate)")
       ->required();
@@ -39,7 +43,8 @@ Subcommand register_compare(CLI::App& app) {
                   "incidents_per_100mi, collisions_per_100mi, at_fault_collisions_per_100mi,\n"
                   "near_misses_per_100mi");
   cmd->add_flag("--fail-if-worse", st->fail_if_worse,
-                "Exit with status 1 when any compared figure got significantly worse");
+                "Exit with status 1 when any compared figure got significantly worse, 2 when\n"
+                "some comparison has too few seeds to judge");
   cmd->add_option("--json", st->json, "Also write the comparison as JSON to this file");
   cmd->add_flag("--quiet,-q", st->quiet, "Print nothing (the exit status and --json say it)");
   return {cmd, [st] {
@@ -66,7 +71,15 @@ Subcommand register_compare(CLI::App& app) {
             const nlohmann::json result = compare_bench_folders(st->before, st->after, o);
             if (!st->json.empty()) write_file_atomic(st->json, result.dump(2) + "\n");
             if (!st->quiet) std::cout << eval::compare_text(result);
-            return st->fail_if_worse && !result["worse"].empty() ? kExitFailure : kExitOk;
+            if (!st->fail_if_worse) return kExitOk;
+            if (!result["worse"].empty()) return kExitFailure;
+            if (!result["withheld"].empty()) {
+              for (const auto& w : result["withheld"]) {
+                std::cerr << "overtake compare: no verdict, " << w.get<std::string>() << "\n";
+              }
+              return kExitUsage;
+            }
+            return kExitOk;
           }};
 }
 

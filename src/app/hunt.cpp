@@ -57,18 +57,6 @@ std::string slug(const std::string& text) {
   return out.empty() ? "run" : out;
 }
 
-bool counts(const sim::Incident& i, HuntTarget target) {
-  switch (target) {
-    case HuntTarget::collisions:
-      return i.type == sim::IncidentType::collision;
-    case HuntTarget::at_fault:
-      return i.type == sim::IncidentType::collision && (!i.collision || i.collision->at_fault);
-    case HuntTarget::incidents:
-      return true;
-  }
-  return false;
-}
-
 std::string what_of(const sim::Incident& i) {
   std::string text(sim::to_string(i.type));
   if (i.collision) {
@@ -335,23 +323,35 @@ HuntOutcome run_hunt(const HuntSpec& spec, const std::atomic<bool>* stop,
     prog.runs = out.runs;
     prog.simulated_s = out.simulated_s;
     const Combo c = combo_of(spec, k);
-    // One failure per episode: the referee counts a contact (or a speeding, a straddle)
-    // again each second it lasts; those repeats are the same failure.
-    std::vector<const sim::Incident*> found;
+    // One failure per contact (a collision) or per episode (another incident): the referee
+    // counts a contact, a speeding or a straddle again each second it lasts; those repeats are
+    // the same failure.
+    std::vector<sim::Incident> found;
     // A planner that fails (stalls, crashes, sends what cannot be read) is a failure too.
     const bool planner_failed = res.report.outcome.end == sim::RunEnd::planner_failed &&
                                 static_cast<int>(out.failures.size()) < spec.failures;
-    std::map<std::pair<int, long>, double> last_seen;  // (type, car) -> time of its last count
-    for (const sim::Incident& i : res.report.incidents) {
-      if (!counts(i, spec.target)) continue;
-      const std::pair<int, long> key{
-          static_cast<int>(i.type),
-          i.type == sim::IncidentType::collision ? std::lround(i.value) : -1};
-      const auto it = last_seen.find(key);
-      const bool repeat = it != last_seen.end() && i.t_s - it->second <= kRepeatS;
-      last_seen[key] = i.t_s;
-      if (!repeat && static_cast<int>(out.failures.size() + found.size()) < spec.failures) {
-        found.push_back(&i);
+    const auto room = [&] {
+      return static_cast<int>(out.failures.size() + found.size()) < spec.failures;
+    };
+    if (spec.target != HuntTarget::incidents) {
+      for (std::size_t n = 0; n < res.report.contacts.size(); ++n) {
+        const sim::Contact& contact = res.report.contacts[n];
+        if (spec.target == HuntTarget::at_fault && !contact.collision.at_fault) continue;
+        if (room()) found.push_back(contact_incident(contact, static_cast<int>(n)));
+      }
+    } else {
+      std::map<int, double> last_seen;  // type -> time of its last count
+      std::set<int> contacts_seen;
+      for (const sim::Incident& i : res.report.incidents) {
+        bool repeat = false;
+        if (i.type == sim::IncidentType::collision && i.contact >= 0) {
+          repeat = !contacts_seen.insert(i.contact).second;
+        } else {
+          const auto it = last_seen.find(static_cast<int>(i.type));
+          repeat = it != last_seen.end() && i.t_s - it->second <= kRepeatS;
+          last_seen[static_cast<int>(i.type)] = i.t_s;
+        }
+        if (!repeat && room()) found.push_back(i);
       }
     }
     if (found.empty() && !planner_failed) {
@@ -365,8 +365,10 @@ HuntOutcome run_hunt(const HuntSpec& spec, const std::atomic<bool>* stop,
     if (ec)
       throw std::runtime_error(kept.string() + ": cannot keep the replay (" + ec.message() + ")");
     const replay::Replay r = replay::read_replay(kept);
-    if (planner_failed) found.push_back(nullptr);
-    for (const sim::Incident* i : found) {
+    std::vector<const sim::Incident*> failures;
+    for (const sim::Incident& i : found) failures.push_back(&i);
+    if (planner_failed) failures.push_back(nullptr);
+    for (const sim::Incident* i : failures) {
       HuntFailure f;
       f.run = k;
       f.seed = c.seed;

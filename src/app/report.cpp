@@ -59,7 +59,8 @@ json finite_or_null(double v) {
   return std::isfinite(v) ? json(v) : json(nullptr);
 }
 
-// The run's collisions summed up by their classes.
+// The run's collisions, counted as contacts (one per car touched, however long), summed up by
+// their classes.
 struct CollisionCounts {
   int total = 0;
   int at_fault = 0;
@@ -68,12 +69,10 @@ struct CollisionCounts {
 
 CollisionCounts count_collisions(const sim::RunReport& r) {
   CollisionCounts c;
-  for (const sim::Incident& i : r.incidents) {
-    if (i.type != sim::IncidentType::collision) continue;
+  for (const sim::Contact& k : r.contacts) {
     ++c.total;
-    if (!i.collision) continue;
-    ++c.by_kind[static_cast<std::size_t>(i.collision->kind)];
-    if (i.collision->at_fault) ++c.at_fault;
+    ++c.by_kind[static_cast<std::size_t>(k.collision.kind)];
+    if (k.collision.at_fault) ++c.at_fault;
   }
   return c;
 }
@@ -86,7 +85,23 @@ json collisions_json(const sim::RunReport& r) {
   const CollisionCounts c = count_collisions(r);
   json by_kind = json::object();
   for (std::size_t k = 0; k < c.by_kind.size(); ++k) by_kind[kind_name(k)] = c.by_kind[k];
-  return {{"total", c.total}, {"at_fault", c.at_fault}, {"by_kind", by_kind}};
+  json contacts = json::array();
+  for (const sim::Contact& k : r.contacts) {
+    contacts.push_back({{"car", k.car_id},
+                        {"t_s", k.t_s},
+                        {"end_t_s", k.end_t_s},
+                        {"s_m", k.s_m},
+                        {"lane", k.lane},
+                        {"kind", sim::to_string(k.collision.kind)},
+                        {"at_fault", k.collision.at_fault},
+                        {"rubric_incidents", k.rubric_collisions}});
+  }
+  return {{"total", c.total},
+          {"at_fault", c.at_fault},
+          {"by_kind", by_kind},
+          {"rubric_incidents",
+           r.incident_counts[static_cast<std::size_t>(sim::IncidentType::collision)]},
+          {"contacts", contacts}};
 }
 
 json safety_json(const sim::RunReport& r) {
@@ -123,7 +138,20 @@ json incident_to_json(const sim::Incident& i) {
     j["kind"] = sim::to_string(i.collision->kind);
     j["at_fault"] = i.collision->at_fault;
   }
+  if (i.type == sim::IncidentType::collision && i.contact >= 0) j["contact"] = i.contact;
   return j;
+}
+
+sim::Incident contact_incident(const sim::Contact& k, int index) {
+  sim::Incident i;
+  i.type = sim::IncidentType::collision;
+  i.t_s = k.t_s;
+  i.s_m = k.s_m;
+  i.lane = k.lane;
+  i.value = k.car_id;
+  i.collision = k.collision;
+  i.contact = index;
+  return i;
 }
 
 json report_to_json(const sim::RunReport& r, const RunProvenance& p) {
@@ -209,14 +237,16 @@ std::string format_scorecard(const sim::RunReport& r, const RunProvenance& p) {
   }
   os << ")\n";
   if (const CollisionCounts c = count_collisions(r); c.total > 0) {
-    os << "  collisions         " << c.total << ": at fault " << c.at_fault << " (";
+    os << "  collisions         " << c.total << " contact" << (c.total == 1 ? "" : "s")
+       << ": at fault " << c.at_fault << " (";
     const char* sep = "";
     for (std::size_t k = 0; k < c.by_kind.size(); ++k) {
       if (c.by_kind[k] == 0) continue;
       os << sep << kind_name(k) << " " << c.by_kind[k];
       sep = ", ";
     }
-    os << ")\n";
+    os << "); the rubric's collision incidents, one per second of contact: "
+       << r.incident_counts[static_cast<std::size_t>(sim::IncidentType::collision)] << "\n";
   }
   {
     const sim::SafetySummary& s = r.safety;
@@ -225,10 +255,10 @@ std::string format_scorecard(const sim::RunReport& r, const RunProvenance& p) {
     };
     const double d = r.duration_s > 0 ? r.duration_s : 1.0;
     os << "  near misses        least TTC ahead " << seconds(s.min_ttc_ahead_s)
-       << ", entering a lane " << seconds(s.min_ttc_entering_s) << ", least headway "
+       << ", entering a lane " << seconds(s.min_ttc_entering_s) << ", least time gap "
        << seconds(s.min_headway_s) << "\n";
     os << printf_string(
-        "                     TTC < %.1f s %.2f%% of the time, headway < %.1f s %.2f%%, %d "
+        "                     TTC < %.1f s %.2f%% of the time, time gap < %.1f s %.2f%%, %d "
         "near-miss episode%s\n",
         s.ttc_threshold_s, 100.0 * s.ttc_below_s / d, s.headway_threshold_s,
         100.0 * s.headway_below_s / d, s.near_miss_episodes, s.near_miss_episodes == 1 ? "" : "s");
@@ -285,6 +315,9 @@ std::string format_scorecard(const sim::RunReport& r, const RunProvenance& p) {
       if (inc.collision) {
         os << "   " << sim::to_string(inc.collision->kind)
            << (inc.collision->at_fault ? " (at fault)" : " (not at fault)");
+      }
+      if (inc.type == sim::IncidentType::collision && inc.contact >= 0) {
+        os << ", contact " << inc.contact + 1;
       }
       os << "\n";
     }

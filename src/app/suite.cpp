@@ -67,6 +67,17 @@ std::vector<sim::Incident> judged_incidents(const sim::Scenario& sc, const sim::
   return out;
 }
 
+/// The collisions of the judged part, as contacts (one per car touched, however long).
+std::vector<sim::Incident> judged_contacts(const sim::Scenario& sc, const sim::RunReport& r,
+                                           const ScenarioTrace& trace) {
+  const double from = trace.start_s + (sc.cut ? sc.cut->lead_in_s : 0.0) - 1e-9;
+  std::vector<sim::Incident> out;
+  for (std::size_t k = 0; k < r.contacts.size(); ++k) {
+    if (r.contacts[k].t_s >= from) out.push_back(contact_incident(r.contacts[k], static_cast<int>(k)));
+  }
+  return out;
+}
+
 }  // namespace
 
 std::vector<std::string> judge_scenario(const sim::Scenario& sc, const sim::RunReport& r,
@@ -76,11 +87,11 @@ std::vector<std::string> judge_scenario(const sim::Scenario& sc, const sim::RunR
     fails.push_back("the planner failed: " + r.outcome.reason);
   }
   const std::vector<sim::Incident> inc = judged_incidents(sc, r, trace);
+  const std::vector<sim::Incident> contacts = judged_contacts(sc, r, trace);
   std::vector<const sim::Incident*> collisions, at_fault;
-  for (const sim::Incident& i : inc) {
-    if (i.type != sim::IncidentType::collision) continue;
+  for (const sim::Incident& i : contacts) {
     collisions.push_back(&i);
-    if (!i.collision || i.collision->at_fault) at_fault.push_back(&i);
+    if (i.collision->at_fault) at_fault.push_back(&i);
   }
   const auto limit = [&](const std::optional<int>& max, std::size_t got, const char* what,
                          const sim::Incident* first) {
@@ -187,12 +198,10 @@ SuiteOutcome run_suite(const SuiteSpec& spec, const std::atomic<bool>* stop,
       const DriveResult r = drive_loaded(in, {}, stop);
       if (r.report.outcome.end == sim::RunEnd::stopped) return std::optional<ScenarioVerdict>();
       v.failures = judge_scenario(*in.scenario, r.report, watch.trace);
-      for (const sim::Incident& i : judged_incidents(*in.scenario, r.report, watch.trace)) {
-        ++v.incidents;
-        if (i.type == sim::IncidentType::collision) {
-          ++v.collisions;
-          if (!i.collision || i.collision->at_fault) ++v.at_fault_collisions;
-        }
+      v.incidents = static_cast<int>(judged_incidents(*in.scenario, r.report, watch.trace).size());
+      for (const sim::Incident& i : judged_contacts(*in.scenario, r.report, watch.trace)) {
+        ++v.collisions;
+        if (i.collision->at_fault) ++v.at_fault_collisions;
       }
       v.distance_m = r.report.distance_m;
       v.duration_s = r.report.duration_s;

@@ -10,6 +10,7 @@
 #include "overtake/app/build_info.hpp"
 #include "overtake/app/cli.hpp"
 #include "overtake/app/io.hpp"
+#include "overtake/eval/summary.hpp"
 #include "overtake/app/resources.hpp"
 #include "overtake/view/page.hpp"
 
@@ -141,6 +142,7 @@ json bench_report_object(const fs::path& bench_out, const fs::path& html_dir) {
                                          out.at("traffic").get<std::vector<std::string>>(),
                                          (bench_out / "runs.jsonl").string());
   out["summary"] = std::move(summary.rows);
+  out["verdicts"] = eval::verdict_method(eval::family_size(summary.pairs));
   out["pairs"] = std::move(summary.pairs);
   return out;
 }

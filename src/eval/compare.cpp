@@ -5,6 +5,7 @@
 #include <set>
 #include <stdexcept>
 
+#include "overtake/eval/stats.hpp"
 #include "overtake/eval/summary.hpp"
 
 namespace overtake::eval {
@@ -118,15 +119,14 @@ json compare_benches(const BenchData& base, const BenchData& candidate,
 
   const std::vector<std::string> cand_traffic = traffic_of(candidate);
   json comparisons = json::array();
-  json worse = json::array();
   for (const PolicyPair& p : pairs) {
     for (const std::string& t : traffic_of(base)) {
       if (std::find(cand_traffic.begin(), cand_traffic.end(), t) == cand_traffic.end()) continue;
       const auto b = runs_of(base, p.base, t);
       const auto c = runs_of(candidate, p.candidate, t);
       if (b.empty() || c.empty()) continue;
-      json result =
-          compare_paired(b, c, "compare|" + p.base + "|" + p.candidate + "|" + t, metrics);
+      json result = compare_paired(b, c, "compare|" + p.base + "|" + p.candidate + "|" + t,
+                                   metrics, options.resamples);
       const auto seeds = result["seeds"].get<std::size_t>();
       if (seeds == 0) {
         notes.push_back(p.base + " / " + t + ": no seed in common, not compared");
@@ -136,9 +136,12 @@ json compare_benches(const BenchData& base, const BenchData& candidate,
         notes.push_back(p.base + " / " + t + ": " + std::to_string(seeds) + " seeds paired of " +
                         std::to_string(b.size()) + " and " + std::to_string(c.size()));
       }
-      for (const auto& [name, f] : result["figures"].items()) {
-        if (!f.is_null() && f["verdict"] == "worse") {
-          worse.push_back(p.candidate + " / " + t + ": " + name);
+      for (const Metric m : metrics) {
+        const std::string why = unavailable_reason(m, b).empty() ? unavailable_reason(m, c)
+                                                                 : unavailable_reason(m, b);
+        if (!why.empty()) {
+          notes.push_back(p.candidate + " / " + t + ": " + std::string(info(m).name) +
+                          " not compared: " + why);
         }
       }
       comparisons.push_back({{"base_policy", p.base},
@@ -152,11 +155,28 @@ json compare_benches(const BenchData& base, const BenchData& candidate,
     throw NotComparable("no runs to pair: " + base.name + " and " + candidate.name +
                         " share no traffic profile and seed for the policies compared");
   }
+  const std::size_t tests = judge_family(comparisons);
+  json worse = json::array();
+  json withheld = json::array();
+  for (const json& c : comparisons) {
+    const std::string who =
+        c["candidate_policy"].get<std::string>() + " / " + c["traffic"].get<std::string>();
+    if (c["seeds"].get<std::size_t>() < kMinSeeds) {
+      withheld.push_back(who + ": too few seeds: " + std::to_string(c["seeds"].get<std::size_t>()) +
+                         ", need at least " + std::to_string(kMinSeeds));
+      continue;
+    }
+    for (const auto& [name, f] : c["figures"].items()) {
+      if (!f.is_null() && f["verdict"] == "worse") worse.push_back(who + ": " + name);
+    }
+  }
   return {{"base", base.name},
           {"candidate", candidate.name},
           {"notes", notes},
           {"comparisons", comparisons},
-          {"worse", worse}};
+          {"verdicts", verdict_method(tests)},
+          {"worse", worse},
+          {"withheld", withheld}};
 }
 
 std::string compare_text(const json& result) {
@@ -167,8 +187,8 @@ std::string compare_text(const json& result) {
     const std::string bp = c["base_policy"], cp = c["candidate_policy"];
     out += "\n" + (bp == cp ? cp : bp + " -> " + cp) + " (" + c["traffic"].get<std::string>() +
            ", " + std::to_string(c["seeds"].get<std::size_t>()) + " seeds paired)\n";
-    out += "  " + pad("figure", 34) + pad("before", 10, true) + pad("after", 10, true) + "   " +
-           pad("change (95% interval)", 30) + pad("P(better)", 10) + "verdict\n";
+    out += "  " + pad("figure", 32) + pad("before", 9, true) + pad("after", 9, true) + "   " +
+           pad("change (95% interval)", 28) + pad("P(improvement)", 20) + "verdict\n";
     for (const Metric m : all_metrics()) {
       const MetricInfo& mi = info(m);
       const std::string name(mi.name);
@@ -176,23 +196,39 @@ std::string compare_text(const json& result) {
       const json& f = c["figures"][name];
       const std::string label = std::string(mi.label) + " (" + std::string(mi.unit) + ")";
       if (f.is_null()) {
-        out += "  " + pad(label, 34) + "not in both benches' rows\n";
+        out += "  " + pad(label, 32) + "not in both benches' rows\n";
         continue;
       }
       constexpr int decimals = 2;
-      out +=
-          "  " + pad(label, 34) + pad(fixed(f["base"], decimals), 10, true) +
-          pad(fixed(f["candidate"], decimals), 10, true) + "   " +
-          pad(signed_fixed(f["difference"], decimals) + " (" + signed_fixed(f["ci"][0], decimals) +
-                  ", " + signed_fixed(f["ci"][1], decimals) + ")",
-              30) +
-          pad(fixed(f["probability_of_improvement"], 2), 10) + f["verdict"].get<std::string>() +
-          "\n";
+      std::string change = signed_fixed(f["difference"], decimals);
+      if (f["ci"].is_array()) {
+        change += " (" + signed_fixed(f["ci"][0], decimals) + ", " +
+                  signed_fixed(f["ci"][1], decimals) + ")";
+      }
+      std::string chance = "–";
+      if (f["probability_of_improvement"].is_number()) {
+        chance = fixed(f["probability_of_improvement"], 2) + " (" +
+                 fixed(f["probability_of_improvement_ci"][0], 2) + "–" +
+                 fixed(f["probability_of_improvement_ci"][1], 2) + ")";
+      }
+      out += "  " + pad(label, 32) + pad(fixed(f["base"], decimals), 9, true) +
+             pad(fixed(f["candidate"], decimals), 9, true) + "   " + pad(change, 28) +
+             pad(chance, 20) + f["verdict"].get<std::string>() + "\n";
     }
   }
+  const json& v = result["verdicts"];
+  out += "\nVerdicts: " + std::to_string(v["family_tests"].get<std::size_t>()) +
+         " tests (a figure the same on every seed is not tested), Holm-corrected to 5% "
+         "family-wise (paired t-test for mean speed, exact sign-flip test over seeds for the "
+         "rates); no verdict below " +
+         std::to_string(v["min_seeds"].get<std::size_t>()) +
+         " seeds. Each interval is its figure's own 95%; P(improvement): P(after better than "
+         "before) over all pairs of runs.\n";
+  for (const json& w : result["withheld"]) out += "  no verdict: " + w.get<std::string>() + "\n";
   const json& worse = result["worse"];
   if (worse.empty()) {
-    out += "\nNo figure got significantly worse.\n";
+    out += result["withheld"].empty() ? "\nNo figure got significantly worse.\n"
+                                      : "\nNo figure judged got significantly worse.\n";
   } else {
     out += "\n" + std::to_string(worse.size()) + " figure" + (worse.size() == 1 ? "" : "s") +
            " significantly worse:\n";

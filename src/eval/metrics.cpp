@@ -113,15 +113,25 @@ RunRow read_run_row(const json& row, std::string_view where) {
     out.incidents_by_type[t] = r.count(counts, name, "incident_counts." + name);
     out.incidents += out.incidents_by_type[t];
   }
-  if (row.contains("collisions")) {
+  // Collisions as contacts: rows that list them (older rows counted a collision for every
+  // second of contact, and those counts are not comparable).
+  if (row.contains("collisions") && row["collisions"].is_object() &&
+      row["collisions"].contains("contacts")) {
     const json& c = r.object(row, "collisions", "collisions");
-    out.classified = true;
+    out.contacts_known = true;
+    out.collisions = r.count(c, "total", "collisions.total");
     out.at_fault_collisions = r.count(c, "at_fault", "collisions.at_fault");
+    if (out.at_fault_collisions > out.collisions) {
+      r.fail("collisions.at_fault", "is more than collisions.total");
+    }
     const json& by_kind = r.object(c, "by_kind", "collisions.by_kind");
+    double kinds = 0.0;
     for (std::size_t k = 0; k < sim::kCollisionKindCount; ++k) {
       const std::string name(sim::to_string(static_cast<sim::CollisionKind>(k)));
       out.collisions_by_kind[k] = r.count(by_kind, name, "collisions.by_kind." + name);
+      kinds += out.collisions_by_kind[k];
     }
+    if (kinds != out.collisions) r.fail("collisions.by_kind", "does not add up to total");
   }
   if (row.contains("safety")) {
     const json& s = r.object(row, "safety", "safety");
@@ -202,7 +212,7 @@ MetricTerms terms(Metric m, const RunRow& r) {
     case Metric::incidents_per_100mi:
       return rate(r.incidents);
     case Metric::collisions_per_100mi:
-      return rate(r.incidents_by_type[static_cast<std::size_t>(sim::IncidentType::collision)]);
+      return rate(r.collisions);
     case Metric::at_fault_collisions_per_100mi:
       return rate(r.at_fault_collisions);
     case Metric::near_misses_per_100mi:
@@ -212,11 +222,22 @@ MetricTerms terms(Metric m, const RunRow& r) {
 }
 
 bool available(Metric m, const std::vector<const RunRow*>& runs) {
+  return unavailable_reason(m, runs).empty();
+}
+
+std::string unavailable_reason(Metric m, const std::vector<const RunRow*>& runs) {
+  const bool collisions =
+      m == Metric::collisions_per_100mi || m == Metric::at_fault_collisions_per_100mi;
   for (const RunRow* r : runs) {
-    if (m == Metric::at_fault_collisions_per_100mi && !r->classified) return false;
-    if (m == Metric::near_misses_per_100mi && !r->has_safety) return false;
+    if (collisions && !r->contacts_known) {
+      return "rows written before collisions were counted as contacts (they counted one per "
+             "second of contact): bench again to compare collisions";
+    }
+    if (m == Metric::near_misses_per_100mi && !r->has_safety) {
+      return "rows written before near misses were measured";
+    }
   }
-  return true;
+  return {};
 }
 
 double value(Metric m, const std::vector<const RunRow*>& runs) {

@@ -55,15 +55,68 @@ std::vector<std::pair<std::string, std::string>> groups_of(
   return out;
 }
 
-BootstrapOptions bootstrap_for(const std::string& key) {
+BootstrapOptions bootstrap_for(const std::string& key, int resamples = kBootstrapResamples) {
   BootstrapOptions o;
   o.seed = bootstrap_seed(key);
+  o.resamples = resamples;
   return o;
+}
+
+/// "too few seeds: 3, need at least 8", or "" when there are enough.
+std::string too_few(std::size_t seeds) {
+  if (seeds >= kMinSeeds) return {};
+  return "too few seeds: " + std::to_string(seeds) + ", need at least " +
+         std::to_string(kMinSeeds);
+}
+
+/// An interval as JSON, or null when there are too few seeds for one.
+json ci_or_null(const Interval& i, bool enough) {
+  return enough ? pair_of(i) : json(nullptr);
 }
 
 /// An interval's precision: its half width and the seeds that would halve it.
 json precision(const Interval& i, std::size_t seeds_to_halve) {
   return {{"half_width", 0.5 * i.width()}, {"seeds_to_halve", seeds_to_halve}};
+}
+
+/// Events and miles of each run (one run per seed).
+struct RateColumns {
+  std::vector<double> events;
+  std::vector<double> miles;
+};
+
+/// A rate per 100 miles with its interval over the runs: the figure, its interval (null with
+/// too few seeds), a warning when one seed holds most of the events.
+struct RateFigure {
+  double value = 0.0;
+  RateInterval interval;
+  json ci = nullptr;
+  std::size_t seeds_to_halve = 0;
+};
+
+RateFigure rate_figure(const RateColumns& c, bool enough) {
+  RateFigure f;
+  double k = 0.0, m = 0.0;
+  for (std::size_t i = 0; i < c.events.size(); ++i) {
+    k += c.events[i];
+    m += c.miles[i];
+  }
+  f.value = m > 0 ? 100.0 * k / m : 0.0;
+  f.interval = rate_interval(c.events, c.miles, 100.0);
+  f.ci = ci_or_null(f.interval.ci, enough);
+  f.seeds_to_halve = seeds_to_halve_rate(c.events, c.miles);
+  return f;
+}
+
+/// A seed holding this share of a rate's events (or more) makes its interval one seed's.
+constexpr double kTopSeedWarning = 1.0 / 3.0;
+
+void warn_top_seed(json& warnings, const std::string& figure, const RateFigure& f,
+                   std::size_t seeds) {
+  if (seeds >= kMinSeeds && f.interval.top_seed_share >= kTopSeedWarning) {
+    warnings.push_back(figure + ": one seed holds " + fixed(100.0 * f.interval.top_seed_share, 0) +
+                       "% of the events; the interval cannot tell how rare such seeds are");
+  }
 }
 
 json summary_row(const std::string& policy, const std::string& traffic,
@@ -72,6 +125,8 @@ json summary_row(const std::string& policy, const std::string& traffic,
   double miles = 0.0, seconds = 0.0, peak_acc = 0.0, peak_jerk = 0.0, strict_acc = 0.0,
          strict_jerk = 0.0, worst_p99 = 0.0, worst_wall_p99 = 0.0, known_cycles = 0.0;
   std::vector<double> free_miles, p50s, speed_num, speed_den;
+  std::array<RateColumns, sim::kIncidentTypeCount> by_type;
+  RateColumns all_incidents;
   std::array<double, sim::kIncidentTypeCount> counts{};
   std::array<double, core::kPlanStatusCount> status_cycles{};
   bool some_unknown = false;  // a row, or some cycles of one, whose plan status is unknown
@@ -80,7 +135,13 @@ json summary_row(const std::string& policy, const std::string& traffic,
     miles += r->miles;
     seconds += r->seconds;
     free_miles.push_back(r->best_incident_free_miles);
-    for (std::size_t t = 0; t < counts.size(); ++t) counts[t] += r->incidents_by_type[t];
+    for (std::size_t t = 0; t < counts.size(); ++t) {
+      counts[t] += r->incidents_by_type[t];
+      by_type[t].events.push_back(r->incidents_by_type[t]);
+      by_type[t].miles.push_back(r->miles);
+    }
+    all_incidents.events.push_back(r->incidents);
+    all_incidents.miles.push_back(r->miles);
     peak_acc = std::max(peak_acc, r->peak_acceleration_mps2);
     peak_jerk = std::max(peak_jerk, r->peak_jerk_mps3);
     strict_acc = std::max(strict_acc, r->peak_strict_acceleration_mps2);
@@ -100,11 +161,14 @@ json summary_row(const std::string& policy, const std::string& traffic,
     speed_den.push_back(speed.denominator);
   }
   const std::size_t n = mine.size();
+  const bool enough = n >= kMinSeeds;
+  json warnings = json::array();
   double total_incidents = 0.0;
   json per100 = json::object(), per100_ci = json::object();
   for (std::size_t t = 0; t < counts.size(); ++t) {
-    per100[incident_name(t)] = miles > 0 ? 100.0 * counts[t] / miles : 0.0;
-    per100_ci[incident_name(t)] = pair_of(rate_interval(counts[t], miles, 100.0));
+    const RateFigure f = rate_figure(by_type[t], enough);
+    per100[incident_name(t)] = f.value;
+    per100_ci[incident_name(t)] = f.ci;
     total_incidents += counts[t];
   }
   // The shares of the cycles whose status is known. Null when none is but some cycles are
@@ -124,25 +188,25 @@ json summary_row(const std::string& policy, const std::string& traffic,
                                               : 0.0;
   }
 
-  const Interval speed_ci = bootstrap_ratio(speed_num, speed_den, bootstrap_for("speed|" + key));
-  const Interval incidents_ci = rate_interval(total_incidents, miles, 100.0);
-  const double collisions = counts[static_cast<std::size_t>(sim::IncidentType::collision)];
+  const Interval speed_ci = mean_interval(speed_num, speed_den, bootstrap_for("speed|" + key));
+  const RateFigure incidents = rate_figure(all_incidents, enough);
+  warn_top_seed(warnings, "incidents_per_100mi", incidents, n);
 
   json row = {
       {"policy", policy},
       {"traffic", traffic},
       {"runs", n},
       {"total_miles", miles},
+      {"intervals", enough ? json(nullptr) : json(too_few(n))},
       {"mean_speed_mph", value(Metric::mean_speed_mph, mine)},
-      {"mean_speed_mph_ci", pair_of(speed_ci)},
+      {"mean_speed_mph_ci", ci_or_null(speed_ci, enough)},
       {"incidents", total_incidents},
-      {"incidents_per_100mi", miles > 0 ? 100.0 * total_incidents / miles : 0.0},
-      {"incidents_per_100mi_ci", pair_of(incidents_ci)},
+      {"incidents_per_100mi", incidents.value},
+      {"incidents_per_100mi_ci", incidents.ci},
       {"incidents_per_100mi_by_type", per100},
       {"incidents_per_100mi_by_type_ci", per100_ci},
       {"incident_free_miles_median", median(free_miles)},
-      {"incident_free_miles_median_ci",
-       pair_of(bootstrap_median(free_miles, bootstrap_for("free|" + key)))},
+      {"incident_free_miles_median_ci", ci_or_null(median_interval(free_miles), enough)},
       {"incident_free_miles_worst", *std::min_element(free_miles.begin(), free_miles.end())},
       {"peak_acceleration_mps2", peak_acc},
       {"peak_jerk_mps3", peak_jerk},
@@ -155,48 +219,62 @@ json summary_row(const std::string& policy, const std::string& traffic,
         {"planner_p99_us_worst", worst_p99},
         {"planner_wall_p99_us_worst", worst_wall_p99}}}};
 
-  // Collisions: all of them, and (rows that classify them) at fault and by kind.
-  const bool classified = available(Metric::at_fault_collisions_per_100mi, mine);
-  json coll = {{"total", collisions},
-               {"per_100mi", miles > 0 ? 100.0 * collisions / miles : 0.0},
-               {"per_100mi_ci", pair_of(rate_interval(collisions, miles, 100.0))},
-               {"at_fault", nullptr},
-               {"at_fault_per_100mi", nullptr},
-               {"at_fault_per_100mi_ci", nullptr},
-               {"by_kind", nullptr}};
-  Interval at_fault_ci;
-  if (classified) {
-    double at_fault = 0.0;
-    std::array<double, sim::kCollisionKindCount> by_kind{};
+  // Collisions as contacts (rows that count them so): all of them, at fault and by kind; and
+  // the rubric's collision incidents (one per second of contact) beside them.
+  json coll = nullptr;
+  std::optional<RateFigure> at_fault;
+  if (available(Metric::collisions_per_100mi, mine)) {
+    RateColumns all, mine_fault;
+    std::array<double, sim::kCollisionKindCount> kinds{};
+    double total = 0.0, fault = 0.0;
     for (const RunRow* r : mine) {
-      at_fault += r->at_fault_collisions;
-      for (std::size_t k = 0; k < by_kind.size(); ++k) by_kind[k] += r->collisions_by_kind[k];
+      all.events.push_back(r->collisions);
+      all.miles.push_back(r->miles);
+      mine_fault.events.push_back(r->at_fault_collisions);
+      mine_fault.miles.push_back(r->miles);
+      total += r->collisions;
+      fault += r->at_fault_collisions;
+      for (std::size_t k = 0; k < kinds.size(); ++k) kinds[k] += r->collisions_by_kind[k];
     }
-    json kinds = json::object();
-    for (std::size_t k = 0; k < by_kind.size(); ++k) kinds[kind_name(k)] = by_kind[k];
-    at_fault_ci = rate_interval(at_fault, miles, 100.0);
-    coll["at_fault"] = at_fault;
-    coll["at_fault_per_100mi"] = miles > 0 ? 100.0 * at_fault / miles : 0.0;
-    coll["at_fault_per_100mi_ci"] = pair_of(at_fault_ci);
-    coll["by_kind"] = kinds;
+    const RateFigure every = rate_figure(all, enough);
+    at_fault = rate_figure(mine_fault, enough);
+    warn_top_seed(warnings, "collisions_per_100mi", every, n);
+    warn_top_seed(warnings, "at_fault_collisions_per_100mi", *at_fault, n);
+    json by_kind = json::object();
+    for (std::size_t k = 0; k < kinds.size(); ++k) by_kind[kind_name(k)] = kinds[k];
+    const double rubric = counts[static_cast<std::size_t>(sim::IncidentType::collision)];
+    coll = {{"total", total},
+            {"per_100mi", every.value},
+            {"per_100mi_ci", every.ci},
+            {"at_fault", fault},
+            {"at_fault_per_100mi", at_fault->value},
+            {"at_fault_per_100mi_ci", at_fault->ci},
+            {"by_kind", by_kind},
+            {"rubric_incidents", rubric},
+            {"rubric_per_100mi", miles > 0 ? 100.0 * rubric / miles : 0.0}};
   }
   row["collisions"] = coll;
 
   // Near misses (rows that measure them).
   if (available(Metric::near_misses_per_100mi, mine)) {
-    double episodes = 0.0, ttc_below = 0.0, headway_below = 0.0;
+    RateColumns episodes;
+    double ttc_below = 0.0, headway_below = 0.0;
     double ttc_ahead = kInf, ttc_entering = kInf, headway = kInf;
     for (const RunRow* r : mine) {
-      episodes += r->near_misses;
+      episodes.events.push_back(r->near_misses);
+      episodes.miles.push_back(r->miles);
       ttc_below += r->ttc_below_s;
       headway_below += r->headway_below_s;
       ttc_ahead = std::min(ttc_ahead, r->min_ttc_ahead_s);
       ttc_entering = std::min(ttc_entering, r->min_ttc_entering_s);
       headway = std::min(headway, r->min_headway_s);
     }
-    row["near_misses"] = {{"episodes", episodes},
-                          {"per_100mi", miles > 0 ? 100.0 * episodes / miles : 0.0},
-                          {"per_100mi_ci", pair_of(rate_interval(episodes, miles, 100.0))},
+    const RateFigure near = rate_figure(episodes, enough);
+    double total = 0.0;
+    for (const double e : episodes.events) total += e;
+    row["near_misses"] = {{"episodes", total},
+                          {"per_100mi", near.value},
+                          {"per_100mi_ci", near.ci},
                           {"min_ttc_ahead_s", finite_or_null(ttc_ahead)},
                           {"min_ttc_entering_s", finite_or_null(ttc_entering)},
                           {"min_time_headway_s", finite_or_null(headway)},
@@ -208,23 +286,21 @@ json summary_row(const std::string& policy, const std::string& traffic,
     row["near_misses"] = nullptr;
   }
 
-  // How wide each interval is, and how many seeds would halve it.
-  json prec = {
-      {"mean_speed_mph", precision(speed_ci, seeds_to_halve_bootstrap(n))},
-      {"incidents_per_100mi", precision(incidents_ci, seeds_to_halve_rate(total_incidents, n))},
-      {"at_fault_collisions_per_100mi", nullptr}};
-  if (classified) {
-    prec["at_fault_collisions_per_100mi"] =
-        precision(at_fault_ci, seeds_to_halve_rate(coll["at_fault"].get<double>(), n));
+  // How wide each interval is, and how many seeds would halve it (by the same methods).
+  json prec = {{"mean_speed_mph", nullptr},
+               {"incidents_per_100mi", nullptr},
+               {"at_fault_collisions_per_100mi", nullptr}};
+  if (enough) {
+    prec["mean_speed_mph"] = precision(speed_ci, seeds_to_halve_mean(n));
+    prec["incidents_per_100mi"] = precision(incidents.interval.ci, incidents.seeds_to_halve);
+    if (at_fault) {
+      prec["at_fault_collisions_per_100mi"] =
+          precision(at_fault->interval.ci, at_fault->seeds_to_halve);
+    }
   }
   row["precision"] = prec;
+  row["warnings"] = warnings;
   return row;
-}
-
-std::string verdict(const Interval& ci, bool higher_is_better) {
-  if (!ci.excludes_zero()) return "no difference";
-  const bool up = ci.lo > 0.0;
-  return up == higher_is_better ? "better" : "worse";
 }
 
 }  // namespace
@@ -259,7 +335,7 @@ json summarize(const std::vector<RunRow>& runs, const std::vector<std::string>& 
 
 json compare_paired(const std::vector<const RunRow*>& base,
                     const std::vector<const RunRow*>& candidate, std::string_view key,
-                    const std::vector<Metric>& metrics) {
+                    const std::vector<Metric>& metrics, int resamples) {
   // Pairs by seed, in the candidate's order.
   std::map<std::uint64_t, const RunRow*> by_seed;
   for (const RunRow* r : base) by_seed.emplace(r->seed, r);
@@ -270,15 +346,18 @@ json compare_paired(const std::vector<const RunRow*>& base,
     a.push_back(r);
     b.push_back(it->second);
   }
+  const std::size_t n = a.size();
+  const bool enough = n >= kMinSeeds;
   json figures = json::object();
   for (const Metric m : metrics) {
     const MetricInfo& mi = info(m);
+    const std::string name(mi.name);
     if (a.empty() || !available(m, a) || !available(m, b)) {
-      figures[std::string(mi.name)] = nullptr;
+      figures[name] = nullptr;
       continue;
     }
     std::vector<double> na, da, nb, db, va, vb;
-    for (std::size_t i = 0; i < a.size(); ++i) {
+    for (std::size_t i = 0; i < n; ++i) {
       const MetricTerms ta = terms(m, *a[i]);
       const MetricTerms tb = terms(m, *b[i]);
       na.push_back(ta.numerator);
@@ -288,20 +367,89 @@ json compare_paired(const std::vector<const RunRow*>& base,
       va.push_back(value(m, *a[i]));
       vb.push_back(value(m, *b[i]));
     }
-    BootstrapOptions o;
-    o.seed = bootstrap_seed(std::string(key) + "|" + std::string(mi.name));
-    const Interval ci = bootstrap_ratio_difference(na, da, nb, db, o);
+    const PairedRatios pairs{na, da, nb, db};
+    const std::string k = std::string(key) + "|" + name;
     const double cand = value(m, a);
     const double base_value = value(m, b);
-    figures[std::string(mi.name)] = {
-        {"candidate", cand},
-        {"base", base_value},
-        {"difference", cand - base_value},
-        {"ci", pair_of(ci)},
-        {"probability_of_improvement", probability_of_improvement(va, vb, mi.higher_is_better)},
-        {"verdict", verdict(ci, mi.higher_is_better)}};
+    json f = {{"candidate", cand},
+              {"base", base_value},
+              {"difference", cand - base_value},
+              {"ci", nullptr},
+              {"p_value", nullptr},
+              {"p_adjusted", nullptr},
+              {"probability_of_improvement", nullptr},
+              {"probability_of_improvement_ci", nullptr},
+              {"verdict", "too few seeds"}};
+    // A figure that is the same on every seed (no event in either arm, say) has nothing to
+    // test: "no difference", outside the family (a test that cannot reject would only make
+    // the correction of the others stricter).
+    bool differs = false;
+    for (std::size_t i = 0; i < n; ++i) differs = differs || va[i] != vb[i];
+    if (enough && !differs) {
+      f["ci"] = pair_of(Interval{});
+      f["verdict"] = "no difference";
+      if (m != Metric::mean_speed_mph) {
+        std::vector<double> ea(na), eb(nb);
+        for (double& e : ea) e /= 100.0;
+        for (double& e : eb) e /= 100.0;
+        f["ci"] = pair_of(rate_difference_interval({ea, da, eb, db}, 100.0));
+      }
+      const Improvement imp =
+          probability_of_improvement(va, vb, mi.higher_is_better, bootstrap_for("p|" + k, resamples));
+      f["probability_of_improvement"] = imp.p;
+      f["probability_of_improvement_ci"] = pair_of(imp.ci);
+    } else if (enough) {
+      const bool mean = m == Metric::mean_speed_mph;
+      Interval ci;
+      double p = 1.0;
+      if (mean) {
+        ci = mean_difference_interval(pairs, bootstrap_for("ci|" + k, resamples));
+        p = mean_difference_p_value(pairs);
+      } else {
+        // Rates are numerators of 100 x events: the test and interval take the events.
+        std::vector<double> ea(na), eb(nb);
+        for (double& e : ea) e /= 100.0;
+        for (double& e : eb) e /= 100.0;
+        const PairedRatios events{ea, da, eb, db};
+        ci = rate_difference_interval(events, 100.0);
+        p = rate_difference_p_value(events, bootstrap_seed("flip|" + k));
+      }
+      const Improvement imp =
+          probability_of_improvement(va, vb, mi.higher_is_better, bootstrap_for("p|" + k, resamples));
+      f["ci"] = pair_of(ci);
+      f["p_value"] = p;
+      f["probability_of_improvement"] = imp.p;
+      f["probability_of_improvement_ci"] = pair_of(imp.ci);
+      f["verdict"] = nullptr;  // the family's correction decides (judge_family)
+    }
+    figures[name] = f;
   }
-  return {{"seeds", a.size()}, {"figures", figures}};
+  return {{"seeds", n}, {"figures", figures}};
+}
+
+std::size_t judge_family(json& comparisons) {
+  std::vector<double> p;
+  std::vector<std::pair<json*, const MetricInfo*>> tested;
+  for (json& c : comparisons) {
+    for (auto& [name, f] : c["figures"].items()) {
+      const std::optional<Metric> m = parse_metric(name);
+      if (!m || !f.is_object() || !f["p_value"].is_number()) continue;
+      p.push_back(f["p_value"].get<double>());
+      tested.emplace_back(&f, &info(*m));
+    }
+  }
+  const std::vector<double> adjusted = holm_adjust(p);
+  for (std::size_t i = 0; i < tested.size(); ++i) {
+    json& f = *tested[i].first;
+    f["p_adjusted"] = adjusted[i];
+    std::string v = "no difference";
+    if (adjusted[i] < kFamilyAlpha) {
+      const double d = f["difference"].get<double>();
+      v = (d > 0.0) == tested[i].second->higher_is_better ? "better" : "worse";
+    }
+    f["verdict"] = v;
+  }
+  return tested.size();
 }
 
 json pair_policies(const std::vector<RunRow>& runs, const std::vector<std::string>& policies,
@@ -328,7 +476,34 @@ json pair_policies(const std::vector<RunRow>& runs, const std::vector<std::strin
       }
     }
   }
+  judge_family(pairs);
   return pairs;
+}
+
+json verdict_method(std::size_t tests) {
+  return {{"alpha", kFamilyAlpha},
+          {"correction", "Holm"},
+          {"family_tests", tests},
+          {"min_seeds", kMinSeeds},
+          {"mean_test", "paired t-test on the seeds' linearized differences"},
+          {"rate_test", "exact sign-flip randomization test over seeds"},
+          {"mean_interval",
+           "bootstrap-t over seeds: the span of its symmetric and equal-tailed intervals"},
+          {"rate_interval",
+           "exact (Garwood) interval on the events over the seeds' dispersion "
+           "(quasi-Poisson, t-scaled); no event: one-sided upper bound"},
+          {"difference_interval",
+           "means: paired bootstrap-t (the same span); rates: MOVER from both rates' intervals"}};
+}
+
+std::size_t family_size(const json& pairs) {
+  std::size_t n = 0;
+  for (const json& p : pairs) {
+    for (const auto& [name, f] : p["figures"].items()) {
+      if (f.is_object() && f["p_value"].is_number()) ++n;
+    }
+  }
+  return n;
 }
 
 namespace {
@@ -342,12 +517,27 @@ std::string join_csv(const std::vector<std::string>& fields) {
   return line + "\n";
 }
 
+const json& null_json() {
+  static const json null = nullptr;
+  return null;
+}
+
+/// v[key] of an object, or null (for a part of a row that is null).
+const json& member(const json& v, const char* key) {
+  return v.is_object() && v.contains(key) ? v[key] : null_json();
+}
+
+/// pair[i] of an interval, or null.
+const json& end_of(const json& pair, int i) {
+  return pair.is_array() && pair.size() == 2 ? pair[static_cast<std::size_t>(i)] : null_json();
+}
+
 /// A number for CSV: empty for null.
 std::string csv_number(const json& v, int decimals) {
   return v.is_number() ? fixed(v.get<double>(), decimals) : std::string();
 }
 
-/// "x (lo-hi)" for a value with an interval of non-negative values.
+/// "x (lo–hi)" for a value with an interval (just "x" without one).
 std::string with_ci(const json& v, const json& ci, int decimals) {
   if (!v.is_number()) return "–";
   std::string s = fixed(v.get<double>(), decimals);
@@ -356,6 +546,14 @@ std::string with_ci(const json& v, const json& ci, int decimals) {
          ")";
   }
   return s;
+}
+
+/// A rate with its interval; with no event "0.00 (≤ hi)", its one-sided upper bound.
+std::string rate_cell(const json& v, const json& ci, int decimals) {
+  if (v.is_number() && v.get<double>() == 0.0 && ci.is_array()) {
+    return fixed(0.0, decimals) + " (≤ " + fixed(ci[1].get<double>(), decimals) + ")";
+  }
+  return with_ci(v, ci, decimals);
 }
 
 std::string seconds_or_dash(const json& v) {
@@ -372,19 +570,23 @@ std::string status_cells(const json& share) {
   return percent(share["least_bad"]) + " / " + percent(share["fallback"]);
 }
 
-/// A paired difference: "+0.27 (+0.05, +0.49) better" (the verdict only when beyond noise).
+/// A paired difference: "+0.27 (+0.05, +0.49) **better**" (the verdict only when beyond
+/// noise), "+0.27 (too few seeds)".
 std::string difference_cell(const json& f, int decimals) {
   if (f.is_null()) return "–";
-  std::string s = signed_fixed(f["difference"].get<double>(), decimals) + " (" +
-                  signed_fixed(f["ci"][0].get<double>(), decimals) + ", " +
-                  signed_fixed(f["ci"][1].get<double>(), decimals) + ")";
-  const std::string v = f["verdict"].get<std::string>();
-  if (v != "no difference") s += " **" + v + "**";
+  std::string s = signed_fixed(f["difference"].get<double>(), decimals);
+  if (!f["ci"].is_array()) return s + " (" + f["verdict"].get<std::string>() + ")";
+  s += " (" + signed_fixed(f["ci"][0].get<double>(), decimals) + ", " +
+       signed_fixed(f["ci"][1].get<double>(), decimals) + ")";
+  const std::string v = f["verdict"].is_string() ? f["verdict"].get<std::string>() : "";
+  if (v == "better" || v == "worse") s += " **" + v + "**";
   return s;
 }
 
+/// "0.62 (0.45–0.78)"
 std::string chance_cell(const json& f) {
-  return f.is_null() ? "–" : fixed(f["probability_of_improvement"].get<double>(), 2);
+  if (f.is_null() || !f["probability_of_improvement"].is_number()) return "–";
+  return with_ci(f["probability_of_improvement"], f["probability_of_improvement_ci"], 2);
 }
 
 }  // namespace
@@ -418,6 +620,10 @@ std::string summary_csv(const json& rows) {
   }
   for (std::size_t k = 0; k < sim::kCollisionKindCount; ++k)
     header.push_back("collisions_" + kind_name(k));
+  // Added with collisions counted as contacts.
+  for (const char* h : {"collisions", "collisions_per_100mi", "rubric_collision_incidents"}) {
+    header.emplace_back(h);
+  }
   std::string out = join_csv(header);
   for (const json& r : rows) {
     std::vector<std::string> f{r["policy"].get<std::string>(),
@@ -443,42 +649,38 @@ std::string summary_csv(const json& rows) {
     f.push_back(std::to_string(r["runs_ended_early"].get<std::size_t>()));
     const json& c = r["collisions"];
     const json& nm = r["near_misses"];
-    const json null = nullptr;
-    const auto ci = [&](const json& pair, int i) { return pair.is_array() ? pair[i] : null; };
-    const auto near = [&](const char* k) { return nm.is_null() ? null : nm[k]; };
-    f.push_back(csv_number(r["mean_speed_mph_ci"][0], 3));
-    f.push_back(csv_number(r["mean_speed_mph_ci"][1], 3));
-    f.push_back(csv_number(r["incidents_per_100mi_ci"][0], 3));
-    f.push_back(csv_number(r["incidents_per_100mi_ci"][1], 3));
-    f.push_back(csv_number(c["per_100mi_ci"][0], 3));
-    f.push_back(csv_number(c["per_100mi_ci"][1], 3));
-    f.push_back(csv_number(c["at_fault"], 0));
-    f.push_back(csv_number(c["at_fault_per_100mi"], 3));
-    f.push_back(csv_number(ci(c["at_fault_per_100mi_ci"], 0), 3));
-    f.push_back(csv_number(ci(c["at_fault_per_100mi_ci"], 1), 3));
-    f.push_back(csv_number(r["incident_free_miles_median_ci"][0], 3));
-    f.push_back(csv_number(r["incident_free_miles_median_ci"][1], 3));
-    f.push_back(csv_number(near("episodes"), 0));
-    f.push_back(csv_number(near("per_100mi"), 3));
-    f.push_back(csv_number(ci(near("per_100mi_ci"), 0), 3));
-    f.push_back(csv_number(ci(near("per_100mi_ci"), 1), 3));
-    f.push_back(csv_number(near("min_ttc_ahead_s"), 3));
-    f.push_back(csv_number(near("min_ttc_entering_s"), 3));
-    f.push_back(csv_number(near("min_time_headway_s"), 3));
-    f.push_back(csv_number(near("share_ttc_below"), 5));
-    f.push_back(csv_number(near("share_headway_below"), 5));
+    f.push_back(csv_number(end_of(r["mean_speed_mph_ci"], 0), 3));
+    f.push_back(csv_number(end_of(r["mean_speed_mph_ci"], 1), 3));
+    f.push_back(csv_number(end_of(r["incidents_per_100mi_ci"], 0), 3));
+    f.push_back(csv_number(end_of(r["incidents_per_100mi_ci"], 1), 3));
+    f.push_back(csv_number(end_of(member(c, "per_100mi_ci"), 0), 3));
+    f.push_back(csv_number(end_of(member(c, "per_100mi_ci"), 1), 3));
+    f.push_back(csv_number(member(c, "at_fault"), 0));
+    f.push_back(csv_number(member(c, "at_fault_per_100mi"), 3));
+    f.push_back(csv_number(end_of(member(c, "at_fault_per_100mi_ci"), 0), 3));
+    f.push_back(csv_number(end_of(member(c, "at_fault_per_100mi_ci"), 1), 3));
+    f.push_back(csv_number(end_of(r["incident_free_miles_median_ci"], 0), 3));
+    f.push_back(csv_number(end_of(r["incident_free_miles_median_ci"], 1), 3));
+    f.push_back(csv_number(member(nm, "episodes"), 0));
+    f.push_back(csv_number(member(nm, "per_100mi"), 3));
+    f.push_back(csv_number(end_of(member(nm, "per_100mi_ci"), 0), 3));
+    f.push_back(csv_number(end_of(member(nm, "per_100mi_ci"), 1), 3));
+    f.push_back(csv_number(member(nm, "min_ttc_ahead_s"), 3));
+    f.push_back(csv_number(member(nm, "min_ttc_entering_s"), 3));
+    f.push_back(csv_number(member(nm, "min_time_headway_s"), 3));
+    f.push_back(csv_number(member(nm, "share_ttc_below"), 5));
+    f.push_back(csv_number(member(nm, "share_headway_below"), 5));
     const json& prec = r["precision"];
-    f.push_back(std::to_string(prec["mean_speed_mph"]["seeds_to_halve"].get<std::size_t>()));
-    f.push_back(std::to_string(prec["incidents_per_100mi"]["seeds_to_halve"].get<std::size_t>()));
-    f.push_back(
-        prec["at_fault_collisions_per_100mi"].is_null()
-            ? std::string()
-            : std::to_string(
-                  prec["at_fault_collisions_per_100mi"]["seeds_to_halve"].get<std::size_t>()));
-    for (std::size_t k = 0; k < sim::kCollisionKindCount; ++k) {
-      f.push_back(c["by_kind"].is_null() ? std::string()
-                                         : csv_number(c["by_kind"][kind_name(k)], 0));
+    for (const char* k :
+         {"mean_speed_mph", "incidents_per_100mi", "at_fault_collisions_per_100mi"}) {
+      f.push_back(csv_number(member(prec[k], "seeds_to_halve"), 0));
     }
+    for (std::size_t k = 0; k < sim::kCollisionKindCount; ++k) {
+      f.push_back(csv_number(member(member(c, "by_kind"), kind_name(k).c_str()), 0));
+    }
+    f.push_back(csv_number(member(c, "total"), 0));
+    f.push_back(csv_number(member(c, "per_100mi"), 3));
+    f.push_back(csv_number(member(c, "rubric_incidents"), 0));
     out += join_csv(f);
   }
   return out;
@@ -486,12 +688,17 @@ std::string summary_csv(const json& rows) {
 
 std::string pairs_csv(const json& pairs) {
   std::vector<std::string> header{"traffic", "policy", "versus", "seeds"};
+  // The older columns first, then those added with tests and their correction.
+  const std::array<const char*, 5> older = {"_difference", "_lo", "_hi",
+                                            "_probability_of_improvement", "_verdict"};
+  const std::array<const char*, 4> added = {"_p_value", "_p_adjusted",
+                                            "_probability_of_improvement_lo",
+                                            "_probability_of_improvement_hi"};
   for (const Metric m : all_metrics()) {
-    const std::string n(info(m).name);
-    for (const char* suffix :
-         {"_difference", "_lo", "_hi", "_probability_of_improvement", "_verdict"}) {
-      header.push_back(n + suffix);
-    }
+    for (const char* suffix : older) header.push_back(std::string(info(m).name) + suffix);
+  }
+  for (const Metric m : all_metrics()) {
+    for (const char* suffix : added) header.push_back(std::string(info(m).name) + suffix);
   }
   std::string out = join_csv(header);
   for (const json& p : pairs) {
@@ -500,15 +707,19 @@ std::string pairs_csv(const json& pairs) {
                                std::to_string(p["seeds"].get<std::size_t>())};
     for (const Metric m : all_metrics()) {
       const json& fig = p["figures"][std::string(info(m).name)];
-      if (fig.is_null()) {
-        for (int k = 0; k < 5; ++k) f.emplace_back();
-        continue;
-      }
-      f.push_back(fixed(fig["difference"], 4));
-      f.push_back(fixed(fig["ci"][0], 4));
-      f.push_back(fixed(fig["ci"][1], 4));
-      f.push_back(fixed(fig["probability_of_improvement"], 3));
-      f.push_back(fig["verdict"].get<std::string>());
+      f.push_back(csv_number(member(fig, "difference"), 4));
+      f.push_back(csv_number(end_of(member(fig, "ci"), 0), 4));
+      f.push_back(csv_number(end_of(member(fig, "ci"), 1), 4));
+      f.push_back(csv_number(member(fig, "probability_of_improvement"), 3));
+      const json& v = member(fig, "verdict");
+      f.push_back(v.is_string() ? v.get<std::string>() : std::string());
+    }
+    for (const Metric m : all_metrics()) {
+      const json& fig = p["figures"][std::string(info(m).name)];
+      f.push_back(csv_number(member(fig, "p_value"), 6));
+      f.push_back(csv_number(member(fig, "p_adjusted"), 6));
+      f.push_back(csv_number(end_of(member(fig, "probability_of_improvement_ci"), 0), 3));
+      f.push_back(csv_number(end_of(member(fig, "probability_of_improvement_ci"), 1), 3));
     }
     out += join_csv(f);
   }
@@ -521,8 +732,10 @@ std::string summary_markdown(const json& rows, const json& pairs) {
     return "| " + p + " | " + t + " | ";
   };
   out +=
-      "Speed and incidents (95% intervals: bootstrap over runs for speed and incident-free "
-      "miles, exact Poisson for the rates)\n\n"
+      "Speed and incidents (95% intervals over the seeds: bootstrap-t for speed, order statistics "
+      "for the median, overdispersed exact for the rates; a rate with no event: 0 (≤ its "
+      "one-sided 95% upper bound); collisions are contacts, one per car touched; "
+      "docs/evaluation.md)\n\n"
       "| policy | traffic | runs | miles | mean mph | incidents /100 mi | collisions /100 mi | "
       "at fault /100 mi | speeding | max acc | max jerk | outside lane | incident-free mi, "
       "median / worst |\n"
@@ -533,9 +746,9 @@ std::string summary_markdown(const json& rows, const json& pairs) {
     out += head(r["policy"], r["traffic"]) + std::to_string(r["runs"].get<std::size_t>()) + " | " +
            fixed(r["total_miles"], 1) + " | " +
            with_ci(r["mean_speed_mph"], r["mean_speed_mph_ci"], 2) + " | " +
-           with_ci(r["incidents_per_100mi"], r["incidents_per_100mi_ci"], 2) + " | " +
-           with_ci(c["per_100mi"], c["per_100mi_ci"], 2) + " | " +
-           with_ci(c["at_fault_per_100mi"], c["at_fault_per_100mi_ci"], 2);
+           rate_cell(r["incidents_per_100mi"], r["incidents_per_100mi_ci"], 2) + " | " +
+           rate_cell(member(c, "per_100mi"), member(c, "per_100mi_ci"), 2) + " | " +
+           rate_cell(member(c, "at_fault_per_100mi"), member(c, "at_fault_per_100mi_ci"), 2);
     for (const char* type : {"speeding", "max_acceleration", "max_jerk", "outside_lane"}) {
       out += " | " + fixed(by[type], 1);
     }
@@ -549,12 +762,14 @@ std::string summary_markdown(const json& rows, const json& pairs) {
   }
   if (any_near) {
     const std::string ttc = fixed((*any_near)["ttc_threshold_s"], 1);
-    const std::string hw = fixed((*any_near)["headway_threshold_s"], 1);
-    out += "\nNear misses (least over the runs; shares of the time; an episode: TTC below " + ttc +
+    const std::string gap = fixed((*any_near)["headway_threshold_s"], 1);
+    out += "\nNear misses (least over the runs; shares of the time; the time gap is bumper to "
+           "bumper; an episode: TTC below " +
+           ttc +
            " s without a contact)\n\n"
            "| policy | traffic | least TTC ahead (s) | least TTC entering a lane (s) | least "
-           "headway (s) | time TTC < " +
-           ttc + " s | time headway < " + hw +
+           "time gap (s) | time TTC < " +
+           ttc + " s | time gap < " + gap +
            " s | near misses /100 mi |\n"
            "|---|---|---:|---:|---:|---:|---:|---|\n";
     for (const json& r : rows) {
@@ -564,29 +779,30 @@ std::string summary_markdown(const json& rows, const json& pairs) {
              seconds_or_dash(nm["min_ttc_entering_s"]) + " | " +
              seconds_or_dash(nm["min_time_headway_s"]) + " | " + percent(nm["share_ttc_below"], 2) +
              " | " + percent(nm["share_headway_below"], 1) + " | " +
-             with_ci(nm["per_100mi"], nm["per_100mi_ci"], 2) + " |\n";
+             rate_cell(nm["per_100mi"], nm["per_100mi_ci"], 2) + " |\n";
     }
   }
 
   bool classified = false;
-  for (const json& r : rows) classified = classified || !r["collisions"]["by_kind"].is_null();
+  for (const json& r : rows) classified = classified || !r["collisions"].is_null();
   if (classified) {
     out +=
-        "\nCollisions by kind (whose fault: docs/evaluation.md)\n\n| policy | traffic | "
+        "\nCollisions by kind (contacts; whose fault: docs/evaluation.md; the rubric counts a "
+        "collision incident for every second of contact)\n\n| policy | traffic | "
         "collisions | at fault |";
     for (std::size_t k = 0; k < sim::kCollisionKindCount; ++k) out += " " + kind_name(k) + " |";
-    out += "\n|---|---|---:|---:|";
+    out += " rubric's collision incidents |\n|---|---|---:|---:|";
     for (std::size_t k = 0; k < sim::kCollisionKindCount; ++k) out += "---:|";
-    out += "\n";
+    out += "---:|\n";
     for (const json& r : rows) {
       const json& c = r["collisions"];
-      if (c["by_kind"].is_null()) continue;
+      if (c.is_null()) continue;
       out += head(r["policy"], r["traffic"]) + fixed(c["total"], 0) + " | " +
              fixed(c["at_fault"], 0) + " |";
       for (std::size_t k = 0; k < sim::kCollisionKindCount; ++k) {
         out += " " + fixed(c["by_kind"][kind_name(k)], 0) + " |";
       }
-      out += "\n";
+      out += " " + fixed(c["rubric_incidents"], 0) + " |\n";
     }
   }
 
@@ -606,12 +822,17 @@ std::string summary_markdown(const json& rows, const json& pairs) {
   }
 
   if (!pairs.empty()) {
-    out +=
-        "\nPaired comparisons (the same seeds; A - B with its 95% bootstrap interval over the "
-        "seeds, **better** or **worse** when the interval excludes 0; P: the share of seeds on "
-        "which A did better, ties half)\n\n"
-        "| traffic | A vs B | seeds | mean mph | P | incidents /100 mi | P | at fault /100 mi | P "
-        "|\n|---|---|---:|---|---:|---|---:|---|---:|\n";
+    out += "\nPaired comparisons (the same seeds; A - B with its 95% interval over the seeds; "
+           "**better** or **worse** when its test is significant at 5% family-wise, Holm over "
+           "all " +
+           std::to_string(family_size(pairs)) +
+           " tests of this table's figures (paired t-test for speed, exact sign-flip test over "
+           "seeds for the rates); no verdict below " +
+           std::to_string(kMinSeeds) +
+           " seeds; P: the probability of improvement, P(A better than B) over all pairs of "
+           "runs, with its 95% interval)\n\n"
+           "| traffic | A vs B | seeds | mean mph | P | incidents /100 mi | P | at fault /100 mi "
+           "| P |\n|---|---|---:|---|---|---|---|---|---|\n";
     for (const json& p : pairs) {
       const json& f = p["figures"];
       out += "| " + p["traffic"].get<std::string>() + " | " + p["policy"].get<std::string>() +
@@ -626,8 +847,8 @@ std::string summary_markdown(const json& rows, const json& pairs) {
   }
 
   out +=
-      "\nHow many seeds (± half the 95% interval; the seeds that would halve it, if the figures "
-      "stay as they are)\n\n"
+      "\nHow many seeds (± half the 95% interval; the seeds that would halve it, by the same "
+      "method, if the spread stayed as it is)\n\n"
       "| policy | traffic | runs | mean mph ± | seeds to halve | incidents /100 mi ± | seeds to "
       "halve | at fault /100 mi ± | seeds to halve |\n"
       "|---|---|---:|---:|---:|---:|---:|---:|---:|\n";
@@ -642,6 +863,19 @@ std::string summary_markdown(const json& rows, const json& pairs) {
            cells(p["mean_speed_mph"], 2) + " | " + cells(p["incidents_per_100mi"], 2) + " | " +
            cells(p["at_fault_collisions_per_100mi"], 2) + " |\n";
   }
+
+  std::string notes;
+  for (const json& r : rows) {
+    const std::string who = r["policy"].get<std::string>() + " / " + r["traffic"].get<std::string>();
+    if (r["intervals"].is_string()) notes += "- " + who + ": no intervals, " + r["intervals"].get<std::string>() + "\n";
+    if (r["collisions"].is_null()) {
+      notes += "- " + who +
+               ": no collision figures (rows written before collisions were counted as "
+               "contacts)\n";
+    }
+    for (const json& w : r["warnings"]) notes += "- " + who + ": " + w.get<std::string>() + "\n";
+  }
+  if (!notes.empty()) out += "\nNotes\n\n" + notes;
   return out;
 }
 

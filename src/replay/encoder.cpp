@@ -68,6 +68,9 @@ void ReplayEncoder::append_incidents(std::span<const sim::Incident> incidents,
     put_i32(out, ego_.y);
     put_u8(out, i.collision ? static_cast<std::uint8_t>(i.collision->kind) : kNoCollisionKind);
     put_u8(out, i.collision && i.collision->at_fault ? 1 : 0);
+    put_u32(out, i.type == sim::IncidentType::collision && i.contact >= 0
+                     ? static_cast<std::uint32_t>(i.contact) + 1U
+                     : 0U);
     end_record(out, iat);
   }
 }

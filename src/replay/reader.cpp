@@ -2,6 +2,7 @@
 
 #include <zlib.h>
 
+#include <algorithm>
 #include <limits>
 #include <utility>
 
@@ -190,6 +191,10 @@ class Decoder {
     }
     st_.step_s = h.step_s;
     incident_types_ = h.incident_types.size();
+    const auto collision = std::find(h.incident_types.begin(), h.incident_types.end(), "collision");
+    collision_type_ = collision == h.incident_types.end()
+                          ? -1
+                          : static_cast<int>(collision - h.incident_types.begin());
     collision_kinds_ = std::min(h.collision_kinds.size(), sim::kCollisionKindCount);
     sink_.header(std::move(h), std::move(text));
   }
@@ -480,6 +485,13 @@ class Decoder {
             i.collision = sim::CollisionClass{static_cast<sim::CollisionKind>(k), fault == 1};
           }
         }
+        if (r.remaining() >= kContactBytes) {  // added later within version 2
+          const std::uint32_t contact = r.u32();
+          if (contact > 0 && (!i.collision || i.type != collision_type_)) {
+            bad_record(kind, at, "a contact number on an incident that is no classified collision");
+          }
+          if (contact > 0) i.contact = static_cast<long>(contact) - 1;
+        }
         sink_.incident(i);
         return;
       }
@@ -522,6 +534,7 @@ class Decoder {
   std::size_t body_start_ = 0;
   std::size_t inflated_base_ = 0;  // inflated offset of buf[0]
   std::size_t incident_types_ = 0;
+  int collision_type_ = -1;  ///< the index of "collision" among the header's incident types
   std::size_t collision_kinds_ = 0;
   bool ended_ = false;
   ReplayFrame frame_;           // reused

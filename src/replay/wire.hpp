@@ -27,6 +27,9 @@ inline constexpr std::size_t kIncidentBytes = 18;
 // Added within version 2 at the ends of records (older readers skip them):
 inline constexpr std::size_t kFrameSafetyBytes = 6;     // u16 TTC ahead, TTC entering, headway
 inline constexpr std::size_t kCollisionClassBytes = 2;  // u8 collision kind, u8 at fault
+// After the class (added later within version 2): u32 the collision's contact, counting from 1
+// (0: not a collision, or not known).
+inline constexpr std::size_t kContactBytes = 4;
 inline constexpr std::uint8_t kNoCollisionKind = 255;   // an incident that is not a collision
 inline constexpr std::uint16_t kNoSeconds = 65535;      // TTC or headway: none (or >= 655.35 s)
 inline constexpr std::size_t kMaxVarintBytes = 5;  // 35 bits: the zigzag of a difference of two i32

@@ -132,6 +132,7 @@ std::vector<std::string> validate(const WorldParams& p) {
   c.in_range("world.safety.headway_threshold_s", s.headway_threshold_s, 0.0, 60.0);
   c.in_range("world.safety.headway_min_speed_mps", s.headway_min_speed_mps, 0.0, 100.0);
   c.in_range("world.safety.episode_gap_s", s.episode_gap_s, 0.0, 600.0);
+  c.in_range("world.safety.contact_gap_s", s.contact_gap_s, 0.0, 600.0);
   return out;
 }
 

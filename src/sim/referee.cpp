@@ -93,8 +93,9 @@ core::Vec2 Referee::recent(long back) const {
 void Referee::count(IncidentType type, const EgoFrame& f, double value) {
   const bool per_block = type == IncidentType::max_acceleration || type == IncidentType::max_jerk;
   if (!per_block && latched(type)) return;
+  const bool collision = type == IncidentType::collision;
   incidents_.push_back({type, f.t_s, f.s_m, core::lane_of(f.d_m, road_), value,
-                        type == IncidentType::collision ? f.collision : std::nullopt});
+                        collision ? f.collision : std::nullopt, collision ? f.contact : -1});
   latch_until_step_[index_of(type)] = step_ + p_.latch_steps;
   ++counts_[index_of(type)];
   incident_free_m_ = 0.0;
@@ -231,6 +232,21 @@ void archive_incident(core::StateArchive& ar, Incident& incident, int lanes) {
                    a.io_enum(c.kind, CollisionKind::car_stopped, "collision kind");
                    a.io(c.at_fault, "at fault");
                  });
+}
+
+void Referee::link_contacts(std::span<const Contact> contacts) {
+  for (Incident& i : incidents_) {
+    if (i.type != IncidentType::collision) continue;
+    i.contact = -1;
+    for (std::size_t k = 0; k < contacts.size(); ++k) {
+      const Contact& c = contacts[k];
+      if (c.car_id == static_cast<int>(i.value) && i.t_s >= c.t_s - 1e-9 &&
+          i.t_s <= c.end_t_s + 1e-9) {
+        i.contact = static_cast<int>(k);
+        break;
+      }
+    }
+  }
 }
 
 void Referee::archive(core::StateArchive& ar) {

@@ -75,10 +75,12 @@ Stepper::Stepper(World& world, const RunOptions& options)
     if (options.restore_scope == RunOptions::RestoreScope::whole_run) {
       scorecard_.archive(ar);
       archive(ar);
+      scorecard_.archive_contacts(ar);
     } else {
       Scorecard skipped(world_);
       skipped.archive(ar);
       archive(ar);
+      skipped.archive_contacts(ar);
       scorecard_ = Scorecard(world_);
       total_steps_ = world_.steps() + std::lround(options.duration_s / world_.params().step_s);
     }
@@ -102,6 +104,7 @@ std::string Stepper::save() {
   world_.archive(ar);
   scorecard_.archive(ar);
   archive(ar);
+  scorecard_.archive_contacts(ar);
   return ar.take();
 }
 

@@ -63,33 +63,57 @@ double time_to_collision_s(double gap_m, double follower_speed_mps, double leade
   return std::max(gap_m, 0.0) / closing_mps;
 }
 
-bool entry_absorbable(const LaneEntry& e, double loop_length_m, const core::CarFootprint& size,
-                      const SafetyParams& p) {
+bool entry_absorbable(const LaneEntry& e, double front_speed_now_mps, double loop_length_m,
+                      const core::CarFootprint& size, const SafetyParams& p) {
   const double ds = wrap_delta(e.ego.s_m, e.car.s_m, loop_length_m);
   const double gap_m = std::abs(ds) - size.length_m;
   if (gap_m <= 0.0) return false;  // it came in beside the other
-  const double follower_mps = ds > 0.0 ? e.ego_speed_mps : e.car_speed_mps;
-  const double leader_mps = ds > 0.0 ? e.car_speed_mps : e.ego_speed_mps;
-  const double closing_mps = std::max(0.0, follower_mps - leader_mps);
-  const double needed_m =
-      closing_mps * p.reaction_time_s + closing_mps * closing_mps / (2.0 * p.hard_braking_mps2);
-  return needed_m < gap_m;
+  const double rear_mps = std::max(0.0, ds > 0.0 ? e.ego_speed_mps : e.car_speed_mps);
+  const double front_mps = std::max(0.0, ds > 0.0 ? e.car_speed_mps : e.ego_speed_mps);
+  const double b = p.hard_braking_mps2;
+  // What the one ahead did: its mean deceleration from the entry to the contact.
+  const double since_s = std::max(e.entered_s_ago, 1e-3);
+  const double front_decel = (front_mps - std::max(0.0, front_speed_now_mps)) / since_s;
+  if (front_decel > b) return false;
+  // The one behind responding properly against it: the least gap over time, piecewise
+  // quadratic, sampled finely until the one behind has stopped (the gap only grows after).
+  const double t_r = p.reaction_time_s;
+  const double t_end = t_r + rear_mps / b;
+  const auto travelled = [](double v, double decel, double t) {
+    if (decel > 0.0) t = std::min(t, v / decel);  // it stops
+    return v * t - 0.5 * decel * t * t;
+  };
+  constexpr int kSamples = 2000;
+  for (int i = 1; i <= kSamples; ++i) {
+    const double t = t_end * static_cast<double>(i) / kSamples;
+    const double rear_m = rear_mps * std::min(t, t_r) + travelled(rear_mps, b, std::max(0.0, t - t_r));
+    if (gap_m + travelled(front_mps, front_decel, t) - rear_m <= 0.0) return false;
+  }
+  return true;
 }
 
 CollisionClass classify_collision(const ContactSituation& s, const SafetyParams& p) {
   using K = CollisionKind;
-  // Standing still first, as nuPlan does: an ego that stands is never at fault, a car that
-  // stands is always hit by the ego.
-  if (s.ego.speed_mps <= p.stopped_speed_mps) return {K::ego_stopped, false};
-  if (s.car.speed_mps <= p.stopped_speed_mps) return {K::car_stopped, true};
-
   // Which way they met: along the axis on which they were apart just before (the larger of
   // the two gaps, bumper to bumper and side to side).
   const double ds = wrap_delta(s.ego.frenet.s_m, s.car.frenet.s_m, s.loop_length_m);
   const double dd = s.car.frenet.d_m - s.ego.frenet.d_m;
   const double along_gap_m = std::abs(ds) - s.size.length_m;
   const double across_gap_m = std::abs(dd) - s.size.width_m;
-  if (across_gap_m > along_gap_m) {
+  const bool side_by_side = across_gap_m > along_gap_m;
+  const bool car_ahead = !side_by_side && ds > 0.0;
+  const bool car_behind = !side_by_side && !car_ahead;
+  const bool ego_braked_hard = s.ego_deceleration_mps2 > p.hard_braking_mps2;
+
+  // Standing still first, as nuPlan does: an ego that stands is not at fault, a car that
+  // stands is hit by the ego. An ego that came to a stand by braking harder than traffic does,
+  // in front of a car that then ran into it, is judged as the same stop at a crawl is (below).
+  if (s.ego.speed_mps <= p.stopped_speed_mps && !(car_behind && ego_braked_hard)) {
+    return {K::ego_stopped, false};
+  }
+  if (s.car.speed_mps <= p.stopped_speed_mps) return {K::car_stopped, true};
+
+  if (side_by_side) {
     if (s.ego.in_two_lanes && !s.car.in_two_lanes) return {K::ego_lane_change, true};
     if (s.car.in_two_lanes && !s.ego.in_two_lanes) return {K::car_cut_in, false};
     // Both in one lane (one wandered) or both changing: the fault of the one that moved
@@ -98,8 +122,7 @@ CollisionClass classify_collision(const ContactSituation& s, const SafetyParams&
   }
 
   // Front or rear. The more recent entry into the other's lane within the window decides
-  // first: whoever entered made the situation, unless the one behind had room to absorb it.
-  const bool car_ahead = ds > 0.0;
+  // first: whoever entered made the situation, unless the one behind could have absorbed it.
   const double window = p.lane_change_window_s;
   const bool ego_entered = s.ego_entry.s_ago < window;
   const bool car_entered = s.car_entry.s_ago < window;
@@ -108,20 +131,22 @@ CollisionClass classify_collision(const ContactSituation& s, const SafetyParams&
   if (ego_entered_last) {
     // Into a car ahead: always the ego's. In front of a follower: the ego's when the
     // follower could not absorb the gap it was left.
-    if (car_ahead || !entry_absorbable(s.ego_entry, s.loop_length_m, s.size, p)) {
+    if (car_ahead || !entry_absorbable(s.ego_entry, s.ego.speed_mps, s.loop_length_m, s.size, p)) {
       return {K::ego_lane_change, true};
     }
   } else if (car_entered) {
     // Into the ego's rear: the car's. In front of the ego: the car's when the ego could not
     // absorb it, else the ego had room to brake.
-    if (!car_ahead || !entry_absorbable(s.car_entry, s.loop_length_m, s.size, p)) {
+    if (!car_ahead || !entry_absorbable(s.car_entry, s.car.speed_mps, s.loop_length_m, s.size, p)) {
       return {K::car_cut_in, false};
     }
     return {K::ego_hit_car_ahead, true};
   }
   if (car_ahead) return {K::ego_hit_car_ahead, true};
-  if (!ego_entered_last && s.ego.in_two_lanes) return {K::ego_lane_change, true};
-  if (s.ego_deceleration_mps2 > p.hard_braking_mps2) return {K::hit_from_behind_braking, true};
+  // A follower in a lane the ego did not just enter drove into its rear (nuPlan's active rear
+  // collision, also when the ego's body reaches into the next lane): not the ego's, unless it
+  // braked harder than traffic does.
+  if (ego_braked_hard) return {K::hit_from_behind_braking, true};
   return {K::hit_from_behind, false};
 }
 
@@ -135,6 +160,7 @@ SafetyMonitor::SafetyMonitor(const SafetyParams& params, double step_s,
                                 std::to_string(ego_.lane_since.size()));
   }
   window_steps_ = std::max<long>(1, std::lround(p_.braking_window_s / step_s));
+  contact_gap_steps_ = std::max<long>(1, std::lround(p_.contact_gap_s / step_s));
   inverse_lane_width_ = 1.0 / road_.lane_width_m;
   summary_.ttc_threshold_s = p_.ttc_threshold_s;
   summary_.headway_threshold_s = p_.headway_threshold_s;
@@ -239,6 +265,7 @@ LaneEntry SafetyMonitor::lane_entry(const Track& mover, const Track& other,
   }
   const long ended = std::max(since, mover.two_lanes_last);
   e.s_ago = static_cast<double>(last_step_ - ended) * step_s_;
+  e.entered_s_ago = static_cast<double>(last_step_ - since) * step_s_;
   return e;
 }
 
@@ -282,15 +309,22 @@ bool SafetyMonitor::classify_contact(int car_id) {
   return true;
 }
 
-std::optional<CollisionClass> SafetyMonitor::observe(const SafetyEgo& ego,
-                                                     std::span<const TrafficCar> cars,
-                                                     std::optional<int> contact_id) {
+std::optional<ContactStep> SafetyMonitor::observe(const SafetyEgo& ego,
+                                                  std::span<const TrafficCar> cars,
+                                                  std::optional<int> contact_id) {
+  // Contacts end once the two have been apart for the gap; a touch before then belongs to the
+  // contact that car already has with the ego.
+  std::erase_if(open_contacts_,
+                [&](const OpenContact& c) { return step_ - c.last_step > contact_gap_steps_; });
+  const auto open_with = [&](int car_id) {
+    return std::find_if(open_contacts_.begin(), open_contacts_.end(),
+                        [&](const OpenContact& c) { return c.car_id == car_id; });
+  };
+  const bool begins = contact_id && open_with(*contact_id) == open_contacts_.end();
   // A contact that begins now is classified from the state of the step before (the tracks
-  // still hold it), when the two did not touch; at the first step, from the state now.
-  const bool begins = contact_id && contact_id != contact_id_;
+  // still hold it: the two did not touch then); at the first step, from the state now.
   bool classified = false;
   if (begins && step_ > 0) classified = classify_contact(*contact_id);
-  contact_id_ = contact_id;
 
   // Then the tracks move on to this step.
   if (step_ > 0) ring_head_ = (ring_head_ + 1) % static_cast<std::size_t>(window_steps_ + 1);
@@ -314,6 +348,17 @@ std::optional<CollisionClass> SafetyMonitor::observe(const SafetyEgo& ego,
     // A car that is not on the road: the ego could do nothing about it.
     contact_class_ = {CollisionKind::car_cut_in, false};
   }
+  std::optional<ContactStep> touch;
+  if (begins) {
+    open_contacts_.push_back({*contact_id, step_, contact_class_, contacts_begun_++});
+    touch = ContactStep{contact_class_, open_contacts_.back().index, true};
+  } else if (contact_id) {
+    const auto it = open_with(*contact_id);
+    it->last_step = step_;
+    contact_class_ = it->collision;
+    touch = ContactStep{it->collision, it->index, false};
+  }
+  contact_id_ = contact_id;
 
   measure();
   const double ttc = std::min(current_.ttc_ahead_s, current_.ttc_entering_s);
@@ -327,8 +372,7 @@ std::optional<CollisionClass> SafetyMonitor::observe(const SafetyEgo& ego,
   }
   count_episode(below, contact_id.has_value());
   ++step_;
-  if (contact_id) return contact_class_;
-  return std::nullopt;
+  return touch;
 }
 
 void SafetyMonitor::measure() {
@@ -477,6 +521,19 @@ void SafetyMonitor::archive(core::StateArchive& ar) {
   ar.io(in_episode_, "in episode");
   ar.io(episode_contact_, "episode contact");
   ar.io(last_below_step_, "last step below");
+}
+
+void SafetyMonitor::archive_contacts(core::StateArchive& ar) {
+  ar.part("contacts");
+  ar.io_range(contacts_begun_, 0, std::numeric_limits<int>::max(), "contacts begun");
+  ar.io_vector(open_contacts_, 1U << 16U, "open contacts", [this](core::StateArchive& a,
+                                                                  OpenContact& c) {
+    a.io_range(c.car_id, 0, 65535, "contact car");
+    a.io_range(c.last_step, step_ - contact_gap_steps_ - 1, step_, "contact's last step");
+    a.io_enum(c.collision.kind, CollisionKind::car_stopped, "contact kind");
+    a.io(c.collision.at_fault, "contact at fault");
+    a.io_range(c.index, 0, contacts_begun_ - 1, "contact number");
+  });
 }
 
 }  // namespace overtake::sim

@@ -63,11 +63,28 @@ Scorecard::Scorecard(const World& world)
   referee_.set_initial_speed(world.ego().speed_mps);
 }
 
+namespace {
+constexpr auto kCollision = static_cast<std::size_t>(IncidentType::collision);
+}  // namespace
+
 void Scorecard::observe_step(const World& world) {
   EgoFrame frame = world.ego_frame();
-  frame.collision = safety_.observe({world.ego().map_frenet, world.ego().speed_mps},
-                                    world.traffic().cars(), frame.collided_with);
+  const std::optional<ContactStep> touch = safety_.observe(
+      {world.ego().map_frenet, world.ego().speed_mps}, world.traffic().cars(), frame.collided_with);
+  Contact* contact = nullptr;
+  if (touch) {
+    frame.collision = touch->collision;
+    frame.contact = touch->index;
+    if (touch->begins) {
+      contacts_.push_back({*frame.collided_with, frame.t_s, frame.t_s, frame.s_m,
+                           core::lane_of(frame.d_m, world.params().road), touch->collision, 0});
+    }
+    contact = &contacts_[static_cast<std::size_t>(touch->index)];
+    contact->end_t_s = frame.t_s;
+  }
+  const int collisions_before = referee_.counts()[kCollision];
   referee_.observe(frame);
+  if (contact && referee_.counts()[kCollision] > collisions_before) ++contact->rubric_collisions;
   lanes_.observe(world.ego().frenet.d_m, step_s_);
 }
 
@@ -115,6 +132,7 @@ RunReport Scorecard::report(const World& world, RunOutcome outcome, CycleClock c
   r.best_incident_free_m = referee_.best_incident_free_m();
   r.incidents = referee_.incidents();
   r.incident_counts = referee_.counts();
+  r.contacts = contacts_;
   r.exact_outside_lane = referee_.exact_outside_lane_count();
   r.peak = referee_.peaks();
   r.safety = safety_.summary();
@@ -145,6 +163,28 @@ void LaneTracker::archive(core::StateArchive& ar) {
   const std::size_t n = time_in_lane_s_.size();
   ar.require(ar.io_length(n, n, "time in lane") == n, "time in lane: another number of lanes");
   for (double& t : time_in_lane_s_) ar.io(t, "time in lane");
+}
+
+void Scorecard::archive_contacts(core::StateArchive& ar) {
+  if (ar.loading() && ar.at_end()) {  // a checkpoint of a build before contacts
+    contacts_.clear();
+    return;
+  }
+  safety_.archive_contacts(ar);
+  ar.io_vector(contacts_, 1U << 24U, "contacts", [](core::StateArchive& a, Contact& c) {
+    a.io_range(c.car_id, 0, 65535, "contact car");
+    a.io(c.t_s, "contact start");
+    a.io(c.end_t_s, "contact end");
+    a.require(c.end_t_s >= c.t_s, "contact end: before its start");
+    a.io_metres(c.s_m, "contact s");
+    a.io_range(c.lane, -64, 128, "contact lane");
+    a.io_enum(c.collision.kind, CollisionKind::car_stopped, "contact kind");
+    a.io(c.collision.at_fault, "contact at fault");
+    a.io_range(c.rubric_collisions, 0, std::numeric_limits<int>::max(), "contact's incidents");
+  });
+  ar.require(static_cast<std::size_t>(safety_.contacts_begun()) == contacts_.size(),
+             "contacts: another number than the safety monitor began");
+  if (ar.loading()) referee_.link_contacts(contacts_);
 }
 
 void Scorecard::archive(core::StateArchive& ar) {

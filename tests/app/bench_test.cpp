@@ -109,12 +109,13 @@ TEST_F(BenchTest, SameRunsTwiceAndWithOneOrTwoJobs) {
 }
 
 // `overtake compare`: a second identical bench is no difference (exit 0 even with
-// --fail-if-worse); a slower planner fails --fail-if-worse; folders that are not benches, or
-// benches that cannot be paired, fail with a message; bad flags are usage errors.
+// --fail-if-worse); a slower planner fails --fail-if-worse; too few seeds give no verdict
+// (exit 2 with --fail-if-worse, and the reason); folders that are not benches, or benches
+// that cannot be paired, fail with a message; bad flags are usage errors.
 TEST_F(BenchTest, CompareTellsNoDifferenceFromWorse) {
   BenchSpec a = spec("a");
   a.policies = {"reference"};
-  a.seeds = {1, 2, 3, 4, 5};
+  a.seeds = {1, 2, 3, 4, 5, 6, 7, 8};
   BenchSpec b = a;
   b.out = root_ / "b";
   BenchSpec slow = a;
@@ -126,7 +127,10 @@ TEST_F(BenchTest, CompareTellsNoDifferenceFromWorse) {
   BenchSpec other_map = a;
   other_map.out = root_ / "other";
   other_map.minutes = 0.5;
-  for (const BenchSpec* s : {&a, &b, &slow, &other_map}) (void)run_bench(*s, nullptr, {});
+  BenchSpec few = slow;
+  few.out = root_ / "few";
+  few.seeds = {1, 2, 3};
+  for (const BenchSpec* s : {&a, &b, &slow, &other_map, &few}) (void)run_bench(*s, nullptr, {});
 
   const auto compare = [&](std::vector<std::string> args) {
     args.insert(args.begin(), "compare");
@@ -148,6 +152,13 @@ TEST_F(BenchTest, CompareTellsNoDifferenceFromWorse) {
   const json cmp = json::parse(read_file(root_ / "cmp.json"));
   EXPECT_EQ(cmp["comparisons"][0]["figures"]["mean_speed_mph"]["verdict"], "worse");
   EXPECT_EQ(compare({a.out, slow.out}).first, 0);  // reported, not failed, without the flag
+  // Three seeds, however much slower: no verdict, and --fail-if-worse says why (exit 2).
+  auto [few_status, few_text] = compare({a.out, few.out, "--fail-if-worse"});
+  EXPECT_EQ(few_status, 2) << few_text;
+  EXPECT_THAT(few_text, HasSubstr("no verdict, reference / faithful: too few seeds: 3, need at "
+                                  "least 8"));
+  EXPECT_THAT(few_text, HasSubstr("too few seeds"));
+  EXPECT_THAT(few_text, ::testing::Not(HasSubstr(" worse\n")));
 
   auto [unpaired, unpaired_text] = compare({a.out, other_map.out});
   EXPECT_EQ(unpaired, 1);
@@ -416,8 +427,8 @@ TEST(BenchSummary, PlanStatusesAndEarlyEndsAreSummed) {
   EXPECT_THAT(eval::summary_markdown(rows, json::array()), HasSubstr("| 0.0% / 10.0% | 1 |"));
   EXPECT_THAT(eval::summary_csv(rows),
               HasSubstr("least_bad_cycle_share,fallback_cycle_share,runs_ended_early"));
-  // Without classes in every row there are no at-fault figures, nor near misses.
-  EXPECT_TRUE(rows[0]["collisions"]["at_fault"].is_null());
+  // Without contacts in every row there are no collision figures, nor near misses.
+  EXPECT_TRUE(rows[0]["collisions"].is_null());
   EXPECT_TRUE(rows[0]["near_misses"].is_null());
 }
 

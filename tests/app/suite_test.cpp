@@ -28,12 +28,19 @@ class TempDir : public test::TempDir {
   TempDir() : test::TempDir("overtake-suite") {}
 };
 
-sim::Incident collision(double t, sim::CollisionKind kind, bool at_fault) {
-  sim::Incident i;
-  i.type = sim::IncidentType::collision;
-  i.t_s = t;
-  i.collision = sim::CollisionClass{kind, at_fault};
-  return i;
+/// A contact with a car at `t` that the rubric counts `counts` times (once a second).
+void add_collision(sim::RunReport& r, double t, sim::CollisionKind kind, bool at_fault,
+                   int counts = 1) {
+  const int contact = static_cast<int>(r.contacts.size());
+  for (int k = 0; k < counts; ++k) {
+    sim::Incident i;
+    i.type = sim::IncidentType::collision;
+    i.t_s = t + k;
+    i.collision = sim::CollisionClass{kind, at_fault};
+    i.contact = contact;
+    r.incidents.push_back(i);
+  }
+  r.contacts.push_back({contact + 1, t, t + counts - 1, 0.0, 1, {kind, at_fault}, counts});
 }
 
 TEST(JudgeScenario, NoExpectationMeansNoAtFaultCollision) {
@@ -41,9 +48,9 @@ TEST(JudgeScenario, NoExpectationMeansNoAtFaultCollision) {
   sim::RunReport r;
   ScenarioTrace trace;
   EXPECT_TRUE(judge_scenario(sc, r, trace).empty());
-  r.incidents.push_back(collision(3.0, sim::CollisionKind::hit_from_behind, false));
+  add_collision(r, 3.0, sim::CollisionKind::hit_from_behind, false);
   EXPECT_TRUE(judge_scenario(sc, r, trace).empty());  // not the ego's fault
-  r.incidents.push_back(collision(4.0, sim::CollisionKind::ego_lane_change, true));
+  add_collision(r, 4.0, sim::CollisionKind::ego_lane_change, true);
   const auto fails = judge_scenario(sc, r, trace);
   ASSERT_EQ(fails.size(), 1U);
   EXPECT_THAT(fails[0], HasSubstr("1 at-fault collision (at most 0)"));
@@ -59,7 +66,7 @@ TEST(JudgeScenario, EachLimitIsChecked) {
   sc.expect.min_distance_m = 100.0;
   sim::RunReport r;
   r.distance_m = 50.0;
-  r.incidents.push_back(collision(3.0, sim::CollisionKind::hit_from_behind, false));
+  add_collision(r, 3.0, sim::CollisionKind::hit_from_behind, false);
   sim::Incident jerk;
   jerk.type = sim::IncidentType::max_jerk;
   jerk.t_s = 5.0;
@@ -80,18 +87,39 @@ TEST(JudgeScenario, EachLimitIsChecked) {
   EXPECT_TRUE(judge_scenario(sc, r, trace).empty());
 }
 
+TEST(JudgeScenario, OneContactIsOneCollisionHoweverOftenTheRubricCountedIt) {
+  // A contact the rubric counted three times (3 s of contact): one collision, three of the
+  // rubric's incidents.
+  sim::Scenario sc;
+  sc.expect.max_collisions = 1;
+  sim::RunReport r;
+  add_collision(r, 3.0, sim::CollisionKind::ego_hit_car_ahead, true, 3);
+  ScenarioTrace trace;
+  EXPECT_TRUE(judge_scenario(sc, r, trace).empty());
+  sc.expect.max_at_fault_collisions = 0;
+  auto fails = judge_scenario(sc, r, trace);
+  ASSERT_EQ(fails.size(), 1U);
+  EXPECT_THAT(fails[0], HasSubstr("1 at-fault collision (at most 0)"));
+  sc.expect.max_at_fault_collisions.reset();
+  sc.expect.max_incidents = 2;
+  fails = judge_scenario(sc, r, trace);
+  ASSERT_EQ(fails.size(), 1U);
+  EXPECT_THAT(fails[0], HasSubstr("3 incidents (at most 2)"));
+}
+
 TEST(JudgeScenario, TheLeadInIsNotJudgedAndAFailedPlannerFails) {
   sim::Scenario sc;
   sc.cut.emplace();
   sc.cut->lead_in_s = 10.0;
   sim::RunReport r;
-  r.incidents.push_back(collision(105.0, sim::CollisionKind::ego_lane_change, true));
+  add_collision(r, 105.0, sim::CollisionKind::ego_lane_change, true);
   ScenarioTrace trace;
   trace.start_s = 100.0;
   EXPECT_TRUE(judge_scenario(sc, r, trace).empty());  // 5 s in: the lead-in
-  r.incidents.push_back(collision(111.0, sim::CollisionKind::ego_lane_change, true));
+  add_collision(r, 111.0, sim::CollisionKind::ego_lane_change, true);
   EXPECT_EQ(judge_scenario(sc, r, trace).size(), 1U);
   r.incidents.clear();
+  r.contacts.clear();
   r.outcome = {sim::RunEnd::planner_failed, 104.0, "stalled"};
   const auto fails = judge_scenario(sc, r, trace);
   ASSERT_EQ(fails.size(), 1U);

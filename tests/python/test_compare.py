@@ -10,8 +10,8 @@ import overtake
 
 @pytest.fixture(scope="module")
 def benches(binary, tmp_path_factory):
-    """Two identical benches and one of a slower reference planner (walkthrough and reference,
-    seeds 1-3, 2 minutes of faithful traffic)."""
+    """Two identical benches, one of a slower reference planner (walkthrough and reference,
+    seeds 1-8, a minute of faithful traffic) and one of only three seeds."""
     root = tmp_path_factory.mktemp("benches")
     config = root / "slow.json"
     defaults = json.loads(subprocess.run([binary, "config"], check=True, capture_output=True,
@@ -19,10 +19,11 @@ def benches(binary, tmp_path_factory):
     defaults["planner"]["reference"]["behaviour"]["cruise_speed_mps"] = 18.0
     config.write_text(json.dumps(defaults))
     out = {}
-    for name, extra in (("a", []), ("b", []), ("slow", ["--config", str(config)])):
+    for name, seeds, extra in (("a", "1-8", []), ("b", "1-8", []),
+                               ("slow", "1-8", ["--config", str(config)]), ("few", "1-3", [])):
         out[name] = root / name
-        subprocess.run([binary, "bench", "--policies", "walkthrough,reference", "--seeds", "1-3",
-                        "--minutes", "2", "--traffic", "faithful", "--jobs", "2", "--quiet",
+        subprocess.run([binary, "bench", "--policies", "walkthrough,reference", "--seeds", seeds,
+                        "--minutes", "1", "--traffic", "faithful", "--jobs", "2", "--quiet",
                         "--out", str(out[name]), *extra], check=True, timeout=600)
     return out
 
@@ -30,12 +31,16 @@ def benches(binary, tmp_path_factory):
 def test_an_identical_bench_is_no_difference(benches):
     r = overtake.compare(benches["a"], benches["b"])
     assert r["worse"] == []
+    assert r["withheld"] == []
     assert [(c["candidate_policy"], c["traffic"], c["seeds"]) for c in r["comparisons"]] == [
-        ("walkthrough", "faithful", 3), ("reference", "faithful", 3)]
+        ("walkthrough", "faithful", 8), ("reference", "faithful", 8)]
     for c in r["comparisons"]:
         for name, f in c["figures"].items():
             assert f["verdict"] == "no difference", name
-            assert f["difference"] == 0.0 and f["ci"] == [0.0, 0.0], name
+            assert f["difference"] == 0.0 and f["ci"][0] <= 0.0 <= f["ci"][1], name
+            assert f["probability_of_improvement"] == 0.5, name
+    assert r["comparisons"][0]["figures"]["mean_speed_mph"]["ci"] == [0.0, 0.0]
+    assert r["verdicts"]["correction"] == "Holm" and r["verdicts"]["min_seeds"] == 8
 
 
 def test_a_slower_planner_is_worse_in_speed(benches):
@@ -44,7 +49,9 @@ def test_a_slower_planner_is_worse_in_speed(benches):
     speed = ref["figures"]["mean_speed_mph"]
     assert speed["difference"] < -1.0
     assert speed["ci"][1] < 0 and speed["verdict"] == "worse"
-    assert speed["probability_of_improvement"] == 0.0
+    assert speed["p_adjusted"] < 0.05 and speed["p_adjusted"] >= speed["p_value"]
+    lo, hi = speed["probability_of_improvement_ci"]
+    assert lo <= speed["probability_of_improvement"] <= hi and hi < 0.5
     assert "reference / faithful: mean_speed_mph" in r["worse"]
     assert any("parameters differ" in n for n in r["notes"])
     # The walkthrough policy has no such parameter: unchanged.
@@ -56,7 +63,7 @@ def test_pairs_by_hand_and_what_is_refused(benches):
     r = overtake.compare(benches["a"], benches["b"], pairs={"walkthrough": "reference"})
     assert len(r["comparisons"]) == 1
     c = r["comparisons"][0]
-    assert (c["base_policy"], c["candidate_policy"], c["seeds"]) == ("walkthrough", "reference", 3)
+    assert (c["base_policy"], c["candidate_policy"], c["seeds"]) == ("walkthrough", "reference", 8)
     rows = {row["policy"]: row for row in overtake.bench_summary(benches["a"])["rows"]}
     speed = c["figures"]["mean_speed_mph"]
     assert speed["difference"] == pytest.approx(
@@ -70,6 +77,15 @@ def test_pairs_by_hand_and_what_is_refused(benches):
         overtake.compare(benches["a"], benches["a"] / "missing")
 
 
+def test_too_few_seeds_give_no_verdict(benches):
+    r = overtake.compare(benches["a"], benches["few"])
+    assert r["worse"] == []
+    assert r["withheld"] == ["walkthrough / faithful: too few seeds: 3, need at least 8",
+                             "reference / faithful: too few seeds: 3, need at least 8"]
+    speed = r["comparisons"][0]["figures"]["mean_speed_mph"]
+    assert speed["verdict"] == "too few seeds" and speed["ci"] is None
+
+
 def test_the_summary_is_the_benchs_own(benches):
     s = overtake.bench_summary(benches["a"])
     written = json.loads((benches["a"] / "summary.json").read_text())
@@ -78,3 +94,4 @@ def test_the_summary_is_the_benchs_own(benches):
     lo, hi = row["mean_speed_mph_ci"]
     assert lo <= row["mean_speed_mph"] <= hi
     assert row["collisions"]["at_fault"] is not None
+    assert s["verdicts"] == written["verdicts"]

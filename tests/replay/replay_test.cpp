@@ -237,6 +237,7 @@ TEST_F(ReplayTest, RoundTripKeepsEveryFieldBitForBit) {
     const auto at = static_cast<std::size_t>(got.step);
     EXPECT_EQ(cm(got.position.x), cm(seen.states[at].position.x));
     EXPECT_EQ(got.collision, want.collision);
+    EXPECT_EQ(got.contact, want.type == IncidentType::collision ? want.contact : -1);
   }
   // Some frames had a car ahead, so the figures were measured.
   EXPECT_TRUE(std::any_of(r.frames.begin(), r.frames.end(),
@@ -506,6 +507,51 @@ TEST_F(ReplayTest, UnknownKindsAreSkippedAndBadRecordsNamed) {
   e2.append_frame(first_frame(world), twice);
   write_bytes(file, handmade(header(), twice));
   EXPECT_THAT(error_of(file), HasSubstr("step 0 does not follow step 0"));
+}
+
+TEST_F(ReplayTest, AnIncidentsContactIsReadAndOneOnNoCollisionRefused) {
+  World world(map_, line_, params_, TrafficProfile::faithful, 1);
+  ReplayEncoder enc;
+  std::string records;
+  enc.append_frame(first_frame(world), records);
+  Incident hit;
+  hit.type = IncidentType::collision;
+  hit.value = 4.0;
+  hit.collision = CollisionClass{CollisionKind::ego_hit_car_ahead, true};
+  hit.contact = 2;
+  Incident speeding;
+  speeding.type = IncidentType::speeding;
+  speeding.value = 23.0;
+  const std::vector<Incident> both = {hit, speeding};
+  enc.append_incidents(both, records);
+  std::string good = records;
+  ReplayEncoder::append_end("{}", good);
+  const auto file = dir_ / "contact.otr";
+  write_bytes(file, handmade(header(), good));
+  const Replay r = read_replay(file);
+  ASSERT_EQ(r.incidents.size(), 2U);
+  EXPECT_EQ(r.incidents[0].contact, 2);
+  EXPECT_EQ(r.incidents[0].collision, hit.collision);
+  EXPECT_EQ(r.incidents[1].contact, -1);
+  // A 20-byte incident (a file from before contacts) has none.
+  std::string older;
+  ReplayEncoder().append_frame(first_frame(world), older);
+  std::string one;
+  enc.append_incidents(std::vector<Incident>{hit}, one);
+  older += record_of(3, one.substr(5, 20));
+  ReplayEncoder::append_end("{}", older);
+  write_bytes(file, handmade(header(), older));
+  EXPECT_EQ(read_replay(file).incidents.at(0).contact, -1);
+  // A contact number on a speeding incident is refused.
+  std::string bad;
+  ReplayEncoder().append_frame(first_frame(world), bad);
+  std::string payload = one.substr(5);
+  payload[0] = static_cast<char>(IncidentType::speeding);
+  bad += record_of(3, payload);
+  ReplayEncoder::append_end("{}", bad);
+  write_bytes(file, handmade(header(), bad));
+  EXPECT_THAT(error_of(file), HasSubstr("a contact number on an incident that is no classified "
+                                        "collision"));
 }
 
 // Found by fuzz/replay_fuzz.cpp (UBSan: 1e+300 is outside the range of int): the header's

@@ -62,6 +62,35 @@ TEST(CollisionRules, AStandingEgoIsNeverAtFaultAndAStandingCarAlwaysIsHit) {
             (CollisionClass{K::car_stopped, true}));
 }
 
+TEST(CollisionRules, AStopByBrakingHarderThanTrafficIsJudgedAsTheSameStopAtACrawl) {
+  // Rear-ended after braking at 8 m/s^2 over the last second: at 0.06 m/s and at 0.04 m/s
+  // (standing, by the stopped threshold) alike the ego's, as a hard stop.
+  for (const double v : {0.06, 0.04, 0.0}) {
+    auto rear = situation(body(100, 6, v), body(95.2, 6, 5));
+    rear.ego_deceleration_mps2 = 8.0;
+    EXPECT_EQ(classify(rear), (CollisionClass{K::hit_from_behind_braking, true})) << v;
+    // Without the hard braking: not the ego's, either way.
+    rear.ego_deceleration_mps2 = 2.0;
+    EXPECT_FALSE(classify(rear).at_fault) << v;
+  }
+  // A standing ego that braked hard is still not at fault for a car that drives into its
+  // front or side.
+  auto front = situation(body(100, 6, 0.0), body(104.8, 6, 3));
+  front.ego_deceleration_mps2 = 8.0;
+  EXPECT_EQ(classify(front), (CollisionClass{K::ego_stopped, false}));
+}
+
+TEST(CollisionRules, AFollowerInTheEgosOwnLaneRearEndingAStraddlingEgoIsNotItsFault) {
+  // The ego's body reaches into the next lane (it has not entered that lane's follower's
+  // lane: the follower is in the ego's own lane): an active rear collision (nuPlan), not the
+  // ego's, where it once counted as the ego's lane change.
+  auto rear = situation(body(100, 7.2, 15), body(95.2, 6.0, 20));
+  rear.ego.in_two_lanes = true;
+  EXPECT_EQ(classify(rear), (CollisionClass{K::hit_from_behind, false}));
+  rear.ego_deceleration_mps2 = 7.0;
+  EXPECT_EQ(classify(rear), (CollisionClass{K::hit_from_behind_braking, true}));
+}
+
 TEST(CollisionRules, FrontAndRearInOneLane) {
   // The ego 4.8 m behind the car (bumpers 0.1 m apart): it drove into it.
   EXPECT_EQ(classify(situation(body(100, 6, 20), body(104.8, 6.3, 15))),
@@ -103,15 +132,41 @@ TEST(CollisionRules, SideContactsGoToWhoeverWasChangingLanes) {
 TEST(CollisionRules, AGapTheFollowerCouldAbsorbOrNot) {
   const SafetyParams p;
   const core::CarFootprint size;
-  // Closing at 10 m/s, reacting after 1 s and braking at 6.5 m/s^2 needs 10 + 100/13 = 17.7 m.
-  EXPECT_FALSE(entry_absorbable(entry(0, 100, 15, 100 - 4.7 - 17.0, 25), kLoopM, size, p));
-  EXPECT_TRUE(entry_absorbable(entry(0, 100, 15, 100 - 4.7 - 18.5, 25), kLoopM, size, p));
+  // The one ahead holds its speed. Closing at 10 m/s, reacting after 1 s and braking at
+  // 6.5 m/s^2 needs 10 + 100/13 = 17.7 m.
+  EXPECT_FALSE(entry_absorbable(entry(0, 100, 15, 100 - 4.7 - 17.0, 25), 15, kLoopM, size, p));
+  EXPECT_TRUE(entry_absorbable(entry(0, 100, 15, 100 - 4.7 - 18.5, 25), 15, kLoopM, size, p));
   // The same with the ego behind, closing on the car.
-  EXPECT_FALSE(entry_absorbable(entry(0, 100, 25, 100 + 4.7 + 17.0, 15), kLoopM, size, p));
-  EXPECT_TRUE(entry_absorbable(entry(0, 100, 25, 100 + 4.7 + 18.5, 15), kLoopM, size, p));
+  EXPECT_FALSE(entry_absorbable(entry(0, 100, 25, 100 + 4.7 + 17.0, 15), 15, kLoopM, size, p));
+  EXPECT_TRUE(entry_absorbable(entry(0, 100, 25, 100 + 4.7 + 18.5, 15), 15, kLoopM, size, p));
   // Not closing: any gap will do; beside the other: none will.
-  EXPECT_TRUE(entry_absorbable(entry(0, 100, 25, 100 - 4.7 - 0.5, 20), kLoopM, size, p));
-  EXPECT_FALSE(entry_absorbable(entry(0, 100, 20, 100 - 3.0, 20), kLoopM, size, p));
+  EXPECT_TRUE(entry_absorbable(entry(0, 100, 25, 100 - 4.7 - 0.5, 20), 25, kLoopM, size, p));
+  EXPECT_FALSE(entry_absorbable(entry(0, 100, 20, 100 - 3.0, 20), 20, kLoopM, size, p));
+}
+
+TEST(CollisionRules, WhatTheOneAheadDidAfterTheEntryCounts) {
+  const SafetyParams p;
+  const core::CarFootprint size;
+  // A car enters 15 m ahead of the ego at the ego's 20 m/s and slows to 10 m/s over the 2.5 s
+  // to the contact (4 m/s^2). Reacting after 1 s and then braking at 6.5 m/s^2, the ego would
+  // have kept at least 9.8 m: it could have absorbed it.
+  LaneEntry e = entry(0.0, 100, 20, 100 + 4.7 + 15.0, 20);
+  e.entered_s_ago = 2.5;
+  EXPECT_TRUE(entry_absorbable(e, 10.0, kLoopM, size, p));
+  // Slowing at 6 m/s^2 (to 5 m/s), as traffic may brake: 15 m was too little room.
+  EXPECT_FALSE(entry_absorbable(e, 5.0, kLoopM, size, p));
+  // Braking at 8 m/s^2 (to 0 over the same 2.5 s): harder than traffic does, the cutter's
+  // whatever the gap. The rule once assumed the one ahead would hold its speed: every one of
+  // these was "absorbable".
+  EXPECT_FALSE(entry_absorbable(e, 0.0, kLoopM, size, p));
+  LaneEntry roomy = entry(0.0, 100, 20, 100 + 4.7 + 60.0, 20);
+  roomy.entered_s_ago = 2.5;
+  EXPECT_FALSE(entry_absorbable(roomy, 0.0, kLoopM, size, p));
+  EXPECT_TRUE(entry_absorbable(roomy, 5.0, kLoopM, size, p));
+  // A car ahead speeding up after its entry: easier than holding its speed.
+  LaneEntry faster = entry(0.0, 100, 25, 100 + 4.7 + 17.0, 15);
+  faster.entered_s_ago = 1.0;
+  EXPECT_TRUE(entry_absorbable(faster, 20.0, kLoopM, size, p));
 }
 
 TEST(CollisionRules, ARecentLaneEntryDecidesFrontAndRearContacts) {
@@ -133,6 +188,13 @@ TEST(CollisionRules, ARecentLaneEntryDecidesFrontAndRearContacts) {
   EXPECT_EQ(classify(car_in), (CollisionClass{K::car_cut_in, false}));
   car_in.car_entry = entry(0.0, 60, 20, 100, 12);  // 35.3 m
   EXPECT_EQ(classify(car_in), (CollisionClass{K::ego_hit_car_ahead, true}));
+  // A car that cut in 15 m ahead at the ego's speed, then braked at 8 m/s^2 until the
+  // contact 2 s later: the cutter's (it was the ego's while the rule assumed the cutter
+  // would hold its speed).
+  auto brakes = situation(body(100, 6, 20), body(104.8, 6, 4));
+  brakes.car_entry = entry(0.2, 100 - 4.7 - 15.0 - 24.0, 20, 100 - 24.0, 20);
+  brakes.car_entry.entered_s_ago = 2.0;
+  EXPECT_EQ(classify(brakes), (CollisionClass{K::car_cut_in, false}));
   // A car that changed lanes into the ego's rear: the car's.
   auto into_rear = situation(body(100, 6, 15), body(95.2, 6.4, 20));
   into_rear.car_entry = entry(0.5, 95, 15, 60, 20);
@@ -210,6 +272,67 @@ TEST_F(MonitorTest, EnteringALaneMeasuresItsLeaderAndFollower) {
   EXPECT_NEAR(monitor_.current().ttc_entering_s, std::min(behind, ahead), 1e-9);
 }
 
+TEST_F(MonitorTest, TouchesOfOneCarAreOneContactUntilTheyHaveBeenApartForTheGap) {
+  // A car bumping into the ego's rear again and again (pushed apart, closing again), then
+  // apart for longer than the gap (5 s, 250 steps), then touching again; another car between.
+  std::vector<TrafficCar> cars = {car_at(3, 95.3, 6.0, 20.0), car_at(4, 104.7, 6.0, 20.0)};
+  double s = 100.0;
+  const auto step = [&](std::optional<int> touching) {
+    s += 0.4;
+    for (TrafficCar& c : cars) c.map_frenet.s_m += 0.4;
+    return monitor_.observe({{s, 6.0}, 20.0}, cars, touching);
+  };
+  (void)monitor_.observe({{s, 6.0}, 20.0}, cars, std::nullopt);
+  std::vector<std::optional<ContactStep>> seen;
+  for (int k = 0; k < 5; ++k) seen.push_back(step(3));
+  for (int k = 0; k < 200; ++k) seen.push_back(step(std::nullopt));  // 4 s apart
+  for (int k = 0; k < 5; ++k) seen.push_back(step(3));                // the same contact
+  for (int k = 0; k < 3; ++k) seen.push_back(step(4));                // another car
+  for (int k = 0; k < 5; ++k) seen.push_back(step(3));                // still the first
+  ASSERT_TRUE(seen.front().has_value());
+  EXPECT_TRUE(seen.front()->begins);
+  EXPECT_EQ(seen.front()->index, 0);
+  for (std::size_t i = 1; i < seen.size(); ++i) {
+    if (!seen[i]) continue;
+    const bool other = i >= 210 && i < 213;
+    EXPECT_EQ(seen[i]->index, other ? 1 : 0) << i;
+    EXPECT_EQ(seen[i]->begins, i == 210) << i;
+    if (!other) {
+      EXPECT_EQ(seen[i]->collision, seen.front()->collision) << i;
+    }
+  }
+  EXPECT_EQ(monitor_.contacts_begun(), 2);
+  // 251 steps apart (more than the gap): a new contact, classified afresh.
+  for (int k = 0; k < 251; ++k) (void)step(std::nullopt);
+  const std::optional<ContactStep> again = step(3);
+  ASSERT_TRUE(again.has_value());
+  EXPECT_TRUE(again->begins);
+  EXPECT_EQ(again->index, 2);
+  EXPECT_EQ(monitor_.contacts_begun(), 3);
+}
+
+TEST_F(MonitorTest, OpenContactsGoThroughACheckpoint) {
+  std::vector<TrafficCar> cars = {car_at(3, 95.3, 6.0, 20.0)};
+  (void)monitor_.observe({{100.0, 6.0}, 20.0}, cars, std::nullopt);
+  (void)monitor_.observe({{100.4, 6.0}, 20.0}, cars, 3);
+  (void)monitor_.observe({{100.8, 6.0}, 20.0}, cars, std::nullopt);
+  core::StateArchive out;
+  monitor_.archive(out);
+  monitor_.archive_contacts(out);
+  const std::string bytes = out.take();
+  SafetyMonitor restored{SafetyParams{}, 0.02, core::RoadParams{}, core::CarFootprint{}, kLoopM};
+  core::StateArchive in(bytes, "monitor");
+  restored.archive(in);
+  restored.archive_contacts(in);
+  in.expect_end();
+  const auto a = monitor_.observe({{101.2, 6.0}, 20.0}, cars, 3);
+  const auto b = restored.observe({{101.2, 6.0}, 20.0}, cars, 3);
+  ASSERT_TRUE(a && b);
+  EXPECT_FALSE(b->begins);  // the same contact goes on
+  EXPECT_EQ(a->index, b->index);
+  EXPECT_EQ(a->collision, b->collision);
+}
+
 // --- scripted scenarios in the world -------------------------------------------------------
 
 constexpr double kEgoS = 1000.0;
@@ -239,10 +362,10 @@ class SafetyScenario : public ::testing::Test {
   SafetyScenario() : map_(test::circle_map()), line_(map_) {}
 
   RunReport run(Scenario sc, const std::function<core::FrenetPoint(double)>& ego,
-                double duration_s) {
+                double duration_s, const WorldParams& params = {}) {
     std::stable_sort(sc.events.begin(), sc.events.end(),
                      [](const ScenarioEvent& a, const ScenarioEvent& b) { return a.t_s < b.t_s; });
-    World world(map_, line_, WorldParams{}, sc);
+    World world(map_, line_, params, sc);
     RunOptions opts;
     opts.duration_s = duration_s;
     opts.steps_per_call = 2;
@@ -364,6 +487,91 @@ TEST_F(SafetyScenario, ACarCuttingInTooCloseIsItsFaultAndFartherAheadTheEgos) {
   const RunReport late = run(far, steady(20.0), 7.0);
   ASSERT_GE(late.incident_counts[0], 1);
   EXPECT_EQ(the_class(late), (CollisionClass{K::ego_hit_car_ahead, true}));
+}
+
+TEST_F(SafetyScenario, ACarThatCutsInCloseAndThenBrakesIsItsFault) {
+  // A car at the ego's 20 m/s cuts in about 15 m ahead and then brakes at 8 m/s^2, harder
+  // than traffic does: the contact is its fault (the rule once assumed the cutter would hold
+  // its speed, and booked it as the ego's driving into the car ahead).
+  Scenario sc = ego_at(20.0);
+  sc.cars = {{kEgoS + 4.7 + 15.0, 0, 20.0}};
+  sc.events = {{0.0, 0, ScenarioAction::change_lane, 1, 0.0, 0.0, 0.0},
+               {1.2, 0, ScenarioAction::brake, 0, 0.0, 8.0, 2.5}};
+  const RunReport r = run(sc, steady(20.0), 5.0);
+  ASSERT_GE(r.incident_counts[0], 1);
+  EXPECT_EQ(the_class(r), (CollisionClass{K::car_cut_in, false}));
+  ASSERT_EQ(r.contacts.size(), 1U);
+  EXPECT_FALSE(r.contacts.front().collision.at_fault);
+  // Braking at 5 m/s^2, as traffic does: reacting after a second and braking at 6.5 m/s^2,
+  // the ego could have stopped behind it.
+  sc.events[1].rate_mps2 = 5.0;
+  sc.events[1].duration_s = 4.0;
+  const RunReport soft = run(sc, steady(20.0), 6.0);
+  ASSERT_EQ(soft.contacts.size(), 1U);
+  EXPECT_EQ(soft.contacts.front().collision, (CollisionClass{K::ego_hit_car_ahead, true}));
+}
+
+TEST_F(SafetyScenario, AFollowerRearEndingAnEgoThatLeansIntoTheNextLaneIsNotItsFault) {
+  // The ego drifts from the centre of lane 1 to d = 7.4 m (its body reaches 0.35 m into lane
+  // 2, it never enters the follower's lane) and holds 15 m/s; a follower in lane 1 at 25 m/s
+  // runs into its rear.
+  Scenario sc = ego_at(15.0);
+  sc.cars = {{kEgoS - 30.0, 1, 25.0}};
+  const auto lean = [](double t) {
+    return core::FrenetPoint{kEgoS + 15.0 * t, lane_change_d(t, 0.5, 1.0, 6.0, 7.4)};
+  };
+  const RunReport r = run(sc, lean, 5.0);
+  ASSERT_EQ(r.contacts.size(), 1U);
+  EXPECT_GT(r.contacts.front().t_s, 1.5);  // after the drift
+  EXPECT_EQ(the_class(r), (CollisionClass{K::hit_from_behind, false}));
+}
+
+TEST_F(SafetyScenario, AHardStopIsTheEgosAtACrawlAndAtAStandAlike) {
+  // The ego brakes at 8 m/s^2 from 20 m/s at t = 1 s down to `crawl` and holds it; the
+  // follower brakes later and softer (5 m/s^2 from t = 1.5 s) and runs into it just after it
+  // stops. Once a stop under the stopped threshold (0.05 m/s) excused the ego and the same
+  // stop at 0.06 m/s did not.
+  const auto hard_stop = [](double crawl) {
+    return [crawl](double t) {
+      const double tb = std::max(0.0, t - 1.0);
+      const double t_stop = (20.0 - crawl) / 8.0;
+      const double braking = std::min(tb, t_stop);
+      const double s = 20.0 * std::min(t, 1.0) + 20.0 * braking - 4.0 * braking * braking +
+                       crawl * std::max(0.0, tb - t_stop);
+      return core::FrenetPoint{kEgoS + s, 6.0};
+    };
+  };
+  for (const double crawl : {0.04, 0.06}) {
+    Scenario sc = ego_at(20.0);
+    sc.cars = {{kEgoS - 20.5, 1, 20.0}};
+    sc.events = {{1.5, 0, ScenarioAction::brake, 0, 0.0, 5.0, 3.0}};
+    const RunReport r = run(sc, hard_stop(crawl), 5.0);
+    ASSERT_EQ(r.contacts.size(), 1U) << crawl;
+    EXPECT_GT(r.contacts.front().t_s, 1.0 + (20.0 - crawl) / 8.0) << crawl;  // stopped
+    EXPECT_EQ(the_class(r), (CollisionClass{K::hit_from_behind_braking, true})) << crawl;
+  }
+}
+
+TEST_F(SafetyScenario, OneContactIsOneCollisionHoweverOftenTheRubricCountsIt) {
+  // The ego at 20 m/s runs into a car at 10 m/s and keeps pushing it for 4 s: the bodies are
+  // pushed apart and touch again step after step, the rubric counts a collision for every
+  // second, and the report has one contact, with one class, that every count belongs to.
+  Scenario sc = ego_at(20.0);
+  sc.cars = {{kEgoS + 15.0, 1, 10.0}};
+  const RunReport r = run(sc, steady(20.0), 5.5);
+  ASSERT_GE(r.incident_counts[0], 3);
+  ASSERT_EQ(r.contacts.size(), 1U);
+  const Contact& c = r.contacts.front();
+  EXPECT_EQ(c.car_id, 0);
+  EXPECT_EQ(c.collision, (CollisionClass{K::ego_hit_car_ahead, true}));
+  EXPECT_EQ(c.rubric_collisions, r.incident_counts[0]);
+  EXPECT_NEAR(c.t_s, (15.0 - 4.7) / 10.0, 0.05);
+  EXPECT_GT(c.end_t_s, c.t_s + 3.0);
+  for (const Incident& i : r.incidents) {
+    if (i.type == IncidentType::collision) {
+      EXPECT_EQ(i.contact, 0) << i.t_s;
+    }
+  }
 }
 
 TEST_F(SafetyScenario, SideContacts) {

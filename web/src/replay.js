@@ -22,6 +22,9 @@ const INCIDENT_BYTES = 1 + 4 + 4 + 1 + 4 + 4; // 18
 // Added within version 2 at the ends of records; a record of an older writer lacks them.
 const FRAME_SAFETY_BYTES = 3 * 2; // u16 TTC ahead, TTC entering a lane, headway (0.01 s)
 const COLLISION_CLASS_BYTES = 2; // u8 collision kind, u8 at fault
+// Added later within version 2, after the class: u32 the collision's contact, counting from 1
+// (0: not a collision, or not known).
+const CONTACT_BYTES = 4;
 const NO_SECONDS = 65535; // a TTC or headway that is none (or 655.35 s and more)
 /// An incident's collision kind when it has none (not a collision, or an older file).
 export const NO_COLLISION_KIND = 255;
@@ -180,6 +183,9 @@ export class Replay {
     this.incY = f32(incidents);
     this.incKind = new Uint8Array(incidents); // index into collisionKinds, or NO_COLLISION_KIND
     this.incAtFault = new Uint8Array(incidents);
+    // a collision's contact (0-based, as the report's collisions.contacts and an incident's
+    // `contact`), or -1 when it has none (not a collision, or a file from before contacts)
+    this.incContact = new Float64Array(incidents);
   }
 
   _growFrames(need, exact = false) {
@@ -208,7 +214,7 @@ export class Replay {
 
   _growIncidents(need, exact = false) {
     if (need <= this.incFrame.length) return;
-    for (const k of ['incFrame', 'incType', 'incValue', 'incS', 'incLane', 'incX', 'incY', 'incKind', 'incAtFault']) {
+    for (const k of ['incFrame', 'incType', 'incValue', 'incS', 'incLane', 'incX', 'incY', 'incKind', 'incAtFault', 'incContact']) {
       this[k] = grow(this[k], need, exact);
     }
   }
@@ -430,6 +436,16 @@ export class Replay {
             return `its at-fault byte is ${atFault}, not 0 or 1`;
           }
         }
+        // the collision's contact (added later within version 2): a number from 1, 0 for none;
+        // only a classified collision has one
+        let contact = -1;
+        if (n >= INCIDENT_BYTES + COLLISION_CLASS_BYTES + CONTACT_BYTES) {
+          const number = v.getUint32(p + INCIDENT_BYTES + COLLISION_CLASS_BYTES, true);
+          if (number > 0 && kind === NO_COLLISION_KIND) {
+            return `contact number ${number} on an incident that is no classified collision`;
+          }
+          contact = number - 1;
+        }
         const k = this.incidents;
         this._growIncidents(k + 1);
         this.incFrame[k] = this.frames - 1;
@@ -441,6 +457,7 @@ export class Replay {
         this.incY[k] = v.getInt32(p + 14, true) * CM;
         this.incKind[k] = kind;
         this.incAtFault[k] = atFault;
+        this.incContact[k] = contact;
         this.incidents = k + 1;
         return null;
       }
@@ -590,6 +607,36 @@ export class Replay {
     const kind = this.incKind[k];
     if (kind === NO_COLLISION_KIND) return null;
     return { kind: this.collisionKinds[kind] || `kind ${kind}`, atFault: this.incAtFault[k] === 1 };
+  }
+
+  /// Incident k's contact: its index in the run's contacts (from 0; the banner says "contact
+  /// k + 1"), or -1 when it has none (not a collision, or a file from before contacts).
+  incidentContact(k) {
+    return k >= 0 && k < this.incidents ? this.incContact[k] : -1;
+  }
+
+  /// The contacts the incidents name, in order of their first incident: [{contact, first (its
+  /// first incident), incidents (how many of the rubric's latched collision incidents it
+  /// has)}]; and for each incident whether it repeats a contact named before (`repeat`, a
+  /// Uint8Array by incident). Collisions without a contact are not in it.
+  contacts() {
+    const byNumber = new Map();
+    const list = [];
+    const repeat = new Uint8Array(this.incidents);
+    for (let k = 0; k < this.incidents; ++k) {
+      const c = this.incContact[k];
+      if (c < 0) continue;
+      const known = byNumber.get(c);
+      if (known) {
+        known.incidents += 1;
+        repeat[k] = 1;
+      } else {
+        const entry = { contact: c, first: k, incidents: 1 };
+        byNumber.set(c, entry);
+        list.push(entry);
+      }
+    }
+    return { list, byNumber, repeat };
   }
 
   /// A sentence on how much was read, for warnings.

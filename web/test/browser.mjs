@@ -18,7 +18,7 @@
 //   node test/browser.mjs --report REPORT.html [--runs N] [--replays N]
 //       opens a bench report page (`overtake bench ... --html REPORT.html`); or, with
 //       --bench-dir DIR --report-template report.html, fills the template from DIR's
-//       bench.json and runs.jsonl (linking every run to a replay page of its own)
+//       bench.json, runs.jsonl and summary.json (linking every run to a replay page of its own)
 //
 // Asserts: no console errors and no network requests; the replay's positions (stored as
 // differences) agree with the incidents' absolute ones and each path starts at the ego; the
@@ -32,10 +32,12 @@
 // the current time (it follows seeks and playback, the traffic choice, and copies or selects
 // the command); a cut scenario's replay says where it was cut from and marks the moment on
 // the timeline, and its clock (from a later step than 0) drives the time label, the slider
-// and the charts. The bench report shows the intervals, error bars,
-// precision and paired comparisons its data holds, and so do copies of it with the data of
-// today's bench filled in, with an older bench's data, and with no summary. Saves a
-// screenshot per page into the artifacts folder.
+// and the charts. Each contact is marked once (its latched repeats lighter), its marker and
+// banner name it. The bench report shows the intervals, error bars, row notes, precision,
+// speed against safety and paired comparisons (matrices with their mirror cells) its data
+// holds, with no two chart labels overlapping, and so do copies of it with the data of
+// today's bench filled in, with nine policies, as a bench from before contacts, with an older
+// bench's data, and with no summary. Saves a screenshot per page into the artifacts folder.
 import { execFileSync, spawn } from 'node:child_process';
 import { copyFileSync, existsSync, mkdirSync, mkdtempSync, readFileSync, rmSync, writeFileSync } from 'node:fs';
 import { tmpdir } from 'node:os';
@@ -45,7 +47,9 @@ import { pathToFileURL } from 'node:url';
 import { chromium } from 'playwright-core';
 
 import { decodeReplay } from '../src/replay.js';
-import { clock, cutCommand, cutOriginText, incidentText, safetyStatusText } from '../src/viewer/format.js';
+import { overlapping } from '../src/report/layout.js';
+import { PAIR_FIGURES, signed } from '../src/report/tables.js';
+import { clock, cutCommand, cutOriginText, incidentText, latchedText, safetyStatusText } from '../src/viewer/format.js';
 import { syntheticDrive } from './encode.mjs';
 
 const MPH_PER_MPS = 2.2369362920544025;
@@ -265,9 +269,12 @@ async function testPage(context, spec, artifacts) {
   return { shot, loadMs };
 }
 
-// A collision's marker and banner name its kind and whether it was the ego's fault (a file
-// from before collisions were classified: neither); an at-fault mark is filled, another
-// outlined. `spec.collision` is a text the first collision must say.
+// A collision's marker and banner name its kind, its contact and whether it was the ego's
+// fault (a file from before collisions were classified: neither; from before contacts: no
+// contact); an at-fault mark is filled, another outlined. Each contact is marked once, at its
+// first incident; the rubric's latched incidents of it (one per second of contact) get lighter
+// marks that say so, and its banner shows once. `spec.collision` is a text the first collision
+// must say.
 async function testCollisionMarks(page, replay, spec) {
   let k = -1;
   for (let j = 0; j < replay.incidents && k < 0; ++j) if (replay.incidentTypeName(replay.incType[j]) === 'collision') k = j;
@@ -276,14 +283,14 @@ async function testCollisionMarks(page, replay, spec) {
     return;
   }
   const cls = replay.incidentClass(k);
-  const want = incidentText('collision', replay.incValue[k], cls);
+  const want = incidentText('collision', replay.incValue[k], cls, replay.incidentContact(k));
   const step = replay.step[replay.incFrame[k]];
-  const mark = page.locator(`#incident-markers .marker[data-type="collision"][data-step="${step}"]`).first();
+  const mark = page.locator(`#incident-markers .marker[data-type="collision"][data-step="${step}"]:not(.latched)`).first();
   const seen = await mark.evaluate((m) => ({
-    title: m.title, fault: m.dataset.atFault ?? null, kind: m.dataset.kind ?? null,
+    title: m.title, fault: m.dataset.atFault ?? null, kind: m.dataset.kind ?? null, contact: m.dataset.contact ?? null,
     fill: getComputedStyle(m).backgroundColor, border: getComputedStyle(m).borderTopWidth,
   }));
-  check(seen.title.endsWith(want) || seen.title.includes(`${want} (and`), `the collision's marker says "${want}" (${seen.title})`);
+  check(seen.title.includes(want), `the collision's marker says "${want}" (${seen.title})`);
   if (spec.collision) check(seen.title.includes(spec.collision), `the first collision is "${spec.collision}"`);
   if (cls) {
     check(seen.kind === cls.kind && seen.fault === String(cls.atFault), `the marker carries the kind and fault (${seen.kind}, ${seen.fault})`);
@@ -292,9 +299,41 @@ async function testCollisionMarks(page, replay, spec) {
   } else {
     check(seen.kind === null && seen.fault === null && !/at fault/.test(seen.title), `an unclassified collision's marker says no fault (${seen.title})`);
   }
+  const contact = replay.incidentContact(k);
+  check(contact < 0 ? seen.contact === null && !/contact \d/.test(seen.title) : seen.contact === String(contact + 1) && seen.title.includes(`(contact ${contact + 1})`),
+    `the marker names its contact (${contact < 0 ? 'none in this replay' : `contact ${contact + 1}`}: ${seen.contact})`);
   await mark.evaluate((m) => m.click()); // as a click on it, wherever other marks lie
   const banners = await page.locator('#incident-banners .banner[data-type="collision"]').allTextContents();
   check(banners.includes(want), `the banner says "${want}" (${banners.join(' | ')})`);
+
+  // every contact once: a full mark at its first incident, lighter ones for its latched repeats
+  const { list, repeat } = replay.contacts();
+  if (!list.length) return;
+  const marks = await page.evaluate(() => [...document.querySelectorAll('#incident-markers .marker[data-type="collision"]')].map((m) => ({
+    step: Number(m.dataset.step), contact: m.dataset.contact ?? null, latched: m.classList.contains('latched'), title: m.title,
+    opacity: Number(getComputedStyle(m).opacity), height: m.getBoundingClientRect().height,
+  })));
+  const full = marks.filter((m) => m.contact !== null && !m.latched);
+  const firsts = list.map((c) => replay.step[replay.incFrame[c.first]]);
+  check(full.length === list.length && full.every((m, i) => m.step === firsts[i] && m.contact === String(list[i].contact + 1)),
+    `each of the ${list.length} contacts is marked once, at its first incident (${full.map((m) => `${m.contact}@${m.step}`).join(', ')})`);
+  const repeats = [...repeat].filter(Boolean).length;
+  const latched = marks.filter((m) => m.latched);
+  if (repeats > 0) {
+    const normal = full[0];
+    check(latched.length > 0 && latched.every((m) => m.opacity < 1 && m.height < normal.height && m.contact !== null && /still in contact/.test(m.title)),
+      `the rubric's ${repeats} latched incidents of a contact are marked lighter (${latched.length} marks, opacity ${latched.map((m) => m.opacity).join(', ')})`);
+    const c = list.find((x) => x.incidents > 1);
+    check(latched.some((m) => m.title.includes(latchedText(2, c.incidents))), `a latched mark says "${latchedText(2, c.incidents)}"`);
+    // its banner shows once while the contact goes on (at its last latched incident)
+    let last = -1;
+    for (let j = 0; j < replay.incidents; ++j) if (replay.incidentContact(j) === c.contact) last = j;
+    await page.evaluate((s) => window.overtakeViewer.seek(s), replay.step[replay.incFrame[last]]);
+    const shown = await page.evaluate(() => [...document.querySelectorAll('#incident-banners .banner[data-contact]')].map((b) => b.dataset.contact));
+    check(shown.filter((x) => x === String(c.contact + 1)).length === 1, `a contact's banner shows once however many incidents it has (${shown.join(', ')})`);
+  } else {
+    check(latched.length === 0, 'no latched marks without latched incidents');
+  }
 }
 
 // A cut scenario's replay says where it was cut from and marks the moment on the timeline;
@@ -455,11 +494,19 @@ async function testNearMisses(page, replay, name, artifacts) {
   check(want === '' ? !/near miss|at fault/.test(status) : status.includes(want), `the status line says "${want || 'nothing of near misses'}" (${status})`);
 }
 
-// The bench report object (docs/replay.md) from a bench --out folder.
+// The bench report object (docs/replay.md) from a bench --out folder: bench.json, the runs,
+// and summary.json's rows, pairs and verdicts when the folder has one (without, the page
+// summarizes the runs itself).
 function benchObject(dir) {
   const bench = JSON.parse(readFileSync(join(dir, 'bench.json'), 'utf8'));
   bench.runs = readFileSync(join(dir, 'runs.jsonl'), 'utf8').split('\n').filter(Boolean).map((l) => JSON.parse(l));
   bench.runs.forEach((r, i) => { r.replay = i % 2 === 0 ? `replays/run-${i}.html` : null; });
+  if (existsSync(join(dir, 'summary.json'))) {
+    const summary = JSON.parse(readFileSync(join(dir, 'summary.json'), 'utf8'));
+    if (Array.isArray(summary.rows)) bench.summary = summary.rows;
+    if (Array.isArray(summary.pairs)) bench.pairs = summary.pairs;
+    if (summary.verdicts) bench.verdicts = summary.verdicts;
+  }
   return bench;
 }
 
@@ -473,51 +520,121 @@ const OLDER_ROW_KEYS = ['policy', 'traffic', 'runs', 'total_miles', 'mean_speed_
   'incidents_per_100mi_by_type', 'incident_free_miles_median', 'incident_free_miles_worst', 'peak_acceleration_mps2',
   'peak_jerk_mps3', 'peak_strict_acceleration_mps2', 'peak_strict_jerk_mps3', 'timing'];
 
-// The verdict of A's difference from B with its interval (docs: better when it leaves out 0
-// on A's side).
+// The verdict of A's difference from B with its interval, as a bench from before the tests
+// gave it (better when it leaves out 0 on A's side).
 const verdictOf = (d, ci, higherIsBetter) => (ci[0] > 0 || ci[1] < 0 ? ((d > 0) === higherIsBetter ? 'better' : 'worse') : 'no difference');
+const MIRRORED = { better: 'worse', worse: 'better' };
 
-// The bench data with every key of today's bench that it lacks made up (plausible, not
-// computed: the page only shows them): intervals, collisions, near misses, precision; and, in
-// place of its pairs (the page's own are checked on the page itself), a pair per two policies
-// on each traffic profile with every verdict, one of whose figures has no data.
-function withTodaysKeys(bench) {
-  const b = structuredClone(bench);
-  const rows = b.summary;
-  for (const r of rows) {
+// How the verdicts were reached, as the bench writes it (docs/replay.md).
+const VERDICT_METHOD = {
+  alpha: 0.05, correction: 'Holm', family_tests: 0, min_seeds: 8, mean_test: "paired t-test on the seeds' linearized differences",
+  rate_test: 'exact sign-flip randomization test over seeds', mean_interval: 'symmetric bootstrap-t over seeds',
+  rate_interval: "exact (Garwood) interval on the events over the seeds' dispersion (quasi-Poisson, t-scaled); no event: one-sided upper bound",
+  difference_interval: "means: paired symmetric bootstrap-t; rates: MOVER from both rates' intervals",
+};
+
+// The rows of a bench of today made up from `rows` (plausible, not computed: the page only
+// shows them): intervals, collisions as contacts beside the rubric's count (the first row's
+// at-fault rate with no event: a one-sided interval), near misses, precision, a warning.
+function todaysRows(rows) {
+  return rows.map((r0, i) => {
+    const r = structuredClone(r0);
     const rate = (v) => [v * 0.6, v * 1.5 + 2.5];
+    r.intervals = null;
+    r.warnings = i === 1 ? ['at_fault_collisions_per_100mi: one seed holds 100% of the events; the interval cannot tell how rare such seeds are'] : [];
     r.mean_speed_mph_ci ??= [r.mean_speed_mph - 0.8, r.mean_speed_mph + 0.6];
     r.incidents_per_100mi_ci ??= rate(r.incidents_per_100mi);
-    r.incidents_per_100mi_by_type_ci ??= Object.fromEntries(Object.entries(r.incidents_per_100mi_by_type || {}).map(([k, v]) => [k, rate(v)]));
+    r.incidents_per_100mi_by_type_ci = Object.fromEntries(Object.entries(r.incidents_per_100mi_by_type || {}).map(([k, v]) => [k, rate(v)]));
     r.incident_free_miles_median_ci ??= [r.incident_free_miles_median * 0.9, r.incident_free_miles_median * 1.05];
     const per = 100 / Math.max(1e-9, r.total_miles);
-    r.collisions ??= { total: 1, per_100mi: per, per_100mi_ci: rate(per), at_fault: 1, at_fault_per_100mi: per, at_fault_per_100mi_ci: rate(per), by_kind: { ego_hit_car_ahead: 1 } };
+    r.collisions = i === 0
+      ? { total: 0, per_100mi: 0, per_100mi_ci: [0, 3 * per], at_fault: 0, at_fault_per_100mi: 0, at_fault_per_100mi_ci: [0, 3 * per], by_kind: {}, rubric_incidents: 0, rubric_per_100mi: 0 }
+      : { total: 1, per_100mi: per, per_100mi_ci: rate(per), at_fault: 1, at_fault_per_100mi: per, at_fault_per_100mi_ci: rate(per), by_kind: { ego_hit_car_ahead: 1 }, rubric_incidents: 3, rubric_per_100mi: 3 * per };
     r.near_misses ??= { episodes: 2, per_100mi: 2 * per, per_100mi_ci: rate(2 * per), min_ttc_ahead_s: 0.9, min_ttc_entering_s: null, min_time_headway_s: 0.4,
       share_ttc_below: 0.012, share_headway_below: 0.2, ttc_threshold_s: 1.5, headway_threshold_s: 1.0 };
-    r.precision ??= { mean_speed_mph: { half_width: 0.7, seeds_to_halve: 4 * r.runs }, incidents_per_100mi: { half_width: 3.1, seeds_to_halve: 4 * r.runs + 1 },
+    r.near_misses.per_100mi_ci ??= rate(r.near_misses.per_100mi);
+    r.precision = { mean_speed_mph: { half_width: 0.7, seeds_to_halve: 4 * r.runs }, incidents_per_100mi: { half_width: 3.1, seeds_to_halve: 4 * r.runs + 1 },
       at_fault_collisions_per_100mi: null };
-  }
-  b.pairs = [];
-  const fig = (ca, cb, spread, higher) => {
-    const d = ca - cb;
-    const ci = [d - spread, d + spread];
-    return { candidate: ca, base: cb, difference: d, ci, probability_of_improvement: 0.5 + Math.sign(higher ? d : -d) * 0.4, verdict: verdictOf(d, ci, higher) };
+    return r;
+  });
+}
+
+// Pairs of today for `rows`: every two policies on each traffic profile, each figure with its
+// test, P(improvement) with its interval and a verdict; the verdicts cycle through better,
+// worse, no difference and too few seeds, and one figure has no data.
+function todaysPairs(rows) {
+  const pairs = [];
+  const verdicts = ['better', 'worse', 'no difference', 'too few seeds'];
+  let n = 0;
+  const fig = (ca, cb, higher) => {
+    const verdict = verdicts[n++ % verdicts.length];
+    const few = verdict === 'too few seeds';
+    // a difference of the verdict's sign (better: up for speed, down for rates)
+    const sign = verdict === 'better' ? (higher ? 1 : -1) : verdict === 'worse' ? (higher ? -1 : 1) : 0;
+    const d = sign === 0 ? ca - cb : sign * (Math.abs(ca - cb) + 1.5);
+    const ci = few ? null : sign === 0 ? [d - 2, d + 2] : [d - 1, d + 1];
+    const p = few ? null : 0.5 + 0.3 * (higher ? Math.sign(d) : -Math.sign(d));
+    return { candidate: cb + d, base: cb, difference: d, ci, p_value: few ? null : sign ? 0.0004 : 0.3, p_adjusted: few ? null : sign ? 0.004 : 1,
+      probability_of_improvement: p, probability_of_improvement_ci: few ? null : [p - 0.1, Math.min(1, p + 0.1)], verdict };
   };
   for (const t of [...new Set(rows.map((r) => r.traffic))]) {
     const mine = rows.filter((r) => r.traffic === t);
     for (let i = 0; i < mine.length; ++i) {
       for (let j = i + 1; j < mine.length; ++j) {
         const a = mine[i];
-        b.pairs.push({ traffic: t, policy: a.policy, versus: mine[j].policy, seeds: a.runs, figures: {
-          mean_speed_mph: fig(a.mean_speed_mph, a.mean_speed_mph + 3, 1, true), // worse
-          incidents_per_100mi: fig(a.incidents_per_100mi, a.incidents_per_100mi + 5, 1, false), // better
-          collisions_per_100mi: fig(1, 1, 1, false), // no difference
-          at_fault_collisions_per_100mi: fig(1, 0.5, 1, false),
+        const b = mine[j];
+        pairs.push({ traffic: t, policy: a.policy, versus: b.policy, seeds: a.runs, figures: {
+          mean_speed_mph: fig(a.mean_speed_mph, b.mean_speed_mph, true),
+          incidents_per_100mi: fig(a.incidents_per_100mi, b.incidents_per_100mi, false),
+          collisions_per_100mi: fig(1, 1, false),
+          at_fault_collisions_per_100mi: fig(1, 0.5, false),
           near_misses_per_100mi: null,
         } });
       }
     }
   }
+  return pairs;
+}
+
+// The bench data with every key of today's bench filled in (made up), and, in place of its
+// pairs (the page's own are checked on the page itself), pairs of every verdict.
+function withTodaysKeys(bench) {
+  const b = structuredClone(bench);
+  b.summary = todaysRows(b.summary);
+  b.pairs = todaysPairs(b.summary);
+  b.verdicts = { ...VERDICT_METHOD, family_tests: b.pairs.length * 4 };
+  return b;
+}
+
+// A bench of nine policies with long names on two traffic profiles (made up from the first
+// row and its runs), crowded: close speeds, most without an at-fault collision. Its charts'
+// labels must not overlap.
+function withManyPolicies(bench) {
+  const b = structuredClone(bench);
+  const [row] = todaysRows([b.summary[0], b.summary[0]]).slice(1);
+  const policies = Array.from({ length: 9 }, (_, i) => `a-policy-with-a-long-name-${i + 1}`);
+  const traffic = ['faithful', 'calm'];
+  b.policies = policies;
+  b.traffic = traffic;
+  b.summary = [];
+  for (const t of traffic) {
+    policies.forEach((p, i) => {
+      const r = structuredClone(row);
+      r.policy = p;
+      r.traffic = t;
+      r.mean_speed_mph = 44 + (i % 3) * 0.15 + (t === 'calm' ? 0.3 : 0);
+      r.mean_speed_mph_ci = [r.mean_speed_mph - 0.7, r.mean_speed_mph + 0.6];
+      const rate = i % 4 === 0 ? 2 + i * 0.2 : 0;
+      r.collisions = { ...r.collisions, at_fault_per_100mi: rate, at_fault_per_100mi_ci: rate ? [rate * 0.4, rate * 2.2] : [0, 3.1] };
+      b.summary.push(r);
+    });
+  }
+  const runs = b.runs.filter((r) => r.config.policy === b.runs[0].config.policy && r.config.traffic === b.runs[0].config.traffic);
+  b.runs = [];
+  for (const t of traffic) for (const p of policies) for (const r of runs) b.runs.push({ ...structuredClone(r), config: { ...r.config, policy: p, traffic: t }, replay: null });
+  b.pairs = todaysPairs(b.summary);
+  b.verdicts = { ...VERDICT_METHOD, family_tests: b.pairs.length * 4 };
+  b.combinations = b.runs.length;
   return b;
 }
 
@@ -527,27 +644,67 @@ function asOlderBench(bench) {
   const b = structuredClone(bench);
   b.summary = b.summary.map((r) => Object.fromEntries(OLDER_ROW_KEYS.filter((k) => k in r).map((k) => [k, r[k]])));
   delete b.pairs;
+  delete b.verdicts;
   for (const r of b.runs) {
     delete r.collisions;
     delete r.safety;
     for (const i of r.incidents || []) {
       delete i.kind;
       delete i.at_fault;
+      delete i.contact;
     }
   }
   return b;
 }
 
-// Copies of the report page beside it: with today's keys, as an older bench's, and without a
-// summary (the page summarizes the runs itself). Returns [{path, name, expect}].
+// The bench data as a build from before contacts and tests wrote it: collisions counted for
+// every second of contact (no rubric's count, no contacts in the runs), zero-event intervals
+// two-sided (no `intervals` key), pairs without p-values or an interval of P(improvement),
+// their verdicts from the interval, no `verdicts`.
+function asBeforeContacts(bench) {
+  const b = withTodaysKeys(bench);
+  delete b.verdicts;
+  for (const r of b.summary) {
+    delete r.intervals;
+    delete r.warnings;
+    delete r.collisions.rubric_incidents;
+    delete r.collisions.rubric_per_100mi;
+  }
+  for (const p of b.pairs) {
+    for (const [k, f] of Object.entries(p.figures)) {
+      if (!f) continue;
+      if (!f.ci) f.ci = [f.difference - 1, f.difference + 1];
+      f.probability_of_improvement ??= 0.5;
+      delete f.p_value;
+      delete f.p_adjusted;
+      delete f.probability_of_improvement_ci;
+      f.verdict = verdictOf(f.difference, f.ci, k === 'mean_speed_mph');
+    }
+  }
+  for (const r of b.runs) {
+    if (!r.collisions) continue;
+    r.collisions.total = (r.incident_counts || {}).collision || 0;
+    delete r.collisions.contacts;
+    delete r.collisions.rubric_incidents;
+    for (const i of r.incidents || []) delete i.contact;
+  }
+  return b;
+}
+
+// Copies of the report page beside it: with today's keys, with many policies, as a bench from
+// before contacts, as an older bench's, and without a summary (the page summarizes the runs
+// itself). Returns [{path, name, expect}].
 function reportVariants(path) {
   const html = readFileSync(path, 'utf8');
   const bench = benchOfPage(html);
   const noSummary = structuredClone(bench);
   delete noSummary.summary;
   delete noSummary.pairs;
+  delete noSummary.verdicts;
   return [
     { name: 'today', expect: 'today', bench: withTodaysKeys(bench) },
+    { name: 'many', expect: 'many', bench: withManyPolicies(bench) },
+    { name: 'before-contacts', expect: 'before-contacts', bench: asBeforeContacts(bench) },
     { name: 'older', expect: 'older', bench: asOlderBench(bench) },
     { name: 'no-summary', expect: 'no-summary', bench: noSummary },
   ].map((v) => {
@@ -555,6 +712,145 @@ function reportVariants(path) {
     writeFileSync(out, pageWithBench(html, v.bench));
     return { path: out, name: v.name, expect: v.expect };
   });
+}
+
+// The matrices of the pairs against the data: for each figure and traffic profile a grid of
+// every policy against every other; the cell of each pair (row policy, column versus) has its
+// verdict and difference, the mirror cell (versus, policy) the mirrored verdict and the negated
+// difference; verdicts are told apart by colour and by mark; each cell's hover text holds the
+// difference's interval, P(row better) with its interval and the adjusted p-value the data has.
+async function testMatrices(page) {
+  const got = await page.evaluate(() => {
+    const pairs = (window.overtakeReport || {}).pairs || [];
+    const tables = [...document.querySelectorAll('#matrices table.matrix')].map((t) => ({
+      figure: t.dataset.figure, traffic: t.dataset.traffic,
+      cols: [...t.querySelectorAll('thead th')].slice(1).map((th) => th.title || th.textContent), // numbered with long names: the title names it
+      rows: [...t.querySelectorAll('tbody tr')].map((tr) => ({
+        policy: tr.dataset.policy,
+        cells: [...tr.querySelectorAll('td')].slice(1).map((td) => ({ text: td.textContent, title: td.title, cls: td.className, ...td.dataset,
+          background: getComputedStyle(td).backgroundColor, image: getComputedStyle(td).backgroundImage })),
+      })),
+    }));
+    const legend = [...document.querySelectorAll('#matrix-legend .m-key')].map((k) => k.textContent);
+    return { pairs, tables, legend, method: document.getElementById('pairs-method').textContent };
+  });
+  const pairs = got.pairs;
+  const figures = [...new Set(pairs.flatMap((p) => Object.entries(p.figures || {}).filter(([, f]) => f && typeof f === 'object').map(([k]) => k)))];
+  const traffic = [...new Set(pairs.map((p) => p.traffic))];
+  check(got.tables.length === figures.length * traffic.length, `a matrix per figure and traffic profile (${got.tables.length} of ${figures.length} × ${traffic.length})`);
+  let cells = 0;
+  let bad = [];
+  const seen = {};
+  for (const p of pairs) {
+    for (const [key, f] of Object.entries(p.figures || {})) {
+      const t = got.tables.find((x) => x.figure === key && x.traffic === p.traffic);
+      if (!t) {
+        if (f) bad.push(`no matrix of ${key} on ${p.traffic}`);
+        continue;
+      }
+      const cellOf = (a, b) => {
+        const row = t.rows.find((r) => r.policy === a);
+        const j = t.cols.indexOf(b);
+        return row && j >= 0 ? row.cells[j] : null;
+      };
+      const c = cellOf(p.policy, p.versus);
+      const m = cellOf(p.versus, p.policy);
+      if (!c || !m) {
+        bad.push(`${key} ${p.policy} vs ${p.versus}: no cell`);
+        continue;
+      }
+      cells += 2;
+      if (!f) {
+        if (c.verdict !== 'none' || m.verdict !== 'none') bad.push(`${key} ${p.policy} vs ${p.versus}: a figure without data is not blank`);
+        continue;
+      }
+      const mirrored = MIRRORED[f.verdict] ?? f.verdict;
+      if (c.verdict !== f.verdict || m.verdict !== mirrored) bad.push(`${key} ${p.policy} vs ${p.versus}: verdicts ${c.verdict} / ${m.verdict}, want ${f.verdict} / ${mirrored}`);
+      if (c.mirrored !== 'false' || m.mirrored !== 'true') bad.push(`${key} ${p.policy} vs ${p.versus}: the mirror cell is not marked so`);
+      if (Math.abs(Number(c.difference) - f.difference) > 1e-9 || Math.abs(Number(m.difference) + f.difference) > 1e-9) {
+        bad.push(`${key} ${p.policy} vs ${p.versus}: differences ${c.difference} / ${m.difference}, want ${f.difference} and its negation`);
+      }
+      const ci = Array.isArray(f.ci) ? f.ci : null;
+      const dec = (PAIR_FIGURES.find((x) => x.key === key) || { d: 2 }).d;
+      if (ci && !(c.title.includes(`(${signed(ci[0], dec)} to ${signed(ci[1], dec)})`) && m.title.includes(`(${signed(-ci[1], dec)} to ${signed(-ci[0], dec)})`))) {
+        bad.push(`${key} ${p.policy} vs ${p.versus}: the hover lacks the interval or its mirror (${c.title} / ${m.title})`);
+      }
+      if (typeof f.probability_of_improvement === 'number') {
+        const pci = Array.isArray(f.probability_of_improvement_ci) ? f.probability_of_improvement_ci : null;
+        const want = `P(${p.policy} better): ${f.probability_of_improvement.toFixed(2)}${pci ? ` (${pci[0].toFixed(2)}–${pci[1].toFixed(2)})` : ''}`;
+        const wantMirror = `P(${p.versus} better): ${(1 - f.probability_of_improvement).toFixed(2)}${pci ? ` (${(1 - pci[1]).toFixed(2)}–${(1 - pci[0]).toFixed(2)})` : ''}`;
+        if (!c.title.includes(want) || !m.title.includes(wantMirror)) bad.push(`${key} ${p.policy} vs ${p.versus}: the hover lacks "${want}" / "${wantMirror}"`);
+      }
+      if (typeof f.p_adjusted === 'number' && !(c.title.includes('Holm-adjusted') && m.title.includes('Holm-adjusted'))) bad.push(`${key} ${p.policy} vs ${p.versus}: the hover lacks the adjusted p-value`);
+      for (const x of [c, m]) seen[x.verdict] = { background: x.background, image: x.image, mark: x.text.split(' ')[0] };
+    }
+  }
+  bad = [...new Set(bad)];
+  check(bad.length === 0, `every pair's cell and its mirror show the verdict, difference and hover text (${cells} cells${bad.length ? `; ${bad.slice(0, 3).join('; ')}` : ''})`);
+  const diagonal = got.tables.every((t) => t.rows.every((r) => r.cells[t.cols.indexOf(r.policy)]?.verdict === 'self'));
+  check(diagonal && got.tables.every((t) => t.rows.length === t.cols.length), 'each matrix is square, its diagonal blank');
+  const kinds = Object.keys(seen).filter((v) => ['better', 'worse', 'no difference', 'too few seeds'].includes(v));
+  const looks = new Set(kinds.map((v) => `${seen[v].background}|${seen[v].image}`));
+  const marks = new Set(kinds.map((v) => seen[v].mark));
+  check(looks.size === kinds.length && marks.size === kinds.length,
+    `each verdict has a colour and a mark of its own (${kinds.map((v) => `${v}: ${seen[v].mark} ${seen[v].background}`).join('; ')})`);
+  check(got.legend.length >= 4 && got.legend.some((l) => l.includes('better')) && got.legend.some((l) => l.includes('worse')), `the matrices have a legend (${got.legend.join(', ')})`);
+  return { seen: kinds, method: got.method };
+}
+
+// The speed-against-safety chart against the rows: a point per row with both figures, an
+// error bar each way per interval (a rate with no event: one-sided), the rows without collision
+// figures named; no two labels of any chart overlap, and every scatter label was placed.
+async function testScatterAndLabels(page, expect) {
+  const got = await page.evaluate(() => {
+    const rep = window.overtakeReport || {};
+    const rows = rep.rows || [];
+    const isCI = (c) => Array.isArray(c) && c.length === 2 && c.every((x) => typeof x === 'number');
+    const num = (x) => typeof x === 'number' && Number.isFinite(x);
+    const withFigures = rows.filter((r) => num(r.mean_speed_mph) && num((r.collisions || {}).at_fault_per_100mi));
+    const el = document.getElementById('chart-scatter');
+    return {
+      rows: rows.length,
+      points: withFigures.length,
+      xBars: withFigures.filter((r) => isCI(r.collisions.at_fault_per_100mi_ci)).length,
+      yBars: withFigures.filter((r) => isCI(r.mean_speed_mph_ci)).length,
+      oneSided: withFigures.filter((r) => 'intervals' in r && r.collisions.at_fault_per_100mi === 0 && isCI(r.collisions.at_fault_per_100mi_ci) && r.collisions.at_fault_per_100mi_ci[0] === 0).length,
+      shown: el && !el.hidden ? { ...el.dataset } : null,
+      leftOut: document.querySelector('#chart-scatter .left-out')?.textContent || '',
+      leftOutHidden: document.querySelector('#chart-scatter .left-out')?.hidden ?? true,
+      legend: [...document.querySelectorAll('#chart-scatter .scatter-legend .key')].map((k) => k.textContent.trim()),
+      traffic: [...new Set(rows.map((r) => r.traffic))].length,
+      boxes: rep.labelBoxes ? rep.labelBoxes() : {},
+      canvas: (() => {
+        const c = el && el.querySelector('canvas');
+        return c ? { w: c.clientWidth, h: c.clientHeight } : null;
+      })(),
+    };
+  });
+  const d = got.shown || {};
+  check(got.shown && Number(d.points) === got.points, `the speed-against-safety chart has a point per row with both figures (${d.points} of ${got.points})`);
+  check(Number(d.xBars) === got.xBars && Number(d.yBars) === got.yBars,
+    `and error bars both ways: ${d.xBars} across of ${got.xBars}, ${d.yBars} up of ${got.yBars}`);
+  check(Number(d.oneSidedBars) === got.oneSided, `a rate with no event has a one-sided bar (${d.oneSidedBars} of ${got.oneSided})`);
+  if (got.points < got.rows) check(!got.leftOutHidden && /Left out/.test(got.leftOut), `the rows left out are named (${got.leftOut})`);
+  if (got.points > 0) {
+    check(got.legend.filter((k) => / traffic$/.test(k)).length === got.traffic, `the legend tells the traffic profiles apart (${got.legend.join(', ')})`);
+    check(Number(d.unplaced) === 0, `every label of the speed-against-safety chart is placed (${d.labelMode}, ${d.unplaced} not placed)`);
+  }
+  let total = 0;
+  const clashes = [];
+  for (const [id, boxes] of Object.entries(got.boxes)) {
+    total += boxes.length;
+    for (const [i, j] of overlapping(boxes)) clashes.push(`${id}: "${boxes[i].text}" and "${boxes[j].text}"`);
+  }
+  check(clashes.length === 0, `no two labels overlap (${total} labels in ${Object.keys(got.boxes).length} charts${clashes.length ? `: ${clashes.slice(0, 4).join('; ')}` : ''})`);
+  if (expect === 'many') {
+    check(got.points >= 16 && (got.boxes['chart-scatter'] || []).length === got.points, `with nine policies on two profiles every point has a label (${(got.boxes['chart-scatter'] || []).length} of ${got.points})`);
+    const numbered = await page.evaluate(() => ({ modes: [...document.querySelectorAll('.chart[data-label-mode]')].map((c) => `${c.id}:${c.dataset.labelMode}`),
+      legend: !document.getElementById('slot-legend').hidden ? document.querySelectorAll('#slot-legend span').length : 0 }));
+    const some = numbered.modes.some((m) => m.endsWith(':numbers'));
+    check(!some || numbered.legend === got.rows, `the bars' numbers are named in a legend (${numbered.modes.join(', ')}; ${numbered.legend} entries)`);
+  }
 }
 
 // What the report page shows of intervals, error bars, precision and pairs, against what its
@@ -574,16 +870,24 @@ async function testReportFigures(page, expect) {
       incidentsCI: rows.filter((r) => isCI(r.incidents_per_100mi_ci)).length,
       fault: rows.filter((r) => typeof (r.collisions || {}).at_fault_per_100mi === 'number').length,
       faultCI: rows.filter((r) => isCI((r.collisions || {}).at_fault_per_100mi_ci)).length,
-      precision: rows.filter((r) => r.precision && typeof r.precision === 'object' && Object.keys(r.precision).length).length,
+      precision: rows.filter((r) => r.precision && typeof r.precision === 'object' && Object.values(r.precision).some((p) => p && typeof p === 'object')).length,
+      fewSeeds: rows.filter((r) => typeof r.intervals === 'string').length,
+      warnings: rows.reduce((a, r) => a + (Array.isArray(r.warnings) ? r.warnings.length : 0), 0),
+      notes: cells('#summary tr.notes-row td').map((td) => td.textContent),
       pairs: Array.isArray(bench.pairs) ? bench.pairs.length : 0,
-      intervalCells: cells('#summary tbody td').filter((td) => /\d \(\d[\d.]*–\d[\d.]*\)/.test(td.textContent)).length,
+      verdictsObject: Boolean(bench.verdicts),
+      intervalCells: cells('#summary tbody td').filter((td) => /\d \((\d[\d.]*–\d[\d.]*|≤ \d[\d.]*)\)/.test(td.textContent)).length,
+      oneSidedCells: cells('#summary tbody td').filter((td) => /^0\.0+ \(≤ \d[\d.]*\)$/.test(td.textContent)).length,
       summaryText: cells('#summary tbody tr:first-child td').map((td) => td.textContent).join(' | '),
+      headers: cells('#summary thead th').map((th) => th.textContent).join(' | '),
       bars: { speed: bars('chart-speed'), incidents: bars('chart-incidents'), fault: bars('chart-fault') },
       faultChart: visible('chart-fault') && document.querySelectorAll('#chart-fault canvas').length > 0,
       precisionShown: visible('precision-section') ? document.querySelectorAll('#precision tbody tr').length : 0,
       pairsShown: visible('pairs-section') ? document.querySelectorAll('#pairs tbody tr').length : 0,
       pairText: cells('#pairs tbody tr:first-child td').map((td) => td.textContent).join(' | '),
       verdicts: cells('#pairs td.verdict').map((td) => ({ text: td.textContent, cls: td.className })),
+      method: document.getElementById('pairs-method')?.textContent || '',
+      collisionsNote: visible('summary-collisions') ? document.getElementById('summary-collisions').textContent : '',
     };
   });
   console.log(`  summary: ${got.summaryText}`);
@@ -592,24 +896,37 @@ async function testReportFigures(page, expect) {
   } else {
     check(got.intervalCells === 0, `no intervals in the data, none shown (${got.intervalCells})`);
   }
+  check(!/headway/i.test(got.headers) && /time gap/.test(got.headers), 'the summary calls the headway a time gap');
   check(got.bars.speed === got.speedCI && got.bars.incidents === got.incidentsCI,
     `the mean speed and incidents charts have an error bar per interval (${got.bars.speed} of ${got.speedCI}, ${got.bars.incidents} of ${got.incidentsCI})`);
   check(got.faultChart === got.fault > 0 && got.bars.fault === got.faultCI,
     `the at-fault collisions chart is drawn when the data has them (${got.faultChart}, ${got.fault} rows, ${got.bars.fault} error bars of ${got.faultCI})`);
   check(got.precisionShown === (got.precision > 0 ? got.rows : 0), `the precision table has a row per group when the data has precision (${got.precisionShown})`);
+  check(got.notes.filter((n) => /too few seeds/.test(n)).length === got.fewSeeds && got.notes.join('\n').split('⚠').length - 1 === got.warnings,
+    `each row's notes (no intervals: ${got.fewSeeds}, warnings: ${got.warnings}) are shown under it (${got.notes.length} note lines)`);
   if (got.pairs > 0) {
     console.log(`  pairs: ${got.pairText}`);
     check(got.pairsShown === got.pairs, `the paired comparisons table has a row per pair (${got.pairsShown} of ${got.pairs})`);
-    const known = got.verdicts.every((v) => ['better', 'worse', 'no difference', '–'].includes(v.text)
+    const known = got.verdicts.every((v) => ['better', 'worse', 'no difference', 'too few seeds', '–'].includes(v.text)
       && v.cls === (v.text === 'better' || v.text === 'worse' ? `verdict ${v.text}` : 'verdict'));
-    check(got.verdicts.length > 0 && known, `the verdicts are shown, better and worse coloured (${got.verdicts.map((v) => v.text).join(', ')})`);
+    check(got.verdicts.length > 0 && known, `the verdicts are shown, better and worse coloured (${[...new Set(got.verdicts.map((v) => v.text))].join(', ')})`);
+    if (got.verdictsObject) check(/^Verdicts: Holm over \d+ tests, 5% family-wise; paired t-test.* for speed, exact sign-flip.* for rates; no verdict below 8 seeds/.test(got.method), `the page says how the verdicts were reached (${got.method})`);
+    else check(/before the tests/.test(got.method), `a bench from before the tests says how its verdicts were reached (${got.method})`);
+    const m = await testMatrices(page);
+    if (expect === 'today' || expect === 'many') check(['better', 'worse', 'no difference', 'too few seeds'].every((v) => m.seen.includes(v)), `the matrices show every verdict (${m.seen.join(', ')})`);
   } else {
     check(got.pairsShown === 0, 'no pairs in the data, no paired table');
   }
+  await testScatterAndLabels(page, expect);
   if (expect === 'today') {
     check(got.speedCI === got.rows && got.pairs > 0 && got.precision > 0 && got.fault > 0, 'the data of today\'s bench has intervals, pairs, precision and at-fault rates');
-    check(got.verdicts.some((v) => v.text === 'better') && got.verdicts.some((v) => v.text === 'worse') && got.verdicts.some((v) => v.text === 'no difference'),
-      'its pairs have each verdict');
+    check(got.verdicts.some((v) => v.text === 'better') && got.verdicts.some((v) => v.text === 'worse') && got.verdicts.some((v) => v.text === 'no difference')
+      && got.verdicts.some((v) => v.text === 'too few seeds'), 'its pairs have each verdict');
+    check(got.oneSidedCells >= 2, `a rate with no event shows its one-sided bound, "0.00 (≤ …)" (${got.oneSidedCells} cells)`);
+    check(got.collisionsNote === '', 'its collisions are contacts: no note on them');
+  } else if (expect === 'before-contacts') {
+    check(got.oneSidedCells === 0 && got.intervalCells > 0, `an older bench's zero-event intervals stay two-sided (${got.oneSidedCells} "≤" cells)`);
+    check(/counted for every second of contact/.test(got.collisionsNote), `its collisions are said to predate contacts (${got.collisionsNote})`);
   } else if (expect === 'older') {
     check(got.speedCI === 0 && got.pairs === 0 && got.precision === 0 && got.fault === 0, 'the older data has no interval, pair, precision or at-fault rate');
     check(/–/.test(got.summaryText), 'the older data\'s missing figures are dashes');
@@ -632,7 +949,7 @@ async function testReport(context, path, artifacts, opts = {}) {
       runs: rep.runs.length,
       withReplay: rep.runs.filter((r) => typeof r.replay === 'string' && r.replay).length,
       groups: rep.rows.length,
-      summaryRows: document.querySelectorAll('#summary tbody tr').length,
+      summaryRows: document.querySelectorAll('#summary tbody tr:not(.notes-row)').length,
       runRows: document.querySelectorAll('#runs tbody tr').length,
       links: [...document.querySelectorAll('#runs a.replay-link')].map((a) => a.getAttribute('href')),
       charts: document.querySelectorAll('.chart canvas').length,
@@ -832,12 +1149,37 @@ function recordWithOvertake(args) {
   run(bin, ['drive', '--scenario', scenario, '--record', cut, '--quiet']);
   page(cut, join(w, 'cut.html'));
   args.pages.push({ page: join(w, 'cut.html'), replay: cut, incident: false, cut: true, name: 'cut' });
+  // the contact replays of test/encode.mjs, read by the C++ side too (its reader checks the
+  // contact numbers) when it writes their pages
+  for (const d of contactDrives()) {
+    const otr = join(w, `${d.name}.otr`);
+    const html = join(w, `${d.name}.html`);
+    writeFileSync(otr, d.drive.bytes);
+    rmSync(html, { force: true });
+    page(otr, html);
+    args.pages.push({ page: html, replay: otr, incident: d.incident, collision: d.collision, name: d.name });
+  }
   const bench = join(w, 'bench');
   rmSync(bench, { recursive: true, force: true });
   run(bin, ['bench', '--policies', 'walkthrough,reference', '--seeds', '1-2', '--minutes', '0.5', '--traffic', 'faithful',
     '--jobs', '1', '--record-worst', '1', '--out', bench, '--html', join(bench, 'report.html'), '--quiet']);
   args.report = join(bench, 'report.html');
   args.reportLinksExist = true;
+}
+
+// Replays made by test/encode.mjs with contacts: a contact of three seconds (the rubric's
+// latched incident each second), a jerk, an at-fault contact; and one as a writer from before
+// contacts wrote it (20-byte incidents, collisions counted per second).
+function contactDrives() {
+  return [
+    { name: 'synthetic-incidents', incident: true, collision: 'Collision with car 4 (contact 1) — hit from behind (not at fault)',
+      drive: syntheticDrive({ seconds: 30, incidents: [{ step: 400, type: 'collision', value: 4, kind: 'hit_from_behind' },
+        { step: 450, type: 'collision', value: 4, kind: 'hit_from_behind' }, { step: 500, type: 'collision', value: 4, kind: 'hit_from_behind' },
+        { step: 900, type: 'max_jerk', value: 14.2 }, { step: 1200, type: 'collision', value: 6, kind: 'ego_lane_change', atFault: true }] }) },
+    { name: 'synthetic-before-contacts', incident: true, collision: 'Collision with car 4 — hit from behind (not at fault)',
+      drive: syntheticDrive({ seconds: 20, preContacts: true, incidents: [{ step: 300, type: 'collision', value: 4, kind: 'hit_from_behind' },
+        { step: 350, type: 'collision', value: 4, kind: 'hit_from_behind' }] }) },
+  ];
 }
 
 async function main() {
@@ -848,9 +1190,7 @@ async function main() {
     if (!args.viewer) throw new Error('--synthetic needs --viewer viewer.html');
     const template = readFileSync(args.viewer, 'utf8');
     const drives = [
-      { name: 'synthetic-incidents', incident: true, collision: 'hit from behind (not at fault)',
-        drive: syntheticDrive({ seconds: 30, incidents: [{ step: 400, type: 'collision', value: 4, kind: 'hit_from_behind' }, { step: 900, type: 'max_jerk', value: 14.2 },
-          { step: 1200, type: 'collision', value: 6, kind: 'ego_lane_change', atFault: true }] }) },
+      ...contactDrives(),
       { name: 'synthetic-clean', incident: false, drive: syntheticDrive({ seconds: 20 }) },
       { name: 'synthetic-legacy', incident: true, drive: syntheticDrive({ seconds: 20, legacy: true, incidents: [{ step: 300, type: 'collision', value: 2 }] }) },
       // a cut scenario's replay: checkpoints among the records, frames from t 1049.44 s, the

@@ -106,10 +106,13 @@ export class RecordWriter {
 
 /// kind 3: an incident at the preceding frame. With `inc.kind` (an index into the header's
 /// collision_kinds, or 255 for none) and `inc.atFault`, the 20-byte record of version 2's
-/// later writers; without, an older writer's 18 bytes.
+/// later writers; without, an older writer's 18 bytes. With `inc.contact` too (the collision's
+/// contact from 0, or -1 / null for none), the 24-byte record of the writers that count
+/// contacts: a u32 contact number from 1 (0 for none).
 export function incidentRecord(inc) {
   const classified = inc.kind !== undefined;
-  const buf = new Uint8Array(classified ? 20 : 18);
+  const counted = classified && inc.contact !== undefined;
+  const buf = new Uint8Array(counted ? 24 : classified ? 20 : 18);
   const v = new DataView(buf.buffer);
   v.setUint8(0, inc.type);
   v.setFloat32(1, inc.value, true);
@@ -121,6 +124,7 @@ export function incidentRecord(inc) {
     v.setUint8(18, inc.kind);
     v.setUint8(19, inc.atFault ? 1 : 0);
   }
+  if (counted) v.setUint32(20, inc.contact === null || inc.contact < 0 ? 0 : inc.contact + 1, true);
   return record(3, buf);
 }
 
@@ -182,7 +186,12 @@ export function syntheticSafety(step) {
 /// steps, and a car with the id 65535 jumps between two far ends of the i32 range (5-byte
 /// differences). `legacy` writes as a writer from before TTC, headway and collision classes
 /// (no collision_kinds, frames without their last six bytes, 18-byte incidents); otherwise an
-/// incident may give `kind` (a collision kind's name) and `atFault`. As the replay of a cut
+/// incident may give `kind` (a collision kind's name) and `atFault`. Collisions are counted as
+/// contacts, one per car (an incident's `value`) touched: a collision with the car of the
+/// collision before it (within `contactGapSteps`) repeats that contact, as the rubric's latched
+/// incident of every second of contact does; `preContacts` writes as a writer from before
+/// contacts (20-byte incidents, a report whose collisions have no `contacts` and count every
+/// incident). As the replay of a cut
 /// scenario: `startStep`, the step of the first frame (the run's clock: a cut starts later
 /// than 0; an incident's step is one of the frames'), and `cutFrom`, the header's
 /// provenance.cut_from. `checkpointEvery` adds a checkpoint record (kind 5) after the first
@@ -190,7 +199,7 @@ export function syntheticSafety(step) {
 /// the frames as plain objects for the assertions.
 export function syntheticDrive({
   seconds = 20, carCount = 12, incidents = [], trackLength = 6945.554, end = true, churn = false, legacy = false,
-  startStep = 0, cutFrom = null, checkpointEvery = 0,
+  startStep = 0, cutFrom = null, checkpointEvery = 0, preContacts = false, contactGapSteps = 60,
 } = {}) {
   const stepS = 0.02;
   const R = trackLength / (2 * Math.PI);
@@ -216,7 +225,8 @@ export function syntheticDrive({
     lane_lines: laneLines,
     incident_types: INCIDENT_TYPES,
     ...(legacy ? {} : { collision_kinds: COLLISION_KINDS }),
-    provenance: { policy: 'synthetic', traffic: 'faithful', seed: 1, track: 'circle', duration_s: seconds, ...(cutFrom ? { cut_from: cutFrom } : {}) },
+    provenance: { policy: 'synthetic', traffic: 'faithful', seed: 1, track: 'circle', duration_s: seconds, overtake_version: 'synthetic', config_hash: '0',
+      ...(cutFrom ? { cut_from: cutFrom } : {}) },
   };
   const writer = new RecordWriter();
   const records = [];
@@ -230,6 +240,8 @@ export function syntheticDrive({
   let dist = 0;
   const incidentAt = new Map(incidents.map((i) => [i.step, i]));
   const recorded = [];
+  const contacts = []; // {car, first, last, kind, atFault, incidents}
+  let lastCollision = null; // the contact of the collision before, while it may go on
   for (let step = startStep; step < steps; ++step) {
     const acc = v < 20 ? 4 : 0;
     v = Math.min(20, v + acc * stepS);
@@ -279,6 +291,19 @@ export function syntheticDrive({
       if (!legacy) {
         rec.kind = inc.kind === undefined ? 255 : COLLISION_KINDS.indexOf(inc.kind);
         rec.atFault = Boolean(inc.atFault);
+        if (!preContacts) {
+          rec.contact = -1;
+          if (inc.type === 'collision' && rec.kind !== 255) {
+            const car = Math.round(rec.value);
+            const same = lastCollision && lastCollision.car === car && step - lastCollision.last <= contactGapSteps;
+            const c = same ? lastCollision : { index: contacts.length, car, first: step, last: step, s: rec.s, kind: rec.kind, atFault: rec.atFault, incidents: 0 };
+            if (!same) contacts.push(c);
+            c.last = step;
+            c.incidents += 1;
+            lastCollision = c;
+            rec.contact = c.index;
+          }
+        }
       }
       recorded.push(rec);
       records.push(incidentRecord(rec));
@@ -291,14 +316,24 @@ export function syntheticDrive({
     incidents: recorded.map((r) => ({
       type: INCIDENT_TYPES[r.type], t_s: r.step * stepS, s_m: r.s, lane: 1, value: r.value, unit: '',
       ...(r.kind !== undefined && r.kind !== 255 ? { kind: COLLISION_KINDS[r.kind], at_fault: r.atFault } : {}),
+      ...(r.contact !== undefined && r.contact >= 0 ? { contact: r.contact } : {}),
     })),
   };
   if (!legacy) {
     const collisions = recorded.filter((r) => INCIDENT_TYPES[r.type] === 'collision');
-    report.collisions = {
+    report.collisions = preContacts ? {
       total: collisions.length,
       at_fault: collisions.filter((r) => r.atFault).length,
       by_kind: Object.fromEntries(COLLISION_KINDS.map((k, j) => [k, collisions.filter((r) => r.kind === j).length])),
+    } : {
+      total: contacts.length,
+      at_fault: contacts.filter((c) => c.atFault).length,
+      by_kind: Object.fromEntries(COLLISION_KINDS.map((k, j) => [k, contacts.filter((c) => c.kind === j).length])),
+      rubric_incidents: collisions.length,
+      contacts: contacts.map((c) => ({
+        car: c.car, t_s: c.first * stepS, end_t_s: (c.last + 1) * stepS, s_m: c.s, lane: 1, kind: COLLISION_KINDS[c.kind],
+        at_fault: c.atFault, rubric_incidents: c.incidents,
+      })),
     };
     report.safety = {
       min_ttc_ahead_s: 0.8, min_ttc_entering_s: 0.5, min_time_headway_s: 0.6, time_ttc_below_s: 1, share_ttc_below: 1 / seconds,

@@ -1,6 +1,6 @@
 // The decoder against the test writer (docs/replay.md): round trip, truncation, corruption,
 // live records split over messages, the fields added within version 2 (TTC and headway,
-// collision classes) and files from before them.
+// collision classes, contact numbers) and files from before them.
 import assert from 'node:assert/strict';
 import { test } from 'node:test';
 
@@ -430,6 +430,127 @@ test('an incident shorter than 18 bytes, a collision kind beyond collision_kinds
   assert.match(r.problem, /malformed: an incident needs 18 bytes, has 17/);
 });
 
+test('contacts: a collision incident\'s contact number comes back, 0-based; latched repeats share it', () => {
+  const drive = syntheticDrive({
+    seconds: 30,
+    incidents: [
+      { step: 400, type: 'collision', value: 4, kind: 'hit_from_behind' },
+      { step: 450, type: 'collision', value: 4, kind: 'hit_from_behind' }, // the same contact, a second on
+      { step: 500, type: 'collision', value: 4, kind: 'hit_from_behind' },
+      { step: 900, type: 'max_jerk', value: 14.2 },
+      { step: 1000, type: 'collision', value: 9 }, // unclassified: no contact
+      { step: 1200, type: 'collision', value: 6, kind: 'ego_lane_change', atFault: true },
+      { step: 1230, type: 'collision', value: 4, kind: 'car_cut_in' }, // car 4 again, later: a contact of its own
+    ],
+  });
+  const r = decodeReplay(drive.bytes);
+  assert.equal(r.problem, null);
+  assert.equal(r.incidents, 7);
+  assert.deepEqual(Array.from(r.incContact.subarray(0, r.incidents)), [0, 0, 0, -1, -1, 1, 2]);
+  assert.deepEqual([0, 3, 5, 6, 7, -1].map((k) => r.incidentContact(k)), [0, -1, 1, 2, -1, -1]);
+  const { list, repeat, byNumber } = r.contacts();
+  assert.deepEqual(list, [{ contact: 0, first: 0, incidents: 3 }, { contact: 1, first: 5, incidents: 1 }, { contact: 2, first: 6, incidents: 1 }]);
+  assert.deepEqual(Array.from(repeat), [0, 1, 1, 0, 0, 0, 0]);
+  assert.equal(byNumber.get(2).first, 6);
+  // the end record's report: contacts, and the rubric's latched count beside them
+  const c = r.report.collisions;
+  assert.equal(c.total, 3);
+  assert.equal(c.at_fault, 1);
+  assert.equal(c.rubric_incidents, 6);
+  assert.deepEqual(c.contacts.map((x) => [x.car, x.rubric_incidents, x.kind]), [[4, 3, 'hit_from_behind'], [6, 1, 'ego_lane_change'], [4, 1, 'car_cut_in']]);
+  assert.deepEqual(r.report.incidents.map((i) => i.contact), [0, 0, 0, undefined, undefined, 1, 2]);
+});
+
+test('incidents of 18, 20 and 24 bytes: no class, a class, a class and a contact; 0 is none; later bytes are ignored', () => {
+  const w = new RecordWriter();
+  const frame = w.frame(STILL);
+  const base = { type: 0, value: 3, s: 1, lane: 1, x: 0, y: 0 };
+  const read = (...records) => {
+    const r = new Replay({ step_s: 0.02, collision_kinds: COLLISION_KINDS });
+    r.appendRecords(concat([frame, ...records]));
+    return r;
+  };
+  const sizes = [incidentRecord(base), incidentRecord({ ...base, kind: 1, atFault: false }), incidentRecord({ ...base, kind: 1, atFault: true, contact: 4 })]
+    .map((rec) => rec.length - 5);
+  assert.deepEqual(sizes, [18, 20, 24]);
+  const r = read(incidentRecord(base), incidentRecord({ ...base, kind: 1, atFault: false }), incidentRecord({ ...base, kind: 3, atFault: true, contact: 4 }),
+    incidentRecord({ ...base, kind: 0, atFault: true, contact: null }), incidentRecord({ ...base, type: 3, kind: 255, contact: -1 }));
+  assert.equal(r.problem, null);
+  assert.equal(r.incidents, 5);
+  assert.deepEqual([0, 1, 2, 3, 4].map((k) => r.incidentContact(k)), [-1, -1, 4, -1, -1]);
+  assert.deepEqual([0, 1, 2].map((k) => r.incidentClass(k)), [null, { kind: 'hit_from_behind', atFault: false }, { kind: 'ego_lane_change', atFault: true }]);
+  // the u32 is little-endian, from 1
+  const big = incidentRecord({ ...base, kind: 0, atFault: false, contact: 0x01020304 - 1 });
+  assert.deepEqual(Array.from(big.subarray(5 + 20, 5 + 24)), [4, 3, 2, 1]);
+  assert.equal(read(big).incidentContact(0), 0x01020304 - 1);
+  const max = incidentRecord({ ...base, kind: 0, atFault: false, contact: 0xfffffffe });
+  assert.equal(read(max).incidentContact(0), 0xfffffffe);
+  // 21 to 23 bytes: a class and no contact; 27 (a later writer's): the contact, the rest ignored
+  const sized = (rec, n) => {
+    const out = new Uint8Array(5 + n);
+    out.set(rec.subarray(0, Math.min(rec.length, 5 + n)));
+    new DataView(out.buffer).setUint32(1, n, true);
+    return out;
+  };
+  const full = incidentRecord({ ...base, kind: 2, atFault: false, contact: 6 });
+  for (const n of [21, 22, 23]) {
+    const rr = read(sized(full, n));
+    assert.equal(rr.problem, null, `${n} bytes`);
+    assert.equal(rr.incidentContact(0), -1, `${n} bytes: no contact`);
+    assert.equal(rr.incidentClass(0).kind, 'hit_from_behind_braking');
+  }
+  const later = sized(full, 27);
+  later.set([9, 9, 9], 5 + 24);
+  assert.equal(read(later).incidentContact(0), 6);
+});
+
+test('a contact number on an incident that is no classified collision is malformed', () => {
+  const w = new RecordWriter();
+  const frame = w.frame(STILL);
+  const r = new Replay({ step_s: 0.02, collision_kinds: COLLISION_KINDS });
+  r.appendRecords(concat([frame, incidentRecord({ type: 1, value: 51, s: 1, lane: 1, x: 0, y: 0, kind: 255, contact: 2 })]));
+  assert.match(r.problem, /record 2 \(incident\) at byte \d+ of the data is malformed: contact number 3 on an incident that is no classified collision/);
+  assert.equal(r.incidents, 0);
+  // a whole file with one: what comes before it is kept, with the problem named
+  const drive = syntheticDrive({ seconds: 4, incidents: [{ step: 100, type: 'speeding', value: 51 }] });
+  const records = drive.records.map((rec) => (rec[0] === 3 ? incidentRecord({ ...drive.incidents[0], kind: 255, contact: 0 }) : rec));
+  const bad = decodeReplay(encodeReplay(drive.header, records), 'bad.otr');
+  assert.match(bad.problem, /^bad\.otr: record \d+ \(incident\) .* malformed: contact number 1 on an incident that is no classified collision/);
+  assert.equal(bad.frames, 101);
+});
+
+test('a file from before contacts (20-byte incidents, collisions without contacts) reads as before, with no contact', () => {
+  const drive = syntheticDrive({ seconds: 12, preContacts: true,
+    incidents: [{ step: 120, type: 'collision', value: 5, kind: 'hit_from_behind' }, { step: 170, type: 'collision', value: 5, kind: 'hit_from_behind' }] });
+  assert.ok(drive.records.filter((rec) => rec[0] === 3).every((rec) => rec.length - 5 === 20));
+  const r = decodeReplay(drive.bytes);
+  assert.equal(r.problem, null);
+  assert.deepEqual([r.incidentContact(0), r.incidentContact(1)], [-1, -1]);
+  assert.equal(r.contacts().list.length, 0);
+  assert.equal(r.incidentClass(1).kind, 'hit_from_behind');
+  assert.equal(r.report.collisions.total, 2, 'counted per incident');
+  assert.equal(r.report.collisions.contacts, undefined);
+});
+
+test('contact texts: the banner names the contact, the report counts contacts beside the rubric\'s incidents', async () => {
+  const { collisionsText, incidentText, latchedText, safetyStatusText } = await import('../src/viewer/format.js');
+  assert.equal(incidentText('collision', 5, { kind: 'hit_from_behind', atFault: false }, 1), 'Collision with car 5 (contact 2) — hit from behind (not at fault)');
+  assert.equal(incidentText('collision', 5, null, 0), 'Collision with car 5 (contact 1)');
+  assert.equal(incidentText('collision', 5, { kind: 'ego_lane_change', atFault: true }, -1), 'Collision with car 5 — ego lane change (at fault)');
+  assert.equal(incidentText('speeding', 51.2, null, 3), 'Speed limit exceeded: 51.2 mph');
+  assert.equal(latchedText(2, 3), 'still in contact: the rubric\'s collision incident 2 of 3 (one per second of contact; one collision)');
+  const report = { collisions: { total: 3, at_fault: 2, rubric_incidents: 7, by_kind: {}, contacts: [{}, {}, {}] }, safety: { near_miss_episodes: 2 } };
+  assert.equal(collisionsText(report), '3 collisions (contacts), 2 at fault; the rubric counted 7 collision incidents (one per second of contact)');
+  assert.equal(safetyStatusText(report), '3 collisions (contacts), 2 at fault; the rubric counted 7 collision incidents (one per second of contact) · 2 near misses');
+  assert.equal(collisionsText({ collisions: { total: 1, at_fault: 0, rubric_incidents: 1, contacts: [{}] } }),
+    '1 collision (contact), 0 at fault; the rubric counted 1 collision incident (one per second of contact)');
+  assert.equal(collisionsText({ collisions: { total: 0, at_fault: 0, rubric_incidents: 0, contacts: [] } }), '');
+  // a report from before contacts: as before, saying so
+  assert.equal(collisionsText({ collisions: { total: 2, at_fault: 1 } }), '2 collisions (1 at fault), counted before contacts (one per second of contact)');
+  assert.equal(collisionsText({ collisions: { total: 1 } }), '1 collision, counted before contacts (one per second of contact)');
+  assert.equal(collisionsText(null), '');
+});
+
 test('incident and status texts name the collision kind and fault', async () => {
   const { incidentText, safetyStatusText } = await import('../src/viewer/format.js');
   assert.equal(incidentText('collision', 5, { kind: 'hit_from_behind', atFault: false }), 'Collision with car 5 — hit from behind (not at fault)');
@@ -439,9 +560,10 @@ test('incident and status texts name the collision kind and fault', async () => 
   assert.equal(incidentText('max_jerk', 12.5, null), 'Max jerk exceeded: 12.5 m/s³');
   assert.equal(safetyStatusText(null), '');
   assert.equal(safetyStatusText({ incidents: [] }), ''); // a report from before
-  assert.equal(safetyStatusText({ collisions: { total: 2, at_fault: 1 }, safety: { near_miss_episodes: 3 } }), '2 collisions (1 at fault) · 3 near misses');
+  assert.equal(safetyStatusText({ collisions: { total: 2, at_fault: 1 }, safety: { near_miss_episodes: 3 } }),
+    '2 collisions (1 at fault), counted before contacts (one per second of contact) · 3 near misses');
   assert.equal(safetyStatusText({ collisions: { total: 0, at_fault: 0 }, safety: { near_miss_episodes: 1 } }), '1 near miss');
-  assert.equal(safetyStatusText({ collisions: { total: 1, at_fault: 0 } }), '1 collision (0 at fault)');
+  assert.equal(safetyStatusText({ collisions: { total: 1, at_fault: 0 } }), '1 collision (0 at fault), counted before contacts (one per second of contact)');
 });
 
 // The columns that two decodings of the same run must share.

@@ -1,7 +1,8 @@
 // The bench summary rows, computed from the runs as the bench's summary does, for a report
 // object that carries runs but no "summary": the figures without their intervals (those, and
-// how precise they are, come only from the bench), collisions at fault and near misses when
-// every run has them (else null, as the bench writes for older runs).
+// how precise they are, come only from the bench), collisions as contacts when every run
+// counts them so (else the older per-second count), at fault when every run classifies them,
+// near misses when every run has them (else null, as the bench writes for older runs).
 export const INCIDENT_TYPES = ['collision', 'speeding', 'max_acceleration', 'max_jerk', 'outside_lane'];
 const METRES_PER_MILE = 1609.344;
 const MPH_PER_MPS = 2.2369362920544025;
@@ -17,18 +18,37 @@ const num = (x) => (typeof x === 'number' && Number.isFinite(x) ? x : 0);
 const isNum = (x) => typeof x === 'number' && Number.isFinite(x);
 const per100 = (n, miles) => (miles > 0 ? (100 * n) / miles : 0);
 
-// Collisions of runs: the total from the incident counts; at fault and by kind only when
-// every run classified its collisions.
+// Collisions of runs. When every run counts them as contacts (its collisions list
+// `contacts`): contacts in all, at fault and by kind, and the rubric's latched collision
+// incidents (one per second of contact) beside them, as the bench writes. Else as an older
+// bench wrote them: the rubric's count from the incident counts (a collision for every second
+// of contact), at fault and by kind only when every run classified its collisions and none
+// counts contacts (the two counts do not add up); no `rubric_incidents` key, which says so.
 function collisionsOf(runs, miles) {
-  const total = runs.reduce((a, r) => a + num((r.incident_counts || {}).collision), 0);
+  const rubric = runs.reduce((a, r) => a + num((r.incident_counts || {}).collision), 0);
+  const contacts = runs.filter((r) => r.collisions && Array.isArray(r.collisions.contacts)).length;
+  if (runs.length && contacts === runs.length) {
+    const total = runs.reduce((a, r) => a + num(r.collisions.total), 0);
+    const atFault = runs.reduce((a, r) => a + num(r.collisions.at_fault), 0);
+    return {
+      total, per_100mi: per100(total, miles), per_100mi_ci: null,
+      at_fault: atFault, at_fault_per_100mi: per100(atFault, miles), at_fault_per_100mi_ci: null,
+      by_kind: byKind(runs), rubric_incidents: rubric, rubric_per_100mi: per100(rubric, miles),
+    };
+  }
+  const out = { total: rubric, per_100mi: per100(rubric, miles), per_100mi_ci: null, at_fault: null, at_fault_per_100mi: null, at_fault_per_100mi_ci: null, by_kind: null };
   const classified = runs.every((r) => r.collisions && isNum(r.collisions.at_fault));
-  const out = { total, per_100mi: per100(total, miles), per_100mi_ci: null, at_fault: null, at_fault_per_100mi: null, at_fault_per_100mi_ci: null, by_kind: null };
-  if (!classified) return out;
+  if (!classified || contacts > 0) return out;
   out.at_fault = runs.reduce((a, r) => a + r.collisions.at_fault, 0);
   out.at_fault_per_100mi = per100(out.at_fault, miles);
-  out.by_kind = {};
+  out.by_kind = byKind(runs);
+  return out;
+}
+
+function byKind(runs) {
+  const out = {};
   for (const r of runs) {
-    for (const [k, n] of Object.entries(r.collisions.by_kind || {})) out.by_kind[k] = (out.by_kind[k] || 0) + num(n);
+    for (const [k, n] of Object.entries(r.collisions.by_kind || {})) out[k] = (out[k] || 0) + num(n);
   }
   return out;
 }

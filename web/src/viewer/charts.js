@@ -15,7 +15,7 @@ const SAFETY_TOP_S = 6;
 const SAFETY_SERIES = [
   { key: 'ttcAhead', label: 'TTC ahead', color: '#ff5ce1' },
   { key: 'ttcEntering', label: 'TTC entering', color: '#b28dff' },
-  { key: 'headway', label: 'headway', color: '#32c5ff' },
+  { key: 'headway', label: 'time gap', color: '#32c5ff' },
 ];
 
 // Axis ticks: "m:ss", or "h:mm:ss" from an hour on.
@@ -56,11 +56,11 @@ function limitLine(limit) {
   return (u) => drawLimit(u, limit, LIMIT_COLOR, '');
 }
 
-// The near-miss thresholds: TTC (for both TTCs) and headway.
+// The near-miss thresholds: TTC (for both TTCs) and the time gap (the headway's keys).
 function thresholdLines(th) {
   return (u) => {
     drawLimit(u, th.ttc, LIMIT_COLOR, `TTC ${th.ttc} s`);
-    drawLimit(u, th.headway, HEADWAY_COLOR, `headway ${th.headway} s`);
+    drawLimit(u, th.headway, HEADWAY_COLOR, `time gap ${th.headway} s`);
   };
 }
 
@@ -112,8 +112,9 @@ export class Charts {
       { el: 'chart-jerk', title: `Jerk (m/s³), limit ${lim.jerk_mps3 ?? '–'}`, label: 'jerk',
         series: [line('jerk', 'm/s³', '#f5a623')], range: rangeFor(lim.jerk_mps3 || 0), draw: limitLine(lim.jerk_mps3 || 0) },
       { el: 'chart-safety', label: 'safety',
-        // a replay from before TTC and headway were recorded has none: say so in the title
-        title: replay.safetyFrames === 0 && replay.frames > 0 ? 'TTC and headway: not in this replay' : 'TTC and headway (s)',
+        // a replay from before TTC and headway were recorded has none: say so in the title; the
+        // headway is the bumper-to-bumper time gap to the car ahead
+        title: replay.safetyFrames === 0 && replay.frames > 0 ? 'TTC and time gap: not in this replay' : 'TTC and time gap (s)',
         series: SAFETY_SERIES.map((s) => ({ label: s.label, stroke: s.color, width: 1, points: { show: false }, value: secondsValue })),
         range: [0, SAFETY_TOP_S], draw: thresholdLines(th) },
     ];

@@ -24,12 +24,15 @@ const INCIDENT_TEXT = {
 export const kindText = (kind) => String(kind).replace(/_/g, ' ');
 
 /// The banner text of an incident, with its value where it says something, and for a
-/// collision its class ({kind, atFault}, from Replay.incidentClass) when the file has one.
-export function incidentText(type, value, cls = null) {
+/// collision its contact (from 0, as Replay.incidentContact; -1 for none: "contact 2" is the
+/// second car touched) and its class ({kind, atFault}, from Replay.incidentClass) when the
+/// file has them.
+export function incidentText(type, value, cls = null, contact = -1) {
   const head = INCIDENT_TEXT[type] || type;
   switch (type) {
     case 'collision': {
-      const what = `${head} with car ${Math.round(value)}`;
+      const numbered = typeof contact === 'number' && contact >= 0 ? ` (contact ${contact + 1})` : '';
+      const what = `${head} with car ${Math.round(value)}${numbered}`;
       return cls ? `${what} — ${kindText(cls.kind)} (${cls.atFault ? 'at fault' : 'not at fault'})` : what;
     }
     case 'speeding': return `${head}: ${value.toFixed(1)} mph`;
@@ -38,6 +41,13 @@ export function incidentText(type, value, cls = null) {
     case 'outside_lane': return `${head}: d = ${value.toFixed(2)} m`;
     default: return `${head} (${value})`;
   }
+}
+
+/// What a latched collision incident adds to its contact's text: the rubric counts a
+/// collision incident for every second of contact, the contact is one collision. `nth` is
+/// this incident's place among its contact's (from 1), `of` how many it has.
+export function latchedText(nth, of) {
+  return `still in contact: the rubric's collision incident ${nth} of ${of} (one per second of contact; one collision)`;
 }
 
 /// What the run's report says of how the planner planned: '' when every cycle was planned
@@ -62,18 +72,37 @@ export function safetyThresholds(report) {
   return { ttc: pos(s.ttc_threshold_s, 1.5), headway: pos(s.headway_threshold_s, 1.0) };
 }
 
-/// What the run's report says of its collisions and near misses, e.g. '2 collisions (1 at
-/// fault) · 3 near misses'; '' for a report from before they were counted. No collisions
-/// are not mentioned (the status line counts incidents already).
+const plural = (n, one, many) => `${n} ${n === 1 ? one : many}`;
+
+/// What the run's report says of its collisions, counted as contacts (one per car touched,
+/// however long), beside the rubric's latched count: e.g. '3 collisions (contacts), 2 at
+/// fault; the rubric counted 7 collision incidents (one per second of contact)'. A report from
+/// before contacts (collisions without `contacts`) counted a collision for every second of
+/// contact: its figures as they are, saying so. '' without collisions.
+export function collisionsText(report) {
+  const c = report && report.collisions;
+  if (!c || typeof c !== 'object' || !(Number(c.total) > 0)) return '';
+  const n = Number(c.total);
+  const fault = typeof c.at_fault === 'number' ? c.at_fault : null;
+  if (!Array.isArray(c.contacts)) {
+    return `${plural(n, 'collision', 'collisions')}${fault === null ? '' : ` (${fault} at fault)`}, counted before contacts (one per second of contact)`;
+  }
+  let text = `${n} collision${n === 1 ? '' : 's'} (contact${n === 1 ? '' : 's'})${fault === null ? '' : `, ${fault} at fault`}`;
+  if (typeof c.rubric_incidents === 'number') {
+    text += `; the rubric counted ${plural(c.rubric_incidents, 'collision incident', 'collision incidents')} (one per second of contact)`;
+  }
+  return text;
+}
+
+/// What the run's report says of its collisions and near misses, e.g. '2 collisions
+/// (contacts), 1 at fault; the rubric counted 5 collision incidents (one per second of contact)
+/// · 3 near misses'; '' for a report from before they were counted. No collisions are not
+/// mentioned (the status line counts incidents already).
 export function safetyStatusText(report) {
   if (!report) return '';
   const parts = [];
-  const c = report.collisions;
-  if (c && Number(c.total) > 0) {
-    const n = Number(c.total);
-    const fault = typeof c.at_fault === 'number' ? ` (${c.at_fault} at fault)` : '';
-    parts.push(`${n} collision${n === 1 ? '' : 's'}${fault}`);
-  }
+  const collisions = collisionsText(report);
+  if (collisions) parts.push(collisions);
   const s = report.safety;
   if (s && typeof s.near_miss_episodes === 'number') {
     const n = s.near_miss_episodes;

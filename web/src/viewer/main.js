@@ -5,7 +5,7 @@ import './viewer.css';
 import { base64ToBytes, decodeReplayAsync, parseHeader, Replay, ReplayError } from '../replay.js';
 import { Charts } from './charts.js';
 import {
-  clock, cutCommand, cutOriginText, incidentText, METRES_PER_MILE, MPH_PER_MPS, planStatusText, safetyStatusText,
+  clock, cutCommand, cutOriginText, incidentText, latchedText, METRES_PER_MILE, MPH_PER_MPS, planStatusText, safetyStatusText,
   safetyThresholds,
 } from './format.js';
 import { Scene } from './scene.js';
@@ -258,22 +258,32 @@ class Viewer {
     const s0 = r.step[0];
     const span = Math.max(1, r.step[r.frames - 1] - s0);
     const buckets = new Map();
+    // a collision is a contact, marked once, at its first incident; the rubric's latched
+    // incidents of the same contact (one per second of it) get lighter marks of their own
+    const { byNumber, repeat } = r.contacts();
+    const nth = new Map(); // contact -> incidents of it so far
     for (let k = 0; k < r.incidents; ++k) {
       const step = r.step[r.incFrame[k]];
       const type = r.incidentTypeName(r.incType[k]);
       const cls = r.incidentClass(k);
+      const contact = r.incidentContact(k);
+      const latched = repeat[k] === 1;
+      if (contact >= 0) nth.set(contact, (nth.get(contact) || 0) + 1);
       // collisions at fault and not at fault get marks of their own (filled, outlined)
       const fault = cls ? String(cls.atFault) : '';
-      const key = `${type}:${fault}:${Math.round(((step - s0) / span) * MARKER_BUCKETS)}`;
+      const key = `${type}:${fault}:${latched ? `latched ${contact}` : ''}:${Math.round(((step - s0) / span) * MARKER_BUCKETS)}`;
       const b = buckets.get(key);
       if (b) b.count += 1;
-      else buckets.set(key, { k, step, type, cls, count: 1 });
+      else {
+        const of = contact >= 0 ? byNumber.get(contact).incidents : 0;
+        buckets.set(key, { k, step, type, cls, contact, latched, nth: nth.get(contact) || 0, of, count: 1 });
+      }
     }
     const frag = document.createDocumentFragment();
     for (const b of buckets.values()) {
       const m = document.createElement('button');
       m.type = 'button';
-      m.className = 'marker';
+      m.className = b.latched ? 'marker latched' : 'marker';
       m.dataset.step = String(b.step);
       m.dataset.type = b.type;
       m.dataset.count = String(b.count);
@@ -281,9 +291,14 @@ class Viewer {
         m.dataset.kind = b.cls.kind;
         m.dataset.atFault = String(b.cls.atFault);
       }
+      if (b.contact >= 0) m.dataset.contact = String(b.contact + 1);
+      if (b.latched) m.dataset.latched = 'true';
       m.style.left = `${(((b.step - s0) / span) * 100).toFixed(3)}%`;
+      let text = incidentText(b.type, r.incValue[b.k], b.cls, b.contact);
+      if (b.latched) text += ` — ${latchedText(b.nth, b.of)}`;
+      else if (b.of > 1) text += ` — the rubric counted ${b.of} collision incidents for it (one per second of contact)`;
       const more = b.count > 1 ? ` (and ${b.count - 1} more nearby)` : '';
-      m.title = `${clock(b.step * r.stepS)} ${incidentText(b.type, r.incValue[b.k], b.cls)}${more}`;
+      m.title = `${clock(b.step * r.stepS)} ${text}${more}`;
       m.setAttribute('aria-label', m.title);
       frag.appendChild(m);
     }
@@ -525,11 +540,17 @@ class Viewer {
     const end = lo; // first incident after frame i
     const shown = [];
     const hits = new Set();
+    const contacts = new Set(); // a contact's banner once, however many latched incidents it has
     for (let k = end - 1; k >= 0 && r.incFrame[k] >= from && shown.length < MAX_BANNERS; --k) {
       const type = r.incidentTypeName(r.incType[k]);
       const cls = r.incidentClass(k);
-      shown.push({ k, type, cls, text: incidentText(type, r.incValue[k], cls) });
+      const contact = r.incidentContact(k);
       if (type === 'collision') hits.add(Math.round(r.incValue[k]));
+      if (contact >= 0) {
+        if (contacts.has(contact)) continue;
+        contacts.add(contact);
+      }
+      shown.push({ k, type, cls, contact, text: incidentText(type, r.incValue[k], cls, contact) });
     }
     this.scene.highlightCars = hits;
     const key = shown.map((s) => s.k).join(',');
@@ -542,6 +563,7 @@ class Viewer {
       b.className = 'banner';
       b.dataset.type = s.type;
       if (s.cls) b.dataset.atFault = String(s.cls.atFault);
+      if (s.contact >= 0) b.dataset.contact = String(s.contact + 1);
       b.textContent = s.text;
       box.appendChild(b);
     }

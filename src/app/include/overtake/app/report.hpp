@@ -41,6 +41,10 @@ struct RunProvenance {
 /// One incident as the report lists it: type, t_s, s_m, lane, value (in `unit`), unit.
 [[nodiscard]] nlohmann::json incident_to_json(const sim::Incident& incident);
 
+/// A contact (a collision as evaluation counts it) as the collision incident at its first step,
+/// numbered `index`: what a failure is named and cut by.
+[[nodiscard]] sim::Incident contact_incident(const sim::Contact& contact, int index);
+
 /// The JSON report. Deterministic for a given run apart from the `timing` key.
 [[nodiscard]] nlohmann::json report_to_json(const sim::RunReport& r, const RunProvenance& p);
 

@@ -128,6 +128,9 @@ class StateArchive {
   [[nodiscard]] std::string take() { return std::move(out_); }
   /// Reading: fails unless every byte was read.
   void expect_end() const;
+  /// Reading: every byte was read (a part added to a format later may be missing from bytes
+  /// written before it).
+  [[nodiscard]] bool at_end() const { return loading_ && pos_ >= in_.size(); }
   /// Bytes read or written so far.
   [[nodiscard]] std::size_t offset() const { return loading_ ? pos_ : out_.size(); }
   /// A StateError naming the bytes, the part and `what`.

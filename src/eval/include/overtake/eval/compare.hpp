@@ -10,6 +10,7 @@
 #include <nlohmann/json.hpp>
 
 #include "overtake/eval/metrics.hpp"
+#include "overtake/eval/stats.hpp"
 
 namespace overtake::eval {
 
@@ -41,14 +42,18 @@ struct CompareOptions {
   std::vector<PolicyPair> pairs;
   /// Empty: every metric.
   std::vector<Metric> metrics;
+  /// Bootstrap resamples of each interval (the verdicts' tests do not resample; fewer make a
+  /// many-draw calibration affordable).
+  int resamples = kBootstrapResamples;
 };
 
 /// Compares `candidate` with `base`. Throws NotComparable when their runs cannot be pairs
 /// (another map, other minutes or latency, no policy, profile and seed in common) and
 /// std::invalid_argument when a pair names a policy a bench did not run. The result: {"base",
 /// "candidate", "notes", "comparisons": [{"base_policy", "candidate_policy", "traffic", "seeds",
-/// "figures"}], "worse": ["policy / traffic: metric", ...]} with figures as compare_paired gives
-/// them (candidate minus base).
+/// "figures"}], "verdicts" (the method: verdict_method), "worse": ["policy / traffic: metric",
+/// ...], "withheld": ["policy / traffic: too few seeds: ...", ...]} with figures as
+/// compare_paired gives them (candidate minus base), their verdicts judged as one family.
 [[nodiscard]] nlohmann::json compare_benches(const BenchData& base, const BenchData& candidate,
                                              const CompareOptions& options);
 

@@ -32,8 +32,10 @@ struct RunRow {
   double best_incident_free_miles = 0.0;
   std::array<double, sim::kIncidentTypeCount> incidents_by_type{};
   double incidents = 0.0;  ///< of every type
-  /// False for rows written before collisions were classified (no at-fault figures).
-  bool classified = false;
+  /// False for rows written before collisions were counted as contacts (they counted one
+  /// collision per second of contact): no collision figures then.
+  bool contacts_known = false;
+  double collisions = 0.0;  ///< contacts
   double at_fault_collisions = 0.0;
   std::array<double, sim::kCollisionKindCount> collisions_by_kind{};
   /// False for rows written before near misses were measured.
@@ -101,8 +103,10 @@ struct MetricTerms {
 };
 [[nodiscard]] MetricTerms terms(Metric m, const RunRow& run);
 /// True when every run has what the metric needs (rows written before collisions were
-/// classified have no at-fault count; before near misses, none of those).
+/// counted as contacts have no collision figures; before near misses, none of those).
 [[nodiscard]] bool available(Metric m, const std::vector<const RunRow*>& runs);
+/// Why a metric is not available for some run ("" when it is).
+[[nodiscard]] std::string unavailable_reason(Metric m, const std::vector<const RunRow*>& runs);
 /// The metric over runs (0 with no exposure).
 [[nodiscard]] double value(Metric m, const std::vector<const RunRow*>& runs);
 /// The metric of one run.

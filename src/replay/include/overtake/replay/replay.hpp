@@ -207,6 +207,9 @@ struct ReplayIncident {
   core::Vec2 position;  ///< where the ego was
   /// A collision's class (none in files written before collisions were classified).
   std::optional<sim::CollisionClass> collision;
+  /// A collision's contact (its number in the run, from 0; the report's collisions.contacts),
+  /// -1 when not known (files written before collisions were counted as contacts).
+  long contact = -1;
 };
 
 /// A checkpoint the run stored at frame `step`.

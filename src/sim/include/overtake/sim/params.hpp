@@ -296,6 +296,7 @@ void describe(V& v, SafetyParams& p) {
   v("headway_threshold_s", p.headway_threshold_s);
   v("headway_min_speed_mps", p.headway_min_speed_mps);
   v("episode_gap_s", p.episode_gap_s);
+  v("contact_gap_s", p.contact_gap_s);
 }
 
 template <class V>

@@ -4,6 +4,7 @@
 #include <array>
 #include <cstddef>
 #include <optional>
+#include <span>
 #include <string_view>
 #include <vector>
 
@@ -32,6 +33,9 @@ struct Incident {
   double value = 0.0;
   /// For a collision: its class, decided at the contact's first step (safety.hpp).
   std::optional<CollisionClass> collision;
+  /// For a collision: the number of the contact it was counted in (RunReport::contacts), -1
+  /// when not known.
+  int contact = -1;
   friend bool operator==(const Incident&, const Incident&) = default;
 };
 
@@ -48,8 +52,9 @@ struct EgoFrame {
   double exact_d_m = 0.0;  ///< on the reference line: the extra figure
   /// Id of a car whose body touched the ego's this step, if any.
   std::optional<int> collided_with;
-  /// The class of that contact (the scorecard's safety monitor decides it).
+  /// The class of that contact (the scorecard's safety monitor decides it) and its number.
   std::optional<CollisionClass> collision;
+  int contact = -1;
 };
 
 /// Peaks under both rule sets (SI).
@@ -105,6 +110,9 @@ class Referee {
   /// Writes or restores everything it counts and keeps (a checkpoint); the params must be
   /// the same.
   void archive(core::StateArchive& ar);
+  /// After a restore: each collision incident gets the number of the contact it was counted
+  /// in (the contact with its car whose time span holds it), which a checkpoint does not keep.
+  void link_contacts(std::span<const Contact> contacts);
 
  private:
   void count(IncidentType type, const EgoFrame& f, double value);

@@ -60,6 +60,9 @@ struct SafetyParams {
   double headway_min_speed_mps = 1.0;
   /// A near-miss episode ends once TTC has stayed at or above the threshold this long.
   double episode_gap_s = 1.0;
+  /// A contact with a car ends once the two bodies have been apart this long: touching again
+  /// sooner is the same contact (one collision), later a new one.
+  double contact_gap_s = 5.0;
   friend bool operator==(const SafetyParams&, const SafetyParams&) = default;
 };
 
@@ -103,6 +106,8 @@ struct LaneEntry {
   /// contact, 0 while it is still crossing; infinity: it did not enter that lane (it was in
   /// it from the run's start or its own placement, or the lane is not its newest).
   double s_ago = std::numeric_limits<double>::infinity();
+  /// Seconds from the entry itself (its body first in the lane) to the contact.
+  double entered_s_ago = std::numeric_limits<double>::infinity();
   core::FrenetPoint ego;  ///< on the waypoint chords, then
   core::FrenetPoint car;
   double ego_speed_mps = 0.0;
@@ -125,12 +130,17 @@ struct ContactSituation {
 [[nodiscard]] CollisionClass classify_collision(const ContactSituation& situation,
                                                 const SafetyParams& params);
 
-/// True when the body behind at a lane entry could have kept clear of the one ahead: reacting
-/// after `reaction_time_s` and then braking at `hard_braking_mps2`, it stops closing before
-/// the gap is gone (the one ahead holding its speed). An entry beside the other (no gap) is
-/// never absorbable.
-[[nodiscard]] bool entry_absorbable(const LaneEntry& entry, double loop_length_m,
-                                    const core::CarFootprint& size, const SafetyParams& params);
+/// True when the body behind at a lane entry could have kept clear of the one ahead, given
+/// what the one ahead did from the entry to the contact (RSS's proper response, Shalev-Shwartz
+/// et al. 2017): reacting after `reaction_time_s` at its speed and then braking at
+/// `hard_braking_mps2`, it would have stopped closing before the gap was gone while the one
+/// ahead slowed from its entry speed at its mean deceleration until the contact
+/// (`front_speed_now_mps` is its speed just before the contact). A front body that slowed
+/// harder than traffic brakes left no room the one behind was owed: not absorbable; nor an
+/// entry beside the other (no gap).
+[[nodiscard]] bool entry_absorbable(const LaneEntry& entry, double front_speed_now_mps,
+                                    double loop_length_m, const core::CarFootprint& size,
+                                    const SafetyParams& params);
 
 /// Constant-velocity time-to-collision (s) of a follower closing on a leader `gap_m` ahead
 /// (bumper to bumper): gap / (follower - leader speed) when it closes, else infinity.
@@ -164,25 +174,54 @@ struct SafetyEgo {
   double speed_mps = 0.0;
 };
 
-/// Watches the ego and the cars step by step: classifies each contact at its start (the
-/// class holds while that contact lasts) and measures TTC and headway.
+/// A step at which a car touches the ego, as the monitor sees it: which contact it belongs
+/// to and that contact's class.
+struct ContactStep {
+  CollisionClass collision;  ///< decided at the contact's first step, held while it lasts
+  int index = 0;             ///< the contact's number in the run (0, 1, ...)
+  bool begins = false;       ///< this is the contact's first step
+};
+
+/// One contact of the ego with one car, as a run reports it: a collision as evaluation counts
+/// them (the rubric counts a collision incident for every second of contact).
+struct Contact {
+  int car_id = -1;
+  double t_s = 0.0;      ///< its first step
+  double end_t_s = 0.0;  ///< the last step at which the two touched
+  double s_m = 0.0;      ///< the ego's s at its first step (on the waypoint chords)
+  int lane = 0;          ///< the ego's lane then
+  CollisionClass collision;
+  /// The rubric's collision incidents counted while it lasted (0 when the rubric's latch still
+  /// held from a contact with another car).
+  int rubric_collisions = 0;
+  friend bool operator==(const Contact&, const Contact&) = default;
+};
+
+/// Watches the ego and the cars step by step: groups the steps at which a car touches the ego
+/// into contacts (one car; it ends once the two have been apart for `contact_gap_s`),
+/// classifies each contact once, at its start, and measures TTC and headway.
 class SafetyMonitor {
  public:
   SafetyMonitor(const SafetyParams& params, double step_s, const core::RoadParams& road,
                 const core::CarFootprint& size, double loop_length_m);
 
   /// After each step: the ego, the cars, and the car touching the ego (if any). Returns the
-  /// class of that contact (classified when it began).
-  std::optional<CollisionClass> observe(const SafetyEgo& ego, std::span<const TrafficCar> cars,
-                                        std::optional<int> contact_id);
+  /// contact that car's touch belongs to (classified when it began).
+  std::optional<ContactStep> observe(const SafetyEgo& ego, std::span<const TrafficCar> cars,
+                                     std::optional<int> contact_id);
 
   /// The figures at the newest step.
   [[nodiscard]] const SafetyFigures& current() const { return current_; }
   /// The run so far.
   [[nodiscard]] SafetySummary summary() const;
+  /// Contacts begun so far.
+  [[nodiscard]] int contacts_begun() const { return contacts_begun_; }
 
   /// Writes or restores its tracks, figures and episodes (a checkpoint).
   void archive(core::StateArchive& ar);
+  /// Writes or restores the contacts that have not ended (a part of its own, added after the
+  /// checkpoint's first format: a checkpoint without it restores with none open).
+  void archive_contacts(core::StateArchive& ar);
 
  private:
   /// One step of a body's history.
@@ -245,8 +284,18 @@ class SafetyMonitor {
   std::size_t ring_head_ = 0;
   Track ego_;
   std::vector<Track> cars_;  ///< by index in the traffic's list
-  std::optional<int> contact_id_;
-  CollisionClass contact_class_;
+  /// A contact that has not ended: its car, the last step they touched, its class and number.
+  struct OpenContact {
+    int car_id = -1;
+    long last_step = 0;
+    CollisionClass collision;
+    int index = 0;
+  };
+  std::optional<int> contact_id_;  ///< the car that touched the ego at the newest step
+  CollisionClass contact_class_;   ///< its contact's class
+  std::vector<OpenContact> open_contacts_;
+  int contacts_begun_ = 0;
+  long contact_gap_steps_ = 1;
   SafetyFigures current_;
   SafetySummary summary_;
   // near-miss episodes

@@ -76,6 +76,9 @@ struct RunReport {
   double best_incident_free_m = 0.0;
   std::vector<Incident> incidents;
   std::array<int, kIncidentTypeCount> incident_counts{};
+  /// The collisions as contacts: one per car the ego touched, however long (the rubric's
+  /// `incident_counts` count one collision per second of contact).
+  std::vector<Contact> contacts;
   /// Outside-of-lane counts under the same rule on the exact d (the rubric uses the
   /// original's d on the waypoint chords); a figure, not an incident.
   int exact_outside_lane = 0;
@@ -146,11 +149,15 @@ class Scorecard {
   /// Writes or restores everything it counts (a checkpoint), but the planner's timing: that
   /// is not part of the determinism promise, and after a restore it counts afresh.
   void archive(core::StateArchive& ar);
+  /// Writes or restores the contacts (a part of its own, after the stepper's: checkpoints of
+  /// builds before contacts end without it, and restore with none). Call after archive().
+  void archive_contacts(core::StateArchive& ar);
 
  private:
   Referee referee_;
   SafetyMonitor safety_;
   LaneTracker lanes_;
+  std::vector<Contact> contacts_;
   double step_s_;
   double start_s_ = 0.0;  // the world's time when the scorecard was made
   // Timing in fixed memory: a 7-day run has 15 million cycles.
