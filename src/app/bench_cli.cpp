@@ -146,8 +146,10 @@ Subcommand register_bench(CLI::App& app) {
   auto* cmd = app.add_subcommand(
       "bench",
       "Run every combination of policies x traffic profiles x seeds in parallel and summarise\n"
-      "them with 95% intervals, at-fault collisions, near misses and paired comparisons of\n"
-      "the policies (runs.jsonl, summary.md, summary.csv, summary.json, pairs.csv in --out).\n"
+      "them with 95% intervals over the seeds, collisions (one per car touched) and whose\n"
+      "fault, near misses, and paired comparisons of the policies whose verdicts are corrected\n"
+      "for the number of figures judged; no interval or verdict below 8 seeds (runs.jsonl,\n"
+      "summary.md, summary.csv, summary.json, pairs.csv in --out; docs/evaluation.md).\n"
       "`overtake bench merge` joins shards; `overtake compare` compares two benches.");
   st->policies_opt = cmd->add_option("--policies", st->policies,
                                      "Comma-separated policies (built-in ones, and the names of\n"

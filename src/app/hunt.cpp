@@ -803,8 +803,9 @@ Subcommand register_hunt(CLI::App& app) {
   cmd->add_option("--budget-hours", st->spec.budget_hours, "... or after this many simulated hours")
       ->capture_default_str();
   cmd->add_option("--find", st->find,
-                  "What counts as a failure: collisions, at-fault (collisions that were the\n"
-                  "ego's fault) or incidents (any incident)")
+                  "What counts as a failure: collisions (each contact with a car once, however\n"
+                  "long), at-fault (those contacts that were the ego's fault) or incidents (any\n"
+                  "of the rubric's; one counted again each second it lasts is one failure)")
       ->capture_default_str();
   cmd->add_option("--first-seed", st->spec.first_seed, "Seeds go up from this one")
       ->capture_default_str();

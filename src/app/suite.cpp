@@ -73,7 +73,8 @@ std::vector<sim::Incident> judged_contacts(const sim::Scenario& sc, const sim::R
   const double from = trace.start_s + (sc.cut ? sc.cut->lead_in_s : 0.0) - 1e-9;
   std::vector<sim::Incident> out;
   for (std::size_t k = 0; k < r.contacts.size(); ++k) {
-    if (r.contacts[k].t_s >= from) out.push_back(contact_incident(r.contacts[k], static_cast<int>(k)));
+    if (r.contacts[k].t_s >= from)
+      out.push_back(contact_incident(r.contacts[k], static_cast<int>(k)));
   }
   return out;
 }

@@ -10,8 +10,8 @@
 #include "overtake/app/build_info.hpp"
 #include "overtake/app/cli.hpp"
 #include "overtake/app/io.hpp"
-#include "overtake/eval/summary.hpp"
 #include "overtake/app/resources.hpp"
+#include "overtake/eval/summary.hpp"
 #include "overtake/view/page.hpp"
 
 namespace overtake::app {

@@ -125,8 +125,8 @@ json compare_benches(const BenchData& base, const BenchData& candidate,
       const auto b = runs_of(base, p.base, t);
       const auto c = runs_of(candidate, p.candidate, t);
       if (b.empty() || c.empty()) continue;
-      json result = compare_paired(b, c, "compare|" + p.base + "|" + p.candidate + "|" + t,
-                                   metrics, options.resamples);
+      json result = compare_paired(b, c, "compare|" + p.base + "|" + p.candidate + "|" + t, metrics,
+                                   options.resamples);
       const auto seeds = result["seeds"].get<std::size_t>();
       if (seeds == 0) {
         notes.push_back(p.base + " / " + t + ": no seed in common, not compared");
@@ -137,8 +137,8 @@ json compare_benches(const BenchData& base, const BenchData& candidate,
                         std::to_string(b.size()) + " and " + std::to_string(c.size()));
       }
       for (const Metric m : metrics) {
-        const std::string why = unavailable_reason(m, b).empty() ? unavailable_reason(m, c)
-                                                                 : unavailable_reason(m, b);
+        const std::string why =
+            unavailable_reason(m, b).empty() ? unavailable_reason(m, c) : unavailable_reason(m, b);
         if (!why.empty()) {
           notes.push_back(p.candidate + " / " + t + ": " + std::string(info(m).name) +
                           " not compared: " + why);
@@ -170,12 +170,8 @@ json compare_benches(const BenchData& base, const BenchData& candidate,
       if (!f.is_null() && f["verdict"] == "worse") worse.push_back(who + ": " + name);
     }
   }
-  return {{"base", base.name},
-          {"candidate", candidate.name},
-          {"notes", notes},
-          {"comparisons", comparisons},
-          {"verdicts", verdict_method(tests)},
-          {"worse", worse},
+  return {{"base", base.name},          {"candidate", candidate.name},       {"notes", notes},
+          {"comparisons", comparisons}, {"verdicts", verdict_method(tests)}, {"worse", worse},
           {"withheld", withheld}};
 }
 
@@ -208,7 +204,7 @@ std::string compare_text(const json& result) {
       std::string chance = "–";
       if (f["probability_of_improvement"].is_number()) {
         chance = fixed(f["probability_of_improvement"], 2) + " (" +
-                 fixed(f["probability_of_improvement_ci"][0], 2) + "–" +
+                 fixed(f["probability_of_improvement_ci"][0], 2) + ", " +
                  fixed(f["probability_of_improvement_ci"][1], 2) + ")";
       }
       out += "  " + pad(label, 32) + pad(fixed(f["base"], decimals), 9, true) +

@@ -172,6 +172,7 @@ struct RateLimits {
   double hi = 0.0;
   double dispersion = 0.0;
   double top_share = 0.0;
+  double top = 0.0;
   bool none = true;  ///< no event
 };
 
@@ -202,6 +203,7 @@ RateLimits rate_limits(std::span<const double> events, std::span<const double> e
   }
   r.none = false;
   r.top_share = top / k;
+  r.top = top;
   const std::size_t n = events.size();
   double phi = 1.0;
   if (n >= 2) {
@@ -313,6 +315,7 @@ RateInterval rate_interval(std::span<const double> events, std::span<const doubl
   out.upper_bound_only = r.none;
   out.dispersion = r.dispersion;
   out.top_seed_share = r.top_share;
+  out.top_seed_events = r.top;
   return out;
 }
 

@@ -65,8 +65,7 @@ BootstrapOptions bootstrap_for(const std::string& key, int resamples = kBootstra
 /// "too few seeds: 3, need at least 8", or "" when there are enough.
 std::string too_few(std::size_t seeds) {
   if (seeds >= kMinSeeds) return {};
-  return "too few seeds: " + std::to_string(seeds) + ", need at least " +
-         std::to_string(kMinSeeds);
+  return "too few seeds: " + std::to_string(seeds) + ", need at least " + std::to_string(kMinSeeds);
 }
 
 /// An interval as JSON, or null when there are too few seeds for one.
@@ -108,14 +107,19 @@ RateFigure rate_figure(const RateColumns& c, bool enough) {
   return f;
 }
 
-/// A seed holding this share of a rate's events (or more) makes its interval one seed's.
+/// A seed holding this share of a rate's events (or more), in a burst of at least so many,
+/// makes its interval that seed's.
 constexpr double kTopSeedWarning = 1.0 / 3.0;
+constexpr double kBurstEvents = 3.0;
 
 void warn_top_seed(json& warnings, const std::string& figure, const RateFigure& f,
                    std::size_t seeds) {
-  if (seeds >= kMinSeeds && f.interval.top_seed_share >= kTopSeedWarning) {
-    warnings.push_back(figure + ": one seed holds " + fixed(100.0 * f.interval.top_seed_share, 0) +
-                       "% of the events; the interval cannot tell how rare such seeds are");
+  const RateInterval& i = f.interval;
+  if (seeds >= kMinSeeds && i.top_seed_share >= kTopSeedWarning &&
+      i.top_seed_events >= kBurstEvents) {
+    warnings.push_back(figure + ": one seed holds " + fixed(100.0 * i.top_seed_share, 0) +
+                       "% of the events (" + fixed(i.top_seed_events, 0) +
+                       "); the interval cannot tell how rare such bursts are");
   }
 }
 
@@ -394,8 +398,8 @@ json compare_paired(const std::vector<const RunRow*>& base,
         for (double& e : eb) e /= 100.0;
         f["ci"] = pair_of(rate_difference_interval({ea, da, eb, db}, 100.0));
       }
-      const Improvement imp =
-          probability_of_improvement(va, vb, mi.higher_is_better, bootstrap_for("p|" + k, resamples));
+      const Improvement imp = probability_of_improvement(va, vb, mi.higher_is_better,
+                                                         bootstrap_for("p|" + k, resamples));
       f["probability_of_improvement"] = imp.p;
       f["probability_of_improvement_ci"] = pair_of(imp.ci);
     } else if (enough) {
@@ -414,8 +418,8 @@ json compare_paired(const std::vector<const RunRow*>& base,
         ci = rate_difference_interval(events, 100.0);
         p = rate_difference_p_value(events, bootstrap_seed("flip|" + k));
       }
-      const Improvement imp =
-          probability_of_improvement(va, vb, mi.higher_is_better, bootstrap_for("p|" + k, resamples));
+      const Improvement imp = probability_of_improvement(va, vb, mi.higher_is_better,
+                                                         bootstrap_for("p|" + k, resamples));
       f["ci"] = pair_of(ci);
       f["p_value"] = p;
       f["probability_of_improvement"] = imp.p;
@@ -763,15 +767,16 @@ std::string summary_markdown(const json& rows, const json& pairs) {
   if (any_near) {
     const std::string ttc = fixed((*any_near)["ttc_threshold_s"], 1);
     const std::string gap = fixed((*any_near)["headway_threshold_s"], 1);
-    out += "\nNear misses (least over the runs; shares of the time; the time gap is bumper to "
-           "bumper; an episode: TTC below " +
-           ttc +
-           " s without a contact)\n\n"
-           "| policy | traffic | least TTC ahead (s) | least TTC entering a lane (s) | least "
-           "time gap (s) | time TTC < " +
-           ttc + " s | time gap < " + gap +
-           " s | near misses /100 mi |\n"
-           "|---|---|---:|---:|---:|---:|---:|---|\n";
+    out +=
+        "\nNear misses (least over the runs; shares of the time; the time gap is bumper to "
+        "bumper; an episode: TTC below " +
+        ttc +
+        " s without a contact)\n\n"
+        "| policy | traffic | least TTC ahead (s) | least TTC entering a lane (s) | least "
+        "time gap (s) | time TTC < " +
+        ttc + " s | time gap < " + gap +
+        " s | near misses /100 mi |\n"
+        "|---|---|---:|---:|---:|---:|---:|---|\n";
     for (const json& r : rows) {
       const json& nm = r["near_misses"];
       if (nm.is_null()) continue;
@@ -822,17 +827,18 @@ std::string summary_markdown(const json& rows, const json& pairs) {
   }
 
   if (!pairs.empty()) {
-    out += "\nPaired comparisons (the same seeds; A - B with its 95% interval over the seeds; "
-           "**better** or **worse** when its test is significant at 5% family-wise, Holm over "
-           "all " +
-           std::to_string(family_size(pairs)) +
-           " tests of this table's figures (paired t-test for speed, exact sign-flip test over "
-           "seeds for the rates); no verdict below " +
-           std::to_string(kMinSeeds) +
-           " seeds; P: the probability of improvement, P(A better than B) over all pairs of "
-           "runs, with its 95% interval)\n\n"
-           "| traffic | A vs B | seeds | mean mph | P | incidents /100 mi | P | at fault /100 mi "
-           "| P |\n|---|---|---:|---|---|---|---|---|---|\n";
+    out +=
+        "\nPaired comparisons (the same seeds; A - B with its 95% interval over the seeds; "
+        "**better** or **worse** when its test is significant at 5% family-wise, Holm over "
+        "all " +
+        std::to_string(family_size(pairs)) +
+        " tests of this table's figures (paired t-test for speed, exact sign-flip test over "
+        "seeds for the rates); no verdict below " +
+        std::to_string(kMinSeeds) +
+        " seeds; P: the probability of improvement, P(A better than B) over all pairs of "
+        "runs, with its 95% interval)\n\n"
+        "| traffic | A vs B | seeds | mean mph | P | incidents /100 mi | P | at fault /100 mi "
+        "| P |\n|---|---|---:|---|---|---|---|---|---|\n";
     for (const json& p : pairs) {
       const json& f = p["figures"];
       out += "| " + p["traffic"].get<std::string>() + " | " + p["policy"].get<std::string>() +
@@ -866,8 +872,10 @@ std::string summary_markdown(const json& rows, const json& pairs) {
 
   std::string notes;
   for (const json& r : rows) {
-    const std::string who = r["policy"].get<std::string>() + " / " + r["traffic"].get<std::string>();
-    if (r["intervals"].is_string()) notes += "- " + who + ": no intervals, " + r["intervals"].get<std::string>() + "\n";
+    const std::string who =
+        r["policy"].get<std::string>() + " / " + r["traffic"].get<std::string>();
+    if (r["intervals"].is_string())
+      notes += "- " + who + ": no intervals, " + r["intervals"].get<std::string>() + "\n";
     if (r["collisions"].is_null()) {
       notes += "- " + who +
                ": no collision figures (rows written before collisions were counted as "

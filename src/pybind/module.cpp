@@ -429,10 +429,11 @@ PYBIND11_MODULE(_overtake, m) {
         }
         const nlohmann::json rows = eval::summarize(b.runs, policies, traffic);
         const nlohmann::json pairs = eval::pair_policies(b.runs, policies, traffic);
-        return to_python(nlohmann::json{{"rows", rows},
-                                        {"pairs", pairs},
-                                        {"verdicts", eval::verdict_method(eval::family_size(pairs))},
-                                        {"notes", notes}});
+        return to_python(
+            nlohmann::json{{"rows", rows},
+                           {"pairs", pairs},
+                           {"verdicts", eval::verdict_method(eval::family_size(pairs))},
+                           {"notes", notes}});
       },
       py::arg("folder"));
 

@@ -30,8 +30,8 @@ inline constexpr std::size_t kCollisionClassBytes = 2;  // u8 collision kind, u8
 // After the class (added later within version 2): u32 the collision's contact, counting from 1
 // (0: not a collision, or not known).
 inline constexpr std::size_t kContactBytes = 4;
-inline constexpr std::uint8_t kNoCollisionKind = 255;   // an incident that is not a collision
-inline constexpr std::uint16_t kNoSeconds = 65535;      // TTC or headway: none (or >= 655.35 s)
+inline constexpr std::uint8_t kNoCollisionKind = 255;  // an incident that is not a collision
+inline constexpr std::uint16_t kNoSeconds = 65535;     // TTC or headway: none (or >= 655.35 s)
 inline constexpr std::size_t kMaxVarintBytes = 5;  // 35 bits: the zigzag of a difference of two i32
 inline constexpr std::size_t kIdCount = 65536;     // car ids are u16
 inline constexpr std::size_t kMaxCars = 255;

@@ -86,7 +86,8 @@ bool entry_absorbable(const LaneEntry& e, double front_speed_now_mps, double loo
   constexpr int kSamples = 2000;
   for (int i = 1; i <= kSamples; ++i) {
     const double t = t_end * static_cast<double>(i) / kSamples;
-    const double rear_m = rear_mps * std::min(t, t_r) + travelled(rear_mps, b, std::max(0.0, t - t_r));
+    const double rear_m =
+        rear_mps * std::min(t, t_r) + travelled(rear_mps, b, std::max(0.0, t - t_r));
     if (gap_m + travelled(front_mps, front_decel, t) - rear_m <= 0.0) return false;
   }
   return true;
@@ -526,14 +527,14 @@ void SafetyMonitor::archive(core::StateArchive& ar) {
 void SafetyMonitor::archive_contacts(core::StateArchive& ar) {
   ar.part("contacts");
   ar.io_range(contacts_begun_, 0, std::numeric_limits<int>::max(), "contacts begun");
-  ar.io_vector(open_contacts_, 1U << 16U, "open contacts", [this](core::StateArchive& a,
-                                                                  OpenContact& c) {
-    a.io_range(c.car_id, 0, 65535, "contact car");
-    a.io_range(c.last_step, step_ - contact_gap_steps_ - 1, step_, "contact's last step");
-    a.io_enum(c.collision.kind, CollisionKind::car_stopped, "contact kind");
-    a.io(c.collision.at_fault, "contact at fault");
-    a.io_range(c.index, 0, contacts_begun_ - 1, "contact number");
-  });
+  ar.io_vector(
+      open_contacts_, 1U << 16U, "open contacts", [this](core::StateArchive& a, OpenContact& c) {
+        a.io_range(c.car_id, 0, 65535, "contact car");
+        a.io_range(c.last_step, step_ - contact_gap_steps_ - 1, step_, "contact's last step");
+        a.io_enum(c.collision.kind, CollisionKind::car_stopped, "contact kind");
+        a.io(c.collision.at_fault, "contact at fault");
+        a.io_range(c.index, 0, contacts_begun_ - 1, "contact number");
+      });
 }
 
 }  // namespace overtake::sim

@@ -261,8 +261,7 @@ TEST(ScenarioLibrary, EveryCutScenarioReproducesTheFailureItWasCutFrom) {
     bool found = false;
     for (const sim::Contact& c : r.report.contacts) {
       const std::string kind(sim::to_string(c.collision.kind));
-      if (c.t_s - 1e-6 <= at && at <= c.end_t_s + 1e-6 &&
-          incident.find("collision " + kind) == 0) {
+      if (c.t_s - 1e-6 <= at && at <= c.end_t_s + 1e-6 && incident.find("collision " + kind) == 0) {
         found = true;
       }
     }

@@ -73,7 +73,8 @@ const Populations& rows() {
 const Population& population(const std::string& set, const std::string& policy,
                              const std::string& traffic) {
   const auto it = rows().find({set, policy, traffic});
-  if (it == rows().end()) throw std::runtime_error("no rows of " + set + " " + policy + " " + traffic);
+  if (it == rows().end())
+    throw std::runtime_error("no rows of " + set + " " + policy + " " + traffic);
   return it->second;
 }
 
@@ -167,8 +168,8 @@ double rate_coverage(const Population& p, Rate r, std::size_t n, int draws, std:
   return static_cast<double>(covered) / draws;
 }
 
-double speed_difference_coverage(const Population& a, const Population& b, std::size_t n,
-                                 int draws, std::uint64_t seed, int resamples) {
+double speed_difference_coverage(const Population& a, const Population& b, std::size_t n, int draws,
+                                 std::uint64_t seed, int resamples) {
   core::Rng rng(seed);
   const double truth = true_speed(a) - true_speed(b);
   int covered = 0;
@@ -286,8 +287,46 @@ std::function<std::pair<BenchData, BenchData>(core::Rng&)> policy_benches(
   };
 }
 
-std::function<std::pair<BenchData, BenchData>(core::Rng&)> noisy_benches(std::size_t n,
-                                                                          double sd) {
+std::function<std::pair<BenchData, BenchData>(core::Rng&)> thinned_benches(
+    const std::string& set, const std::string& policy, std::size_t n, Rate r, double keep) {
+  return [=](core::Rng& rng) {
+    std::vector<RunRow> base, candidate;
+    for (const char* traffic : {"faithful", "calm"}) {
+      const Population& p = population(set, policy, traffic);
+      const auto ia = draw(rng, p.size(), n);
+      const auto ib = draw(rng, p.size(), n);
+      for (std::size_t k = 0; k < n; ++k) {
+        base.push_back(run_row(p, ia[k], k + 1));
+        RunRow c = run_row(p, ib[k], k + 1);
+        const auto events = static_cast<int>(counts(p, r)[ib[k]]);
+        int kept = 0;
+        for (int e = 0; e < events; ++e) kept += rng.uniform01() < keep ? 1 : 0;
+        const double removed = events - kept;
+        switch (r) {
+          case Rate::incidents:
+            c.incidents -= removed;
+            c.incidents_by_type[0] -= removed;
+            break;
+          case Rate::collisions:
+            c.collisions -= removed;
+            c.at_fault_collisions = std::min(c.at_fault_collisions, c.collisions);
+            break;
+          case Rate::at_fault:
+            c.at_fault_collisions -= removed;
+            c.collisions -= removed;
+            break;
+          case Rate::near_misses:
+            c.near_misses -= removed;
+            break;
+        }
+        candidate.push_back(c);
+      }
+    }
+    return std::make_pair(bench("base", std::move(base)), bench("candidate", std::move(candidate)));
+  };
+}
+
+std::function<std::pair<BenchData, BenchData>(core::Rng&)> noisy_benches(std::size_t n, double sd) {
   return [=](core::Rng& rng) {
     std::vector<RunRow> base, candidate;
     for (const auto& [key, p] : rows()) {

@@ -59,8 +59,7 @@ inline constexpr Rate kRates[] = {Rate::incidents, Rate::collisions, Rate::at_fa
 [[nodiscard]] double dispersion(const Population& p, Rate r);
 
 /// Seeds drawn with replacement (indices into a population).
-[[nodiscard]] std::vector<std::size_t> draw(core::Rng& rng, std::size_t population,
-                                            std::size_t n);
+[[nodiscard]] std::vector<std::size_t> draw(core::Rng& rng, std::size_t population, std::size_t n);
 
 /// Coverage over `draws` synthetic benches of n seeds: the share of intervals that hold the
 /// population's figure (a paired one: the difference of the two populations' figures, a and b
@@ -96,9 +95,10 @@ struct GateOutcome {
 /// Runs compare_benches on `draws` pairs of benches made by `make` (base, candidate) and
 /// counts its outcomes; `watched` ("policy / traffic: metric") is the figure whose "better"
 /// verdicts are counted (power).
-[[nodiscard]] GateOutcome gate(int draws, std::uint64_t seed,
-                               const std::function<std::pair<BenchData, BenchData>(core::Rng&)>& make,
-                               const std::string& watched = "", int resamples = 200);
+[[nodiscard]] GateOutcome gate(
+    int draws, std::uint64_t seed,
+    const std::function<std::pair<BenchData, BenchData>(core::Rng&)>& make,
+    const std::string& watched = "", int resamples = 200);
 
 /// Benches of one policy over both profiles, n seeds: base from `a`, candidate from `b` (per
 /// profile), paired by seed index (`paired`: each seed's two runs to the arms in a random
@@ -107,8 +107,14 @@ struct GateOutcome {
     const std::string& set_a, const std::string& set_b, const std::string& policy, std::size_t n,
     bool paired, double add_mph = 0.0);
 
-/// The construction: the first `n` seeds of every 30-minute policy and profile, each
-/// row's distance scaled by independent noise of `sd` (relative) in both benches.
+/// Benches of one policy over both profiles on independent seeds, the candidate's events of
+/// `r` thinned (each kept with probability `keep`: its true rate times `keep`).
+[[nodiscard]] std::function<std::pair<BenchData, BenchData>(core::Rng&)> thinned_benches(
+    const std::string& set, const std::string& policy, std::size_t n, Rate r, double keep);
+
+/// The construction that once failed the gate 23% of the time: the first `n` seeds of every
+/// 30-minute policy and profile, each row's distance scaled by independent noise of `sd` (relative)
+/// in both benches.
 [[nodiscard]] std::function<std::pair<BenchData, BenchData>(core::Rng&)> noisy_benches(
     std::size_t n, double sd);
 

@@ -51,10 +51,9 @@ TEST(Calibration, TheRowsAreWhatTheDocsDescribe) {
       if (bursts(pop, r)) handful.push_back(pop.name() + " " + name(r));
     }
   }
-  EXPECT_EQ(handful, (std::vector<std::string>{"a10 seed003 / calm incidents",
-                                               "a10 seed003 / faithful incidents",
-                                               "a30 seed003 / calm incidents",
-                                               "a30 seed003 / faithful incidents"}));
+  EXPECT_EQ(handful, (std::vector<std::string>{
+                         "a10 seed003 / calm incidents", "a10 seed003 / faithful incidents",
+                         "a30 seed003 / calm incidents", "a30 seed003 / faithful incidents"}));
 }
 
 TEST(Calibration, MeanSpeedIntervalsCover) {
@@ -134,8 +133,8 @@ TEST(Calibration, PairedRateDifferenceIntervalsCover) {
           const double least = r == Rate::incidents ? kMinIncidentCoverage : kMinCoverage;
           for (const std::size_t n : {8U, 20U}) {
             const double c = rate_difference_coverage(a, b, r, n, kDraws, 401 + n);
-            EXPECT_GE(c, least)
-                << a.name() << " - " << b.name() << " " << name(r) << ", " << n << " seeds";
+            EXPECT_GE(c, least) << a.name() << " - " << b.name() << " " << name(r) << ", " << n
+                                << " seeds";
           }
         }
       }

@@ -223,15 +223,90 @@ TEST(CheckpointFile, ARunStateRestoresOnlyIntoAWorldMadeTheSameWay) {
     EXPECT_THAT(e.what(), HasSubstr("in part 'calm traffic'"));
     EXPECT_THAT(e.what(), HasSubstr("cars (count): 12 is outside [0, 5]"));
   }
-  // Every truncation of the run's state is refused (nothing restores half a world).
+  // Every truncation of the run's state is refused (nothing restores half a world), but the
+  // one that ends where the contacts' part begins: that is a checkpoint of a build before it.
+  const std::size_t contacts_at = c.run.rfind(std::string(1, '\x08') + "contacts");
+  ASSERT_NE(contacts_at, std::string::npos);
   for (std::size_t n = 0; n < c.run.size(); n += 97) {
     World w(f.map, f.line, WorldParams{}, TrafficProfile::calm, 3);
     RunOptions o;
     const std::string part = c.run.substr(0, n);
     o.restore = part;
-    if (part.empty()) continue;  // empty: nothing to restore
+    if (part.empty() || n == contacts_at) continue;  // empty: nothing to restore
     EXPECT_THROW(Stepper(w, o), core::StateError) << n;
   }
+}
+
+// A checkpoint of a build before contacts (no part "contacts" after the stepper's) restores,
+// whole, with no contact so far; one of today's restores its contacts, and the run goes on
+// as the one that never stopped.
+TEST(CheckpointFile, ACheckpointWithoutContactsRestoresAndOneWithContactsGoesOnExactly) {
+  const Fixture f;
+  // A scripted contact: the ego at 20 m/s runs into a car at 10 m/s 15 m ahead (t = 1 s) and
+  // keeps pushing it; the checkpoint is taken 2 s in, in the middle of the contact.
+  Scenario sc;
+  sc.ego_s_m = 100.0;
+  sc.ego_d_m = 6.0;
+  sc.ego_speed_mps = 20.0;
+  sc.cars = {{115.0, 1, 10.0}};
+  const auto plan = [](World& world) {
+    return [&world](const core::Telemetry& t) {
+      core::PlanResult r;
+      r.path = t.previous_path;
+      const double step = world.params().step_s;
+      const double t_end = world.time_s() + static_cast<double>(r.path.size()) * step;
+      for (int k = 1; r.path.size() < 50; ++k) {
+        r.path.push_back(world.line().to_cartesian({100.0 + 20.0 * (t_end + k * step), 6.0}));
+      }
+      return r;
+    };
+  };
+  const auto run_for = [&](World& world, double seconds, const std::string& restore) {
+    RunOptions o;
+    o.steps_per_call = 1;
+    o.duration_s = seconds;
+    o.restore = restore;
+    return run_drive(world, plan(world), o);
+  };
+  World whole(f.map, f.line, WorldParams{}, sc);
+  const RunReport straight = run_for(whole, 4.0, "");
+  ASSERT_EQ(straight.contacts.size(), 1U);
+  ASSERT_GE(straight.incident_counts[0], 2);
+
+  // The same run, its checkpoints kept (every 2 s: at 2 s, inside the contact).
+  struct Keep final : RunObserver {
+    void on_frame(const Frame& /*frame*/, std::span<const Incident> /*new*/) override {}
+    void on_path(std::span<const core::Vec2> /*path*/) override {}
+    void on_checkpoint(const Checkpoint& c) override { kept.push_back(c); }
+    std::vector<Checkpoint> kept;
+  } keep;
+  World first(f.map, f.line, WorldParams{}, sc);
+  RunOptions o;
+  o.steps_per_call = 1;
+  o.duration_s = 4.0;
+  o.checkpoint_every_s = 2.0;
+  o.observer = &keep;
+  EXPECT_EQ(run_drive(first, plan(first), o).contacts, straight.contacts);
+  ASSERT_GE(keep.kept.size(), 2U);
+  const Checkpoint& mid = keep.kept[1];
+  ASSERT_NEAR(mid.info.t_s, 2.0, 0.03);
+  ASSERT_LT(straight.contacts.front().t_s, mid.info.t_s);
+  ASSERT_GT(straight.contacts.front().end_t_s, mid.info.t_s);
+  const std::string state = mid.run;
+  // Today's checkpoint: the contact goes on; the report is the straight run's.
+  World again(f.map, f.line, WorldParams{}, sc);
+  const RunReport resumed = run_for(again, 2.0, state);
+  EXPECT_EQ(resumed.contacts, straight.contacts);
+  EXPECT_EQ(resumed.incidents, straight.incidents);
+  // Without the contacts' part: it restores; the contact open at the checkpoint is counted
+  // anew from its next touch, and the earlier incidents keep their class but no contact.
+  const std::size_t at = state.rfind(std::string(1, '\x08') + "contacts");
+  ASSERT_NE(at, std::string::npos);
+  World older(f.map, f.line, WorldParams{}, sc);
+  const RunReport old = run_for(older, 2.0, state.substr(0, at));
+  EXPECT_EQ(old.incident_counts, straight.incident_counts);
+  EXPECT_EQ(old.contacts.size(), 1U);
+  EXPECT_EQ(old.incidents.front().contact, -1);
 }
 
 // A run's state that says its traffic has run for longer than any run does is refused: catching

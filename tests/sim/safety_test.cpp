@@ -286,9 +286,9 @@ TEST_F(MonitorTest, TouchesOfOneCarAreOneContactUntilTheyHaveBeenApartForTheGap)
   std::vector<std::optional<ContactStep>> seen;
   for (int k = 0; k < 5; ++k) seen.push_back(step(3));
   for (int k = 0; k < 200; ++k) seen.push_back(step(std::nullopt));  // 4 s apart
-  for (int k = 0; k < 5; ++k) seen.push_back(step(3));                // the same contact
-  for (int k = 0; k < 3; ++k) seen.push_back(step(4));                // another car
-  for (int k = 0; k < 5; ++k) seen.push_back(step(3));                // still the first
+  for (int k = 0; k < 5; ++k) seen.push_back(step(3));               // the same contact
+  for (int k = 0; k < 3; ++k) seen.push_back(step(4));               // another car
+  for (int k = 0; k < 5; ++k) seen.push_back(step(3));               // still the first
   ASSERT_TRUE(seen.front().has_value());
   EXPECT_TRUE(seen.front()->begins);
   EXPECT_EQ(seen.front()->index, 0);
@@ -361,8 +361,8 @@ class SafetyScenario : public ::testing::Test {
  protected:
   SafetyScenario() : map_(test::circle_map()), line_(map_) {}
 
-  RunReport run(Scenario sc, const std::function<core::FrenetPoint(double)>& ego,
-                double duration_s, const WorldParams& params = {}) {
+  RunReport run(Scenario sc, const std::function<core::FrenetPoint(double)>& ego, double duration_s,
+                const WorldParams& params = {}) {
     std::stable_sort(sc.events.begin(), sc.events.end(),
                      [](const ScenarioEvent& a, const ScenarioEvent& b) { return a.t_s < b.t_s; });
     World world(map_, line_, params, sc);

@@ -99,9 +99,11 @@ struct RateInterval {
   bool upper_bound_only = false;
   /// The dispersion the interval used (1: as Poisson; 0 with no event).
   double dispersion = 0.0;
-  /// The largest share of the events one seed holds (0 with no event): near 1, the rate is
-  /// one seed's, and no interval from the others can tell how rare such seeds are.
+  /// The largest share of the events one seed holds (0 with no event), and how many that is:
+  /// a burst of many in one seed makes the rate that seed's, and no interval from the others
+  /// can tell how rare such seeds are.
   double top_seed_share = 0.0;
+  double top_seed_events = 0.0;
 };
 
 /// The overdispersed exact interval of a rate over seeds (quasi-Poisson): with K > 0 events in
