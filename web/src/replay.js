@@ -437,11 +437,13 @@ export class Replay {
           }
         }
         // the collision's contact (added later within version 2): a number from 1, 0 for none;
-        // only a classified collision has one
+        // only a classified collision (of the header's type "collision") has one
         let contact = -1;
         if (n >= INCIDENT_BYTES + COLLISION_CLASS_BYTES + CONTACT_BYTES) {
           const number = v.getUint32(p + INCIDENT_BYTES + COLLISION_CLASS_BYTES, true);
-          if (number > 0 && kind === NO_COLLISION_KIND) {
+          const named = this.incidentTypes.length > 0;  // a header that names the types
+          if (number > 0 && (kind === NO_COLLISION_KIND ||
+                             (named && this.incidentTypes[bytes[p]] !== 'collision'))) {
             return `contact number ${number} on an incident that is no classified collision`;
           }
           contact = number - 1;

@@ -461,6 +461,16 @@ test('contacts: a collision incident\'s contact number comes back, 0-based; latc
   assert.deepEqual(r.report.incidents.map((i) => i.contact), [0, 0, 0, undefined, undefined, 1, 2]);
 });
 
+test('a contact number on an incident of another type than collision is refused', () => {
+  const w = new RecordWriter();
+  const frame = w.frame(STILL);
+  const r = new Replay({ step_s: 0.02, collision_kinds: COLLISION_KINDS,
+                         incident_types: ['collision', 'speeding'] });
+  r.appendRecords(concat([frame, incidentRecord({ type: 1, value: 23, s: 1, lane: 1, x: 0, y: 0,
+                                                  kind: 0, atFault: true, contact: 2 })]));
+  assert.match(r.problem, /contact number 3 on an incident that is no classified collision/);
+});
+
 test('incidents of 18, 20 and 24 bytes: no class, a class, a class and a contact; 0 is none; later bytes are ignored', () => {
   const w = new RecordWriter();
   const frame = w.frame(STILL);
