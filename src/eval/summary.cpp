@@ -384,47 +384,32 @@ json compare_paired(const std::vector<const RunRow*>& base,
               {"probability_of_improvement", nullptr},
               {"probability_of_improvement_ci", nullptr},
               {"verdict", "too few seeds"}};
-    // A figure that is the same on every seed (no event in either arm, say) has nothing to
-    // test: "no difference", outside the family (a test that cannot reject would only make
-    // the correction of the others stricter).
-    bool differs = false;
-    for (std::size_t i = 0; i < n; ++i) differs = differs || va[i] != vb[i];
-    if (enough && !differs) {
-      f["ci"] = pair_of(Interval{});
-      f["verdict"] = "no difference";
-      if (m != Metric::mean_speed_mph) {
-        std::vector<double> ea(na), eb(nb);
-        for (double& e : ea) e /= 100.0;
-        for (double& e : eb) e /= 100.0;
-        f["ci"] = pair_of(rate_difference_interval({ea, da, eb, db}, 100.0));
-      }
-      const Improvement imp = probability_of_improvement(va, vb, mi.higher_is_better,
-                                                         bootstrap_for("p|" + k, resamples));
-      f["probability_of_improvement"] = imp.p;
-      f["probability_of_improvement_ci"] = pair_of(imp.ci);
-    } else if (enough) {
+    if (enough) {
+      // Rates are numerators of 100 x events: their interval and test take the events.
       const bool mean = m == Metric::mean_speed_mph;
-      Interval ci;
-      double p = 1.0;
-      if (mean) {
-        ci = mean_difference_interval(pairs, bootstrap_for("ci|" + k, resamples));
-        p = mean_difference_p_value(pairs);
-      } else {
-        // Rates are numerators of 100 x events: the test and interval take the events.
-        std::vector<double> ea(na), eb(nb);
-        for (double& e : ea) e /= 100.0;
-        for (double& e : eb) e /= 100.0;
-        const PairedRatios events{ea, da, eb, db};
-        ci = rate_difference_interval(events, 100.0);
-        p = rate_difference_p_value(events, bootstrap_seed("flip|" + k));
-      }
+      std::vector<double> ea(na), eb(nb);
+      for (double& e : ea) e /= 100.0;
+      for (double& e : eb) e /= 100.0;
+      const PairedRatios events{ea, da, eb, db};
+      const Interval ci = mean ? mean_difference_interval(pairs, bootstrap_for("ci|" + k, resamples))
+                               : rate_difference_interval(events, 100.0);
       const Improvement imp = probability_of_improvement(va, vb, mi.higher_is_better,
                                                          bootstrap_for("p|" + k, resamples));
       f["ci"] = pair_of(ci);
-      f["p_value"] = p;
       f["probability_of_improvement"] = imp.p;
       f["probability_of_improvement_ci"] = pair_of(imp.ci);
-      f["verdict"] = nullptr;  // the family's correction decides (judge_family)
+      // A figure that is the same on every seed (no event in either arm, say) has nothing to
+      // test: "no difference", outside the family (a test that cannot reject would only make
+      // the correction of the others stricter). Else the family's correction decides.
+      bool differs = false;
+      for (std::size_t i = 0; i < n; ++i) differs = differs || va[i] != vb[i];
+      if (differs) {
+        f["p_value"] = mean ? mean_difference_p_value(pairs)
+                            : rate_difference_p_value(events, bootstrap_seed("flip|" + k));
+        f["verdict"] = nullptr;  // judge_family
+      } else {
+        f["verdict"] = "no difference";
+      }
     }
     figures[name] = f;
   }
