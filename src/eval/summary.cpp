@@ -391,8 +391,9 @@ json compare_paired(const std::vector<const RunRow*>& base,
       for (double& e : ea) e /= 100.0;
       for (double& e : eb) e /= 100.0;
       const PairedRatios events{ea, da, eb, db};
-      const Interval ci = mean ? mean_difference_interval(pairs, bootstrap_for("ci|" + k, resamples))
-                               : rate_difference_interval(events, 100.0);
+      const Interval ci = mean
+                              ? mean_difference_interval(pairs, bootstrap_for("ci|" + k, resamples))
+                              : rate_difference_interval(events, 100.0);
       const Improvement imp = probability_of_improvement(va, vb, mi.higher_is_better,
                                                          bootstrap_for("p|" + k, resamples));
       f["ci"] = pair_of(ci);
