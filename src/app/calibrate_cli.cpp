@@ -60,7 +60,7 @@ Subcommand register_calibrate(CLI::App& app) {
             std::cout << format_calibration(rows);
             std::cout.flush();
             const nlohmann::json j = calibration_to_json(f, rows);
-            if (!st->json.empty()) write_file_atomic(st->json, j.dump(2) + "\n");
+            if (!st->json.empty()) write_file_atomic(st->json, json_text(j, 2) + "\n");
             return j["all_pass"].get<bool>() ? kExitOk : kExitFailure;
           }};
 }

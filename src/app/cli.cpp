@@ -137,7 +137,8 @@ int finish_run(const DriveResult& result, const DriveOptions& opts, const RunOut
   }
   std::cout.flush();
   if (out.json) {
-    write_file_atomic(*out.json, report_to_json(result.report, result.provenance).dump(2) + "\n");
+    write_file_atomic(*out.json,
+                      json_text(report_to_json(result.report, result.provenance), 2) + "\n");
     if (!out.quiet) std::cout << "  report written to " << out.json->string() << "\n";
   }
   if (opts.record && !out.quiet)
@@ -349,7 +350,7 @@ Subcommand register_config(CLI::App& app) {
             std::optional<std::filesystem::path> path;
             if (!st->file.empty()) path = st->file;
             const Config c = st->defaults ? Config{} : load_config(path);
-            std::cout << config_to_json(c).dump(2) << "\n";
+            std::cout << json_text(config_to_json(c), 2) << "\n";
             return kExitOk;  // run_cli checks that it was written
           }};
 }

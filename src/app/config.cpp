@@ -6,6 +6,7 @@
 #include "overtake/app/io.hpp"
 #include "overtake/app/resources.hpp"
 #include "overtake/core/hash.hpp"
+#include "overtake/core/text_check.hpp"
 
 namespace overtake::app {
 namespace {
@@ -84,7 +85,7 @@ class Reader {
   std::string key_path(const char* key) const { return path_.empty() ? key : path_ + "." + key; }
   void wrong(const char* key, const char* expected, const json& got) {
     errors_.push_back(key_path(key) + ": expected " + expected + ", got " + type_name(got) + " (" +
-                      got.dump() + ")");
+                      json_text(got) + ")");
   }
   const json& j_;
   std::string path_;
@@ -194,6 +195,11 @@ json parse_json_text(std::string_view text, std::string_view source) {
   };
   json j;
   try {
+    core::require_json_depth(text, source);
+  } catch (const std::invalid_argument& e) {
+    throw ConfigError(e.what());
+  }
+  try {
     j = json::parse(text, watch);
   } catch (const json::exception& e) {  // parse_error; out_of_range for a number like 1e999
     throw ConfigError(std::string(source) + ": not valid JSON: " + e.what());
@@ -207,7 +213,7 @@ json parse_json_text(std::string_view text, std::string_view source) {
 json read_json_file(const std::filesystem::path& path) {
   std::string text;
   try {
-    text = read_file(path);
+    text = read_file(path, kMaxJsonFileBytes);
   } catch (const std::exception& e) {
     throw ConfigError(e.what());
   }
@@ -232,7 +238,7 @@ json config_to_json(const Config& c) {
 }
 
 std::string config_hash(const Config& c) {
-  return core::hex64(core::fnv1a64(config_to_json(c).dump()));
+  return core::hex64(core::fnv1a64(json_text(config_to_json(c))));
 }
 
 }  // namespace overtake::app

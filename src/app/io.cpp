@@ -1,24 +1,71 @@
 #include "overtake/app/io.hpp"
 
+#include <fcntl.h>
+#include <sys/stat.h>
 #include <unistd.h>
 #include <cerrno>
 #include <cstring>
 #include <fstream>
-#include <sstream>
 #include <stdexcept>
 #include <system_error>
 
 namespace overtake::app {
 
-std::string read_file(const std::filesystem::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) {
+namespace {
+
+std::string kind_of(mode_t mode) {
+  if (S_ISDIR(mode)) return "a directory";
+  if (S_ISFIFO(mode)) return "a FIFO";
+  if (S_ISCHR(mode)) return "a character device";
+  if (S_ISBLK(mode)) return "a block device";
+  if (S_ISSOCK(mode)) return "a socket";
+  return "not a regular file";
+}
+
+std::string megabytes(std::uintmax_t bytes) {
+  const std::uintmax_t mib = bytes >> 20;
+  return mib > 0 ? std::to_string(mib) + " MiB" : std::to_string(bytes) + " bytes";
+}
+
+}  // namespace
+
+std::string read_file(const std::filesystem::path& path, std::uintmax_t max_bytes) {
+  // O_NONBLOCK: a FIFO opens at once instead of waiting for a writer (and is then refused).
+  const int fd = ::open(path.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC);
+  if (fd < 0) {
     throw std::runtime_error(path.string() + ": cannot open (" + std::strerror(errno) + ")");
   }
-  std::ostringstream buf;
-  buf << in.rdbuf();
-  if (in.bad()) throw std::runtime_error(path.string() + ": read error");
-  return buf.str();
+  struct Closer {
+    int fd;
+    ~Closer() { ::close(fd); }
+  } closer{fd};
+  struct stat st {};
+  if (::fstat(fd, &st) != 0) {
+    throw std::runtime_error(path.string() + ": cannot read (" + std::strerror(errno) + ")");
+  }
+  if (!S_ISREG(st.st_mode)) {
+    throw std::runtime_error(path.string() + ": is " + kind_of(st.st_mode) +
+                             ", not a regular file");
+  }
+  const auto too_big = [&] {
+    return std::runtime_error(path.string() + ": larger than the " + megabytes(max_bytes) +
+                              " this reads");
+  };
+  if (static_cast<std::uintmax_t>(st.st_size) > max_bytes) throw too_big();
+  std::string out;
+  out.reserve(static_cast<std::size_t>(st.st_size));
+  char chunk[1 << 16];
+  for (;;) {
+    const ssize_t n = ::read(fd, chunk, sizeof chunk);
+    if (n == 0) break;
+    if (n < 0) {
+      if (errno == EINTR) continue;
+      throw std::runtime_error(path.string() + ": read error (" + std::strerror(errno) + ")");
+    }
+    out.append(chunk, static_cast<std::size_t>(n));
+    if (out.size() > max_bytes) throw too_big();  // it grew while read
+  }
+  return out;
 }
 
 void write_file_atomic(const std::filesystem::path& path, std::string_view content) {

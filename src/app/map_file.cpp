@@ -1,17 +1,17 @@
 #include "overtake/app/map_file.hpp"
 
-#include <fstream>
-#include <sstream>
+#include "overtake/app/io.hpp"
 
 namespace overtake::app {
 
 core::Map load_map_file(const std::filesystem::path& path, const core::MapRules& rules) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw core::MapError(path.string() + ": cannot open map file");
-  std::ostringstream buf;
-  buf << in.rdbuf();
-  if (in.bad()) throw core::MapError(path.string() + ": error while reading map file");
-  return core::parse_map(buf.str(), path.string(), rules);
+  std::string text;
+  try {
+    text = read_file(path, kMaxMapFileBytes);
+  } catch (const std::runtime_error& e) {
+    throw core::MapError(std::string(e.what()) + " (map file)");
+  }
+  return core::parse_map(text, path.string(), rules);
 }
 
 }  // namespace overtake::app

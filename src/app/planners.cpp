@@ -108,7 +108,7 @@ std::string PlannerEntry::describe() const {
     // Where it ran: on the host's network, whatever listened on the port was taken for it.
     j["network"] = program_isolated(*this) ? "isolated" : "host";
   }
-  return j.dump();
+  return json_text(j);
 }
 
 std::string PlannerEntry::label() const {

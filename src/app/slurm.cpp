@@ -25,6 +25,7 @@
 
 #include "overtake/app/cli.hpp"
 #include "overtake/app/commands.hpp"
+#include "overtake/app/config.hpp"
 #include "overtake/app/interrupt.hpp"
 #include "overtake/app/io.hpp"
 #include "overtake/app/planner_process.hpp"
@@ -189,7 +190,7 @@ json state_json(const ArrayState& s) {
 
 ArrayState read_state(const fs::path& file) {
   try {
-    const json j = json::parse(read_file(file));
+    const json j = read_json_file(file);
     if (j.value("version", 0) != kStateVersion) throw std::runtime_error("another version");
     ArrayState s;
     s.command = j.at("command").get<std::string>();
@@ -276,7 +277,7 @@ class Follower {
   }
 
   void save() const {
-    write_file_atomic(slurm_dir(array_.out) / kStateFile, state_json(state_).dump(2) + "\n");
+    write_file_atomic(slurm_dir(array_.out) / kStateFile, json_text(state_json(state_), 2) + "\n");
   }
 
   // Looks at the queue once: tasks that left it are done, or submitted again, or given up.

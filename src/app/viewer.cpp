@@ -9,6 +9,7 @@
 #include "overtake/app/bench.hpp"
 #include "overtake/app/build_info.hpp"
 #include "overtake/app/cli.hpp"
+#include "overtake/app/config.hpp"
 #include "overtake/app/io.hpp"
 #include "overtake/app/resources.hpp"
 #include "overtake/eval/summary.hpp"
@@ -78,7 +79,7 @@ replay::ReplayHeader replay_header_for(const Track& track, const Config& config,
 std::string replay_report_json(const sim::RunReport& report, const RunProvenance& provenance) {
   json j = report_to_json(report, provenance);
   j.erase("timing");
-  return j.dump();
+  return json_text(j);
 }
 
 std::shared_ptr<view::LiveView> start_live_view(const replay::ReplayHeader& header,
@@ -93,7 +94,7 @@ std::shared_ptr<view::LiveView> start_live_view(const replay::ReplayHeader& head
 }
 
 std::string load_replay_for_view(const fs::path& replay, bool allow_partial, std::string* warning) {
-  std::string bytes = read_file(replay);
+  std::string bytes = read_file(replay, replay::kMaxReplayBytes);
   const replay::ReplayCheck check = replay::check_replay(bytes, replay.string());
   if (check.error.empty()) return bytes;
   if (!allow_partial || check.frames == 0) {
@@ -119,12 +120,7 @@ std::string bench_replay_name(const std::string& policy, const std::string& traf
 
 json bench_report_object(const fs::path& bench_out, const fs::path& html_dir) {
   json out;
-  try {
-    out = json::parse(read_file(bench_out / "bench.json"));
-  } catch (const json::exception& e) {
-    throw std::runtime_error((bench_out / "bench.json").string() + ": not valid JSON (" + e.what() +
-                             ")");
-  }
+  out = read_json_file(bench_out / "bench.json");
   const std::vector<json> runs = load_bench_runs(bench_out);
   json with_links = json::array();
   for (json r : runs) {
@@ -178,7 +174,7 @@ std::vector<fs::path> write_bench_report(const fs::path& bench_out, const fs::pa
   fs::path dir = html.parent_path();
   if (dir.empty()) dir = ".";
   const json object = bench_report_object(bench_out, dir);
-  write_file_atomic(html, view::report_page(report_template, object.dump()));
+  write_file_atomic(html, view::report_page(report_template, json_text(object)));
   return pages;
 }
 

@@ -5,10 +5,13 @@
 #include <array>
 #include <cmath>
 #include <cstddef>
+#include <cstring>
 #include <memory>
+#include <string_view>
 #include <utility>
 #include <vector>
 
+#include "overtake/core/text_check.hpp"
 #include "overtake/core/units.hpp"
 #include "overtake/core/wire_number.hpp"
 #include "overtake/planner/params.hpp"
@@ -70,8 +73,18 @@ void check_version(const std::string& file, int v) {
 }
 
 /// The text of a C string the plugin gave, or `fallback` when it gave none.
+/// The most of a plugin's reason that is kept: its text need not end within any buffer.
+constexpr std::size_t kMaxReasonBytes = 4096;
+
+/// A plugin's reason (or an exception's text) as overtake keeps it: at most kMaxReasonBytes,
+/// and valid UTF-8 (a reason cut in the middle of a character, or in Latin-1, gets U+FFFD for
+/// each stray byte), since it is written into JSON.
 std::string text_or(const char* s, const char* fallback) {
-  return s != nullptr && *s != '\0' ? std::string(s) : std::string(fallback);
+  if (s == nullptr || *s == '\0') return fallback;
+  const std::size_t n = ::strnlen(s, kMaxReasonBytes);
+  std::string text = core::valid_utf8(std::string_view(s, n));
+  if (n == kMaxReasonBytes) text += " [cut]";
+  return text;
 }
 
 /// An open library and its functions; dlclose when the last owner goes.
@@ -129,7 +142,7 @@ class PluginPolicy final : public planner::Policy {
     try {
       status = lib_->plan(handle_, &in, &out);
     } catch (const std::exception& e) {
-      fail(std::string("threw an exception: ") + e.what());
+      fail("threw an exception: " + text_or(e.what(), "(no text)"));
     } catch (...) {
       fail("threw an exception");
     }
@@ -157,6 +170,7 @@ class PluginPolicy final : public planner::Policy {
       }
       path.push_back(p);
     }
+    if (const auto problem = core::path_problem(path)) fail("answered a bad path: " + *problem);
     // The ABI carries points only: how the plugin found them is not for overtake to say.
     core::PlanResult result = core::normal_plan(std::move(path));
     result.status_known = false;
@@ -249,7 +263,8 @@ std::unique_ptr<planner::Policy> make_policy(const std::shared_ptr<const Library
   try {
     handle = lib->create(&setup, error.data(), error.size());
   } catch (const std::exception& e) {
-    return std::make_unique<FailedPolicy>(lib->label + ": create threw an exception: " + e.what());
+    return std::make_unique<FailedPolicy>(
+        lib->label + ": create threw an exception: " + text_or(e.what(), "(no text)"));
   } catch (...) {
     return std::make_unique<FailedPolicy>(lib->label + ": create threw an exception");
   }

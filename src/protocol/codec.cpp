@@ -8,6 +8,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "overtake/core/text_check.hpp"
 #include "overtake/core/units.hpp"
 
 namespace overtake::protocol {
@@ -113,6 +114,10 @@ json parse_event(std::string_view frame) {
     reject("not a Socket.IO event (does not start with 42): " + excerpt(frame));
   }
   const std::string_view body = frame.substr(kEventPrefix.size());
+  if (const auto at = core::json_too_deep_at(body)) {
+    reject("the event nests arrays and objects deeper than " + std::to_string(core::kMaxJsonDepth) +
+           " levels (at column " + std::to_string(*at + kEventPrefix.size()) + ")");
+  }
   json j;
   try {
     j = json::parse(body.begin(), body.end());

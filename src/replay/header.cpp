@@ -75,7 +75,7 @@ std::string replay_header_json(const ReplayHeader& h) {
                                    {"seed", c.seed},         {"at_s", c.at_s},
                                    {"start_s", c.start_s},   {"incident", c.incident}};
   }
-  return j.dump();
+  return j.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);  // stray bytes: U+FFFD
 }
 
 std::string replay_preamble(const ReplayHeader& header) {

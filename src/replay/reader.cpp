@@ -1,5 +1,8 @@
 // The checking reader: inflates and decodes a replay, saying what is wrong and where.
 
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
 #include <zlib.h>
 
 #include <algorithm>
@@ -8,6 +11,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "overtake/core/text_check.hpp"
 #include "wire.hpp"
 
 namespace overtake::replay {
@@ -185,6 +189,7 @@ class Decoder {
     std::string text(bytes_.substr(kReplayPreambleBytes, header_bytes));
     ReplayHeader h;
     try {
+      core::require_json_depth(text, "its JSON");
       h = parse_header(json::parse(text));
     } catch (const std::exception& e) {
       fail("corrupt header (bytes 16-" + std::to_string(body_start_) + "): " + e.what());
@@ -580,15 +585,36 @@ Replay parse_replay(std::string_view bytes, std::string_view name) {
 }
 
 Replay read_replay(const std::filesystem::path& path) {
-  std::FILE* f = std::fopen(path.c_str(), "rb");
-  if (!f) throw ReplayError(path.string() + ": cannot open (" + std::strerror(errno) + ")");
+  // Opened without waiting (a FIFO would wait for a writer) and read only if it is a regular
+  // file of at most kMaxReplayBytes: /dev/zero would be read until memory ran out.
+  const int fd = ::open(path.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC);
+  if (fd < 0) throw ReplayError(path.string() + ": cannot open (" + std::strerror(errno) + ")");
+  struct Closer {
+    int fd;
+    ~Closer() { ::close(fd); }
+  } closer{fd};
+  struct stat st {};
+  if (::fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
+    throw ReplayError(path.string() + ": not a regular file");
+  }
+  const auto too_big = [&] {
+    return ReplayError(path.string() + ": larger than the " +
+                       std::to_string(kMaxReplayBytes >> 30) + " GiB a replay may be");
+  };
+  if (static_cast<std::uintmax_t>(st.st_size) > kMaxReplayBytes) throw too_big();
   std::string bytes;
+  bytes.reserve(static_cast<std::size_t>(st.st_size));
   char chunk[1 << 16];
-  std::size_t n = 0;
-  while ((n = std::fread(chunk, 1, sizeof chunk, f)) > 0) bytes.append(chunk, n);
-  const bool bad = std::ferror(f) != 0;
-  std::fclose(f);
-  if (bad) throw ReplayError(path.string() + ": read error");
+  for (;;) {
+    const ssize_t n = ::read(fd, chunk, sizeof chunk);
+    if (n == 0) break;
+    if (n < 0) {
+      if (errno == EINTR) continue;
+      throw ReplayError(path.string() + ": read error (" + std::strerror(errno) + ")");
+    }
+    bytes.append(chunk, static_cast<std::size_t>(n));
+    if (bytes.size() > kMaxReplayBytes) throw too_big();
+  }
   return parse_replay(bytes, path.string());
 }
 

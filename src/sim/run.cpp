@@ -130,6 +130,12 @@ bool Stepper::stop_requested() const {
 }
 
 void Stepper::apply(core::PlanResult plan, std::optional<double> cycle_us, double wall_us) {
+  // Whatever the planner (built in, a plugin, Python, a program), a point the world cannot
+  // drive to ends the run as the planner's failure, before it reaches the world.
+  if (const auto problem = core::path_problem(plan.path)) {
+    end(RunEnd::planner_failed, "the planner's path: " + *problem);
+    return;
+  }
   if (cycle_us) scorecard_.count_cycle(plan, *cycle_us, wall_us);
   if (options_.observer) options_.observer->on_path(plan.path);
   world_.apply_path(std::move(plan.path));

@@ -85,7 +85,7 @@ std::string viewer_config_json(ViewerSource source, std::string_view name) {
       break;
   }
   if (!name.empty()) j["name"] = std::string(name);
-  return j.dump();
+  return j.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);  // stray bytes: U+FFFD
 }
 
 std::string viewer_page(std::string_view page_template, ViewerSource source,

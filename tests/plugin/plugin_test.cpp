@@ -12,6 +12,7 @@
 #include <cstddef>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <sstream>
 #include <string>
 
@@ -21,6 +22,7 @@
 #include "overtake/app/commands.hpp"
 #include "overtake/app/io.hpp"
 #include "overtake/app/planners.hpp"
+#include "overtake/core/text_check.hpp"
 #include "overtake/core/units.hpp"
 #include "overtake/planner_plugin.h"
 #include "overtake/plugin/plugin.hpp"
@@ -295,6 +297,8 @@ INSTANTIATE_TEST_SUITE_P(
                       Failure{"too_many", "more than the buffers'"},
                       Failure{"struct_size", "wrote over the path's struct_size"},
                       Failure{"quiet", "failed (status 3): no reason given"},
+                      Failure{"far", "point 0 is (1e+300, 0): beyond 1,000 km of the map's origin"},
+                      Failure{"cut_reason", "failed (status 5): \xC3\xA9\xC3\xA9"},
                       Failure{"create_fails", "create failed: no config given for 3 lanes"},
                       Failure{"create_throws", "create threw an exception: cannot start"}),
     [](const ::testing::TestParamInfo<Failure>& p) { return std::string(p.param.mode); });
@@ -410,6 +414,17 @@ TEST_F(PluginCli, DriveRefusesABadPluginBeforeRunning) {
                                    abi(OVERTAKE_PLUGIN_ABI_MAJOR, OVERTAKE_PLUGIN_ABI_MINOR + 1))));
 }
 
+TEST(FailingPlugin, AReasonCutInTheMiddleOfACharacterIsKeptAsValidUtf8) {
+  const app::DriveResult r = drive_plugin(misbehaving("cut_reason"), 0.5, 1);
+  const std::string reason = r.report.outcome.reason;
+  // 511 whole "é" of the 1,023 bytes snprintf kept, and its last byte as U+FFFD.
+  EXPECT_THAT(reason, HasSubstr("failed (status 5): "));
+  const std::size_t at = reason.find("failed (status 5): ") + 19;
+  std::string want;
+  for (int i = 0; i < 511; ++i) want += "\xC3\xA9";
+  EXPECT_EQ(reason.substr(at), want + "\xEF\xBF\xBD");
+}
+
 TEST_F(PluginCli, BenchRunsPluginsBesideEachOtherAndSurvivesAFailingOne) {
   const fs::path out_dir = dir_ / "bench";
   const auto [status, out, err] = run(
@@ -433,6 +448,33 @@ TEST_F(PluginCli, BenchRunsPluginsBesideEachOtherAndSurvivesAFailingOne) {
   }
   EXPECT_EQ(keep_lane, 2) << err;
   EXPECT_EQ(bad, 2) << err;
+}
+
+// A reason cut in the middle of a character once aborted the bench ("incomplete UTF-8
+// string") with runs.jsonl empty: every policy's finished runs were lost.
+TEST_F(PluginCli, AReasonThatIsNotUtf8LosesNoRunOfTheBench) {
+  const fs::path out_dir = dir_ / "bench";
+  const auto [status, out, err] =
+      run({"bench", "--policy-lib", OVERTAKE_KEEP_LANE_PLUGIN, "--policy-lib",
+           "cut=" + misbehaving("cut_reason"), "--policies", "keep_lane,cut", "--seeds", "1-2",
+           "--traffic", "calm", "--minutes", "0.5", "--jobs", "2", "--quiet", "--out",
+           out_dir.string()});
+  ASSERT_TRUE(status.has_value());
+  EXPECT_LT(*status, 128) << "killed by a signal: " << err;
+  std::ifstream runs(out_dir / "runs.jsonl");
+  std::map<std::string, int> ends;
+  for (std::string line; std::getline(runs, line);) {
+    EXPECT_TRUE(core::is_valid_utf8(line));
+    const json j = json::parse(line);
+    ends[j["config"]["policy"].get<std::string>() + " " + j["end"].get<std::string>()] += 1;
+    if (j["config"]["policy"] == "cut") {
+      EXPECT_THAT(j["ended_early"].get<std::string>(), HasSubstr("\xC3\xA9\xEF\xBF\xBD"));
+    }
+  }
+  EXPECT_EQ(ends,
+            (std::map<std::string, int>{{"cut planner_failed", 2}, {"keep_lane completed", 2}}))
+      << err;
+  EXPECT_TRUE(fs::exists(out_dir / "summary.json")) << err;
 }
 
 }  // namespace

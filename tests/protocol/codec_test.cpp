@@ -250,6 +250,10 @@ TEST(ProtocolTelemetry, RejectsBadMessagesWithAReason) {
       {recorded_with(R"([0,775.99,)", R"([0.5,775.99,)"), "the id is not an integer"},
       {recorded_with(R"(22.1,)", R"("22.1",)"), "'sensor_fusion'[0][3] is a string"},
       {R"(42["telemetry",[1,2]])", "payload is an array, not an object"},
+      {recorded_with(
+           R"("previous_path_x":[])",
+           R"("previous_path_x":)" + std::string(100'000, '[') + std::string(100'000, ']')),
+       "deeper than 64 levels"},
       {R"(42["telemetry","hello"])", "payload is a string"},
       {R"(42["telemetry",{"x":909.48,"y":)", "not valid JSON"},
       {R"(42["telemetry"])", "not a [name, payload] array"},

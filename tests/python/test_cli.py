@@ -52,6 +52,15 @@ def test_a_nan_ends_the_run_as_planner_failed(run_binary):
     assert "path_x[1] is not a finite number" in report["ended_early"]
 
 
+def test_a_point_beyond_the_world_ends_the_run_as_planner_failed(run_binary):
+    code, report, _ = run_binary("drive", "--policy-py", "broken:far", "--minutes", "1",
+                                 cwd=PLANNERS)
+    assert code == 1 and report["end"] == "planner_failed"
+    assert "point 1 is (1e+300, " in report["ended_early"]
+    assert "beyond 1,000 km" in report["ended_early"]
+    assert report["distance_miles"] is not None and report["distance_miles"] >= 0
+
+
 def test_loading_errors_are_usage_errors(run_binary):
     for spec, words in [("no_such_module:plan", ["no_such_module", "ModuleNotFoundError"]),
                         ("import_fails:plan", ["import_fails", "not installed"]),

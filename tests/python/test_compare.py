@@ -1,6 +1,7 @@
 """overtake.compare and overtake.bench_summary: a bench's evaluation from Python, the same as
 `overtake compare` and summary.json give."""
 import json
+import shutil
 import subprocess
 
 import pytest
@@ -95,3 +96,12 @@ def test_the_summary_is_the_benchs_own(benches):
     assert lo <= row["mean_speed_mph"] <= hi
     assert row["collisions"]["at_fault"] is not None
     assert s["verdicts"] == written["verdicts"]
+
+
+def test_a_bench_json_nested_too_deep_is_an_error_not_a_crash(benches, tmp_path):
+    broken = tmp_path / "deep"
+    shutil.copytree(benches["a"], broken)
+    (broken / "bench.json").write_text('{"minutes": ' + "[" * 100000 + "]" * 100000 + "}")
+    with pytest.raises(Exception) as e:
+        overtake.compare(str(benches["a"]), str(broken))
+    assert "bench.json" in str(e.value) and "nested deeper than 64 levels" in str(e.value)

@@ -1,5 +1,7 @@
 """overtake.Env: the Gymnasium-style interface."""
 
+import math
+
 import pytest
 
 import overtake
@@ -50,6 +52,16 @@ def test_a_malformed_action_terminates():
     obs, reward, terminated, truncated, info = env.step(([obs["x"], obs["x"] + 1], [obs["y"]]))
     assert terminated and not truncated and info["end"] == "planner_failed"
     assert "path_y" in info["ended_early"]
+
+
+def test_a_point_beyond_the_world_terminates_with_a_finite_reward():
+    env = overtake.Env(seed=1)
+    obs, _ = env.reset()
+    obs, reward, terminated, truncated, info = env.step(([obs["x"], 1e300], [obs["y"], 0.0]))
+    assert terminated and not truncated and info["end"] == "planner_failed"
+    assert "beyond 1,000 km" in info["ended_early"]
+    assert math.isfinite(reward)
+    assert all(math.isfinite(obs[k]) for k in ("x", "y", "s", "d", "speed"))
 
 
 def test_reset_with_a_seed_reproduces_the_episode():

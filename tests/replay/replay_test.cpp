@@ -6,6 +6,8 @@
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
+
+#include <sys/stat.h>
 #include <zlib.h>
 
 #include <algorithm>
@@ -30,6 +32,7 @@ namespace {
 
 using namespace sim;
 
+using ::testing::AllOf;
 using ::testing::HasSubstr;
 
 constexpr double kCruiseMps = 24.0;  // above the 50 mph limit: speeding incidents
@@ -590,6 +593,35 @@ TEST_F(ReplayTest, HeaderIntegersMustBeIntegersThatFit) {
               HasSubstr("'provenance.seed' is -1, not an integer within range"));
   EXPECT_THAT(with(R"("seed":5)", R"("seed":-1.5e300)"),
               HasSubstr("'provenance.seed' is -1.5e+300, not an integer within range"));
+}
+
+// A header nested 100,000 deep once overflowed the stack while its error was written.
+TEST_F(ReplayTest, AHeaderNestedTooDeepIsCorruptNotACrash) {
+  World world(map_, line_, params_, TrafficProfile::faithful, 1);
+  std::string records;
+  ReplayEncoder().append_frame(first_frame(world), records);
+  ReplayEncoder::append_end("{}", records);
+  std::string text = replay_header_json(header());
+  const std::string from = R"("lanes":3)";
+  text.replace(text.find(from), from.size(),
+               R"("lanes":)" + std::string(100'000, '[') + std::string(100'000, ']'));
+  std::string bytes(kReplayMagic);
+  for (const std::uint32_t v : {kReplayVersion, static_cast<std::uint32_t>(text.size())}) {
+    for (int i = 0; i < 4; ++i) bytes.push_back(static_cast<char>((v >> (8 * i)) & 0xff));
+  }
+  const auto file = dir_ / "deep.otr";
+  write_bytes(file, bytes + text + test::deflate_all(records));
+  EXPECT_THAT(error_of(file), AllOf(HasSubstr("corrupt header (bytes 16-"),
+                                    HasSubstr("JSON nested deeper than 64 levels")));
+}
+
+// /dev/zero would be read until memory ran out, and a FIFO would wait for a writer forever.
+TEST_F(ReplayTest, OnlyARegularFileIsRead) {
+  EXPECT_THAT(error_of("/dev/zero"), HasSubstr("/dev/zero: not a regular file"));
+  EXPECT_THAT(error_of(dir_), HasSubstr("not a regular file"));
+  const auto fifo = dir_ / "fifo.otr";
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  EXPECT_THAT(error_of(fifo), HasSubstr("fifo.otr: not a regular file"));
 }
 
 // ---- positions as differences ---------------------------------------------------------------

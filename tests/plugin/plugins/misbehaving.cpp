@@ -3,7 +3,8 @@
 //   newer_minor (one minor above the header's), newer_major (the next major version);
 // - failures while driving: throws, nan, status, too_many, struct_size (writes over the
 //   path's struct_size), quiet (no summary, and fails without a reason: the NULLs the header
-//   allows);
+//   allows), far (a finite point at 1e300 m), cut_reason (a reason of "é"s formatted into a
+//   1,024-byte buffer, so cut after its first byte: not valid UTF-8);
 // - failures to start: create_fails (its own formatted reason), create_unterminated (fills
 //   the reason buffer without a NUL), create_throws.
 // Before they misbehave they answer a straight path, so a run gets going first. One more,
@@ -17,6 +18,7 @@
 #include <cstring>
 #include <limits>
 #include <stdexcept>
+#include <string>
 
 #define OVERTAKE_STR2(x) #x
 #define OVERTAKE_STR(x) OVERTAKE_STR2(x)
@@ -32,6 +34,8 @@ enum class Mode {
   too_many,
   struct_size,
   quiet,
+  far,
+  cut_reason,
   create_fails,
   create_unterminated,
   create_throws,
@@ -145,6 +149,19 @@ int overtake_plugin_plan(overtake_plugin_handle* h, const overtake_telemetry* in
         return 7;
       case Mode::quiet:
         return 3;  // out->error left NULL
+      case Mode::far:
+        out->next_x[0] = 1e300;
+        out->next_y[0] = 0.0;
+        out->count = 1;
+        return 0;
+      case Mode::cut_reason: {
+        static char reason[1024];
+        std::string many;
+        for (int i = 0; i < 600; ++i) many += "\xC3\xA9";
+        std::snprintf(reason, sizeof reason, "%s", many.c_str());
+        out->error = reason;
+        return 5;
+      }
       case Mode::too_many:
         out->count = out->capacity + 1;
         return 0;

@@ -12,6 +12,11 @@ def nan(telemetry):
     return [telemetry["x"] + 1.0, math.nan], [telemetry["y"], telemetry["y"]]
 
 
+def far(telemetry):
+    """Finite, but 1e300 m away: no world can carry a car there."""
+    return [telemetry["x"] + 1.0, 1e300], [telemetry["y"], telemetry["y"]]
+
+
 def one_list(telemetry):
     return [telemetry["x"]]
 

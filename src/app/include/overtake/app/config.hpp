@@ -3,6 +3,7 @@
 // defaults (config/overtake.json, built into the binary) equal the structs' defaults; a
 // user file given with --config overrides any subset of keys.
 
+#include <cstdint>
 #include <filesystem>
 #include <optional>
 #include <stdexcept>
@@ -35,11 +36,25 @@ class ConfigError : public std::runtime_error {
 
 /// JSON text (a config or scenario file's contents). Text that is not JSON, including a
 /// number beyond the range of a double such as 1e999, is a ConfigError naming `source` and
-/// where the parser stopped.
+/// where the parser stopped; so is text nested deeper than core::kMaxJsonDepth (which would
+/// overflow the stack of anything that walks it) and a key given twice in one object.
 [[nodiscard]] nlohmann::json parse_json_text(std::string_view text, std::string_view source);
 
-/// A JSON file's contents; a file that cannot be read or is not JSON is a ConfigError naming
-/// the path (and, for bad JSON, where the parser stopped).
+/// JSON as text (indented by `indent` spaces, or on one line when -1) that is always valid
+/// UTF-8: a byte of a string that is not (a Latin-1 file name, a planner's reason cut in the
+/// middle of a character) is written as U+FFFD instead of stopping the output.
+template <class Json>
+[[nodiscard]] std::string json_text(const Json& j, int indent = -1) {
+  return j.dump(indent, ' ', false, Json::error_handler_t::replace);
+}
+
+/// The largest JSON file read (a config, a scenario, a bench's bench.json, a hunt's
+/// hunt.json): the largest scenario in the library is under 1 MB.
+inline constexpr std::uintmax_t kMaxJsonFileBytes = 64ULL << 20;
+
+/// A JSON file's contents; a file that cannot be read (or is not a regular file, or is larger
+/// than kMaxJsonFileBytes) or is not JSON is a ConfigError naming the path (and, for bad JSON,
+/// where the parser stopped).
 [[nodiscard]] nlohmann::json read_json_file(const std::filesystem::path& path);
 
 /// Applies the keys present in `j` (any subset) on top of `base`. Unknown keys, wrong types

@@ -1,14 +1,22 @@
 #pragma once
 // Small file helpers for the command line.
 
+#include <cstdint>
 #include <filesystem>
 #include <string>
 #include <string_view>
 
 namespace overtake::app {
 
-/// The whole file; throws std::runtime_error naming the path when it cannot be read.
-[[nodiscard]] std::string read_file(const std::filesystem::path& path);
+/// What read_file reads at most unless told otherwise: far more than any text file overtake
+/// reads (its largest, a bench's runs.jsonl of 10,000 runs, is about 20 MB).
+inline constexpr std::uintmax_t kMaxReadBytes = 256ULL << 20;
+
+/// The whole file; throws std::runtime_error naming the path when it cannot be read, when it
+/// is not a regular file (a device such as /dev/zero, a FIFO, a directory: opened without
+/// waiting for a writer, and never read) or when it holds more than max_bytes.
+[[nodiscard]] std::string read_file(const std::filesystem::path& path,
+                                    std::uintmax_t max_bytes = kMaxReadBytes);
 
 /// Writes through a temporary file and a rename, so that a reader never sees half a file
 /// and a failure leaves any previous file in place. Throws std::runtime_error naming the path.

@@ -5,6 +5,8 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <optional>
+#include <span>
 #include <string>
 #include <string_view>
 #include <utility>
@@ -55,6 +57,17 @@ struct PlanResult {
   /// answers points only): `status` then means nothing, and reports show it as unknown.
   bool status_known = true;
 };
+
+/// How far from the map's origin, on either axis, a path point may be: ten times as far as a
+/// map's waypoints may be (MapRules::max_abs_coordinate_m). A point beyond, like one that is not
+/// finite, is the planner's error: the world would carry the car there, and every figure of
+/// the run after it (distance, speed, its frame on the page) would be nonsense or not finite.
+inline constexpr double kMaxPathCoordinateM = 1e6;
+
+/// What is wrong with a path's first bad point ("point 3 is (1e+300, 0): beyond 1,000 km of the
+/// map's origin", or not finite), or nullopt when every point is finite and within
+/// kMaxPathCoordinateM.
+[[nodiscard]] std::optional<std::string> path_problem(std::span<const Vec2> path);
 
 /// A path planned as meant (status normal).
 [[nodiscard]] inline PlanResult normal_plan(std::vector<Vec2> path) {

@@ -232,9 +232,13 @@ struct Replay {
   std::size_t unknown_records = 0;  ///< records of kinds this build does not know (skipped)
 };
 
+/// The largest replay file read: a 30-minute drive's replay is 8.4 MB, one of the longest run
+/// overtake drives (7 days) about 2.8 GB.
+inline constexpr std::uintmax_t kMaxReplayBytes = 4ULL << 30;
+
 /// Reads and checks a replay file. Throws ReplayError naming the file and what is wrong: not
-/// a replay, another version, a damaged header, a truncated or corrupt body (with the byte
-/// offset and the last good record), no end record.
+/// a regular file, larger than kMaxReplayBytes, not a replay, another version, a damaged header, a
+/// truncated or corrupt body (with the byte offset and the last good record), no end record.
 [[nodiscard]] Replay read_replay(const std::filesystem::path& path);
 /// The same for bytes already in memory; `name` names them in errors.
 [[nodiscard]] Replay parse_replay(std::string_view bytes, std::string_view name);

@@ -1,0 +1,131 @@
+// Input made to break the readers: JSON nested 100,000 deep, files that are not regular files
+// (/dev/zero, a FIFO, a directory), names and reasons that are not UTF-8, a path to 1e300 m.
+// Each is refused with an error that names it, or written as valid JSON; nothing crashes,
+// hangs or reads without bound.
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <sys/stat.h>
+
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "overtake/app/cli.hpp"
+#include "overtake/app/io.hpp"
+#include "overtake/app/resources.hpp"
+#include "overtake/core/text_check.hpp"
+#include "temp_dir.hpp"
+
+namespace overtake::app {
+namespace {
+
+using nlohmann::json;
+using ::testing::AllOf;
+using ::testing::HasSubstr;
+using ::testing::Not;
+namespace fs = std::filesystem;
+
+struct Outcome {
+  int rc = 0;
+  std::string out;
+  std::string err;
+};
+
+Outcome cli(std::vector<std::string> args) {
+  args.insert(args.begin(), "overtake");
+  std::vector<const char*> argv;
+  for (const std::string& a : args) argv.push_back(a.c_str());
+  testing::internal::CaptureStdout();
+  testing::internal::CaptureStderr();
+  Outcome o;
+  o.rc = run_cli(static_cast<int>(argv.size()), argv.data());
+  o.out = testing::internal::GetCapturedStdout();
+  o.err = testing::internal::GetCapturedStderr();
+  return o;
+}
+
+void write(const fs::path& p, std::string_view text) {
+  std::ofstream out(p, std::ios::binary | std::ios::trunc);
+  out << text;
+}
+
+std::string deep(const std::string& key) {
+  return "{\"" + key + "\": " + std::string(100'000, '[') + std::string(100'000, ']') + "}";
+}
+
+TEST(BadInput, DeepJsonInAScenarioOrAConfigIsAnErrorNamingTheFile) {
+  const test::TempDir dir("overtake-bad-input");
+  const fs::path scenario = dir.path() / "deep-scenario.json";
+  write(scenario, deep("duration_s"));
+  const Outcome s = cli({"drive", "--scenario", scenario.string(), "--quiet"});
+  EXPECT_EQ(s.rc, kExitFailure) << s.err;
+  EXPECT_THAT(s.err, AllOf(HasSubstr("deep-scenario.json"),
+                           HasSubstr("JSON nested deeper than 64 levels (at byte 78)")));
+  const fs::path config = dir.path() / "deep-config.json";
+  write(config, deep("world"));
+  const Outcome c = cli({"drive", "--config", config.string(), "--minutes", "0.01", "--quiet"});
+  EXPECT_EQ(c.rc, kExitFailure) << c.err;
+  EXPECT_THAT(c.err, AllOf(HasSubstr("deep-config.json"), HasSubstr("nested deeper than 64")));
+  // 64 levels are still read (and then judged as any value is).
+  write(config, "{\"world\": " + std::string(63, '[') + std::string(63, ']') + "}");
+  const Outcome ok = cli({"drive", "--config", config.string(), "--minutes", "0.01", "--quiet"});
+  EXPECT_THAT(ok.err, Not(HasSubstr("nested deeper")));
+}
+
+TEST(BadInput, AMapThatIsNotARegularFileIsRefusedAtOnce) {
+  const test::TempDir dir("overtake-bad-input");
+  const fs::path fifo = dir.path() / "map.fifo";
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {"/dev/zero", "/dev/zero: is a character device, not a regular file"},
+      {fifo.string(), "map.fifo: is a FIFO, not a regular file"}};
+  for (const auto& [path, why] : cases) {
+    const Outcome o = cli({"drive", "--map", path, "--minutes", "0.01", "--quiet"});
+    EXPECT_EQ(o.rc, kExitFailure) << path;
+    EXPECT_THAT(o.err, HasSubstr(why)) << path;
+  }
+  try {
+    (void)read_file(dir.path());
+    FAIL() << "read a directory";
+  } catch (const std::runtime_error& e) {
+    EXPECT_THAT(e.what(), HasSubstr("is a directory, not a regular file"));
+  }
+}
+
+TEST(BadInput, ReadFileStopsAtItsLimit) {
+  const test::TempDir dir("overtake-bad-input");
+  const fs::path f = dir.path() / "big.txt";
+  write(f, std::string(5000, 'x'));
+  EXPECT_EQ(read_file(f, 5000).size(), 5000U);
+  try {
+    (void)read_file(f, 4999);
+    FAIL() << "read past its limit";
+  } catch (const std::runtime_error& e) {
+    EXPECT_THAT(e.what(), HasSubstr("big.txt: larger than the 4999 bytes this reads"));
+  }
+}
+
+TEST(BadInput, AMapNamedInLatin1StillGivesItsReportAsValidJson) {
+  const test::TempDir dir("overtake-bad-input");
+  const auto text = resources::embedded_file("tracks/default.csv");
+  ASSERT_TRUE(text);
+  const fs::path map = dir.path() / "caf\xE9.csv";  // "café" in Latin-1: not UTF-8
+  write(map, *text);
+  const fs::path report = dir.path() / "report.json";
+  const Outcome o = cli(
+      {"drive", "--map", map.string(), "--minutes", "0.02", "--json", report.string(), "--quiet"});
+  ASSERT_EQ(o.rc, kExitOk) << o.err;
+  std::ifstream in(report);
+  const std::string written((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_TRUE(core::is_valid_utf8(written));
+  const json j = json::parse(written);
+  EXPECT_THAT(written, HasSubstr("caf\xEF\xBF\xBD.csv"));
+  EXPECT_EQ(j["end"], "completed");
+}
+
+}  // namespace
+}  // namespace overtake::app
