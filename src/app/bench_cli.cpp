@@ -170,8 +170,8 @@ Subcommand register_bench(CLI::App& app) {
          "--scenarios", st->scenarios,
          "Instead of the sweep: run every scenario file (*.json) of this folder with every\n"
          "policy and judge it by what it expects (default: no at-fault collision); prints a\n"
-         "pass/fail table (with --out: suite.md, suite.json and the failed runs' replays) and\n"
-         "exits with status 1 when any fails (docs/scenarios.md)")
+         "pass/fail table (with --out, not this folder: suite.md, suite.json and the failed\n"
+         "runs' replays) and exits with status 1 when any fails (docs/scenarios.md)")
       ->check(CLI::ExistingDirectory);
   cmd->add_option("--map", st->map, "Map file; default: the built-in track")
       ->check(CLI::ExistingFile);
@@ -271,12 +271,18 @@ Subcommand register_bench(CLI::App& app) {
             });
             if (draw) std::fprintf(stderr, "\n");
           }
+          for (const std::string& f : o.skipped) {
+            std::cerr << "bench: skipped " << (suite.dir / f).string()
+                      << ": a suite's verdicts, not a scenario\n";
+          }
           if (!st->quiet) {
             std::cout << suite_table(o);
-            if (suite.out) {
+            if (suite.out && o.write_errors.empty()) {
               std::cout << "written: " << suite.out->string() << "/{suite.md,suite.json}\n";
             }
           }
+          for (const std::string& e : o.write_errors) std::cerr << "bench: " << e << "\n";
+          if (!o.write_errors.empty()) return kExitFailure;
           if (o.interrupted) {
             std::cerr << "bench: interrupted; " << o.verdicts.size() << " scenario runs judged\n";
             return kExitInterrupted;

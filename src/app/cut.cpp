@@ -39,14 +39,21 @@ constexpr double kParkedMarginM = 20.0;
 void check_options(const CutOptions& o) {
   const auto finite_nonneg = [](double v) { return std::isfinite(v) && v >= 0.0; };
   if (!finite_nonneg(o.at_s)) throw UsageError("--at must be a time in seconds, at least 0");
-  if (!finite_nonneg(o.before_s) || o.before_s > 3600.0) {
+  if (!finite_nonneg(o.before_s) || o.before_s > kMaxCutWindowS) {
     throw UsageError("--before must be between 0 and 3600 s");
   }
-  if (!finite_nonneg(o.after_s) || o.after_s > 3600.0) {
+  if (!finite_nonneg(o.after_s) || o.after_s > kMaxCutWindowS) {
     throw UsageError("--after must be between 0 and 3600 s");
   }
-  if (!finite_nonneg(o.lead_in_s) || o.lead_in_s > 3600.0) {
+  if (!finite_nonneg(o.lead_in_s) || o.lead_in_s > kMaxCutWindowS) {
     throw UsageError("--lead-in must be between 0 and 3600 s");
+  }
+  if (o.before_s + o.after_s < kMinCutJudgedS) {
+    throw UsageError("--before " + fixed_text(o.before_s, 2) + " s and --after " +
+                     fixed_text(o.after_s, 2) + " s leave " +
+                     fixed_text(o.before_s + o.after_s, 2) +
+                     " s to judge; together they must make at least " +
+                     fixed_text(kMinCutJudgedS, 0) + " s (the lead-in is not judged)");
   }
   if (o.out.empty()) throw UsageError("-o/--out: give the scenario file to write");
   if (same_file(o.out, o.replay)) {
@@ -216,6 +223,17 @@ CutResult cut_replay(const CutOptions& opts) {
   result.asked_start_s = std::max(first_t, opts.at_s - opts.before_s - opts.lead_in_s);
   const double end_t = std::min(last_t, opts.at_s + opts.after_s);
   const long end_step = std::lround(end_t / step_s);
+  // The judged part starts after the lead-in (which ends at the moment at the latest), and
+  // the run's start and end may clip the window.
+  const double judged_from_t = std::min(opts.at_s, result.asked_start_s + opts.lead_in_s);
+  if (end_t - judged_from_t < kMinCutJudgedS - kEps) {
+    throw UsageError("the scenario would judge " + fixed_text(end_t - judged_from_t, 2) + " s (t " +
+                     fixed_text(judged_from_t, 2) + " to " + fixed_text(end_t, 2) +
+                     " s, after the lead-in and within the run's " + fixed_text(first_t, 2) +
+                     " to " + fixed_text(last_t, 2) + " s); it must judge at least " +
+                     fixed_text(kMinCutJudgedS, 0) +
+                     " s: give a larger --before or --after, or a " + "shorter --lead-in");
+  }
   result.incident = incident_near(r, opts.at_s);
 
   // The last checkpoint at or before the start.
@@ -329,7 +347,14 @@ CutResult cut_replay(const CutOptions& opts) {
                                cp.info.track + ") around t " + fixed_text(opts.at_s, 2) + " s" +
                                (result.incident.empty() ? std::string() : ": " + result.incident) +
                                ".";
-  j["duration_s"] = std::round((result.end_s - result.start_s) * 1e6) / 1e6;
+  const double duration_s = std::round((result.end_s - result.start_s) * 1e6) / 1e6;
+  const double lead_in_s = std::max(0.0, std::min(opts.lead_in_s, opts.at_s - result.start_s));
+  if (!(duration_s > lead_in_s)) {  // what `drive` would refuse (checked above; kept as a guard)
+    throw UsageError("the scenario from t " + fixed_text(result.start_s, 2) + " to " +
+                     fixed_text(result.end_s, 2) + " s with a lead-in of " +
+                     fixed_text(lead_in_s, 2) + " s would judge nothing");
+  }
+  j["duration_s"] = duration_s;
   sim::ScenarioExpect no_fault;
   no_fault.max_at_fault_collisions = 0;
   j["expect"] = ordered_json::parse(expect_json(opts.expect.value_or(no_fault)));
@@ -337,7 +362,7 @@ CutResult cut_replay(const CutOptions& opts) {
   cut["traffic"] = opts.replayed ? "replayed" : "reactive";
   cut["start_s"] = result.start_s;
   cut["at_s"] = opts.at_s;
-  cut["lead_in_s"] = std::max(0.0, std::min(opts.lead_in_s, opts.at_s - result.start_s));
+  cut["lead_in_s"] = lead_in_s;
   const std::string map_ref = map_reference(map_path, opts.out);
   if (!map_ref.empty()) cut["map"] = map_ref;
   cut["from"] = {{"replay", opts.replay.string()},
@@ -351,8 +376,27 @@ CutResult cut_replay(const CutOptions& opts) {
                  {"exact_start", result.exact_start}};
   const std::string checkpoint = sim::encode_checkpoint(start);
   result.checkpoint_bytes = checkpoint.size();
+  // A blob beyond what a scenario may carry would be refused by `drive`: refused here first.
+  const auto check_size = [&](const std::string& bytes, const char* what) {
+    if (bytes.size() <= kMaxBlobBytes) return;
+    const double mib = static_cast<double>(bytes.size()) / static_cast<double>(1U << 20U);
+    const double window_s = result.end_s - result.start_s;
+    throw UsageError(
+        std::string("the scenario's ") + what + " for t " + fixed_text(result.start_s, 2) + " to " +
+        fixed_text(result.end_s, 2) + " s is " + fixed_text(mib, 1) + " MB, more than the " +
+        std::to_string(kMaxBlobBytes >> 20U) + " MB a scenario may carry; cut " +
+        "a window of at most about " +
+        fixed_text(
+            window_s * static_cast<double>(kMaxBlobBytes) / static_cast<double>(bytes.size()), 0) +
+        " s (--before, --after and --lead-in together)");
+  };
+  check_size(checkpoint, "checkpoint");
   cut["checkpoint"] = pack_blob(checkpoint);
-  if (opts.replayed) cut["recorded_traffic"] = pack_blob(sim::encode_recorded_traffic(recorded));
+  if (opts.replayed) {
+    const std::string traffic = sim::encode_recorded_traffic(recorded);
+    check_size(traffic, "replayed traffic");
+    cut["recorded_traffic"] = pack_blob(traffic);
+  }
   j["cut"] = std::move(cut);
   const std::string text = j.dump(2) + "\n";
   result.file_bytes = text.size();

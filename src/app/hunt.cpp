@@ -165,8 +165,15 @@ void check_spec(const HuntSpec& spec) {
     o.traffic = t;
     validate_drive_options(o);
   }
-  if (!(spec.before_s >= 0.0) || !(spec.after_s >= 0.0)) {
-    throw UsageError("--before and --after must be at least 0");
+  // What `cut` would refuse, refused before the hunt starts rather than at its first failure.
+  if (!(spec.before_s >= 0.0 && spec.before_s <= kMaxCutWindowS) ||
+      !(spec.after_s >= 0.0 && spec.after_s <= kMaxCutWindowS)) {
+    throw UsageError("--before and --after must be between 0 and " + fixed_text(kMaxCutWindowS, 0) +
+                     " s");
+  }
+  if (spec.before_s + spec.after_s < kMinCutJudgedS) {
+    throw UsageError("--before and --after must together make at least " +
+                     fixed_text(kMinCutJudgedS, 0) + " s (the part a cut scenario judges)");
   }
   if (spec.shard_count < 1 || spec.shard_index < 1 || spec.shard_index > spec.shard_count) {
     throw UsageError("--shard: " + std::to_string(spec.shard_index) + "/" +

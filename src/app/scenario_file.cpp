@@ -24,7 +24,6 @@ constexpr double kMaxDurationS = 7.0 * 24.0 * 3600.0;
 constexpr double kMaxSpeedMps = 100.0;
 constexpr double kMaxAccelMps2 = 50.0;
 constexpr double kMaxDistanceM = 100000.0;
-constexpr int kMaxCars = 64;
 
 // Reads fields of one JSON object, collecting errors that name the key's path.
 class Fields {
@@ -186,7 +185,7 @@ std::string pack_blob(std::string_view bytes) {
 }
 
 std::string unpack_blob(std::string_view text, std::string_view what) {
-  constexpr std::size_t kMaxBytes = std::size_t{256} << 20U;
+  constexpr std::size_t kMaxBytes = kMaxBlobBytes;
   const std::optional<std::string> packed = core::base64_decode(text);
   if (!packed) throw ConfigError(std::string(what) + ": not base64");
   z_stream z{};
@@ -204,11 +203,18 @@ std::string unpack_blob(std::string_view text, std::string_view what) {
     if (out.size() > kMaxBytes) rc = Z_MEM_ERROR;
     if (rc == Z_BUF_ERROR && z.avail_in == 0) break;
   }
+  const std::size_t trailing = z.avail_in;
   inflateEnd(&z);
   if (rc != Z_STREAM_END) {
     throw ConfigError(std::string(what) + (out.size() > kMaxBytes
-                                               ? ": more than 256 MB once inflated"
-                                               : ": damaged or truncated (zlib)"));
+                                               ? ": more than " + std::to_string(kMaxBytes >> 20U) +
+                                                     " MB once inflated (the most a scenario's "
+                                                     "blob may hold)"
+                                               : std::string(": damaged or truncated (zlib)")));
+  }
+  if (trailing > 0) {
+    throw ConfigError(std::string(what) + ": " + std::to_string(trailing) +
+                      " bytes after the end of the zlib stream (damaged, or two blobs in one)");
   }
   return out;
 }
@@ -240,6 +246,13 @@ sim::Scenario parse_scenario(const json& j, std::string_view source, const core:
     if (!(d > 0.0)) errors.push_back("scenario.duration_s: must be more than 0");
     sc.duration_s = d;
   }
+  // The lead-in is not judged: one as long as the scenario leaves nothing to judge, and the
+  // scenario would pass whatever the planner did.
+  if (sc.cut && sc.duration_s && *sc.duration_s > 0.0 && sc.cut->lead_in_s >= *sc.duration_s) {
+    errors.push_back("scenario.cut.lead_in_s: " + fmt(sc.cut->lead_in_s) +
+                     " s is not less than scenario.duration_s (" + fmt(*sc.duration_s) +
+                     " s): nothing after the lead-in would be judged");
+  }
   const double road_width = core::road_width_m(road);
   if (top.has("ego")) {
     Fields ego(j["ego"], "scenario.ego", errors);
@@ -255,6 +268,10 @@ sim::Scenario parse_scenario(const json& j, std::string_view source, const core:
   if (top.has("cars")) {
     if (!j["cars"].is_array()) {
       errors.push_back("scenario.cars: expected a list");
+    } else if (j["cars"].size() > kMaxScenarioCars) {
+      errors.push_back("scenario.cars: " + std::to_string(j["cars"].size()) +
+                       " cars, more than the " + std::to_string(kMaxScenarioCars) +
+                       " a scenario may place");
     } else {
       for (std::size_t i = 0; i < j["cars"].size(); ++i) {
         Fields car(j["cars"][i], "scenario.cars[" + std::to_string(i) + "]", errors);
@@ -276,12 +293,16 @@ sim::Scenario parse_scenario(const json& j, std::string_view source, const core:
   if (top.has("events")) {
     if (!j["events"].is_array()) {
       errors.push_back("scenario.events: expected a list");
+    } else if (j["events"].size() > kMaxScenarioEvents) {
+      errors.push_back("scenario.events: " + std::to_string(j["events"].size()) +
+                       " events, more than the " + std::to_string(kMaxScenarioEvents) +
+                       " a scenario may hold");
     } else {
       for (std::size_t i = 0; i < j["events"].size(); ++i) {
         Fields ev(j["events"][i], "scenario.events[" + std::to_string(i) + "]", errors);
         sim::ScenarioEvent e;
         e.t_s = ev.number("t_s", 0.0, true, 0.0, kMaxDurationS);
-        e.car = ev.integer("car", 0, true, 0, kMaxCars - 1);
+        e.car = ev.integer("car", 0, true, 0, static_cast<int>(kMaxScenarioCars) - 1);
         if (e.car < 0 || e.car >= static_cast<int>(sc.cars.size())) {
           ev.error("car " + std::to_string(e.car) + " is not one of the scenario's " +
                    std::to_string(sc.cars.size()) + " cars");

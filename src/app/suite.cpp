@@ -5,9 +5,12 @@
 #include <cmath>
 #include <mutex>
 #include <sstream>
+#include <string_view>
 #include <thread>
 
+#include "overtake/app/cli.hpp"
 #include "overtake/app/commands.hpp"
+#include "overtake/app/config.hpp"
 #include "overtake/app/io.hpp"
 #include "overtake/app/report.hpp"
 #include "overtake/app/scenario_file.hpp"
@@ -20,10 +23,18 @@ using nlohmann::json;
 
 constexpr int kMaxJobs = 256;
 
-/// Follows the ego's lane through the frames of a run.
+/// The file names a suite writes into its --out.
+constexpr const char* kTableFile = "suite.md";
+constexpr const char* kVerdictsFile = "suite.json";
+/// The first line of every table a suite writes.
+constexpr std::string_view kTableHeader =
+    "| scenario | policy | result | incidents | collisions (at fault) | distance m | why |";
+
+/// Follows the ego's lane, and the distance it drove in the lead-in, through the frames of a
+/// run.
 class TraceWatch final : public sim::RunObserver {
  public:
-  explicit TraceWatch(const core::RoadParams& road) : road_(road) {
+  TraceWatch(const core::RoadParams& road, double lead_in_s) : road_(road), lead_in_s_(lead_in_s) {
     trace.lane_reached_s.assign(static_cast<std::size_t>(road.lane_count), std::nullopt);
   }
   void on_frame(const sim::Frame& frame, std::span<const sim::Incident> /*new*/) override {
@@ -32,6 +43,8 @@ class TraceWatch final : public sim::RunObserver {
       trace.start_s = t;
       first_ = false;
     }
+    // The judged part starts at the lead-in's end (the first frame without one).
+    if (t - trace.start_s <= lead_in_s_ + 1e-9) trace.lead_in_distance_m = frame.distance_m;
     // In a lane: the ego's d within it (its centre within half a lane).
     const int lane = core::lane_of(frame.d_m, road_);
     if (lane >= 0 && lane < road_.lane_count) {
@@ -45,8 +58,85 @@ class TraceWatch final : public sim::RunObserver {
 
  private:
   core::RoadParams road_;
+  double lead_in_s_ = 0.0;
   bool first_ = true;
 };
+
+/// A markdown table cell: a line break or a '|' in the text would end the row or the cell.
+std::string table_cell(std::string_view text) {
+  std::string out;
+  out.reserve(text.size());
+  for (std::size_t i = 0; i < text.size(); ++i) {
+    const char c = text[i];
+    if (c == '|') {
+      out += "\\|";
+    } else if (c == '\r' || c == '\n') {
+      if (c == '\r' && i + 1 < text.size() && text[i + 1] == '\n') ++i;
+      out += "<br>";
+    } else {
+      out += c;
+    }
+  }
+  return out;
+}
+
+/// True when `file` is a suite's verdicts (suite.json as run_suite writes it).
+bool is_suite_verdicts(const std::filesystem::path& file) {
+  try {
+    const json j = parse_json_text(read_file(file), file.string());
+    return j.is_object() && j.contains("verdicts") && j["verdicts"].is_array() &&
+           j.contains("passed") && j.contains("failed") && j.contains("interrupted");
+  } catch (const std::exception&) {
+    return false;
+  }
+}
+
+/// True when `file` is a suite's table (suite.md as run_suite writes it).
+bool is_suite_table(const std::filesystem::path& file) {
+  try {
+    const std::string text = read_file(file);
+    return text.compare(0, kTableHeader.size(), kTableHeader) == 0 &&
+           text.size() > kTableHeader.size() && text[kTableHeader.size()] == '\n';
+  } catch (const std::exception&) {
+    return false;
+  }
+}
+
+/// Refuses an --out that is the scenarios folder (its suite.json would be read as a scenario
+/// by the next run), or that holds a suite.md or suite.json overtake did not write.
+void check_out(const SuiteSpec& spec) {
+  if (!spec.out) return;
+  const std::filesystem::path& out = *spec.out;
+  if (same_file(out, spec.dir)) {
+    throw UsageError("--out: " + out.string() + " is the scenarios folder; the suite's " +
+                     kVerdictsFile + " would be read as a scenario by the next run: write to " +
+                     "another folder (a subfolder of it is fine)");
+  }
+  const std::pair<const char*, bool (*)(const std::filesystem::path&)> outputs[] = {
+      {kTableFile, is_suite_table}, {kVerdictsFile, is_suite_verdicts}};
+  for (const auto& [name, ours] : outputs) {
+    const std::filesystem::path file = out / name;
+    std::error_code ec;
+    const auto st = std::filesystem::symlink_status(file, ec);
+    if (ec || !std::filesystem::exists(st)) continue;
+    if (!std::filesystem::is_regular_file(st) || !ours(file)) {
+      throw UsageError("--out: " + file.string() +
+                       " was not written by an overtake suite and would be replaced; move it "
+                       "away, or give another --out");
+    }
+  }
+}
+
+/// Why `file` cannot be read as a scenario (it is not a regular file, or its status cannot be
+/// read: a dangling link, a loop of links); empty when it can be tried.
+std::string unreadable(const std::filesystem::path& file) {
+  std::error_code ec;
+  const auto st = std::filesystem::status(file, ec);
+  if (ec) return ec.message();
+  if (std::filesystem::is_directory(st)) return "a folder, not a file";
+  if (!std::filesystem::is_regular_file(st)) return "not a regular file";
+  return {};
+}
 
 std::string incident_text(const sim::Incident& i) {
   std::string text = std::string(sim::to_string(i.type));
@@ -119,11 +209,24 @@ std::vector<std::string> judge_scenario(const sim::Scenario& sc, const sim::RunR
                                : std::string(" (never)")));
     }
   }
-  if (ex.min_distance_m && r.distance_m < *ex.min_distance_m) {
-    fails.push_back("drove " + fixed_text(r.distance_m, 1) + " m, less than " +
-                    fixed_text(*ex.min_distance_m, 1) + " m");
+  const double lead_in_s = sc.cut ? sc.cut->lead_in_s : 0.0;
+  const double judged_m = judged_distance_m(r, trace);
+  if (ex.min_distance_m && judged_m < *ex.min_distance_m) {
+    fails.push_back("drove " + fixed_text(judged_m, 1) + " m" +
+                    (lead_in_s > 0.0 ? std::string(" after the lead-in") : std::string()) +
+                    ", less than " + fixed_text(*ex.min_distance_m, 1) + " m");
+  }
+  // A run over before its lead-in was has nothing judged: it cannot pass.
+  if (lead_in_s > 0.0 && r.duration_s + 1e-9 < lead_in_s &&
+      r.outcome.end != sim::RunEnd::planner_failed) {
+    fails.push_back("the run lasted " + fixed_text(r.duration_s, 2) + " s, within the lead-in (" +
+                    fixed_text(lead_in_s, 2) + " s): nothing was judged");
   }
   return fails;
+}
+
+double judged_distance_m(const sim::RunReport& report, const ScenarioTrace& trace) {
+  return std::max(0.0, report.distance_m - trace.lead_in_distance_m);
 }
 
 SuiteOutcome run_suite(const SuiteSpec& spec, const std::atomic<bool>* stop,
@@ -136,9 +239,20 @@ SuiteOutcome run_suite(const SuiteSpec& spec, const std::atomic<bool>* stop,
   if (!std::filesystem::is_directory(spec.dir, ec)) {
     throw UsageError("--scenarios: " + spec.dir.string() + " is not a folder");
   }
+  check_out(spec);
+  SuiteOutcome outcome;
+  // Every *.json entry is a scenario, whatever it is: one that cannot be read (a folder, a
+  // loop of links) fails its rows. A suite's own verdicts (suite.json) are not a scenario.
   std::vector<std::filesystem::path> files;
-  for (const auto& e : std::filesystem::directory_iterator(spec.dir, ec)) {
-    if (e.is_regular_file() && e.path().extension() == ".json") files.push_back(e.path());
+  std::filesystem::directory_iterator it(spec.dir, ec), end;
+  for (; !ec && it != end; it.increment(ec)) {
+    const std::filesystem::path& p = it->path();
+    if (p.extension() != ".json") continue;
+    if (p.filename() == kVerdictsFile && is_suite_verdicts(p)) {
+      outcome.skipped.push_back(p.filename().string());
+      continue;
+    }
+    files.push_back(p);
   }
   if (ec) throw UsageError("--scenarios: " + spec.dir.string() + ": " + ec.message());
   if (files.empty()) {
@@ -165,7 +279,6 @@ SuiteOutcome run_suite(const SuiteSpec& spec, const std::atomic<bool>* stop,
   for (std::size_t f = 0; f < files.size(); ++f) {
     for (const auto& p : spec.policies) jobs.push_back({f, p});
   }
-  SuiteOutcome outcome;
   std::vector<std::optional<ScenarioVerdict>> verdicts(jobs.size());
   std::mutex mu;
   std::size_t done = 0;
@@ -177,6 +290,10 @@ SuiteOutcome run_suite(const SuiteSpec& spec, const std::atomic<bool>* stop,
     ScenarioVerdict v;
     v.file = files[job.file].filename().string();
     v.policy = job.policy;
+    if (const std::string why = unreadable(files[job.file]); !why.empty()) {
+      v.failures.push_back("cannot read: " + why);
+      return std::optional<ScenarioVerdict>(std::move(v));
+    }
     try {
       DriveOptions o;
       o.scenario = files[job.file];
@@ -193,7 +310,7 @@ SuiteOutcome run_suite(const SuiteSpec& spec, const std::atomic<bool>* stop,
       }
       DriveInputs in = load_drive_inputs(o);
       v.name = in.scenario->name;
-      TraceWatch watch(config.road);
+      TraceWatch watch(config.road, in.scenario->cut ? in.scenario->cut->lead_in_s : 0.0);
       watch.step_s = in.config.world.step_s;
       in.options.watcher = &watch;
       const DriveResult r = drive_loaded(in, {}, stop);
@@ -204,7 +321,7 @@ SuiteOutcome run_suite(const SuiteSpec& spec, const std::atomic<bool>* stop,
         ++v.collisions;
         if (i.collision->at_fault) ++v.at_fault_collisions;
       }
-      v.distance_m = r.report.distance_m;
+      v.distance_m = judged_distance_m(r.report, watch.trace);
       v.duration_s = r.report.duration_s;
       v.pass = v.failures.empty();
       if (spec.out) {
@@ -248,23 +365,33 @@ SuiteOutcome run_suite(const SuiteSpec& spec, const std::atomic<bool>* stop,
   outcome.interrupted = outcome.interrupted || stopping();
   outcome.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
   if (spec.out) {
-    write_file_atomic(*spec.out / "suite.md", suite_table(outcome));
-    write_file_atomic(*spec.out / "suite.json", suite_json(outcome).dump(2) + "\n");
+    // The verdicts first; a failure to write one file does not keep the other from being
+    // written, nor the outcome from being returned (and its table printed).
+    const std::pair<const char*, std::string> outputs[] = {
+        {kVerdictsFile, suite_json(outcome).dump(2) + "\n"}, {kTableFile, suite_table(outcome)}};
+    for (const auto& [name, text] : outputs) {
+      try {
+        write_file_atomic(*spec.out / name, text);
+      } catch (const std::exception& e) {
+        outcome.write_errors.emplace_back(e.what());
+      }
+    }
   }
   return outcome;
 }
 
 std::string suite_table(const SuiteOutcome& o) {
   std::ostringstream os;
-  os << "| scenario | policy | result | incidents | collisions (at fault) | distance m | why |\n"
+  os << kTableHeader << "\n"
      << "|---|---|---|---:|---:|---:|---|\n";
   for (const ScenarioVerdict& v : o.verdicts) {
     std::string why;
     for (const std::string& f : v.failures) why += (why.empty() ? "" : "; ") + f;
     if (!v.replay.empty()) why += " (replay: " + v.replay + ")";
-    os << "| " << v.file << " | " << v.policy << " | " << (v.pass ? "pass" : "**FAIL**") << " | "
-       << v.incidents << " | " << v.collisions << " (" << v.at_fault_collisions << ") | "
-       << fixed_text(v.distance_m, 1) << " | " << why << " |\n";
+    os << "| " << table_cell(v.file) << " | " << table_cell(v.policy) << " | "
+       << (v.pass ? "pass" : "**FAIL**") << " | " << v.incidents << " | " << v.collisions << " ("
+       << v.at_fault_collisions << ") | " << fixed_text(v.distance_m, 1) << " | " << table_cell(why)
+       << " |\n";
   }
   os << "\n"
      << o.passed << " passed, " << o.failed << " failed"

@@ -14,6 +14,7 @@
 #include "overtake/app/config.hpp"
 #include "overtake/app/cut.hpp"
 #include "overtake/app/io.hpp"
+#include "overtake/app/report.hpp"
 #include "overtake/app/scenario_file.hpp"
 #include "overtake/replay/replay.hpp"
 #include "overtake/sim/checkpoint.hpp"
@@ -194,6 +195,77 @@ TEST(Cut, RefusesWhatItCannotCut) {
   } catch (const ConfigError& e) {
     EXPECT_THAT(e.what(), HasSubstr("cut from a run on the map"));
   }
+}
+
+// `cut --before 0 --after 0` wrote a scenario of duration_s 0, which `drive` then refused: a
+// window that would judge less than a second is refused before anything is written.
+TEST(Cut, RefusesAWindowThatWouldJudgeLessThanASecond) {
+  TempDir dir;
+  CutOptions o;
+  o.replay = seed001_run().replay;
+  o.out = dir.path() / "w.json";
+  const auto error_of = [&](double at, double before, double after, double lead_in) {
+    o.at_s = at;
+    o.before_s = before;
+    o.after_s = after;
+    o.lead_in_s = lead_in;
+    try {
+      (void)cut_replay(o);
+    } catch (const UsageError& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  EXPECT_THAT(error_of(50.0, 0.0, 0.0, 0.0),
+              HasSubstr("--before 0.00 s and --after 0.00 s leave 0.00 s to judge; together "
+                        "they must make at least 1 s"));
+  EXPECT_THAT(error_of(50.0, 0.5, 0.4, 10.0), HasSubstr("leave 0.90 s to judge"));
+  // The run's end clips --after: at its last frame nothing would be judged.
+  const replay::Replay r = replay::read_replay(o.replay);
+  const double last_t = static_cast<double>(r.frames.back().step) * r.header.step_s;
+  EXPECT_THAT(error_of(last_t, 0.0, 5.0, 0.0),
+              HasSubstr("the scenario would judge 0.00 s (t " + fixed_text(last_t, 2)));
+  // At the run's start the lead-in takes the time before the moment.
+  EXPECT_THAT(error_of(0.5, 10.0, 0.5, 10.0),
+              HasSubstr("would judge 0.50 s (t 0.50 to 1.00 s, after the lead-in"));
+  EXPECT_FALSE(fs::exists(o.out));
+  // One second is enough, and `drive` takes what `cut` wrote.
+  EXPECT_EQ(error_of(50.0, 0.0, 1.0, 5.0), "");
+  const sim::Scenario sc = load_scenario(o.out, core::RoadParams{});
+  ASSERT_TRUE(sc.duration_s && sc.cut);
+  EXPECT_NEAR(*sc.duration_s - sc.cut->lead_in_s, 1.0, 1e-6);
+  EXPECT_NEAR(drive_scenario(o.out, "seed001").report.duration_s, *sc.duration_s, 1e-6);
+}
+
+// Replayed traffic beyond what a scenario may carry (16 MB once inflated) would be refused by
+// `drive`: `cut` refuses the window and says how long one may be.
+TEST(Cut, RefusesReplayedTrafficLargerThanAScenarioMayCarry) {
+  TempDir dir;
+  DriveOptions d;
+  d.policy = "seed001";
+  d.seed = 2;
+  d.minutes = 6.5;
+  d.record = dir.path() / "long.otr";
+  (void)drive(d);
+  CutOptions o;
+  o.replay = *d.record;
+  o.at_s = 389.0;
+  o.before_s = 3600.0;
+  o.after_s = 0.0;
+  o.replayed = true;
+  o.out = dir.path() / "big.json";
+  try {
+    (void)cut_replay(o);
+    FAIL() << "cut 389 s of replayed traffic";
+  } catch (const UsageError& e) {
+    EXPECT_THAT(e.what(), HasSubstr("the scenario's replayed traffic for t 0.00 to 389.00 s is"));
+    EXPECT_THAT(e.what(), HasSubstr("more than the 16 MB a scenario may carry; cut a window of "
+                                    "at most about"));
+  }
+  EXPECT_FALSE(fs::exists(o.out));
+  o.before_s = 60.0;  // a minute is well within it
+  (void)cut_replay(o);
+  EXPECT_NO_THROW((void)load_scenario(o.out, core::RoadParams{}));
 }
 
 TEST(CutScenarioFile, BadBlobsAndMixedKindsAreErrorsNamingTheKey) {

@@ -10,6 +10,7 @@
 #include "overtake/app/commands.hpp"
 #include "overtake/app/config.hpp"
 #include "overtake/app/scenario_file.hpp"
+#include "overtake/core/base64.hpp"
 
 namespace overtake::app {
 namespace {
@@ -139,6 +140,82 @@ TEST(ScenarioFile, ANumberBeyondADoubleIsBadJsonNamingTheFile) {
   } catch (const std::exception& e) {
     FAIL() << "not a ConfigError: " << e.what();
   }
+}
+
+// A lead-in as long as the scenario left nothing to judge, and the scenario passed even with
+// an at-fault collision: refused when the file is read, naming the file and both values.
+TEST(ScenarioFile, ALeadInAsLongAsTheScenarioIsRefused) {
+  const std::string checkpoint = pack_blob("bytes");
+  const auto cut_with = [&](const std::string& duration, const std::string& lead_in) {
+    return R"({"duration_s": )" + duration + R"(, "cut": {"traffic": "reactive", "start_s": 1,
+               "at_s": 2, "lead_in_s": )" +
+           lead_in + R"(, "checkpoint": ")" + checkpoint + R"("}})";
+  };
+  const std::string error = error_of(cut_with("20", "20"));
+  EXPECT_THAT(error, HasSubstr("s.json: invalid scenario"));
+  EXPECT_THAT(error, HasSubstr("scenario.cut.lead_in_s: 20 s is not less than "
+                               "scenario.duration_s (20 s): nothing after the lead-in"));
+  EXPECT_THAT(error_of(cut_with("20", "35.5")), HasSubstr("35.5 s is not less than"));
+  EXPECT_EQ(error_of(cut_with("20", "19.5")), "");
+  EXPECT_EQ(error_of(cut_with("20", "0")), "");
+}
+
+// 20,000 cars in a 2 s scenario took 37 s to drive: the cars and events of a scripted scenario
+// are counted where they enter, and the error names the key, the count and the limit.
+TEST(ScenarioFile, CarsAndEventsAreBoundedWhereTheyEnter) {
+  const auto with = [](std::size_t cars, std::size_t events) {
+    json j = {{"duration_s", 2}, {"cars", json::array()}, {"events", json::array()}};
+    for (std::size_t i = 0; i < cars; ++i) {
+      j["cars"].push_back({{"s_m", static_cast<double>(i)}, {"lane", 0}, {"speed_mps", 10}});
+    }
+    for (std::size_t i = 0; i < events; ++i) {
+      j["events"].push_back({{"t_s", 1}, {"car", 0}, {"speed_mps", 12}, {"accel_mps2", 1}});
+    }
+    return j.dump();
+  };
+  EXPECT_THAT(error_of(with(20000, 0)),
+              HasSubstr("scenario.cars: 20000 cars, more than the 64 a scenario may place"));
+  EXPECT_THAT(error_of(with(65, 0)), HasSubstr("scenario.cars: 65 cars, more than the 64"));
+  EXPECT_EQ(error_of(with(64, 0)), "");
+  EXPECT_THAT(error_of(with(1, 200000)),
+              HasSubstr("scenario.events: 200000 events, more than the 10000 a scenario may hold"));
+  EXPECT_THAT(error_of(with(1, 10001)), HasSubstr("scenario.events: 10001 events"));
+  const auto sc = parse_scenario(json::parse(with(64, 10000)), "s.json", core::RoadParams{});
+  EXPECT_EQ(sc.cars.size(), 64U);
+  EXPECT_EQ(sc.events.size(), 10000U);
+}
+
+std::string blob_error(const std::string& text) {
+  try {
+    (void)unpack_blob(text, "scenario.cut.checkpoint");
+  } catch (const ConfigError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+// A blob of a few KB could inflate to 256 MB (two in a 2.7 MB file: 540 MB; eight under
+// --jobs 8: 4.3 GB); the bound is now 16 MB, named in the error.
+TEST(ScenarioBlob, InflatesToSixteenMegabytesAtMost) {
+  const std::string at_limit(kMaxBlobBytes, '\0');
+  EXPECT_EQ(unpack_blob(pack_blob(at_limit), "x").size(), kMaxBlobBytes);
+  const std::string bomb = pack_blob(std::string(kMaxBlobBytes + 1, '\0'));
+  EXPECT_LT(bomb.size(), 40000U);
+  EXPECT_THAT(blob_error(bomb), HasSubstr("scenario.cut.checkpoint: more than 16 MB once "
+                                          "inflated"));
+}
+
+// Garbage after a checkpoint's zlib stream was accepted.
+TEST(ScenarioBlob, BytesAfterTheZlibStreamAreRefused) {
+  const std::string packed = *core::base64_decode(pack_blob("a checkpoint's bytes"));
+  EXPECT_EQ(unpack_blob(core::base64_encode(packed), "x"), "a checkpoint's bytes");
+  EXPECT_THAT(blob_error(core::base64_encode(packed + "xyz")),
+              HasSubstr("scenario.cut.checkpoint: 3 bytes after the end of the zlib stream"));
+  EXPECT_THAT(blob_error(core::base64_encode(packed + packed)),
+              HasSubstr(std::to_string(packed.size()) + " bytes after the end"));
+  // Cut short, it is damaged as before.
+  EXPECT_THAT(blob_error(core::base64_encode(packed.substr(0, packed.size() - 2))),
+              HasSubstr("damaged or truncated"));
 }
 
 TEST(ScenarioFile, TheShippedExampleDrives) {

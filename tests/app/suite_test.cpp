@@ -8,6 +8,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 
 #include "overtake/app/commands.hpp"
 #include "overtake/app/config.hpp"
@@ -112,6 +113,7 @@ TEST(JudgeScenario, TheLeadInIsNotJudgedAndAFailedPlannerFails) {
   sc.cut.emplace();
   sc.cut->lead_in_s = 10.0;
   sim::RunReport r;
+  r.duration_s = 20.0;
   add_collision(r, 105.0, sim::CollisionKind::ego_lane_change, true);
   ScenarioTrace trace;
   trace.start_s = 100.0;
@@ -126,8 +128,201 @@ TEST(JudgeScenario, TheLeadInIsNotJudgedAndAFailedPlannerFails) {
   EXPECT_THAT(fails[0], HasSubstr("the planner failed: stalled"));
 }
 
+// min_distance_m counted the lead-in: 600 m passed where the judged part drove 442 m.
+TEST(JudgeScenario, TheDistanceIsCountedAfterTheLeadIn) {
+  sim::Scenario sc;
+  sc.cut.emplace();
+  sc.cut->lead_in_s = 10.0;
+  sc.expect.min_distance_m = 500.0;
+  sim::RunReport r;
+  r.distance_m = 600.0;
+  r.duration_s = 20.0;
+  ScenarioTrace trace;
+  trace.start_s = 100.0;
+  trace.lead_in_distance_m = 158.0;
+  EXPECT_DOUBLE_EQ(judged_distance_m(r, trace), 442.0);
+  const auto fails = judge_scenario(sc, r, trace);
+  ASSERT_EQ(fails.size(), 1U);
+  EXPECT_EQ(fails[0], "drove 442.0 m after the lead-in, less than 500.0 m");
+  trace.lead_in_distance_m = 90.0;
+  EXPECT_TRUE(judge_scenario(sc, r, trace).empty());
+}
+
+// A run over within its lead-in has nothing judged: it fails instead of passing.
+TEST(JudgeScenario, ARunOverWithinItsLeadInFails) {
+  sim::Scenario sc;
+  sc.cut.emplace();
+  sc.cut->lead_in_s = 10.0;
+  sim::RunReport r;
+  r.duration_s = 4.0;
+  add_collision(r, 103.0, sim::CollisionKind::ego_lane_change, true);
+  ScenarioTrace trace;
+  trace.start_s = 100.0;
+  const auto fails = judge_scenario(sc, r, trace);
+  ASSERT_EQ(fails.size(), 1U);
+  EXPECT_EQ(fails[0], "the run lasted 4.00 s, within the lead-in (10.00 s): nothing was judged");
+  r.duration_s = 10.0;  // it reached the judged part, which holds no collision
+  EXPECT_TRUE(judge_scenario(sc, r, trace).empty());
+}
+
+// A failure of several lines, or a '|', broke suite.md's table.
+TEST(SuiteTable, EveryVerdictStaysOneRowOfSevenCells) {
+  SuiteOutcome o;
+  ScenarioVerdict v;
+  v.file = "a|b.json";
+  v.policy = "reference";
+  v.failures = {
+      "could not run: x.json: invalid scenario\n  - scenario.cars: expected a list\r\n"
+      "  - scenario.speed: unknown key",
+      "one | two"};
+  o.verdicts = {v, v};
+  o.failed = 2;
+  const std::string table = suite_table(o);
+  EXPECT_THAT(table, HasSubstr("| a\\|b.json | reference | **FAIL** |"));
+  EXPECT_THAT(table, HasSubstr("invalid scenario<br>  - scenario.cars: expected a list<br>  - "
+                               "scenario.speed: unknown key; one \\| two |"));
+  std::istringstream lines(table);
+  std::string line;
+  int rows = 0;
+  while (std::getline(lines, line) && !line.empty()) {
+    ++rows;
+    int cells = 0;  // the '|' not escaped, less the one ending the row
+    for (std::size_t i = 0; i < line.size(); ++i) {
+      if (line[i] == '|' && (i == 0 || line[i - 1] != '\\')) ++cells;
+    }
+    EXPECT_EQ(cells - 1, 7) << line;
+  }
+  EXPECT_EQ(rows, 4);  // the header, its rule and the two verdicts
+}
+
 fs::path library() {
   return fs::path(OVERTAKE_SOURCE_DIR) / "data/scenarios";
+}
+
+/// A scripted scenario of 2 s that every policy passes.
+void write_short_scenario(const fs::path& file) {
+  std::ofstream(file) << R"({"duration_s": 2, "ego": {"s_m": 300, "lane": 1, "speed_mps": 0}})";
+}
+
+// One symlink loop named *.json stopped the whole suite with no table: a file that cannot be
+// read is one failed row, the others still run, and suite.md and suite.json are written.
+TEST(ScenarioSuite, AFileThatCannotBeReadIsOneFailedRow) {
+  TempDir dir;
+  const fs::path scenarios = dir.path() / "s";
+  fs::create_directories(scenarios / "folder.json");
+  write_short_scenario(scenarios / "good.json");
+  fs::create_symlink("loop.json", scenarios / "loop.json");
+  fs::create_symlink("nowhere", scenarios / "dangling.json");
+  std::ofstream(scenarios / "bad|name.json") << R"({"speed": 3, "cars": 5})";
+  SuiteSpec spec;
+  spec.dir = scenarios;
+  spec.policies = {"reference"};
+  spec.out = dir.path() / "out";
+  const SuiteOutcome o = run_suite(spec, nullptr, {});
+  ASSERT_EQ(o.verdicts.size(), 5U);  // in name order
+  EXPECT_EQ(o.verdicts[0].file, "bad|name.json");
+  EXPECT_THAT(o.verdicts[0].failures.front(), HasSubstr("invalid scenario\n"));
+  EXPECT_EQ(o.verdicts[1].file, "dangling.json");
+  EXPECT_EQ(o.verdicts[1].failures,
+            std::vector<std::string>{"cannot read: No such file or directory"});
+  EXPECT_EQ(o.verdicts[2].file, "folder.json");
+  EXPECT_EQ(o.verdicts[2].failures, std::vector<std::string>{"cannot read: a folder, not a file"});
+  EXPECT_EQ(o.verdicts[3].file, "good.json");
+  EXPECT_TRUE(o.verdicts[3].pass);
+  EXPECT_EQ(o.verdicts[4].file, "loop.json");
+  EXPECT_EQ(o.verdicts[4].failures,
+            std::vector<std::string>{"cannot read: Too many levels of symbolic links"});
+  EXPECT_EQ(o.passed, 1U);
+  EXPECT_EQ(o.failed, 4U);
+  EXPECT_EQ(read_json_file(*spec.out / "suite.json")["verdicts"].size(), 5U);
+  const std::string table = read_file(*spec.out / "suite.md");
+  EXPECT_THAT(table, HasSubstr("| loop.json | reference | **FAIL** | 0 | 0 (0) | 0.0 | cannot "
+                               "read: Too many levels of symbolic links |\n"));
+  EXPECT_THAT(table, HasSubstr("| bad\\|name.json |"));
+  EXPECT_THAT(table, HasSubstr("invalid scenario<br>  - "));
+  EXPECT_THAT(table, HasSubstr("\n\n1 passed, 4 failed\n"));
+}
+
+// Driven: the distance judged is the run's less what the ego drove in the lead-in, read
+// from the frames.
+TEST(ScenarioSuite, TheJudgedDistanceStartsAfterTheLeadIn) {
+  TempDir dir;
+  json j = read_json_file(library() / "seed001-default-faithful-ego-lane-change.json");
+  const fs::path whole = dir.path() / "whole.json";
+  std::ofstream(whole) << j.dump();
+  DriveOptions d;
+  d.scenario = whole;
+  d.minutes_from_scenario = true;
+  d.policy = "reference";
+  const double whole_m = drive(d).report.distance_m;
+  const fs::path scenarios = dir.path() / "s";
+  fs::create_directories(scenarios);
+  j["cut"]["lead_in_s"] = 10.0;
+  j["expect"] = {{"min_distance_m", 300.0}};
+  std::ofstream(scenarios / "lead.json") << j.dump();
+  SuiteSpec spec;
+  spec.dir = scenarios;
+  spec.policies = {"reference"};
+  const SuiteOutcome o = run_suite(spec, nullptr, {});
+  ASSERT_EQ(o.verdicts.size(), 1U);
+  const ScenarioVerdict& v = o.verdicts[0];
+  // 20 s at about 22 m/s; the last 10 s are judged.
+  EXPECT_NEAR(whole_m, 443.64, 0.01);
+  EXPECT_NEAR(v.distance_m, 222.31, 0.01);
+  ASSERT_EQ(v.failures.size(), 1U);
+  EXPECT_EQ(v.failures[0], "drove 222.3 m after the lead-in, less than 300.0 m");
+}
+
+// A suite with its scenarios folder as --out read its own suite.json as a scenario the next
+// time; and it replaced whatever suite.md or suite.json --out held.
+TEST(ScenarioSuite, WritesOnlyWhereItMay) {
+  TempDir dir;
+  const fs::path scenarios = dir.path() / "s";
+  fs::create_directories(scenarios);
+  write_short_scenario(scenarios / "a.json");
+  SuiteSpec spec;
+  spec.dir = scenarios;
+  spec.policies = {"reference"};
+  const auto error_of = [&](const fs::path& out) {
+    spec.out = out;
+    try {
+      (void)run_suite(spec, nullptr, {});
+    } catch (const UsageError& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  EXPECT_THAT(error_of(scenarios), HasSubstr("--out: " + scenarios.string() +
+                                             " is the scenarios folder; the suite's suite.json "
+                                             "would be read as a scenario"));
+  EXPECT_THAT(error_of(dir.path() / "s" / "." / ""), HasSubstr("is the scenarios folder"));
+  EXPECT_FALSE(fs::exists(scenarios / "suite.json"));
+  // A subfolder is fine (the suite does not look into subfolders), and so is running again
+  // into a folder that holds a suite's outputs.
+  EXPECT_EQ(error_of(scenarios / "out"), "");
+  EXPECT_EQ(error_of(scenarios / "out"), "");
+  EXPECT_EQ(read_json_file(scenarios / "out" / "suite.json")["verdicts"].size(), 1U);
+  // Files of the same names that no suite wrote are not replaced.
+  for (const char* name : {"suite.md", "suite.json"}) {
+    const fs::path other = dir.path() / (std::string("other-") + name);
+    fs::create_directories(other);
+    std::ofstream(other / name) << "{\"mine\": true}\n";
+    EXPECT_THAT(error_of(other), HasSubstr("--out: " + (other / name).string() +
+                                           " was not written by an overtake suite and would be "
+                                           "replaced; move it away, or give another --out"));
+    EXPECT_EQ(read_file(other / name), "{\"mine\": true}\n");
+    EXPECT_EQ(fs::exists(other / "suite.json"), std::string(name) == "suite.json");
+  }
+  // A suite's verdicts in the scenarios folder (left by an older overtake) are not a scenario.
+  fs::copy_file(scenarios / "out" / "suite.json", scenarios / "suite.json");
+  spec.out.reset();
+  const SuiteOutcome o = run_suite(spec, nullptr, {});
+  ASSERT_EQ(o.verdicts.size(), 1U);
+  EXPECT_EQ(o.verdicts[0].file, "a.json");
+  EXPECT_EQ(o.skipped, std::vector<std::string>{"suite.json"});
+  // ... but a scenario that happens to be named suite.json is one.
+  write_short_scenario(scenarios / "suite.json");
+  EXPECT_EQ(run_suite(spec, nullptr, {}).verdicts.size(), 2U);
 }
 
 TEST(ScenarioSuite, RunsAFolderForEveryPolicyAndSaysWhatFailed) {

@@ -14,6 +14,12 @@
 
 namespace overtake::app {
 
+/// The least a cut scenario judges (after its lead-in), in seconds: a shorter one tests
+/// nothing (a planner's path reaches a second ahead), and one of 0 s is refused by `drive`.
+inline constexpr double kMinCutJudgedS = 1.0;
+/// The most --before, --after and --lead-in may each be, in seconds.
+inline constexpr double kMaxCutWindowS = 3600.0;
+
 struct CutOptions {
   std::filesystem::path replay;
   double at_s = 0.0;

@@ -7,6 +7,7 @@
 //               {"t_s": 6, "car": 1, "brake_mps2": 6, "duration_s": 2},
 //               {"t_s": 9, "car": 1, "speed_mps": 20, "accel_mps2": 2}]}
 
+#include <cstddef>
 #include <filesystem>
 #include <string>
 #include <string_view>
@@ -17,6 +18,16 @@
 #include "overtake/sim/scenario.hpp"
 
 namespace overtake::app {
+
+/// The most cars a scripted scenario may place (random traffic keeps 12; the library's
+/// scripted scenarios place at most 4). Events name cars 0 to this less one.
+inline constexpr std::size_t kMaxScenarioCars = 64;
+/// The most timed events a scripted scenario may hold (the library's most is 28).
+inline constexpr std::size_t kMaxScenarioEvents = 10000;
+/// The most bytes one blob of a cut scenario (its checkpoint, its recorded traffic) may inflate
+/// to: the library's largest, 20 s of replayed traffic, is 0.98 MB; a checkpoint is 21 KB.
+/// `cut` refuses a window whose replayed traffic would be larger.
+inline constexpr std::size_t kMaxBlobBytes = std::size_t{16} << 20U;
 
 /// Reads a scenario from JSON; errors (ConfigError) name `source` and the key.
 [[nodiscard]] sim::Scenario parse_scenario(const nlohmann::json& j, std::string_view source,
@@ -29,8 +40,8 @@ namespace overtake::app {
 
 /// Bytes as scenario files carry them: zlib, then base64.
 [[nodiscard]] std::string pack_blob(std::string_view bytes);
-/// The bytes back; a ConfigError naming `what` when the text is not base64 of a whole zlib
-/// stream, or inflates beyond 256 MB.
+/// The bytes back; a ConfigError naming `what` when the text is not base64 of exactly one
+/// whole zlib stream (nothing after its end), or inflates beyond kMaxBlobBytes.
 [[nodiscard]] std::string unpack_blob(std::string_view text, std::string_view what);
 
 /// Reads a scenario file.

@@ -30,7 +30,8 @@ struct SuiteSpec {
   std::optional<std::filesystem::path> map;
   int jobs = 1;
   /// When set: the table and every verdict are written here (suite.md, suite.json), and a
-  /// replay of each failed run (replays/).
+  /// replay of each failed run (replays/). Not the scenarios folder itself; a suite.md or
+  /// suite.json already there must be a suite's own (it is replaced).
   std::optional<std::filesystem::path> out;
 };
 
@@ -39,6 +40,8 @@ struct ScenarioTrace {
   double start_s = 0.0;  ///< the run's time at its first frame
   /// When the ego was first in each lane (its d within the lane), from the start; unset: never.
   std::vector<std::optional<double>> lane_reached_s;
+  /// The distance driven by the end of the lead-in (not judged; 0 without one).
+  double lead_in_distance_m = 0.0;
 };
 
 /// One scenario driven by one policy, judged.
@@ -52,16 +55,20 @@ struct ScenarioVerdict {
   int incidents = 0;  ///< in the judged part
   int collisions = 0;
   int at_fault_collisions = 0;
-  double distance_m = 0.0;
-  double duration_s = 0.0;
-  std::string replay;  ///< of a failed run, when the suite had an --out
+  double distance_m = 0.0;  ///< in the judged part
+  double duration_s = 0.0;  ///< of the whole run
+  std::string replay;       ///< of a failed run, when the suite had an --out
 };
 
 /// The expectations of `scenario` checked against a run of it (the judged part starts
-/// `cut->lead_in_s` after its start). Empty when it passes.
+/// `cut->lead_in_s` after its start; a run that ends within the lead-in fails). Empty when it
+/// passes.
 [[nodiscard]] std::vector<std::string> judge_scenario(const sim::Scenario& scenario,
                                                       const sim::RunReport& report,
                                                       const ScenarioTrace& trace);
+
+/// The distance the ego drove in the judged part of a run (after the lead-in), in metres.
+[[nodiscard]] double judged_distance_m(const sim::RunReport& report, const ScenarioTrace& trace);
 
 struct SuiteOutcome {
   std::vector<ScenarioVerdict> verdicts;  ///< file order, then policy order
@@ -69,11 +76,18 @@ struct SuiteOutcome {
   std::size_t failed = 0;
   bool interrupted = false;
   double wall_s = 0.0;
+  /// *.json files of the folder that are not scenarios: a suite's own verdicts (suite.json).
+  std::vector<std::string> skipped;
+  /// Outputs (suite.json, suite.md) that could not be written, each naming the file; the
+  /// verdicts are still returned.
+  std::vector<std::string> write_errors;
 };
 
-/// Runs the suite on `jobs` threads. Throws UsageError for bad flags and an empty folder; a
-/// scenario file that cannot be read fails its rows (the others still run). `stop` (may be
-/// null) ends it early, keeping the verdicts reached.
+/// Runs the suite on `jobs` threads. Throws UsageError for bad flags, an empty folder, and an
+/// --out that is the scenarios folder or holds a suite.md or suite.json that no suite wrote.
+/// A scenario file that cannot be read (a folder, a loop of links, bad JSON) fails its rows
+/// and the others still run. `stop` (may be null) ends it early, keeping the verdicts
+/// reached.
 [[nodiscard]] SuiteOutcome run_suite(
     const SuiteSpec& spec, const std::atomic<bool>* stop,
     const std::function<void(std::size_t done, std::size_t total)>& progress);
