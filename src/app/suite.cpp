@@ -7,6 +7,7 @@
 #include <sstream>
 #include <thread>
 
+#include "overtake/app/cli.hpp"
 #include "overtake/app/commands.hpp"
 #include "overtake/app/io.hpp"
 #include "overtake/app/report.hpp"
@@ -129,6 +130,7 @@ std::vector<std::string> judge_scenario(const sim::Scenario& sc, const sim::RunR
 SuiteOutcome run_suite(const SuiteSpec& spec, const std::atomic<bool>* stop,
                        const std::function<void(std::size_t, std::size_t)>& progress) {
   if (spec.policies.empty()) throw UsageError("--policies: no policy given");
+  check_unique_names(spec.policies, "--policies");
   if (spec.jobs < 1 || spec.jobs > kMaxJobs) {
     throw UsageError("--jobs must be between 1 and " + std::to_string(kMaxJobs));
   }
