@@ -14,6 +14,14 @@
 
 namespace overtake::app {
 
+/// The longest a cut scenario reaches before or after its moment, and its longest lead-in (s):
+/// `cut` and `hunt` (which cuts a scenario of each failure it finds) take the same bounds.
+inline constexpr double kMaxCutWindowS = 3600.0;
+
+/// Throws UsageError naming the flag (--before, --after, --lead-in) and the value when one is
+/// not a time from 0 to kMaxCutWindowS.
+void check_cut_window(double before_s, double after_s, double lead_in_s = 0.0);
+
 struct CutOptions {
   std::filesystem::path replay;
   double at_s = 0.0;
