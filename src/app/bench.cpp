@@ -4,10 +4,12 @@
 
 #include <unistd.h>
 #include <algorithm>
+#include <cerrno>
 #include <charconv>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <ctime>
 #include <fstream>
 #include <map>
@@ -89,72 +91,79 @@ json manifest_of(const BenchSpec& spec, const Track& track, const Config& config
             {"map", {{"path", track.map.source}, {"hash", core::hex64(track.map.content_hash)}}},
             {"params_hash", config_hash(config)},
             {"combinations", total},
-            {"shard", std::to_string(spec.shard_index) + "/" + std::to_string(spec.shard_count)}};
+            {"shard", std::to_string(spec.shard_index) + "/" + std::to_string(spec.shard_count)},
+            {"git_revision", std::string(build_revision())}};
   if (!planners.empty()) m["planners"] = planners;
   return m;
 }
 
-json sweep_identity(json manifest) {
-  manifest.erase("shard");
+// What a bench is, whichever build ran it (the build is checked on its own, and named).
+json without_revision(json manifest) {
+  manifest.erase("git_revision");
   return manifest;
 }
 
-// Reads runs.jsonl; a line that does not parse (a run cut off by a kill) is dropped.
-std::vector<json> read_runs(const std::filesystem::path& file, std::size_t* dropped = nullptr) {
-  std::vector<json> runs;
-  std::ifstream in(file);
-  std::string line;
-  std::size_t bad = 0;
-  while (std::getline(in, line)) {
-    if (line.empty()) continue;
-    try {
-      json j = json::parse(line);
-      if (j.contains("index"))
-        runs.push_back(std::move(j));
-      else
-        ++bad;
-    } catch (const json::parse_error&) {
-      ++bad;
-    }
-  }
-  if (dropped) *dropped = bad;
-  return runs;
+// What makes shards one sweep: the bench without its shard (nor its build).
+json sweep_identity(json manifest) {
+  manifest.erase("shard");
+  return without_revision(std::move(manifest));
 }
 
-/// The rows of an interrupted bench, before it resumes: each is keyed by its run (index) and
-/// must be the run this bench would make under that index (policy, traffic, seed) in this
-/// shard, once; anything else (a duplicated row, a row of another bench) is refused.
-void check_resumed_runs(const std::vector<json>& runs, const std::vector<BenchCombo>& all,
-                        const BenchSpec& spec, const std::filesystem::path& file) {
-  std::set<std::size_t> seen;
-  for (const json& r : runs) {
-    const auto bad = [&](const std::string& why) {
-      throw UsageError(
-          "--resume: " + file.string() + ": " + why +
-          "; the folder cannot be resumed (move it away, or bench into another --out)");
-    };
-    if (!r["index"].is_number_unsigned())
-      bad("a row's index is not a run number: " + r["index"].dump());
-    const auto idx = r["index"].get<std::size_t>();
-    if (idx >= all.size())
-      bad("run " + std::to_string(idx) + " is not one of this bench's " +
-          std::to_string(all.size()) + " runs");
-    if (static_cast<int>(idx % static_cast<std::size_t>(spec.shard_count)) !=
-        spec.shard_index - 1) {
-      bad("run " + std::to_string(idx) + " belongs to another shard");
-    }
-    const BenchCombo& c = all[idx];
-    const json& cfg = r.contains("config") ? r["config"] : json();
-    const bool same = cfg.is_object() && cfg.value("policy", "") == c.policy &&
-                      cfg.value("traffic", "") == c.traffic && cfg.contains("seed") &&
-                      cfg["seed"].is_number_unsigned() &&
-                      cfg["seed"].get<std::uint64_t>() == c.seed;
-    if (!same) {
-      bad("the row of run " + std::to_string(idx) + " is not " + c.policy + " / " + c.traffic +
-          " / seed " + std::to_string(c.seed) + " (got " + cfg.dump() + ")");
-    }
-    if (!seen.insert(idx).second) bad("run " + std::to_string(idx) + " appears twice");
+/// Lines of a runs.jsonl listed in one message at most; the rest are counted.
+constexpr std::size_t kMaxLinesListed = 10;
+
+// nlohmann's message without its "[json.exception.parse_error.101] " prefix, and without the
+// line in it (each line of runs.jsonl is parsed alone: it would always say line 1).
+std::string json_error_text(const json::exception& e) {
+  std::string text = e.what();
+  const auto close = text.find("] ");
+  if (text.rfind("[json.exception.", 0) == 0 && close != std::string::npos)
+    text.erase(0, close + 2);
+  const auto at = text.find("at line 1, ");
+  if (at != std::string::npos) text.erase(at + 3, 8);  // "at line 1, column 5": "at column 5"
+  return text;
+}
+
+// What a bench's manifest (bench.json) says its rows must be.
+struct ManifestSweep {
+  std::vector<BenchCombo> all;
+  int shard_index = 1;
+  int shard_count = 1;
+  std::optional<std::string> map_hash, params_hash, revision;
+  std::optional<double> minutes;
+};
+
+ManifestSweep sweep_of(const json& manifest) {
+  ManifestSweep m;
+  BenchSpec spec;
+  spec.policies = manifest.at("policies").get<std::vector<std::string>>();
+  spec.traffic = manifest.at("traffic").get<std::vector<std::string>>();
+  spec.seeds = manifest.at("seeds").get<std::vector<std::uint64_t>>();
+  m.all = bench_combinations(spec);
+  if (manifest.contains("shard")) {
+    std::tie(m.shard_index, m.shard_count) = parse_shard(manifest["shard"].get<std::string>());
   }
+  if (manifest.contains("combinations") &&
+      manifest["combinations"].get<std::size_t>() != m.all.size()) {
+    throw std::invalid_argument("its combinations (" + manifest["combinations"].dump() +
+                                ") are not its policies x traffic x seeds (" +
+                                std::to_string(m.all.size()) + ")");
+  }
+  const auto text_at = [&](const json::json_pointer& at) -> std::optional<std::string> {
+    if (!manifest.contains(at)) return std::nullopt;
+    return manifest[at].get<std::string>();
+  };
+  m.map_hash = text_at(json::json_pointer("/map/hash"));
+  m.params_hash = text_at(json::json_pointer("/params_hash"));
+  m.revision = text_at(json::json_pointer("/git_revision"));
+  if (manifest.contains("minutes")) m.minutes = manifest["minutes"].get<double>();
+  return m;
+}
+
+// A row's text field at `at`, when it has one.
+std::optional<std::string> row_text(const json& row, const json::json_pointer& at) {
+  if (!row.contains(at) || !row[at].is_string()) return std::nullopt;
+  return row[at].get<std::string>();
 }
 
 std::string runs_text(std::vector<json> runs) {
@@ -268,9 +277,150 @@ std::vector<std::filesystem::path> record_worst(const BenchSpec& spec, std::vect
 
 }  // namespace
 
+BenchRowsFile read_bench_rows(const std::filesystem::path& file, bool allow_cut_off_end) {
+  BenchRowsFile out;
+  std::ifstream in(file, std::ios::binary);
+  if (!in) {
+    std::error_code ec;
+    if (!std::filesystem::exists(file, ec)) return out;  // no run finished yet
+    throw std::runtime_error(file.string() + ": cannot open (" + std::strerror(errno) + ")");
+  }
+  std::vector<std::string> bad;
+  std::size_t bad_count = 0;
+  std::string line;
+  for (std::size_t n = 1; std::getline(in, line); ++n) {
+    const bool whole_line = !in.eof();  // it ended with its newline
+    if (line.empty()) continue;
+    std::string why;
+    try {
+      json j = json::parse(line);
+      if (!j.is_object()) {
+        why = "not a JSON object";
+      } else if (!j.contains("index") || !j["index"].is_number_unsigned()) {
+        why = "no run number (\"index\")";
+      } else {
+        out.rows.push_back({std::move(j), n});
+        continue;
+      }
+    } catch (const json::exception& e) {
+      why = json_error_text(e);
+    }
+    if (!whole_line) {  // the last line, without its newline: a write a kill cut off
+      if (allow_cut_off_end) {
+        out.cut_off_line = n;
+        continue;
+      }
+      why +=
+          "; the line is cut off (the bench was killed while writing it): `overtake bench "
+          "--resume` with the bench's flags drives that run again";
+    }
+    if (++bad_count <= kMaxLinesListed) {
+      bad.push_back(file.string() + ":" + std::to_string(n) + ": not a run (" + why + ")");
+    }
+  }
+  if (in.bad()) throw std::runtime_error(file.string() + ": read error");
+  if (bad_count > 0) {
+    std::string message;
+    for (const std::string& b : bad) message += (message.empty() ? "" : "; ") + b;
+    if (bad_count > bad.size()) {
+      message += "; and " + std::to_string(bad_count - bad.size()) + " more lines like them";
+    }
+    throw UsageError(message);
+  }
+  return out;
+}
+
+void check_bench_rows(const std::vector<BenchRow>& rows, const json& manifest,
+                      const std::filesystem::path& file, std::optional<BenchBuild>& build,
+                      const std::string& who, const std::string& hint) {
+  const std::filesystem::path manifest_path = file.parent_path() / kManifestFile;
+  ManifestSweep sweep;
+  try {
+    sweep = sweep_of(manifest);
+  } catch (const std::exception& e) {
+    throw UsageError(who + manifest_path.string() + " is not a bench's manifest (" + e.what() +
+                     ")" + hint);
+  }
+  const auto different_builds = [&](const std::string& revision, const std::string& where) {
+    throw UsageError(who + "the runs come from different builds of overtake: " + build->revision +
+                     " (" + build->where + ") and " + revision + " (" + where +
+                     "); a bench's runs come from one build, which may drive differently from "
+                     "another" +
+                     hint);
+  };
+  if (sweep.revision) {
+    if (!build) {
+      build = BenchBuild{*sweep.revision, "in " + manifest_path.string()};
+    } else if (*sweep.revision != build->revision) {
+      different_builds(*sweep.revision, "in " + manifest_path.string());
+    }
+  }
+  const auto combo_text = [](const BenchCombo& c) {
+    return c.policy + " / " + c.traffic + " / seed " + std::to_string(c.seed);
+  };
+  std::map<std::size_t, std::size_t> line_of;             // run -> its line
+  std::map<std::string, std::size_t> run_of_combination;  // policy, traffic, seed -> run
+  for (const BenchRow& r : rows) {
+    const auto idx = r.run["index"].get<std::size_t>();
+    const std::string at = file.string() + ":" + std::to_string(r.line) + ": ";
+    const auto bad = [&](const std::string& why) { throw UsageError(who + at + why + hint); };
+    const std::string run = "run " + std::to_string(idx);
+    if (idx >= sweep.all.size()) {
+      bad(run + " is not one of this bench's " + std::to_string(sweep.all.size()) + " runs");
+    }
+    if (static_cast<int>(idx % static_cast<std::size_t>(sweep.shard_count)) !=
+        sweep.shard_index - 1) {
+      bad(run + " belongs to another shard than this folder's (" +
+          std::to_string(sweep.shard_index) + "/" + std::to_string(sweep.shard_count) + ")");
+    }
+    const BenchCombo& c = sweep.all[idx];
+    const json& cfg = r.run.contains("config") ? r.run["config"] : json();
+    const bool same = cfg.is_object() && cfg.value("policy", "") == c.policy &&
+                      cfg.value("traffic", "") == c.traffic && cfg.contains("seed") &&
+                      cfg["seed"].is_number_unsigned() &&
+                      cfg["seed"].get<std::uint64_t>() == c.seed;
+    if (!same) bad("the row of " + run + " is not " + combo_text(c) + " (got " + cfg.dump() + ")");
+    if (const auto [it, first] = line_of.emplace(idx, r.line); !first) {
+      bad(run + " appears twice (" + combo_text(c) + ", lines " + std::to_string(it->second) +
+          " and " + std::to_string(r.line) + "); a run counts once");
+    }
+    const std::string key = c.policy + "\n" + c.traffic + "\n" + std::to_string(c.seed);
+    if (const auto [it, first] = run_of_combination.emplace(key, idx); !first) {
+      bad(run + " is " + combo_text(c) + " again (as run " + std::to_string(it->second) +
+          "); a run counts once");
+    }
+    const auto map_hash = row_text(cfg, json::json_pointer("/map/hash"));
+    if (map_hash && sweep.map_hash && *map_hash != *sweep.map_hash) {
+      bad(run + " was driven on another map (" +
+          row_text(cfg, json::json_pointer("/map/path")).value_or("?") + ", hash " + *map_hash +
+          "; this bench's map has hash " + *sweep.map_hash + ")");
+    }
+    if (cfg.contains("minutes") && cfg["minutes"].is_number() && sweep.minutes &&
+        cfg["minutes"].get<double>() != *sweep.minutes) {
+      bad(run + " lasted another length (" + cfg["minutes"].dump() +
+          " minutes; this bench's runs last " + json(*sweep.minutes).dump() + ")");
+    }
+    const auto params = row_text(cfg, json::json_pointer("/params_hash"));
+    if (params && sweep.params_hash && *params != *sweep.params_hash) {
+      bad(run + " ran with other parameters (hash " + *params +
+          "; this bench's: " + *sweep.params_hash + ")");
+    }
+    if (const auto rev = row_text(r.run, json::json_pointer("/provenance/git_revision"))) {
+      if (!build) {
+        build = BenchBuild{*rev, "in " + file.string() + ":" + std::to_string(r.line)};
+      } else if (*rev != build->revision) {
+        different_builds(*rev, "in " + file.string() + ":" + std::to_string(r.line) + ", " + run);
+      }
+    }
+  }
+}
+
 std::vector<json> load_bench_runs(const std::filesystem::path& dir, std::size_t* dropped) {
-  std::vector<json> runs = read_runs(dir / kRunsFile, dropped);
-  std::erase_if(runs, [](const json& r) { return !r["index"].is_number_unsigned(); });
+  BenchRowsFile file = read_bench_rows(dir / kRunsFile, true);
+  if (dropped) *dropped = file.cut_off_line > 0 ? 1 : 0;
+  std::vector<json> runs;
+  runs.reserve(file.rows.size());
+  for (BenchRow& r : file.rows) runs.push_back(std::move(r.run));
   std::stable_sort(runs.begin(), runs.end(), [](const json& a, const json& b) {
     return a["index"].get<std::size_t>() < b["index"].get<std::size_t>();
   });
@@ -330,6 +480,36 @@ std::vector<BenchCombo> bench_combinations(const BenchSpec& spec) {
 
 namespace {
 
+// The files and folders a bench writes besides runs.jsonl and bench.json.
+constexpr std::array<const char*, 4> kBenchSummaryFiles = {"summary.md", "summary.csv",
+                                                           "summary.json", "pairs.csv"};
+constexpr std::array<std::string_view, 2> kBenchFolders = {kReplaysFolder, kLogsDir};
+
+}  // namespace
+
+void check_bench_out(const std::filesystem::path& out, bool force, const std::string& who,
+                     const std::string& remedy) {
+  if (force) return;
+  std::error_code ec;
+  const auto refuse = [&](const std::filesystem::path& what) {
+    throw UsageError(who + what.string() +
+                     " is not a bench's (the folder holds no bench.json): a bench would replace "
+                     "it; " +
+                     remedy);
+  };
+  for (const char* name : kBenchSummaryFiles) {
+    if (std::filesystem::exists(std::filesystem::symlink_status(out / name, ec)))
+      refuse(out / name);
+  }
+  for (const std::string_view name : kBenchFolders) {
+    const std::filesystem::path dir = out / name;
+    if (!std::filesystem::exists(std::filesystem::symlink_status(dir, ec))) continue;
+    if (!std::filesystem::is_directory(dir, ec) || !std::filesystem::is_empty(dir, ec)) refuse(dir);
+  }
+}
+
+namespace {
+
 // What a bench needs before its first run, every input checked.
 struct PreparedBench {
   Config config;
@@ -342,6 +522,10 @@ PreparedBench prepare_bench(const BenchSpec& spec) {
   if (spec.policies.empty()) throw UsageError("--policies: no policy given");
   if (spec.traffic.empty()) throw UsageError("--traffic: no traffic profile given");
   if (spec.seeds.empty()) throw UsageError("--seeds: no seeds given");
+  check_unique_names(spec.policies, "--policies");
+  check_unique_names(spec.traffic, "--traffic");
+  if (std::set<std::uint64_t>(spec.seeds.begin(), spec.seeds.end()).size() != spec.seeds.size())
+    throw UsageError("--seeds: a seed is named twice");
   if (spec.jobs < 1 || spec.jobs > kMaxJobs) {
     throw UsageError("--jobs must be between 1 and " + std::to_string(kMaxJobs) + " (got " +
                      std::to_string(spec.jobs) + ")");
@@ -415,18 +599,33 @@ BenchOutcome run_bench(const BenchSpec& spec, const std::atomic<bool>* stop,
       throw UsageError("--resume: " + manifest_path.string() + " is missing or unreadable (" +
                        e.what() + ")");
     }
-    if (old != manifest) {
+    if (!old.is_object() || without_revision(old) != without_revision(manifest)) {
       throw UsageError("--resume: " + spec.out.string() +
                        " holds a different bench (policies, traffic, seeds, minutes, map, "
                        "parameters or shard differ)");
     }
-    std::size_t dropped = 0;
-    kept = read_runs(runs_path, &dropped);
-    if (dropped)
-      std::fprintf(stderr, "bench: dropped %zu incomplete line(s) of %s\n", dropped,
-                   runs_path.c_str());
-    check_resumed_runs(kept, all, spec, runs_path);
+    // Every row kept must be one this bench, on this build, would write.
+    const std::string hint =
+        "; the folder cannot be resumed (move it away, or bench into another --out)";
+    BenchRowsFile file;
+    try {
+      file = read_bench_rows(runs_path, true);
+    } catch (const UsageError& e) {
+      throw UsageError("--resume: " + std::string(e.what()) + hint);
+    }
+    if (file.cut_off_line > 0) {
+      std::fprintf(stderr,
+                   "bench: %s:%zu was cut off (a run written when the bench was killed); its run "
+                   "is driven again\n",
+                   runs_path.c_str(), file.cut_off_line);
+    }
+    std::optional<BenchBuild> build = BenchBuild{std::string(build_revision()), "this overtake"};
+    check_bench_rows(file.rows, old, runs_path, build, "--resume: ", hint);
+    for (BenchRow& r : file.rows) kept.push_back(std::move(r.run));
     write_file_atomic(runs_path, runs_text(kept));
+  } else {
+    check_bench_out(spec.out, spec.force,
+                    "--out: ", "move it away, choose another --out, or give --force to replace it");
   }
   write_file_atomic(manifest_path, manifest.dump(2) + "\n");
 
@@ -585,8 +784,8 @@ BenchOutcome merge_bench(const std::vector<std::filesystem::path>& dirs,
   std::optional<json> identity;
   json manifest;
   std::vector<json> runs;
-  std::set<std::size_t> seen;
-  std::optional<std::pair<std::string, std::filesystem::path>> revision;  // the first, and where
+  std::map<std::size_t, std::filesystem::path> seen;  // run -> the folder holding it
+  std::optional<BenchBuild> build;                    // one build across every shard's rows
   for (const auto& dir : dirs) {
     json m;
     try {
@@ -594,6 +793,10 @@ BenchOutcome merge_bench(const std::vector<std::filesystem::path>& dirs,
     } catch (const std::exception& e) {
       throw UsageError("merge: " + (dir / kManifestFile).string() + " is missing or unreadable (" +
                        e.what() + ")");
+    }
+    if (!m.is_object()) {
+      throw UsageError("merge: " + (dir / kManifestFile).string() +
+                       " is not a bench's manifest (not a JSON object)");
     }
     if (!identity) {
       identity = sweep_identity(m);
@@ -603,27 +806,27 @@ BenchOutcome merge_bench(const std::vector<std::filesystem::path>& dirs,
                        " comes from a different bench configuration than " + dirs.front().string() +
                        " (policies, traffic, seeds, minutes, map or parameters differ)");
     }
-    for (json& r : read_runs(dir / kRunsFile)) {
-      const auto idx = r["index"].get<std::size_t>();
-      if (!seen.insert(idx).second) {
+    const std::filesystem::path file = dir / kRunsFile;
+    BenchRowsFile rows;
+    try {
+      rows = read_bench_rows(file, false);
+    } catch (const UsageError& e) {
+      throw UsageError("merge: " + std::string(e.what()));
+    }
+    // The same check as --resume's: each row its run, once, on the sweep's map, length,
+    // parameters and build.
+    check_bench_rows(rows.rows, m, file, build,
+                     "merge: ", "; run every shard of a bench with the same binary and flags");
+    for (BenchRow& r : rows.rows) {
+      const auto idx = r.run["index"].get<std::size_t>();
+      if (const auto [it, first] = seen.emplace(idx, dir); !first) {
         throw UsageError("merge: run " + std::to_string(idx) + " appears twice (in " +
-                         dir.string() + " and another folder)");
+                         it->second.string() + " and " + dir.string() + ")");
       }
-      // Runs of one sweep come from one build: another revision may drive differently.
-      const json* prov = r.contains("provenance") ? &r["provenance"] : nullptr;
-      if (prov && prov->contains("git_revision") && (*prov)["git_revision"].is_string()) {
-        const auto rev = (*prov)["git_revision"].get<std::string>();
-        if (!revision) {
-          revision.emplace(rev, dir);
-        } else if (rev != revision->first) {
-          throw UsageError("merge: the runs come from different builds of overtake: " +
-                           revision->first + " (in " + revision->second.string() + ") and " + rev +
-                           " (in " + dir.string() + "); run every shard with the same binary");
-        }
-      }
-      runs.push_back(std::move(r));
+      runs.push_back(std::move(r.run));
     }
   }
+  if (build) manifest["git_revision"] = build->revision;
   const auto total = manifest["combinations"].get<std::size_t>();
   for (const auto& dir : dirs) {
     if (same_file(dir, out)) {
@@ -635,6 +838,7 @@ BenchOutcome merge_bench(const std::vector<std::filesystem::path>& dirs,
     throw UsageError("merge: --out " + out.string() +
                      " already holds bench results; merge into a new folder");
   }
+  check_bench_out(out, false, "merge: --out: ", "move it away, or merge into a new folder");
   if (runs.size() != total) {
     throw UsageError("merge: the folders hold " + std::to_string(runs.size()) + " of the sweep's " +
                      std::to_string(total) + " runs; a shard is missing or unfinished");

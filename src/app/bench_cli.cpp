@@ -73,6 +73,8 @@ SlurmArray bench_array(const BenchSpec& spec, int tasks, std::vector<std::string
                      " already holds bench results (merged, or a local bench); choose another "
                      "--out");
   }
+  // The shards merge into --out at the end: what the merge would refuse is refused now.
+  check_bench_out(a.out, false, "--out: ", "move it away, or choose another --out");
   a.args = std::move(args);
   a.task_flags = {"--resume", "--quiet"};
   a.runs = bench_combinations(spec).size();
@@ -85,9 +87,13 @@ SlurmArray bench_array(const BenchSpec& spec, int tasks, std::vector<std::string
   a.shard_state = [slice](const fs::path& shard, int task) {
     SlurmShardState st;
     const std::size_t want = slice(task);
-    const std::size_t have = fs::exists(shard / kBenchRunsFile) ? load_bench_runs(shard).size() : 0;
-    st.finished = have == want && fs::exists(shard / "summary.json");
-    st.so_far = std::to_string(have) + " of " + std::to_string(want) + " runs";
+    try {
+      const std::size_t have = load_bench_runs(shard).size();
+      st.finished = have == want && fs::exists(shard / "summary.json");
+      st.so_far = std::to_string(have) + " of " + std::to_string(want) + " runs";
+    } catch (const std::exception& e) {  // not finished: the merge names what is wrong
+      st.so_far = e.what();
+    }
     return st;
   };
   a.progress = [slice, runs](const std::vector<fs::path>& shards) {
@@ -184,7 +190,13 @@ Subcommand register_bench(CLI::App& app) {
   st->out_opt = cmd->add_option("--out,-o", st->out, "Output folder")->capture_default_str();
   cmd->add_option("--shard", st->shard, "Run only slice I of N (e.g. 3/8) of the combinations");
   cmd->add_flag("--resume", st->spec.resume,
-                "Continue an interrupted bench in --out, skipping finished runs");
+                "Continue an interrupted bench in --out, skipping finished runs (its rows must\n"
+                "be this bench's, each once, and of this build of overtake)");
+  cmd->add_flag("--force", st->spec.force,
+                "Write into --out even when it holds files of the names a bench writes\n"
+                "(summary.md, summary.csv, summary.json, pairs.csv, replays/, logs/) that no\n"
+                "bench wrote (the folder has no bench.json): they are replaced. A bench's own\n"
+                "results are never replaced (--resume continues them)");
   cmd->add_option(
       "--record-worst", st->spec.record_worst,
       "After the bench, run the N runs with most incidents again (ties: lower seed first;\n"
@@ -239,6 +251,10 @@ Subcommand register_bench(CLI::App& app) {
           throw UsageError("--slurm: a scenario suite (--scenarios) runs here, not on Slurm");
         if (on_slurm && !st->shard.empty())
           throw UsageError("--slurm makes the shards itself; --shard is for arrays of your own");
+        if (on_slurm && st->spec.force)
+          throw UsageError(
+              "--force: a bench on Slurm merges into --out, which must not hold "
+              "files of the names a bench writes; choose another --out");
         if (!st->scenarios.empty()) {
           for (const CLI::Option* o : st->sweep_opts) {
             if (o->count() > 0) {
@@ -315,10 +331,10 @@ Subcommand register_bench(CLI::App& app) {
             (void)embedded_page(kViewerPageName);
             html = st->html;
           }
-          const SlurmArray array =
-              bench_array(spec, st->slurm.tasks,
-                          task_arguments(*cmd, {"out", "jobs", "resume", "quiet", "html", "shard"}),
-                          html, st->quiet);
+          const SlurmArray array = bench_array(
+              spec, st->slurm.tasks,
+              task_arguments(*cmd, {"out", "jobs", "resume", "quiet", "html", "shard", "force"}),
+              html, st->quiet);
           const InterruptScope interrupt;
           return run_slurm_array(array, st->slurm, &InterruptScope::flag());
         }

@@ -62,12 +62,20 @@ eval::BenchData load_bench_for_compare(const std::filesystem::path& dir,
   if (!std::filesystem::exists(runs_path)) {
     throw std::runtime_error(runs_path.string() + " is missing: the bench has no finished run");
   }
-  std::size_t dropped = 0;
-  const std::vector<json> runs = load_bench_runs(dir, &dropped);
-  if (dropped) {
-    notes.push_back(runs_path.string() + ": " + std::to_string(dropped) +
-                    " line(s) that are not whole runs were left out");
+  // Rows it cannot vouch for are refused, naming them: a line that is not a run, a run written
+  // twice, a run of another sweep, map, length or build.
+  std::vector<json> runs;
+  try {
+    BenchRowsFile file = read_bench_rows(runs_path, false);
+    std::optional<BenchBuild> build;
+    check_bench_rows(file.rows, b.manifest, runs_path, build, "", "");
+    for (BenchRow& r : file.rows) runs.push_back(std::move(r.run));
+  } catch (const UsageError& e) {
+    throw std::runtime_error(e.what());
   }
+  std::stable_sort(runs.begin(), runs.end(), [](const json& x, const json& y) {
+    return x["index"].get<std::size_t>() < y["index"].get<std::size_t>();
+  });
   for (const json& r : runs) {
     try {
       b.runs.push_back(eval::read_run_row(r, runs_path.string() + ", run " + r["index"].dump()));

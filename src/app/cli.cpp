@@ -39,6 +39,18 @@ std::vector<std::string> split_list(const std::string& text) {
   return out;
 }
 
+void check_unique_names(const std::vector<std::string>& names, const std::string& flag) {
+  for (std::size_t i = 0; i < names.size(); ++i) {
+    for (std::size_t j = 0; j < i; ++j) {
+      if (names[j] == names[i]) {
+        throw UsageError(flag + ": '" + names[i] + "' is named twice (items " +
+                         std::to_string(j + 1) + " and " + std::to_string(i + 1) +
+                         "); each is driven once, name it once");
+      }
+    }
+  }
+}
+
 std::string policy_help() {
   std::string out = "Policy (built-in planner). Available:";
   for (const auto& p : planner::list_policies()) out += "\n  " + p.name + ": " + p.summary;

@@ -31,7 +31,9 @@ Subcommand register_compare(CLI::App& app) {
       "policy and profile compared; no verdict below 8 seeds (docs/evaluation.md).\n"
       "Exit status: 0; with --fail-if-worse 1 when a figure got significantly worse, 2 when a\n"
       "comparison has too few seeds for a verdict (the reason is printed). Also 1 when a folder\n"
-      "cannot be read or its runs cannot be paired; 2 for bad flags.");
+      "cannot be read, holds a row the bench cannot vouch for (a line that is not a run, a run\n"
+      "written twice, a row of another sweep, map, length or build: named with its file and\n"
+      "line) or its runs cannot be paired; 2 for bad flags.");
   cmd->add_option("before", st->before, "The first bench's --out folder (the base)")->required();
   cmd->add_option("after", st->after, "The second bench's --out folder (the candidate)")
       ->required();

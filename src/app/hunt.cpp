@@ -1,10 +1,13 @@
 #include "overtake/app/hunt.hpp"
 
+#include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <condition_variable>
 #include <cstdio>
 #include <iostream>
+#include <limits>
 #include <map>
 #include <mutex>
 #include <set>
@@ -21,6 +24,7 @@
 #include "overtake/app/io.hpp"
 #include "overtake/app/report.hpp"
 #include "overtake/app/slurm.hpp"
+#include "overtake/core/hash.hpp"
 #include "overtake/core/road.hpp"
 #include "overtake/replay/replay.hpp"
 
@@ -31,6 +35,17 @@ using nlohmann::json;
 
 constexpr int kMaxJobs = 256;
 constexpr int kMaxFailures = 10000;
+/// The largest budget of simulated time (h; some 11 years), and the most runs a hunt takes.
+constexpr double kMaxBudgetHours = 100000.0;
+constexpr std::size_t kMaxHuntRuns = 100000000;
+/// Hex digits of a map's name's hash that tell apart maps whose slugs are the same.
+constexpr std::size_t kMapTagHashDigits = 8;
+/// The files a hunt writes into its folder, and the folders whose files it names after the runs
+/// (a folder of another's that holds them is not replaced without --force).
+constexpr std::array<const char*, 2> kHuntReports = {"hunt.json", "hunt.md"};
+constexpr std::array<const char*, 2> kHuntFolders = {"replays", "scenarios"};
+/// The folder of the runs in progress (their replays until a run is taken).
+constexpr const char* kRunsDir = "runs";
 /// Below this the ego counts as standing, below the next as slow.
 constexpr double kStandingMps = 0.5;
 constexpr double kSlowMps = 10.0;
@@ -87,6 +102,7 @@ std::string situation_of(const sim::Incident& i, const std::string& traffic,
 
 struct Combo {
   std::uint64_t seed = 0;
+  std::size_t map_index = 0;  ///< into HuntSpec::maps
   std::optional<std::filesystem::path> map;
   std::string traffic;
 };
@@ -94,8 +110,31 @@ struct Combo {
 Combo combo_of(const HuntSpec& spec, std::size_t k) {
   const std::size_t per_seed = spec.maps.size() * spec.traffic.size();
   const std::size_t within = k % per_seed;
-  return {spec.first_seed + k / per_seed, spec.maps[within / spec.traffic.size()],
+  const std::size_t m = within / spec.traffic.size();
+  return {spec.first_seed + k / per_seed, m, spec.maps[m],
           spec.traffic[within % spec.traffic.size()]};
+}
+
+/// Each map's part of the names of its runs' files: its name as a slug, and where two maps'
+/// slugs are the same (mp/seed_2.csv, mp/seed-2.csv) a short hash of its whole name too, so
+/// that no run's replay takes the place of another's.
+std::vector<std::string> map_tags(const std::vector<std::optional<std::filesystem::path>>& maps) {
+  std::vector<std::string> tags;
+  for (const auto& m : maps) tags.push_back(slug(map_name(m)));
+  const auto clashes = [&](std::size_t i) {
+    return std::count(tags.begin(), tags.end(), tags[i]) > 1;
+  };
+  std::vector<std::string> out = tags;
+  for (std::size_t i = 0; i < maps.size(); ++i) {
+    if (clashes(i)) {
+      out[i] += "-" + core::hex64(core::fnv1a64(map_name(maps[i]))).substr(0, kMapTagHashDigits);
+    }
+  }
+  tags = out;
+  for (std::size_t i = 0; i < maps.size(); ++i) {  // hashes alike too: the map's place
+    if (clashes(i)) out[i] += "-m" + std::to_string(i + 1);
+  }
+  return out;
 }
 
 /// The command and flags that give a run the hunt's planner: `drive --policy P` for a
@@ -138,8 +177,16 @@ struct RunResult {
 }  // namespace
 
 std::size_t hunt_max_runs(const HuntSpec& spec) {
-  return static_cast<std::size_t>(
-      std::max(1.0, std::floor(spec.budget_hours * 60.0 / spec.minutes + 1e-9)));
+  const double runs = std::floor(spec.budget_hours * 60.0 / spec.minutes + 1e-9);
+  // Saturated before the conversion: a budget check_spec refuses gives no wrapped count.
+  if (!(runs < static_cast<double>(kMaxHuntRuns))) return kMaxHuntRuns;
+  return static_cast<std::size_t>(std::max(1.0, runs));
+}
+
+std::string hunt_run_name(const HuntSpec& spec, std::size_t run) {
+  const Combo c = combo_of(spec, run);
+  return slug(spec.policy + "-" + map_tags(spec.maps)[c.map_index] + "-" + c.traffic + "-seed" +
+              std::to_string(c.seed));
 }
 
 namespace {
@@ -151,11 +198,26 @@ void check_spec(const HuntSpec& spec) {
   if (spec.failures < 1 || spec.failures > kMaxFailures) {
     throw UsageError("--failures must be between 1 and " + std::to_string(kMaxFailures));
   }
-  if (!(spec.budget_hours > 0.0) || !std::isfinite(spec.budget_hours)) {
-    throw UsageError("--budget-hours must be more than 0");
+  if (!(spec.budget_hours > 0.0) || !(spec.budget_hours <= kMaxBudgetHours)) {
+    std::ostringstream os;
+    os << "--budget-hours must be more than 0 and at most " << kMaxBudgetHours << " (got "
+       << spec.budget_hours << ")";
+    throw UsageError(os.str());
   }
   if (spec.maps.empty()) throw UsageError("--maps: no map given");
   if (spec.traffic.empty()) throw UsageError("--traffic: no traffic profile given");
+  for (std::size_t i = 0; i < spec.maps.size(); ++i) {
+    for (std::size_t j = 0; j < i; ++j) {
+      const auto& a = spec.maps[j];
+      const auto& b = spec.maps[i];
+      if (a.has_value() == b.has_value() && (!a || same_file(*a, *b))) {
+        throw UsageError("--maps: " + map_name(b) + " is named twice (items " +
+                         std::to_string(j + 1) + " and " + std::to_string(i + 1) +
+                         "); each map is driven once, name it once");
+      }
+    }
+  }
+  check_unique_names(spec.traffic, "--traffic");
   DriveOptions o;
   o.policy = spec.policy;
   o.planners = spec.planners;
@@ -165,15 +227,20 @@ void check_spec(const HuntSpec& spec) {
     o.traffic = t;
     validate_drive_options(o);
   }
-  // What `cut` would refuse, refused before the hunt starts rather than at its first failure.
-  if (!(spec.before_s >= 0.0 && spec.before_s <= kMaxCutWindowS) ||
-      !(spec.after_s >= 0.0 && spec.after_s <= kMaxCutWindowS)) {
-    throw UsageError("--before and --after must be between 0 and " + fixed_text(kMaxCutWindowS, 0) +
-                     " s");
+  // Each failure's scenarios are cut as `overtake cut` cuts them: the same bounds, checked now.
+  check_cut_window(spec.before_s, spec.after_s);
+  const std::size_t runs = hunt_max_runs(spec);
+  if (static_cast<double>(runs) >= static_cast<double>(kMaxHuntRuns)) {
+    throw UsageError("--budget-hours over --minutes gives more than " +
+                     std::to_string(kMaxHuntRuns - 1) +
+                     " runs; give a smaller budget or longer runs");
   }
-  if (spec.before_s + spec.after_s < kMinCutJudgedS) {
-    throw UsageError("--before and --after must together make at least " +
-                     fixed_text(kMinCutJudgedS, 0) + " s (the part a cut scenario judges)");
+  const std::size_t per_seed = spec.maps.size() * spec.traffic.size();
+  const std::uint64_t last_offset = (runs - 1) / per_seed;
+  if (spec.first_seed > std::numeric_limits<std::uint64_t>::max() - last_offset) {
+    throw UsageError("--first-seed: the hunt's seeds go from " + std::to_string(spec.first_seed) +
+                     " up " + std::to_string(last_offset) + " more, past the last seed (" +
+                     std::to_string(std::numeric_limits<std::uint64_t>::max()) + ")");
   }
   if (spec.shard_count < 1 || spec.shard_index < 1 || spec.shard_index > spec.shard_count) {
     throw UsageError("--shard: " + std::to_string(spec.shard_index) + "/" +
@@ -210,20 +277,94 @@ json hunt_sweep(const HuntSpec& spec, const Config& config) {
 
 }  // namespace
 
+namespace {
+
+// The hunt's maps, each once: two files with the same contents are one map driven twice.
+std::vector<std::shared_ptr<const Track>> load_hunt_tracks(const HuntSpec& spec) {
+  std::vector<std::shared_ptr<const Track>> tracks;
+  for (std::size_t i = 0; i < spec.maps.size(); ++i) {
+    tracks.push_back(load_track(spec.maps[i]));
+    for (std::size_t j = 0; j < i; ++j) {
+      if (tracks[j]->map.content_hash == tracks[i]->map.content_hash) {
+        throw UsageError("--maps: " + map_name(spec.maps[i]) + " is the same map as " +
+                         map_name(spec.maps[j]) + " (hash " +
+                         core::hex64(tracks[i]->map.content_hash) +
+                         "); each map is driven once, name it once");
+      }
+    }
+  }
+  return tracks;
+}
+
+// A replay of a run in progress, as the recorder names it: runK.otr, its FILE.partial or
+// FILE.N.partial. Nothing else in runs/ is removed.
+bool is_run_file(const std::string& name) {
+  std::size_t at = 0;
+  const auto digits = [&] {
+    const std::size_t from = at;
+    while (at < name.size() && name[at] >= '0' && name[at] <= '9') ++at;
+    return at > from;
+  };
+  const auto word = [&](std::string_view w) {
+    if (name.compare(at, w.size(), w) != 0) return false;
+    at += w.size();
+    return true;
+  };
+  if (!word("run") || !digits() || !word(".otr")) return false;
+  if (at == name.size()) return true;
+  if (word(".partial")) return at == name.size();
+  return word(".") && digits() && word(".partial") && at == name.size();
+}
+
+void remove_run_files(const std::filesystem::path& dir) {
+  std::error_code ec;
+  std::vector<std::filesystem::path> doomed;
+  for (const auto& e : std::filesystem::directory_iterator(dir, ec)) {
+    if (is_run_file(e.path().filename().string())) doomed.push_back(e.path());
+  }
+  for (const auto& p : doomed) std::filesystem::remove(p, ec);
+}
+
+}  // namespace
+
+void check_hunt_out(const std::filesystem::path& out, bool force, const std::string& who,
+                    const std::string& remedy) {
+  if (force) return;
+  std::error_code ec;
+  for (const char* name : kHuntReports) {
+    const std::filesystem::path file = out / name;
+    if (!std::filesystem::exists(std::filesystem::symlink_status(file, ec))) continue;
+    throw UsageError(who + file.string() + " exists" +
+                     (std::string(name) == "hunt.json" ? " (a hunt's results)" : "") +
+                     ": a hunt would replace it; " + remedy);
+  }
+  for (const char* name : kHuntFolders) {
+    const std::filesystem::path dir = out / name;
+    if (!std::filesystem::exists(std::filesystem::symlink_status(dir, ec))) continue;
+    if (!std::filesystem::is_directory(dir, ec) || !std::filesystem::is_empty(dir, ec)) {
+      throw UsageError(who + dir.string() +
+                       " is not empty and the folder holds no hunt.json: a hunt would replace "
+                       "files in it; " +
+                       remedy);
+    }
+  }
+}
+
 void check_hunt_spec(const HuntSpec& spec) {
   check_spec(spec);
   (void)load_config(spec.config);
-  for (const auto& m : spec.maps) (void)load_track(m);
+  (void)load_hunt_tracks(spec);
 }
 
 HuntOutcome run_hunt(const HuntSpec& spec, const std::atomic<bool>* stop,
                      const std::function<void(const HuntProgress&)>& progress) {
   check_spec(spec);
   const Config config = load_config(spec.config);
-  std::vector<std::shared_ptr<const Track>> tracks;
-  for (const auto& m : spec.maps) tracks.push_back(load_track(m));
+  const std::vector<std::shared_ptr<const Track>> tracks = load_hunt_tracks(spec);
+  check_hunt_out(spec.out, spec.force,
+                 "--out: ", "move it away, choose another --out, or give --force to replace it");
   std::error_code ec;
-  for (const char* sub : {"runs", "replays", "scenarios", "logs"}) {
+  for (const char* sub : {kRunsDir, "replays", "scenarios", "logs"}) {
     std::filesystem::create_directories(spec.out / sub, ec);
     if (ec)
       throw std::runtime_error((spec.out / sub).string() + ": cannot create (" + ec.message() +
@@ -260,13 +401,11 @@ HuntOutcome run_hunt(const HuntSpec& spec, const std::atomic<bool>* stop,
       o.seed = c.seed;
       o.minutes = spec.minutes;
       o.map = c.map;
-      res.replay = spec.out / "runs" / ("run" + std::to_string(k) + ".otr");
+      res.replay = spec.out / kRunsDir / ("run" + std::to_string(k) + ".otr");
       o.record = res.replay;
       o.planner_log = spec.out / "logs" / ("run" + std::to_string(k) + ".log");
       try {
-        const std::size_t m = static_cast<std::size_t>(
-            std::find(spec.maps.begin(), spec.maps.end(), c.map) - spec.maps.begin());
-        const DriveResult r = drive_on(*tracks[m], config, o, {}, &halt);
+        const DriveResult r = drive_on(*tracks[c.map_index], config, o, {}, &halt);
         res.report = r.report;
         res.stopped = r.report.outcome.end == sim::RunEnd::stopped;
       } catch (const std::exception& e) {
@@ -277,9 +416,7 @@ HuntOutcome run_hunt(const HuntSpec& spec, const std::atomic<bool>* stop,
       cv.notify_all();
     }
   };
-  const int threads = std::min<int>(spec.jobs, static_cast<int>(shard_runs));
   std::vector<std::thread> pool;
-  for (int t = 0; t < threads; ++t) pool.emplace_back(worker);
 
   HuntOutcome out;
   if (spec.shard_count > 1) {
@@ -291,114 +428,134 @@ HuntOutcome run_hunt(const HuntSpec& spec, const std::atomic<bool>* stop,
   std::map<std::string, std::size_t> group_of;
   HuntProgress prog;
   prog.budget_s = static_cast<double>(shard_runs) * spec.minutes * 60.0;
-  std::string failure;
+  // The outcome (hunt.json) first: a hunt.md that cannot be written loses nothing found.
   const auto write_reports = [&] {
     out.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
-    write_file_atomic(spec.out / "hunt.md", hunt_markdown(spec, out));
     write_file_atomic(spec.out / "hunt.json", hunt_json(spec, out).dump(2) + "\n");
+    write_file_atomic(spec.out / "hunt.md", hunt_markdown(spec, out));
   };
   std::size_t taken = 0;
-  while (taken < shard_runs) {
-    RunResult res;
-    {
-      std::unique_lock lock(mu);
-      const bool ready = cv.wait_for(lock, std::chrono::milliseconds(200),
-                                     [&] { return results.count(taken) > 0; });
-      if (stop && stop->load()) halt = true;
-      if (progress) {
-        prog.wall_s =
-            std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
-        progress(prog);
-      }
-      if (!ready) {
-        if (stopping() && next.load() <= taken) break;  // nobody will bring it
-        continue;  // (interrupted: the run waited for ends as stopped soon)
-      }
-      res = std::move(results[taken]);
-      results.erase(taken);
-    }
-    const std::size_t k = run_of(taken++);
-    if (res.stopped) break;  // interrupted mid-run: not a finished run
-    if (!res.error.empty()) {
-      failure = "run " + std::to_string(k) + ": " + res.error;
-      enough = true;
-      break;
-    }
-    ++out.runs;
-    out.simulated_s += res.report.duration_s;
-    if (out.shard) out.shard->run_seconds.emplace_back(k, res.report.duration_s);
-    prog.runs = out.runs;
-    prog.simulated_s = out.simulated_s;
-    const Combo c = combo_of(spec, k);
-    // One failure per contact (a collision) or per episode (another incident): the referee
-    // counts a contact, a speeding or a straddle again each second it lasts; those repeats are
-    // the same failure.
-    std::vector<sim::Incident> found;
-    // A planner that fails (stalls, crashes, sends what cannot be read) is a failure too.
-    const bool planner_failed = res.report.outcome.end == sim::RunEnd::planner_failed &&
-                                static_cast<int>(out.failures.size()) < spec.failures;
-    const auto room = [&] {
-      return static_cast<int>(out.failures.size() + found.size()) < spec.failures;
-    };
-    if (spec.target != HuntTarget::incidents) {
-      for (std::size_t n = 0; n < res.report.contacts.size(); ++n) {
-        const sim::Contact& contact = res.report.contacts[n];
-        if (spec.target == HuntTarget::at_fault && !contact.collision.at_fault) continue;
-        if (room()) found.push_back(contact_incident(contact, static_cast<int>(n)));
-      }
-    } else {
-      std::map<int, double> last_seen;  // type -> time of its last count
-      std::set<int> contacts_seen;
-      for (const sim::Incident& i : res.report.incidents) {
-        bool repeat = false;
-        if (i.type == sim::IncidentType::collision && i.contact >= 0) {
-          repeat = !contacts_seen.insert(i.contact).second;
-        } else {
-          const auto it = last_seen.find(static_cast<int>(i.type));
-          repeat = it != last_seen.end() && i.t_s - it->second <= kRepeatS;
-          last_seen[static_cast<int>(i.type)] = i.t_s;
+  std::string failure;  // why the hunt stopped before its end, when something failed
+  // Whatever ends the hunt (enough failures, a stop, an error anywhere in here), the workers
+  // stop and are joined below before it returns or throws.
+  try {
+    const int threads = std::min<int>(spec.jobs, static_cast<int>(shard_runs));
+    for (int t = 0; t < threads; ++t) pool.emplace_back(worker);
+    while (taken < shard_runs) {
+      RunResult res;
+      {
+        std::unique_lock lock(mu);
+        const bool ready = cv.wait_for(lock, std::chrono::milliseconds(200),
+                                       [&] { return results.count(taken) > 0; });
+        if (stop && stop->load()) halt = true;
+        if (progress) {
+          prog.wall_s =
+              std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
+          progress(prog);
         }
-        if (!repeat && room()) found.push_back(i);
+        if (!ready) {
+          if (stopping() && next.load() <= taken) break;  // nobody will bring it
+          continue;  // (interrupted: the run waited for ends as stopped soon)
+        }
+        res = std::move(results[taken]);
+        results.erase(taken);
       }
-    }
-    if (found.empty() && !planner_failed) {
-      std::filesystem::remove(res.replay, ec);
-      continue;
-    }
-    const std::string base = slug(spec.policy + "-" + map_name(c.map) + "-" + c.traffic + "-seed" +
-                                  std::to_string(c.seed));
-    const std::filesystem::path kept = spec.out / "replays" / (base + ".otr");
-    std::filesystem::rename(res.replay, kept, ec);
-    if (ec)
-      throw std::runtime_error(kept.string() + ": cannot keep the replay (" + ec.message() + ")");
-    const replay::Replay r = replay::read_replay(kept);
-    std::vector<const sim::Incident*> failures;
-    for (const sim::Incident& i : found) failures.push_back(&i);
-    if (planner_failed) failures.push_back(nullptr);
-    for (const sim::Incident* i : failures) {
-      HuntFailure f;
-      f.run = k;
-      f.seed = c.seed;
-      f.traffic = c.traffic;
-      f.map = map_name(c.map);
-      if (i) {
-        f.t_s = i->t_s;
-        f.what = what_of(*i);
-        f.situation = situation_of(*i, c.traffic, r, config.road);
+      const std::size_t k = run_of(taken++);
+      if (res.stopped) break;  // interrupted mid-run: not a finished run
+      if (!res.error.empty()) {
+        failure = "run " + std::to_string(k) + ": " + res.error;
+        break;
+      }
+      ++out.runs;
+      out.simulated_s += res.report.duration_s;
+      if (out.shard) out.shard->run_seconds.emplace_back(k, res.report.duration_s);
+      prog.runs = out.runs;
+      prog.simulated_s = out.simulated_s;
+      const Combo c = combo_of(spec, k);
+      // One failure per contact (a collision) or per episode (another incident): the referee
+      // counts a contact, a speeding or a straddle again each second it lasts; those repeats
+      // are the same failure.
+      std::vector<sim::Incident> found;
+      // A planner that fails (stalls, crashes, sends what cannot be read) is a failure too.
+      const bool planner_failed = res.report.outcome.end == sim::RunEnd::planner_failed &&
+                                  static_cast<int>(out.failures.size()) < spec.failures;
+      const auto room = [&] {
+        return static_cast<int>(out.failures.size() + found.size()) < spec.failures;
+      };
+      if (spec.target != HuntTarget::incidents) {
+        for (std::size_t n = 0; n < res.report.contacts.size(); ++n) {
+          const sim::Contact& contact = res.report.contacts[n];
+          if (spec.target == HuntTarget::at_fault && !contact.collision.at_fault) continue;
+          if (room()) found.push_back(contact_incident(contact, static_cast<int>(n)));
+        }
       } else {
-        f.t_s = res.report.outcome.t_s;
-        f.what = "the planner failed: " + res.report.outcome.reason.substr(0, 200);
-        f.situation = "the planner failed, " + c.traffic + " traffic";
+        std::map<int, double> last_seen;  // type -> time of its last count
+        std::set<int> contacts_seen;
+        for (const sim::Incident& i : res.report.incidents) {
+          bool repeat = false;
+          if (i.type == sim::IncidentType::collision && i.contact >= 0) {
+            repeat = !contacts_seen.insert(i.contact).second;
+          } else {
+            const auto it = last_seen.find(static_cast<int>(i.type));
+            repeat = it != last_seen.end() && i.t_s - it->second <= kRepeatS;
+            last_seen[static_cast<int>(i.type)] = i.t_s;
+          }
+          if (!repeat && room()) found.push_back(i);
+        }
       }
-      f.replay = (std::filesystem::path("replays") / (base + ".otr")).generic_string();
-      f.rerun = rerun_command(spec, c, f.replay);
-      const std::size_t index = out.failures.size();
-      out.failures.push_back(f);
-      auto [it, is_new] = group_of.emplace(f.situation, out.groups.size());
-      if (is_new) {
-        HuntGroup g;
-        g.situation = f.situation;
+      if (found.empty() && !planner_failed) {
+        std::filesystem::remove(res.replay, ec);
+        continue;
+      }
+      const std::string base = hunt_run_name(spec, k);
+      const std::filesystem::path kept = spec.out / "replays" / (base + ".otr");
+      std::filesystem::rename(res.replay, kept, ec);
+      if (ec)
+        throw std::runtime_error(kept.string() + ": cannot keep the replay (" + ec.message() + ")");
+      const replay::Replay r = replay::read_replay(kept);
+      std::vector<const sim::Incident*> failures;
+      for (const sim::Incident& i : found) failures.push_back(&i);
+      if (planner_failed) failures.push_back(nullptr);
+      std::vector<std::size_t> new_groups;  // their scenarios are cut once the run is written
+      for (const sim::Incident* i : failures) {
+        HuntFailure f;
+        f.run = k;
+        f.seed = c.seed;
+        f.traffic = c.traffic;
+        f.map = map_name(c.map);
+        if (i) {
+          f.t_s = i->t_s;
+          f.what = what_of(*i);
+          f.situation = situation_of(*i, c.traffic, r, config.road);
+        } else {
+          f.t_s = res.report.outcome.t_s;
+          f.what = "the planner failed: " + res.report.outcome.reason.substr(0, 200);
+          f.situation = "the planner failed, " + c.traffic + " traffic";
+        }
+        f.replay = (std::filesystem::path("replays") / (base + ".otr")).generic_string();
+        f.rerun = rerun_command(spec, c, f.replay);
+        const std::size_t index = out.failures.size();
+        out.failures.push_back(f);
+        auto [it, is_new] = group_of.emplace(f.situation, out.groups.size());
+        if (is_new) {
+          HuntGroup g;
+          g.situation = f.situation;
+          g.repro = f.rerun;  // until its scenario is cut
+          g.cut_error = "not cut yet";
+          new_groups.push_back(out.groups.size());
+          out.groups.push_back(std::move(g));
+        }
+        out.groups[it->second].failures.push_back(index);
+      }
+      prog.failures = out.failures.size();
+      prog.groups = out.groups.size();
+      // The failures are written before their scenarios are cut: a cut that fails loses none.
+      write_reports();
+      for (const std::size_t gi : new_groups) {
+        HuntGroup& g = out.groups[gi];
+        const HuntFailure& f = out.failures[g.failures.front()];
         const std::string stem = "scenarios/" + slug(base + "-t" + fixed_text(f.t_s, 2));
+        g.cut_error.clear();
         for (const bool replayed : {false, true}) {
           CutOptions co;
           co.replay = kept;
@@ -415,36 +572,59 @@ HuntOutcome run_hunt(const HuntSpec& spec, const std::atomic<bool>* stop,
           try {
             (void)cut_replay(co);
           } catch (const std::exception& e) {
-            throw std::runtime_error("cutting " + co.out.string() + ": " + e.what());
+            // The failure stays, with its replay and the command that drives its run again.
+            g.cut_error =
+                (replayed ? "replayed traffic: " : "reactive traffic: ") + std::string(e.what());
+            break;
           }
         }
-        g.reactive = stem + ".reactive.json";
-        g.replayed = stem + ".replayed.json";
-        g.repro = "overtake drive --scenario " + (spec.out / g.reactive).string() + " --policy " +
-                  spec.policy;
-        out.groups.push_back(std::move(g));
+        if (g.cut_error.empty()) {
+          g.reactive = stem + ".reactive.json";
+          g.replayed = stem + ".replayed.json";
+          g.repro = "overtake drive --scenario " + (spec.out / g.reactive).string() + " --policy " +
+                    spec.policy;
+        } else {
+          std::filesystem::remove(spec.out / (stem + ".reactive.json"), ec);
+        }
       }
-      out.groups[it->second].failures.push_back(index);
+      if (!new_groups.empty()) write_reports();
+      if (static_cast<int>(out.failures.size()) >= spec.failures) break;
     }
-    prog.failures = out.failures.size();
-    prog.groups = out.groups.size();
-    write_reports();
-    if (static_cast<int>(out.failures.size()) >= spec.failures) {
-      enough = true;
-      break;
-    }
+  } catch (const std::exception& e) {
+    failure = e.what();
+  } catch (...) {
+    failure = "an unknown error";
   }
   enough = true;
   halt = true;
-  for (auto& t : pool) t.join();
-  // Runs past the last one taken are not part of the hunt.
-  for (auto& [k, res] : results) std::filesystem::remove(res.replay, ec);
-  for (const auto& e : std::filesystem::directory_iterator(spec.out / "runs", ec)) {
-    std::filesystem::remove(e.path(), ec);
+  for (auto& t : pool) {
+    if (t.joinable()) t.join();
   }
-  if (!failure.empty()) throw std::runtime_error(failure);
+  // Runs past the last one taken are not part of the hunt; nor is a run an error cut short.
+  remove_run_files(spec.out / kRunsDir);
   out.interrupted = stop && stop->load() && static_cast<int>(out.failures.size()) < spec.failures &&
                     taken < shard_runs;
+  if (!failure.empty()) {
+    // What was found is kept (hunt.json says the hunt stopped on an error; a shard that did is
+    // not finished), then the reason goes up to the command line.
+    out.error = failure;
+    if (out.shard) out.shard->finished = false;
+    out.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
+    std::string kept;
+    try {
+      write_file_atomic(spec.out / "hunt.json", hunt_json(spec, out).dump(2) + "\n");
+      kept = std::to_string(out.failures.size()) + " failure" +
+             (out.failures.size() == 1 ? "" : "s") + " found before it kept in " +
+             (spec.out / "hunt.json").string();
+    } catch (const std::exception& e) {
+      kept = "what was found could not be kept either (" + std::string(e.what()) + ")";
+    }
+    try {
+      write_file_atomic(spec.out / "hunt.md", hunt_markdown(spec, out));
+    } catch (const std::exception&) {  // hunt.json holds the outcome; the reason is said
+    }
+    throw std::runtime_error("hunt stopped: " + failure + "; " + kept);
+  }
   if (out.shard) out.shard->finished = !out.interrupted;
   write_reports();
   if (progress) {
@@ -459,9 +639,10 @@ std::string hunt_markdown(const HuntSpec& spec, const HuntOutcome& o) {
   const double hours = o.simulated_s / 3600.0;
   os << "# hunt: " << spec.policy << "\n\n"
      << o.runs << " runs of " << fixed_text(spec.minutes, 1) << " min, " << fixed_text(hours, 2)
-     << " simulated hours" << (o.interrupted ? " (interrupted)" : "") << ": " << o.failures.size()
-     << (o.failures.size() == 1 ? " failure" : " failures") << " in " << o.groups.size()
-     << (o.groups.size() == 1 ? " situation" : " situations") << ".\n\n";
+     << " simulated hours" << (o.interrupted ? " (interrupted)" : "")
+     << (o.error.empty() ? "" : " (stopped by an error: " + o.error + ")") << ": "
+     << o.failures.size() << (o.failures.size() == 1 ? " failure" : " failures") << " in "
+     << o.groups.size() << (o.groups.size() == 1 ? " situation" : " situations") << ".\n\n";
   os << "| situation | failures | scenario (reactive / replayed) | reproduce "
         "|\n|---|---:|---|---|\n";
   for (const HuntGroup& g : o.groups) {
@@ -508,6 +689,7 @@ nlohmann::json hunt_json(const HuntSpec& spec, const HuntOutcome& o) {
             {"runs", o.runs},
             {"simulated_hours", o.simulated_s / 3600.0},
             {"interrupted", o.interrupted},
+            {"error", o.error.empty() ? json(nullptr) : json(o.error)},
             {"failures", failures},
             {"groups", groups},
             {"timing", {{"wall_s", o.wall_s}}}};
@@ -648,6 +830,7 @@ HuntOutcome merge_hunt(const std::vector<std::filesystem::path>& dirs,
                      " already holds a hunt; merge into a new "
                      "folder");
   }
+  check_hunt_out(out, false, "merge: --out: ", "move it away, or merge into a new folder");
 
   // The first `failures` failures in run order (a shard keeps a run's failures in order).
   struct Found {
@@ -701,16 +884,16 @@ HuntOutcome merge_hunt(const std::vector<std::filesystem::path>& dirs,
       group.failures.clear();
       copy_scenario(f.from->dir, out, group.reactive);
       copy_scenario(f.from->dir, out, group.replayed);
-      if (!group.reactive.empty()) {
-        group.repro = "overtake drive --scenario " + (out / group.reactive).string() +
-                      " --policy " + spec.policy;
-      }
+      group.repro = group.reactive.empty()
+                        ? f.failure->rerun
+                        : "overtake drive --scenario " + (out / group.reactive).string() +
+                              " --policy " + spec.policy;
       o.groups.push_back(std::move(group));
     }
     o.groups[it->second].failures.push_back(index);
   }
-  write_file_atomic(out / "hunt.md", hunt_markdown(spec, o));
   write_file_atomic(out / "hunt.json", hunt_json(spec, o).dump(2) + "\n");
+  write_file_atomic(out / "hunt.md", hunt_markdown(spec, o));
   return o;
 }
 
@@ -739,8 +922,11 @@ SlurmArray hunt_array(const HuntSpec& spec, std::vector<std::string> args, bool 
     throw UsageError("--out: " + a.out.string() +
                      " already holds a hunt (merged, or a local hunt); choose another --out");
   }
+  // The shards merge into --out at the end: what the merge would refuse is refused now.
+  check_hunt_out(a.out, false, "--out: ", "move it away, or choose another --out");
   a.args = std::move(args);
-  a.task_flags = {"--quiet"};
+  // A task submitted again starts its shard over, in the array's own folder.
+  a.task_flags = {"--force", "--quiet"};
   a.runs = hunt_max_runs(spec);
   a.resume = resume;
   a.quiet = quiet;
@@ -801,13 +987,16 @@ Subcommand register_hunt(CLI::App& app) {
       "--failures times or --budget-hours of simulation are spent. For each distinct failure\n"
       "(grouped by kind and situation) it keeps the replay, cuts a scenario with reactive and\n"
       "one with replayed traffic, and prints the command that reproduces it (hunt.md,\n"
-      "hunt.json in --out). Ctrl-C keeps what was found (docs/scenarios.md).");
+      "hunt.json in --out). Ctrl-C keeps what was found (docs/scenarios.md).\n"
+      "Exit status: 0; 130 when interrupted; 1 when a run, a replay or a report cannot be\n"
+      "made (the reason is printed; what was found is kept in hunt.json); 2 for bad flags.");
   st->policy_opt =
       cmd->add_option("--policy", st->spec.policy, policy_help())->capture_default_str();
   add_planner_flags(*cmd, st->planners, PlannerFlagSet::all);
   cmd->add_option("--failures,-n", st->spec.failures, "Stop after this many failures")
       ->capture_default_str();
-  cmd->add_option("--budget-hours", st->spec.budget_hours, "... or after this many simulated hours")
+  cmd->add_option("--budget-hours", st->spec.budget_hours,
+                  "... or after this many simulated hours (more than 0, at most 100000)")
       ->capture_default_str();
   cmd->add_option("--find", st->find,
                   "What counts as a failure: collisions (each contact with a car once, however\n"
@@ -815,22 +1004,27 @@ Subcommand register_hunt(CLI::App& app) {
                   "of the rubric's; one counted again each second it lasts is one failure)")
       ->capture_default_str();
   cmd->add_option("--first-seed", st->spec.first_seed, "Seeds go up from this one")
+      ->check(seed_validator())
       ->capture_default_str();
   cmd->add_option("--maps", st->maps,
-                  "Comma-separated map files to drive on (\"default\" for the built-in track;\n"
-                  "default: the built-in track)");
-  cmd->add_option("--traffic", st->traffic, "Comma-separated traffic profiles")
+                  "Comma-separated map files to drive on, each once (\"default\" for the\n"
+                  "built-in track; default: the built-in track)");
+  cmd->add_option("--traffic", st->traffic, "Comma-separated traffic profiles, each once")
       ->capture_default_str();
   cmd->add_option("--minutes", st->spec.minutes, "Simulated minutes per run")
       ->capture_default_str();
-  cmd->add_option("--before", st->spec.before_s, "The cut scenarios start this long before")
+  cmd->add_option("--before", st->spec.before_s,
+                  "The cut scenarios start this long before (0-3600 s, as `overtake cut`)")
       ->capture_default_str();
-  cmd->add_option("--after", st->spec.after_s, "... and end this long after the failure")
+  cmd->add_option("--after", st->spec.after_s, "... and end this long after the failure (0-3600 s)")
       ->capture_default_str();
   cmd->add_option("--config", st->config, "JSON parameter overrides")->check(CLI::ExistingFile);
   cmd->add_option("--jobs,-j", st->spec.jobs, "Runs in parallel (default: all cores)")
       ->capture_default_str();
   cmd->add_option("--out,-o", st->out, "Output folder")->capture_default_str();
+  cmd->add_flag("--force", st->spec.force,
+                "Write into --out even when it holds a hunt (hunt.json, hunt.md) or files in\n"
+                "its replays/ or scenarios/: the new hunt's files replace those of the same names");
   cmd->add_flag("--quiet,-q", st->quiet, "No progress line or table");
   cmd->add_option("--shard", st->shard,
                   "Hunt only slice I of N (e.g. 3/8) of the runs, until this slice has found\n"
@@ -860,6 +1054,10 @@ Subcommand register_hunt(CLI::App& app) {
         if (st->resume && !on_slurm) throw UsageError("--resume goes with --slurm TASKS");
         if (on_slurm && !st->shard.empty())
           throw UsageError("--slurm makes the shards itself; --shard is for arrays of your own");
+        if (on_slurm && st->spec.force)
+          throw UsageError(
+              "--force: a hunt on Slurm merges into --out, which must not hold a "
+              "hunt; choose another --out");
         HuntSpec spec = st->spec;
         spec.planners = catalog_from_flags(st->planners);
         spec.policy = chosen_policy(*spec.planners, spec.policy, st->policy_opt->count() > 0);
@@ -896,9 +1094,9 @@ Subcommand register_hunt(CLI::App& app) {
         if (on_slurm) {
           check_hunt_spec(spec);
           check_programs_for_slurm(*spec.planners, st->planners.network);
-          const SlurmArray array =
-              hunt_array(spec, task_arguments(*cmd, {"out", "jobs", "resume", "quiet", "shard"}),
-                         st->resume, st->quiet);
+          const SlurmArray array = hunt_array(
+              spec, task_arguments(*cmd, {"out", "jobs", "resume", "quiet", "shard", "force"}),
+              st->resume, st->quiet);
           const InterruptScope interrupt;
           return run_slurm_array(array, st->slurm, &InterruptScope::flag());
         }
@@ -906,19 +1104,27 @@ Subcommand register_hunt(CLI::App& app) {
         HuntOutcome o;
         {
           const InterruptScope interrupt;
-          o = run_hunt(spec, &InterruptScope::flag(), [&](const HuntProgress& p) {
-            if (!draw) return;
-            const double rate = p.wall_s > 0 ? (p.simulated_s / 3600.0) / (p.wall_s / 60.0) : 0;
-            const double left_s =
-                p.simulated_s > 0 ? p.wall_s * (p.budget_s - p.simulated_s) / p.simulated_s : 0;
-            std::fprintf(stderr,
-                         "\r  hunt: %zu runs, %.1f of %.1f simulated h, %zu failures in %zu "
-                         "situations, %.1f sim-h/min, at most %.0f s to go   ",
-                         p.runs, p.simulated_s / 3600.0, p.budget_s / 3600.0, p.failures, p.groups,
-                         rate, left_s);
-            std::fflush(stderr);
-          });
-          if (draw) std::fprintf(stderr, "\n");
+          const auto end_line = [&] {
+            if (draw) std::fprintf(stderr, "\n");
+          };
+          try {
+            o = run_hunt(spec, &InterruptScope::flag(), [&](const HuntProgress& p) {
+              if (!draw) return;
+              const double rate = p.wall_s > 0 ? (p.simulated_s / 3600.0) / (p.wall_s / 60.0) : 0;
+              const double left_s =
+                  p.simulated_s > 0 ? p.wall_s * (p.budget_s - p.simulated_s) / p.simulated_s : 0;
+              std::fprintf(stderr,
+                           "\r  hunt: %zu runs, %.1f of %.1f simulated h, %zu failures in %zu "
+                           "situations, %.1f sim-h/min, at most %.0f s to go   ",
+                           p.runs, p.simulated_s / 3600.0, p.budget_s / 3600.0, p.failures,
+                           p.groups, rate, left_s);
+              std::fflush(stderr);
+            });
+          } catch (...) {
+            end_line();
+            throw;
+          }
+          end_line();
         }
         if (!st->quiet) {
           std::cout << hunt_markdown(spec, o);

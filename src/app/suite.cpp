@@ -232,6 +232,7 @@ double judged_distance_m(const sim::RunReport& report, const ScenarioTrace& trac
 SuiteOutcome run_suite(const SuiteSpec& spec, const std::atomic<bool>* stop,
                        const std::function<void(std::size_t, std::size_t)>& progress) {
   if (spec.policies.empty()) throw UsageError("--policies: no policy given");
+  check_unique_names(spec.policies, "--policies");
   if (spec.jobs < 1 || spec.jobs > kMaxJobs) {
     throw UsageError("--jobs must be between 1 and " + std::to_string(kMaxJobs));
   }

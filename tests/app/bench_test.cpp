@@ -6,8 +6,10 @@
 
 #include <filesystem>
 #include <fstream>
+#include <functional>
 
 #include "overtake/app/bench.hpp"
+#include "overtake/app/build_info.hpp"
 #include "overtake/app/commands.hpp"
 #include "overtake/app/config.hpp"
 #include "overtake/app/io.hpp"
@@ -258,7 +260,8 @@ TEST_F(BenchTest, MergeRefusesRowsOfTwoRevisions) {
     FAIL() << "merged rows of two builds";
   } catch (const UsageError& e) {
     EXPECT_THAT(std::string(e.what()), HasSubstr("different builds of overtake"));
-    EXPECT_THAT(std::string(e.what()), HasSubstr("0123abc (in " + s2.out.string() + ")"));
+    EXPECT_THAT(std::string(e.what()),
+                HasSubstr("0123abc (in " + (s2.out / "runs.jsonl").string() + ":1, run 1)"));
   }
   EXPECT_FALSE(fs::exists(root_ / "m" / "runs.jsonl"));
 }
@@ -330,6 +333,17 @@ TEST_F(BenchTest, MergeNeverOverwritesResults) {
     EXPECT_THAT(std::string(e.what()), HasSubstr("is one of the folders being joined"));
   }
   EXPECT_EQ(stable_runs(s1.out), before);
+  // A folder with files of a bench's names that no bench wrote.
+  fs::create_directories(root_ / "notes");
+  write_file_atomic(root_ / "notes" / "pairs.csv", "mine\n");
+  try {
+    (void)merge_bench({s1.out, s2.out}, root_ / "notes");
+    FAIL() << "merged over a pairs.csv of someone's";
+  } catch (const UsageError& e) {
+    EXPECT_THAT(std::string(e.what()),
+                HasSubstr((root_ / "notes" / "pairs.csv").string() + " is not a bench's"));
+  }
+  EXPECT_EQ(read_file(root_ / "notes" / "pairs.csv"), "mine\n");
   (void)merge_bench({s1.out, s2.out}, root_ / "m");
   try {
     (void)merge_bench({s1.out, s2.out}, root_ / "m");
@@ -337,6 +351,191 @@ TEST_F(BenchTest, MergeNeverOverwritesResults) {
   } catch (const UsageError& e) {
     EXPECT_THAT(std::string(e.what()), HasSubstr("already holds bench results"));
   }
+}
+
+// bench.json records the build that ran the bench, and --resume refuses rows of another build,
+// map, length or parameters (the check `bench merge` and `compare` make), naming the line and
+// the run, and leaves the folder as it was.
+TEST_F(BenchTest, ResumeRefusesRowsOfAnotherBuildMapOrLength) {
+  BenchSpec s = spec("r");
+  s.policies = {"walkthrough"};
+  (void)run_bench(s, nullptr, {});
+  const fs::path runs = s.out / "runs.jsonl";
+  const fs::path manifest_path = s.out / "bench.json";
+  const json manifest = json::parse(read_file(manifest_path));
+  EXPECT_EQ(manifest["git_revision"], std::string(build_revision()));
+  std::string first, second;
+  {
+    std::ifstream in(runs);
+    std::getline(in, first);
+    std::getline(in, second);
+  }
+  const auto second_edited = [&](const std::function<void(json&)>& edit) {
+    json j = json::parse(second);
+    edit(j);
+    return first + "\n" + j.dump() + "\n";
+  };
+  s.resume = true;
+  const auto refusal = [&](const std::string& rows) -> std::string {
+    write_file_atomic(runs, rows);
+    try {
+      (void)run_bench(s, nullptr, {});
+    } catch (const UsageError& e) {
+      EXPECT_EQ(read_file(runs), rows);  // refused before anything was rewritten
+      return e.what();
+    }
+    return "";
+  };
+  const std::string at = runs.string() + ":2: ";
+  const std::string rev =
+      refusal(second_edited([](json& j) { j["provenance"]["git_revision"] = "0123abc"; }));
+  EXPECT_THAT(rev, HasSubstr("--resume: the runs come from different builds of overtake: " +
+                             std::string(build_revision()) + " (this overtake) and 0123abc (in " +
+                             runs.string() + ":2, run 1)"));
+  EXPECT_THAT(rev, HasSubstr("cannot be resumed"));
+  EXPECT_THAT(
+      refusal(second_edited([](json& j) { j["config"]["map"]["hash"] = "00000000deadbeef"; })),
+      HasSubstr(at + "run 1 was driven on another map"));
+  EXPECT_THAT(refusal(second_edited([](json& j) { j["config"]["minutes"] = 2.0; })),
+              HasSubstr(at + "run 1 lasted another length (2.0 minutes; this bench's runs last "
+                             "1.0)"));
+  EXPECT_THAT(refusal(second_edited([](json& j) { j["config"]["params_hash"] = "feed"; })),
+              HasSubstr(at + "run 1 ran with other parameters"));
+  // A bench.json of another build.
+  json other = manifest;
+  other["git_revision"] = "0123abc";
+  write_file_atomic(manifest_path, other.dump(2));
+  EXPECT_THAT(refusal(first + "\n" + second + "\n"),
+              HasSubstr("and 0123abc (in " + manifest_path.string() + ")"));
+  // As it was: resumed, nothing to run.
+  write_file_atomic(manifest_path, manifest.dump(2));
+  EXPECT_EQ(run_bench(s, nullptr, {}).runs_new, 0U);
+}
+
+// `compare` counted a row written five times as five seeds (and turned figures "worse"), and a
+// line with 1e999 aborted it naming no file while other bad lines were dropped. Now every
+// row it cannot vouch for is refused, naming the file, the line and the run.
+TEST_F(BenchTest, CompareRefusesRowsItCannotVouchFor) {
+  BenchSpec a = spec("a");
+  a.policies = {"walkthrough"};
+  a.seeds = {1, 2, 3};
+  BenchSpec b = a;
+  b.out = root_ / "b";
+  (void)run_bench(a, nullptr, {});
+  (void)run_bench(b, nullptr, {});
+  const fs::path runs = b.out / "runs.jsonl";
+  std::vector<std::string> lines;
+  {
+    std::ifstream in(runs);
+    std::string line;
+    while (std::getline(in, line)) lines.push_back(line);
+  }
+  ASSERT_EQ(lines.size(), 3U);
+  const auto error_of = [&](const std::string& rows) -> std::string {
+    write_file_atomic(runs, rows);
+    try {
+      (void)compare_bench_folders(a.out, b.out, {});
+    } catch (const std::runtime_error& e) {
+      return e.what();
+    }
+    return "";
+  };
+  EXPECT_EQ(error_of(lines[0] + "\n" + lines[1] + "\n" + lines[2] + "\n"), "");
+  std::string five_times;
+  for (const auto& l : lines) {
+    for (int k = 0; k < 5; ++k) five_times += l + "\n";
+  }
+  EXPECT_THAT(
+      error_of(five_times),
+      HasSubstr(runs.string() +
+                ":2: run 0 appears twice (walkthrough / faithful / seed 1, lines 1 and 2)"));
+  // Every bad line is named, and none is left out: a number out of range, a line not JSON.
+  const std::string bad =
+      error_of(lines[0] + "\n{\"index\": 1, \"duration_s\": 1e999}\n" + lines[2] + "\nnot a row\n");
+  EXPECT_THAT(bad, HasSubstr(runs.string() + ":2: not a run (number overflow parsing '1e999')"));
+  EXPECT_THAT(bad,
+              HasSubstr(runs.string() + ":4: not a run (parse error at column 2: syntax error"));
+  // A last line cut off (a killed bench) is refused too, saying what finishes it.
+  const std::string cut =
+      error_of(lines[0] + "\n" + lines[1] + "\n" + lines[2].substr(0, lines[2].size() / 2));
+  EXPECT_THAT(cut, HasSubstr(runs.string() + ":3: not a run"));
+  EXPECT_THAT(cut, HasSubstr("--resume"));
+  // A row of another build in one bench.
+  json foreign = json::parse(lines[2]);
+  foreign["provenance"]["git_revision"] = "0123abc";
+  EXPECT_THAT(error_of(lines[0] + "\n" + lines[1] + "\n" + foreign.dump() + "\n"),
+              HasSubstr("different builds of overtake"));
+  // At the command line: exit status 1, the file and line named.
+  write_file_atomic(runs, five_times);
+  const pid_t pid =
+      test::start_overtake({"compare", a.out, b.out}, root_ / "out.txt", root_ / "err.txt");
+  EXPECT_EQ(test::exit_status(pid, std::chrono::minutes(1)), 1);
+  EXPECT_THAT(read_file(root_ / "err.txt"), HasSubstr(runs.string() + ":2: run 0 appears twice"));
+}
+
+// `bench --out` replaced a summary.md, pairs.csv or summary.json of someone's own; now a folder
+// that holds no bench is written only when it holds no file of a bench's names (or --force).
+TEST_F(BenchTest, OutNeverReplacesFilesNoBenchWrote) {
+  BenchSpec s = spec("mine");
+  s.policies = {"walkthrough"};
+  s.seeds = {1};
+  for (const char* name : {"summary.md", "summary.csv", "summary.json", "pairs.csv"}) {
+    fs::remove_all(s.out);
+    fs::create_directories(s.out);
+    write_file_atomic(s.out / name, "mine\n");
+    try {
+      (void)run_bench(s, nullptr, {});
+      ADD_FAILURE() << "replaced " << name;
+    } catch (const UsageError& e) {
+      EXPECT_THAT(std::string(e.what()),
+                  HasSubstr("--out: " + (s.out / name).string() + " is not a bench's"));
+      EXPECT_THAT(std::string(e.what()), HasSubstr("--force"));
+    }
+    EXPECT_EQ(read_file(s.out / name), "mine\n");
+    EXPECT_FALSE(fs::exists(s.out / "bench.json"));
+    EXPECT_FALSE(fs::exists(s.out / "runs.jsonl"));
+  }
+  fs::remove_all(s.out);
+  fs::create_directories(s.out / "replays");
+  write_file_atomic(s.out / "replays" / "a.otr", "mine\n");
+  EXPECT_THROW((void)run_bench(s, nullptr, {}), UsageError);
+  fs::remove_all(s.out / "replays");
+  write_file_atomic(s.out / "summary.md", "mine\n");
+  s.force = true;
+  EXPECT_EQ(run_bench(s, nullptr, {}).runs_done, 1U);
+  EXPECT_THAT(read_file(s.out / "summary.md"), HasSubstr("| walkthrough | faithful | 1 |"));
+  // The folder is now a bench's: --resume rewrites its summaries, without --force.
+  s.force = false;
+  s.resume = true;
+  EXPECT_EQ(run_bench(s, nullptr, {}).runs_new, 0U);
+}
+
+// `--traffic faithful,faithful` drove every run twice and counted each failure twice.
+TEST_F(BenchTest, ListFlagsNameEachThingOnce) {
+  auto error_of = [&](const BenchSpec& s) {
+    try {
+      check_bench_spec(s);
+    } catch (const UsageError& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  BenchSpec s = spec("twice");
+  s.policies = {"walkthrough", "seed001", "walkthrough"};
+  EXPECT_THAT(error_of(s), HasSubstr("--policies: 'walkthrough' is named twice (items 1 and 3)"));
+  s = spec("twice");
+  s.traffic = {"faithful", "faithful"};
+  EXPECT_THAT(error_of(s), HasSubstr("--traffic: 'faithful' is named twice (items 1 and 2)"));
+  s = spec("twice");
+  s.seeds = {1, 2, 1};
+  EXPECT_THAT(error_of(s), HasSubstr("--seeds: a seed is named twice"));
+  const pid_t pid =
+      test::start_overtake({"bench", "--policies", "walkthrough", "--traffic", "faithful,faithful",
+                            "--seeds", "1", "--quiet", "--out", (root_ / "twice").string()},
+                           root_ / "out.txt", root_ / "err.txt");
+  EXPECT_EQ(test::exit_status(pid, std::chrono::minutes(1)), 2);
+  EXPECT_THAT(read_file(root_ / "err.txt"), HasSubstr("--traffic: 'faithful' is named twice"));
+  EXPECT_FALSE(fs::exists(root_ / "twice"));
 }
 
 TEST_F(BenchTest, AStopKeepsFinishedRunsOnly) {

@@ -40,6 +40,11 @@ struct BenchSpec {
   int shard_index = 1;  ///< 1-based
   int shard_count = 1;
   bool resume = false;
+  /// Write into `out` even when it holds files of the names a bench writes (summary.md,
+  /// summary.csv, summary.json, pairs.csv, replays/, logs/) that no bench wrote there (it has
+  /// no bench.json or runs.jsonl); a bench's own results are never replaced (--resume
+  /// continues them).
+  bool force = false;
   /// After the bench, run again with a replay recorded the N runs with most incidents (ties:
   /// lower seed first), into out/replays/<policy>-<traffic>-seed<N>.otr.
   int record_worst = 0;
@@ -91,6 +96,14 @@ struct BenchOutcome {
   std::vector<std::filesystem::path> replays;  ///< recorded by record_worst (merge: copied)
 };
 
+/// Refuses an output folder that holds no bench (no runs.jsonl, no bench.json) but files of the
+/// names a bench writes (summary.md, summary.csv, summary.json, pairs.csv) or a folder it
+/// writes into (replays/, logs/) that is not empty: no bench wrote them, and a bench would
+/// replace them. Throws UsageError starting with `who`, naming the file, and ending with
+/// `remedy`; nothing when `force`.
+void check_bench_out(const std::filesystem::path& out, bool force, const std::string& who,
+                     const std::string& remedy);
+
 /// Checks everything run_bench checks before its first run (UsageError / ConfigError /
 /// MapError), and runs nothing: for a bench that runs elsewhere (`--slurm`).
 void check_bench_spec(const BenchSpec& spec);
@@ -110,8 +123,48 @@ void check_bench_spec(const BenchSpec& spec);
 [[nodiscard]] BenchOutcome merge_bench(const std::vector<std::filesystem::path>& dirs,
                                        const std::filesystem::path& out);
 
-/// The runs of a bench output folder (runs.jsonl), in sweep order; unreadable lines are
-/// dropped (counted in `dropped` when given).
+/// A row of runs.jsonl and the line it is on (from 1).
+struct BenchRow {
+  nlohmann::json run;
+  std::size_t line = 0;
+};
+
+/// What a runs.jsonl holds: its rows in file order, and the line a kill cut off at its end
+/// (the last line, without its newline and not a whole run; 0: none).
+struct BenchRowsFile {
+  std::vector<BenchRow> rows;
+  std::size_t cut_off_line = 0;
+};
+
+/// Reads runs.jsonl: each line a run (a JSON object with a run number, `index`). Throws
+/// UsageError listing FILE:LINE and what is wrong for every line that is not one (not JSON, a
+/// number out of range, no run number), but for a last line cut off by a kill when
+/// `allow_cut_off_end` (`bench --resume` drops it and runs that run again).
+[[nodiscard]] BenchRowsFile read_bench_rows(const std::filesystem::path& file,
+                                            bool allow_cut_off_end);
+
+/// The build whose runs a bench holds: its revision (build_revision()) and where it was
+/// read, for messages ("this overtake", a bench.json, a line of runs.jsonl).
+struct BenchBuild {
+  std::string revision;
+  std::string where;
+};
+
+/// The check `bench --resume`, `bench merge` and `compare` make of a bench's rows (read from
+/// `file`) against its manifest (bench.json): each row is the run its number names in the
+/// manifest's sweep and shard (policy, traffic, seed), there once; driven on the manifest's
+/// map, for its minutes, with its parameters; and by one build: `build` when set, else the
+/// manifest's revision (or, in a bench.json older than revisions, the first row's), which
+/// `build` is then set to. Fields a row of an older build lacks are not checked. Throws
+/// UsageError starting with `who` ("--resume: "), naming the file, the line and the run, and
+/// ending with `hint`.
+void check_bench_rows(const std::vector<BenchRow>& rows, const nlohmann::json& manifest,
+                      const std::filesystem::path& file, std::optional<BenchBuild>& build,
+                      const std::string& who, const std::string& hint);
+
+/// The runs of a bench output folder (runs.jsonl), in sweep order; a last line cut off by a
+/// kill is dropped (counted in `dropped` when given), any other line that is not a run is
+/// refused (read_bench_rows).
 [[nodiscard]] std::vector<nlohmann::json> load_bench_runs(const std::filesystem::path& dir,
                                                           std::size_t* dropped = nullptr);
 
@@ -123,9 +176,10 @@ void check_bench_spec(const BenchSpec& spec);
                                            const std::string& where);
 
 /// A bench output folder read for `overtake compare`: its manifest and runs. Throws
-/// std::runtime_error naming the folder when it holds no bench (no bench.json or runs.jsonl)
-/// or a row cannot be read; `notes` gets what the comparison should say (an unfinished bench, lines
-/// dropped).
+/// std::runtime_error naming the folder when it holds no bench (no bench.json or runs.jsonl),
+/// and naming the file and line when a line is not a run or a row is not one the bench can
+/// vouch for (check_bench_rows: a duplicate, another sweep's run, another map, length or
+/// build); `notes` gets what the comparison should say (an unfinished bench).
 [[nodiscard]] eval::BenchData load_bench_for_compare(const std::filesystem::path& dir,
                                                      std::vector<std::string>& notes);
 

@@ -86,6 +86,10 @@ void print_live_address(const std::string& url);
 /// A comma-separated list of names (policies, traffic profiles); spaces and empty items
 /// are dropped.
 [[nodiscard]] std::vector<std::string> split_list(const std::string& text);
+/// Throws UsageError naming `flag` and the name when `names` holds one twice: a list flag
+/// (--policies, --traffic, --maps) names each thing once, or its runs would be driven, and
+/// their failures counted, twice.
+void check_unique_names(const std::vector<std::string>& names, const std::string& flag);
 /// The --policy flag's help: every built-in policy with its summary.
 [[nodiscard]] std::string policy_help();
 

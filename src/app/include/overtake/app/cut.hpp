@@ -17,8 +17,14 @@ namespace overtake::app {
 /// The least a cut scenario judges (after its lead-in), in seconds: a shorter one tests
 /// nothing (a planner's path reaches a second ahead), and one of 0 s is refused by `drive`.
 inline constexpr double kMinCutJudgedS = 1.0;
-/// The most --before, --after and --lead-in may each be, in seconds.
+/// The longest a cut scenario reaches before or after its moment, and its longest lead-in (s):
+/// `cut` and `hunt` (which cuts a scenario of each failure it finds) take the same bounds.
 inline constexpr double kMaxCutWindowS = 3600.0;
+
+/// Throws UsageError naming the flag (--before, --after, --lead-in) and the value when one is
+/// not a time from 0 to kMaxCutWindowS, or when --before and --after together judge less than
+/// kMinCutJudgedS.
+void check_cut_window(double before_s, double after_s, double lead_in_s = 0.0);
 
 struct CutOptions {
   std::filesystem::path replay;

@@ -43,6 +43,9 @@ struct HuntSpec {
   /// all shards then finds what one hunt would (the first failures in run order).
   int shard_index = 1;  ///< 1-based
   int shard_count = 1;
+  /// Write into `out` even when it holds a hunt (hunt.json, hunt.md) or files in replays/ or
+  /// scenarios/: the new hunt's replace those of the same names.
+  bool force = false;
 };
 
 /// One failure found.
@@ -93,21 +96,37 @@ struct HuntOutcome {
   double simulated_s = 0.0;
   double wall_s = 0.0;
   bool interrupted = false;
+  /// Why the hunt stopped before its end (a run or a file that failed); empty when it did not.
+  std::string error;
   std::vector<HuntFailure> failures;
   std::vector<HuntGroup> groups;
   std::optional<HuntShardInfo> shard;  ///< a shard's (shard_count > 1)
 };
 
-/// The runs the budget allows (--budget-hours over --minutes, at least one).
+/// The runs the budget allows (--budget-hours over --minutes, at least one; check_hunt_spec
+/// refuses a budget of 10^8 runs or more, where this saturates).
 [[nodiscard]] std::size_t hunt_max_runs(const HuntSpec& spec);
+/// The name of the files of run `run`'s failures (its replay, before its extension; its
+/// scenarios start with it): policy, map, traffic and seed as a slug, unique per map, traffic
+/// and seed of the hunt (maps whose slugs are the same, mp/seed_2.csv and mp/seed-2.csv, get a
+/// short hash of their whole names).
+[[nodiscard]] std::string hunt_run_name(const HuntSpec& spec, std::size_t run);
+/// Refuses an output folder that holds a hunt (hunt.json), a hunt.md, or files in replays/ or
+/// scenarios/: a hunt would replace them. Throws UsageError starting with `who`, naming the
+/// file, and ending with `remedy`; nothing when `force`.
+void check_hunt_out(const std::filesystem::path& out, bool force, const std::string& who,
+                    const std::string& remedy);
 /// Checks everything run_hunt checks before its first run (flags, parameters, maps), and
 /// runs nothing: for a hunt that runs elsewhere (`--slurm`).
 void check_hunt_spec(const HuntSpec& spec);
 
 /// Runs the hunt (UsageError for bad flags before any run). Runs are taken in a fixed order
 /// (seed, then map, then traffic) and their results in that order, so the same options find
-/// the same failures whatever the number of jobs. Writes out/hunt.md and out/hunt.json after
-/// each failure (Ctrl-C keeps what was found), out/replays/ and out/scenarios/.
+/// the same failures whatever the number of jobs. Writes out/hunt.json and out/hunt.md after
+/// each failure (Ctrl-C keeps what was found), out/replays/ and out/scenarios/; a scenario
+/// that cannot be cut is said in its group (`cut_error`). When a run or a file fails, the
+/// workers are stopped and joined, the runs in progress removed, hunt.json written with what
+/// was found and the reason (`error`), and std::runtime_error thrown with the reason.
 [[nodiscard]] HuntOutcome run_hunt(const HuntSpec& spec, const std::atomic<bool>* stop,
                                    const std::function<void(const HuntProgress&)>& progress);
 
