@@ -19,10 +19,12 @@
 #include <thread>
 
 #include "overtake/app/commands.hpp"
+#include "overtake/app/config.hpp"
 #include "overtake/app/io.hpp"
 #include "overtake/app/program_planner.hpp"
 #include "overtake/app/viewer.hpp"
 #include "overtake/core/hash.hpp"
+#include "overtake/core/text_check.hpp"
 #include "overtake/core/units.hpp"
 #include "overtake/eval/summary.hpp"
 #include "overtake/sim/referee.hpp"
@@ -145,7 +147,7 @@ ManifestSweep sweep_of(const json& manifest) {
   }
   if (manifest.contains("combinations") &&
       manifest["combinations"].get<std::size_t>() != m.all.size()) {
-    throw std::invalid_argument("its combinations (" + manifest["combinations"].dump() +
+    throw std::invalid_argument("its combinations (" + json_text(manifest["combinations"]) +
                                 ") are not its policies x traffic x seeds (" +
                                 std::to_string(m.all.size()) + ")");
   }
@@ -171,7 +173,7 @@ std::string runs_text(std::vector<json> runs) {
     return a["index"].get<std::size_t>() < b["index"].get<std::size_t>();
   });
   std::string out;
-  for (const json& r : runs) out += r.dump() + "\n";
+  for (const json& r : runs) out += json_text(r) + "\n";
   return out;
 }
 
@@ -184,12 +186,10 @@ void write_outputs(const std::filesystem::path& out, const std::vector<json>& ru
   const BenchSummary& s = outcome.summary;
   write_file_atomic(out / "summary.csv", eval::summary_csv(s.rows));
   write_file_atomic(out / "pairs.csv", eval::pairs_csv(s.pairs));
-  write_file_atomic(out / "summary.json",
-                    json{{"rows", s.rows},
-                         {"pairs", s.pairs},
-                         {"verdicts", eval::verdict_method(eval::family_size(s.pairs))}}
-                            .dump(2) +
-                        "\n");
+  const json summary{{"rows", s.rows},
+                     {"pairs", s.pairs},
+                     {"verdicts", eval::verdict_method(eval::family_size(s.pairs))}};
+  write_file_atomic(out / "summary.json", json_text(summary, 2) + "\n");
   outcome.summary_markdown = eval::summary_markdown(s.rows, s.pairs);
   write_file_atomic(out / "summary.md", outcome.summary_markdown);
   outcome.runs_done = runs.size();
@@ -293,8 +293,11 @@ BenchRowsFile read_bench_rows(const std::filesystem::path& file, bool allow_cut_
     if (line.empty()) continue;
     std::string why;
     try {
-      json j = json::parse(line);
-      if (!j.is_object()) {
+      json j;
+      if (const auto at = core::json_too_deep_at(line)) {
+        why = "nested deeper than " + std::to_string(core::kMaxJsonDepth) + " levels (at byte " +
+              std::to_string(*at) + ")";
+      } else if (j = json::parse(line); !j.is_object()) {
         why = "not a JSON object";
       } else if (!j.contains("index") || !j["index"].is_number_unsigned()) {
         why = "no run number (\"index\")";
@@ -379,7 +382,8 @@ void check_bench_rows(const std::vector<BenchRow>& rows, const json& manifest,
                       cfg.value("traffic", "") == c.traffic && cfg.contains("seed") &&
                       cfg["seed"].is_number_unsigned() &&
                       cfg["seed"].get<std::uint64_t>() == c.seed;
-    if (!same) bad("the row of " + run + " is not " + combo_text(c) + " (got " + cfg.dump() + ")");
+    if (!same)
+      bad("the row of " + run + " is not " + combo_text(c) + " (got " + json_text(cfg) + ")");
     if (const auto [it, first] = line_of.emplace(idx, r.line); !first) {
       bad(run + " appears twice (" + combo_text(c) + ", lines " + std::to_string(it->second) +
           " and " + std::to_string(r.line) + "); a run counts once");
@@ -397,8 +401,8 @@ void check_bench_rows(const std::vector<BenchRow>& rows, const json& manifest,
     }
     if (cfg.contains("minutes") && cfg["minutes"].is_number() && sweep.minutes &&
         cfg["minutes"].get<double>() != *sweep.minutes) {
-      bad(run + " lasted another length (" + cfg["minutes"].dump() +
-          " minutes; this bench's runs last " + json(*sweep.minutes).dump() + ")");
+      bad(run + " lasted another length (" + json_text(cfg["minutes"]) +
+          " minutes; this bench's runs last " + json_text(json(*sweep.minutes)) + ")");
     }
     const auto params = row_text(cfg, json::json_pointer("/params_hash"));
     if (params && sweep.params_hash && *params != *sweep.params_hash) {
@@ -594,7 +598,7 @@ BenchOutcome run_bench(const BenchSpec& spec, const std::atomic<bool>* stop,
     }
     json old;
     try {
-      old = json::parse(read_file(manifest_path));
+      old = read_json_file(manifest_path);
     } catch (const std::exception& e) {
       throw UsageError("--resume: " + manifest_path.string() + " is missing or unreadable (" +
                        e.what() + ")");
@@ -627,7 +631,7 @@ BenchOutcome run_bench(const BenchSpec& spec, const std::atomic<bool>* stop,
     check_bench_out(spec.out, spec.force,
                     "--out: ", "move it away, choose another --out, or give --force to replace it");
   }
-  write_file_atomic(manifest_path, manifest.dump(2) + "\n");
+  write_file_atomic(manifest_path, json_text(manifest, 2) + "\n");
 
   std::set<std::size_t> done_indices;
   for (const json& r : kept) done_indices.insert(r["index"].get<std::size_t>());
@@ -696,7 +700,7 @@ BenchOutcome run_bench(const BenchSpec& spec, const std::atomic<bool>* stop,
           std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
       line["timing"]["finished_at"] = utc_now();
       std::lock_guard lock(mu);
-      append << line.dump() << "\n";
+      append << json_text(line) << "\n";
       append.flush();
       fresh.push_back(std::move(line));
       ++prog.done;
@@ -789,7 +793,7 @@ BenchOutcome merge_bench(const std::vector<std::filesystem::path>& dirs,
   for (const auto& dir : dirs) {
     json m;
     try {
-      m = json::parse(read_file(dir / kManifestFile));
+      m = read_json_file(dir / kManifestFile);
     } catch (const std::exception& e) {
       throw UsageError("merge: " + (dir / kManifestFile).string() + " is missing or unreadable (" +
                        e.what() + ")");
@@ -849,7 +853,7 @@ BenchOutcome merge_bench(const std::vector<std::filesystem::path>& dirs,
     throw std::runtime_error(out.string() + ": cannot create the output folder (" + ec.message() +
                              ")");
   manifest["shard"] = "1/1";
-  write_file_atomic(out / kManifestFile, manifest.dump(2) + "\n");
+  write_file_atomic(out / kManifestFile, json_text(manifest, 2) + "\n");
   BenchOutcome outcome;
   write_outputs(out, runs, manifest, outcome);
   outcome.replays = merge_replays(dirs, out);

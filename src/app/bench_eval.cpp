@@ -7,6 +7,7 @@
 
 #include "overtake/app/bench.hpp"
 #include "overtake/app/commands.hpp"
+#include "overtake/app/config.hpp"
 #include "overtake/app/io.hpp"
 #include "overtake/eval/summary.hpp"
 
@@ -29,7 +30,8 @@ BenchSummary summarize_bench(std::vector<json> runs, const std::vector<std::stri
   rows.reserve(runs.size());
   for (const json& r : runs) {
     const std::string at =
-        where + ", run " + (r.contains("index") ? r["index"].dump() : std::to_string(rows.size()));
+        where + ", run " +
+        (r.contains("index") ? json_text(r["index"]) : std::to_string(rows.size()));
     try {
       rows.push_back(eval::read_run_row(r, at));
     } catch (const std::invalid_argument& e) {
@@ -50,7 +52,7 @@ eval::BenchData load_bench_for_compare(const std::filesystem::path& dir,
                              ": no such folder (give two `overtake bench --out` folders)");
   }
   try {
-    b.manifest = json::parse(read_file(manifest_path));
+    b.manifest = read_json_file(manifest_path);
   } catch (const std::exception& e) {
     throw std::runtime_error(manifest_path.string() + " is missing or unreadable (" + e.what() +
                              "): not a bench output folder");
@@ -78,7 +80,8 @@ eval::BenchData load_bench_for_compare(const std::filesystem::path& dir,
   });
   for (const json& r : runs) {
     try {
-      b.runs.push_back(eval::read_run_row(r, runs_path.string() + ", run " + r["index"].dump()));
+      b.runs.push_back(
+          eval::read_run_row(r, runs_path.string() + ", run " + json_text(r["index"])));
     } catch (const std::invalid_argument& e) {
       throw std::runtime_error(e.what());
     }

@@ -9,6 +9,7 @@
 #include "overtake/app/bench.hpp"
 #include "overtake/app/cli.hpp"
 #include "overtake/app/commands.hpp"
+#include "overtake/app/config.hpp"
 #include "overtake/app/io.hpp"
 
 namespace overtake::app {
@@ -71,7 +72,7 @@ Subcommand register_compare(CLI::App& app) {
               }
             }
             const nlohmann::json result = compare_bench_folders(st->before, st->after, o);
-            if (!st->json.empty()) write_file_atomic(st->json, result.dump(2) + "\n");
+            if (!st->json.empty()) write_file_atomic(st->json, json_text(result, 2) + "\n");
             if (!st->quiet) std::cout << eval::compare_text(result);
             if (!st->fail_if_worse) return kExitOk;
             if (!result["worse"].empty()) return kExitFailure;

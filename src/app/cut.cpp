@@ -9,6 +9,7 @@
 
 #include "overtake/app/cli.hpp"
 #include "overtake/app/commands.hpp"
+#include "overtake/app/config.hpp"
 #include "overtake/app/io.hpp"
 #include "overtake/app/report.hpp"
 #include "overtake/app/scenario_file.hpp"
@@ -202,7 +203,7 @@ std::string expect_json(const sim::ScenarioExpect& e) {
   if (e.max_incidents) j["incidents"] = *e.max_incidents;
   if (e.reach_lane) j["reach_lane"] = {{"lane", *e.reach_lane}, {"by_s", e.reach_lane_by_s}};
   if (e.min_distance_m) j["min_distance_m"] = *e.min_distance_m;
-  return j.dump();
+  return json_text(j);
 }
 
 CutResult cut_replay(const CutOptions& opts) {
@@ -402,7 +403,7 @@ CutResult cut_replay(const CutOptions& opts) {
     cut["recorded_traffic"] = pack_blob(traffic);
   }
   j["cut"] = std::move(cut);
-  const std::string text = j.dump(2) + "\n";
+  const std::string text = json_text(j, 2) + "\n";
   result.file_bytes = text.size();
   write_file_atomic(opts.out, text);
   return result;

@@ -26,6 +26,7 @@
 #include "overtake/app/slurm.hpp"
 #include "overtake/core/hash.hpp"
 #include "overtake/core/road.hpp"
+#include "overtake/core/text_check.hpp"
 #include "overtake/replay/replay.hpp"
 
 namespace overtake::app {
@@ -431,7 +432,7 @@ HuntOutcome run_hunt(const HuntSpec& spec, const std::atomic<bool>* stop,
   // The outcome (hunt.json) first: a hunt.md that cannot be written loses nothing found.
   const auto write_reports = [&] {
     out.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
-    write_file_atomic(spec.out / "hunt.json", hunt_json(spec, out).dump(2) + "\n");
+    write_file_atomic(spec.out / "hunt.json", json_text(hunt_json(spec, out), 2) + "\n");
     write_file_atomic(spec.out / "hunt.md", hunt_markdown(spec, out));
   };
   std::size_t taken = 0;
@@ -612,7 +613,7 @@ HuntOutcome run_hunt(const HuntSpec& spec, const std::atomic<bool>* stop,
     out.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
     std::string kept;
     try {
-      write_file_atomic(spec.out / "hunt.json", hunt_json(spec, out).dump(2) + "\n");
+      write_file_atomic(spec.out / "hunt.json", json_text(hunt_json(spec, out), 2) + "\n");
       kept = std::to_string(out.failures.size()) + " failure" +
              (out.failures.size() == 1 ? "" : "s") + " found before it kept in " +
              (spec.out / "hunt.json").string();
@@ -717,7 +718,7 @@ HuntShard read_hunt_shard(const std::filesystem::path& dir) {
   h.dir = dir;
   const std::filesystem::path file = dir / "hunt.json";
   try {
-    h.report = json::parse(read_file(file));
+    h.report = read_json_file(file);
     for (const json& f : h.report.at("failures")) {
       HuntFailure x;
       x.run = f.at("run").get<std::size_t>();
@@ -769,8 +770,10 @@ void copy_scenario(const std::filesystem::path& from, const std::filesystem::pat
   if (rel.empty()) return;
   nlohmann::ordered_json j;
   try {
-    j = nlohmann::ordered_json::parse(read_file(from / rel));
-  } catch (const nlohmann::json::exception& e) {
+    const std::string text = read_file(from / rel, kMaxJsonFileBytes);
+    core::require_json_depth(text, (from / rel).string());
+    j = nlohmann::ordered_json::parse(text);
+  } catch (const std::exception& e) {  // unreadable, too deep, or not JSON
     throw UsageError("merge: " + (from / rel).string() + " is not a scenario (" + e.what() + ")");
   }
   if (j.contains("cut") && j["cut"].contains("from") && j["cut"]["from"].contains("replay")) {
@@ -779,7 +782,7 @@ void copy_scenario(const std::filesystem::path& from, const std::filesystem::pat
   }
   std::error_code ec;
   std::filesystem::create_directories((to / rel).parent_path(), ec);
-  write_file_atomic(to / rel, j.dump(2) + "\n");
+  write_file_atomic(to / rel, json_text(j, 2) + "\n");
 }
 
 }  // namespace
@@ -892,7 +895,7 @@ HuntOutcome merge_hunt(const std::vector<std::filesystem::path>& dirs,
     }
     o.groups[it->second].failures.push_back(index);
   }
-  write_file_atomic(out / "hunt.json", hunt_json(spec, o).dump(2) + "\n");
+  write_file_atomic(out / "hunt.json", json_text(hunt_json(spec, o), 2) + "\n");
   write_file_atomic(out / "hunt.md", hunt_markdown(spec, o));
   return o;
 }
@@ -905,7 +908,7 @@ namespace {
 // A shard's hunt.json, or null while there is none that can be read.
 json shard_report(const std::filesystem::path& shard) {
   try {
-    return json::parse(read_file(shard / "hunt.json"));
+    return read_json_file(shard / "hunt.json");
   } catch (const std::exception&) {
     return nullptr;
   }

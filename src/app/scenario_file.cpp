@@ -44,12 +44,12 @@ class Fields {
     }
     const json& v = j_.at(key);
     if (!v.is_number() || !std::isfinite(v.get<double>())) {
-      errors_.push_back(at(key) + ": expected a finite number, got " + v.dump());
+      errors_.push_back(at(key) + ": expected a finite number, got " + json_text(v));
       return fallback;
     }
     const double x = v.get<double>();
     if (!(x >= lo && x <= hi)) {
-      errors_.push_back(at(key) + ": " + v.dump() + " is out of range (" + fmt(lo) + " to " +
+      errors_.push_back(at(key) + ": " + json_text(v) + " is out of range (" + fmt(lo) + " to " +
                         fmt(hi) + ")");
       return fallback;
     }
@@ -63,14 +63,14 @@ class Fields {
     }
     const json& v = j_.at(key);
     if (!v.is_number_integer()) {
-      errors_.push_back(at(key) + ": expected an integer, got " + v.dump());
+      errors_.push_back(at(key) + ": expected an integer, got " + json_text(v));
       return fallback;
     }
     const bool in_range = v.is_number_unsigned()
                               ? v.get<std::uint64_t>() <= static_cast<std::uint64_t>(hi)
                               : v.get<std::int64_t>() >= lo && v.get<std::int64_t>() <= hi;
     if (!in_range) {
-      errors_.push_back(at(key) + ": " + v.dump() + " is out of range (" + std::to_string(lo) +
+      errors_.push_back(at(key) + ": " + json_text(v) + " is out of range (" + std::to_string(lo) +
                         " to " + std::to_string(hi) + ")");
       return fallback;
     }

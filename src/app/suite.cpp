@@ -369,7 +369,8 @@ SuiteOutcome run_suite(const SuiteSpec& spec, const std::atomic<bool>* stop,
     // The verdicts first; a failure to write one file does not keep the other from being
     // written, nor the outcome from being returned (and its table printed).
     const std::pair<const char*, std::string> outputs[] = {
-        {kVerdictsFile, suite_json(outcome).dump(2) + "\n"}, {kTableFile, suite_table(outcome)}};
+        {kVerdictsFile, json_text(suite_json(outcome), 2) + "\n"},
+        {kTableFile, suite_table(outcome)}};
     for (const auto& [name, text] : outputs) {
       try {
         write_file_atomic(*spec.out / name, text);

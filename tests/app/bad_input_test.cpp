@@ -76,6 +76,28 @@ TEST(BadInput, DeepJsonInAScenarioOrAConfigIsAnErrorNamingTheFile) {
   EXPECT_THAT(ok.err, Not(HasSubstr("nested deeper")));
 }
 
+TEST(BadInput, DeepJsonInABenchIsAnErrorNamingTheFileAndLine) {
+  const test::TempDir dir("overtake-bad-input");
+  const fs::path a = dir.path() / "a";
+  const Outcome bench = cli({"bench", "--policies", "walkthrough", "--seeds", "1-2", "--minutes",
+                             "0.05", "--traffic", "calm", "--quiet", "--out", a.string()});
+  ASSERT_EQ(bench.rc, kExitOk) << bench.err;
+  const fs::path b = dir.path() / "b";
+  fs::copy(a, b, fs::copy_options::recursive);
+  {
+    std::ofstream runs(b / "runs.jsonl", std::ios::app);
+    runs << deep("index") << "\n";
+  }
+  const Outcome rows = cli({"compare", a.string(), b.string()});
+  EXPECT_EQ(rows.rc, kExitFailure) << rows.err;
+  EXPECT_THAT(rows.err, AllOf(HasSubstr("runs.jsonl:3"), HasSubstr("nested deeper than 64")));
+  write(b / "bench.json", deep("minutes"));
+  const Outcome manifest = cli({"compare", a.string(), b.string()});
+  EXPECT_EQ(manifest.rc, kExitFailure) << manifest.err;
+  EXPECT_THAT(manifest.err,
+              AllOf(HasSubstr((b / "bench.json").string()), HasSubstr("nested deeper than 64")));
+}
+
 TEST(BadInput, AMapThatIsNotARegularFileIsRefusedAtOnce) {
   const test::TempDir dir("overtake-bad-input");
   const fs::path fifo = dir.path() / "map.fifo";
