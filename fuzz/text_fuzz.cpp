@@ -1,7 +1,8 @@
 // Text from outside that overtake checks before a library reads it, or writes into JSON: a
 // plugin's failure reason, a file name, any JSON text. Each property failing is a finding:
-// - core::valid_utf8 gives valid UTF-8, gives valid text back unchanged, and its JSON text (as
-//   app::json_text writes it) parses back to the same string;
+// - core::valid_utf8 gives valid UTF-8 and gives valid text back unchanged; the text as JSON
+//   (as app::json_text writes it, stray bytes as U+FFFD) parses back to valid UTF-8, the same
+//   text when it was valid;
 // - core::json_too_deep_at finds a `[` or `{` when it finds anything; when it finds nothing, a
 //   text that parses is a value no deeper than core::kMaxJsonDepth, and it writes and reads
 //   back as the same value.
@@ -44,7 +45,9 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   if (core::is_valid_utf8(text)) check(fixed == text);
   const std::string written =
       json(std::string(text)).dump(-1, ' ', false, json::error_handler_t::replace);
-  check(json::parse(written).get<std::string>() == fixed);
+  const std::string read_back = json::parse(written).get<std::string>();
+  check(core::is_valid_utf8(read_back));
+  if (core::is_valid_utf8(text)) check(read_back == text);
 
   if (const auto at = core::json_too_deep_at(text)) {
     check(*at < text.size() && (text[*at] == '[' || text[*at] == '{'));
