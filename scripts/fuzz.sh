@@ -16,7 +16,7 @@ set -euo pipefail
 
 root="$(cd "$(dirname "$0")/.." && pwd)"
 build="$root/build/fuzz"
-all_harnesses=(map config scenario replay codec view_request bench_rows checkpoint text)
+all_harnesses=(map config scenario replay codec view_request bench_rows checkpoint text bench_folder scenario_folder)
 
 mode="${1:-}"
 case "$mode" in

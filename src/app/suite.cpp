@@ -23,13 +23,6 @@ using nlohmann::json;
 
 constexpr int kMaxJobs = 256;
 
-/// The file names a suite writes into its --out.
-constexpr const char* kTableFile = "suite.md";
-constexpr const char* kVerdictsFile = "suite.json";
-/// The first line of every table a suite writes.
-constexpr std::string_view kTableHeader =
-    "| scenario | policy | result | incidents | collisions (at fault) | distance m | why |";
-
 /// Follows the ego's lane, and the distance it drove in the lead-in, through the frames of a
 /// run.
 class TraceWatch final : public sim::RunObserver {
@@ -62,46 +55,6 @@ class TraceWatch final : public sim::RunObserver {
   bool first_ = true;
 };
 
-/// A markdown table cell: a line break or a '|' in the text would end the row or the cell.
-std::string table_cell(std::string_view text) {
-  std::string out;
-  out.reserve(text.size());
-  for (std::size_t i = 0; i < text.size(); ++i) {
-    const char c = text[i];
-    if (c == '|') {
-      out += "\\|";
-    } else if (c == '\r' || c == '\n') {
-      if (c == '\r' && i + 1 < text.size() && text[i + 1] == '\n') ++i;
-      out += "<br>";
-    } else {
-      out += c;
-    }
-  }
-  return out;
-}
-
-/// True when `file` is a suite's verdicts (suite.json as run_suite writes it).
-bool is_suite_verdicts(const std::filesystem::path& file) {
-  try {
-    const json j = parse_json_text(read_file(file), file.string());
-    return j.is_object() && j.contains("verdicts") && j["verdicts"].is_array() &&
-           j.contains("passed") && j.contains("failed") && j.contains("interrupted");
-  } catch (const std::exception&) {
-    return false;
-  }
-}
-
-/// True when `file` is a suite's table (suite.md as run_suite writes it).
-bool is_suite_table(const std::filesystem::path& file) {
-  try {
-    const std::string text = read_file(file);
-    return text.compare(0, kTableHeader.size(), kTableHeader) == 0 &&
-           text.size() > kTableHeader.size() && text[kTableHeader.size()] == '\n';
-  } catch (const std::exception&) {
-    return false;
-  }
-}
-
 /// Refuses an --out that is the scenarios folder (its suite.json would be read as a scenario
 /// by the next run), or that holds a suite.md or suite.json overtake did not write.
 void check_out(const SuiteSpec& spec) {
@@ -109,11 +62,12 @@ void check_out(const SuiteSpec& spec) {
   const std::filesystem::path& out = *spec.out;
   if (same_file(out, spec.dir)) {
     throw UsageError("--out: " + out.string() + " is the scenarios folder; the suite's " +
-                     kVerdictsFile + " would be read as a scenario by the next run: write to " +
+                     kSuiteVerdictsFile +
+                     " would be read as a scenario by the next run: write to " +
                      "another folder (a subfolder of it is fine)");
   }
   const std::pair<const char*, bool (*)(const std::filesystem::path&)> outputs[] = {
-      {kTableFile, is_suite_table}, {kVerdictsFile, is_suite_verdicts}};
+      {kSuiteTableFile, is_suite_table}, {kSuiteVerdictsFile, is_suite_verdicts}};
   for (const auto& [name, ours] : outputs) {
     const std::filesystem::path file = out / name;
     std::error_code ec;
@@ -125,17 +79,6 @@ void check_out(const SuiteSpec& spec) {
                        "away, or give another --out");
     }
   }
-}
-
-/// Why `file` cannot be read as a scenario (it is not a regular file, or its status cannot be
-/// read: a dangling link, a loop of links); empty when it can be tried.
-std::string unreadable(const std::filesystem::path& file) {
-  std::error_code ec;
-  const auto st = std::filesystem::status(file, ec);
-  if (ec) return ec.message();
-  if (std::filesystem::is_directory(st)) return "a folder, not a file";
-  if (!std::filesystem::is_regular_file(st)) return "not a regular file";
-  return {};
 }
 
 std::string incident_text(const sim::Incident& i) {
@@ -242,24 +185,9 @@ SuiteOutcome run_suite(const SuiteSpec& spec, const std::atomic<bool>* stop,
   }
   check_out(spec);
   SuiteOutcome outcome;
-  // Every *.json entry is a scenario, whatever it is: one that cannot be read (a folder, a
-  // loop of links) fails its rows. A suite's own verdicts (suite.json) are not a scenario.
-  std::vector<std::filesystem::path> files;
-  std::filesystem::directory_iterator it(spec.dir, ec), end;
-  for (; !ec && it != end; it.increment(ec)) {
-    const std::filesystem::path& p = it->path();
-    if (p.extension() != ".json") continue;
-    if (p.filename() == kVerdictsFile && is_suite_verdicts(p)) {
-      outcome.skipped.push_back(p.filename().string());
-      continue;
-    }
-    files.push_back(p);
-  }
-  if (ec) throw UsageError("--scenarios: " + spec.dir.string() + ": " + ec.message());
-  if (files.empty()) {
-    throw UsageError("--scenarios: " + spec.dir.string() + " holds no scenario files (*.json)");
-  }
-  std::sort(files.begin(), files.end());
+  ScenarioFolder folder = list_scenario_folder(spec.dir);
+  std::vector<std::filesystem::path> files = std::move(folder.files);
+  outcome.skipped = std::move(folder.skipped);
   for (const auto& p : spec.policies) {
     DriveOptions o;
     o.policy = p;
@@ -291,7 +219,7 @@ SuiteOutcome run_suite(const SuiteSpec& spec, const std::atomic<bool>* stop,
     ScenarioVerdict v;
     v.file = files[job.file].filename().string();
     v.policy = job.policy;
-    if (const std::string why = unreadable(files[job.file]); !why.empty()) {
+    if (const std::string why = unreadable_scenario(files[job.file]); !why.empty()) {
       v.failures.push_back("cannot read: " + why);
       return std::optional<ScenarioVerdict>(std::move(v));
     }
@@ -369,8 +297,8 @@ SuiteOutcome run_suite(const SuiteSpec& spec, const std::atomic<bool>* stop,
     // The verdicts first; a failure to write one file does not keep the other from being
     // written, nor the outcome from being returned (and its table printed).
     const std::pair<const char*, std::string> outputs[] = {
-        {kVerdictsFile, json_text(suite_json(outcome), 2) + "\n"},
-        {kTableFile, suite_table(outcome)}};
+        {kSuiteVerdictsFile, json_text(suite_json(outcome), 2) + "\n"},
+        {kSuiteTableFile, suite_table(outcome)}};
     for (const auto& [name, text] : outputs) {
       try {
         write_file_atomic(*spec.out / name, text);
@@ -380,46 +308,6 @@ SuiteOutcome run_suite(const SuiteSpec& spec, const std::atomic<bool>* stop,
     }
   }
   return outcome;
-}
-
-std::string suite_table(const SuiteOutcome& o) {
-  std::ostringstream os;
-  os << kTableHeader << "\n"
-     << "|---|---|---|---:|---:|---:|---|\n";
-  for (const ScenarioVerdict& v : o.verdicts) {
-    std::string why;
-    for (const std::string& f : v.failures) why += (why.empty() ? "" : "; ") + f;
-    if (!v.replay.empty()) why += " (replay: " + v.replay + ")";
-    os << "| " << table_cell(v.file) << " | " << table_cell(v.policy) << " | "
-       << (v.pass ? "pass" : "**FAIL**") << " | " << v.incidents << " | " << v.collisions << " ("
-       << v.at_fault_collisions << ") | " << fixed_text(v.distance_m, 1) << " | " << table_cell(why)
-       << " |\n";
-  }
-  os << "\n"
-     << o.passed << " passed, " << o.failed << " failed"
-     << (o.interrupted ? " (interrupted: not every scenario ran)" : "") << "\n";
-  return os.str();
-}
-
-nlohmann::json suite_json(const SuiteOutcome& o) {
-  json rows = json::array();
-  for (const ScenarioVerdict& v : o.verdicts) {
-    rows.push_back({{"file", v.file},
-                    {"name", v.name},
-                    {"policy", v.policy},
-                    {"pass", v.pass},
-                    {"failures", v.failures},
-                    {"incidents", v.incidents},
-                    {"collisions", v.collisions},
-                    {"at_fault_collisions", v.at_fault_collisions},
-                    {"distance_m", v.distance_m},
-                    {"duration_s", v.duration_s},
-                    {"replay", v.replay}});
-  }
-  return {{"passed", o.passed},
-          {"failed", o.failed},
-          {"interrupted", o.interrupted},
-          {"verdicts", rows}};
 }
 
 }  // namespace overtake::app

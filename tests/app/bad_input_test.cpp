@@ -91,11 +91,26 @@ TEST(BadInput, DeepJsonInABenchIsAnErrorNamingTheFileAndLine) {
   const Outcome rows = cli({"compare", a.string(), b.string()});
   EXPECT_EQ(rows.rc, kExitFailure) << rows.err;
   EXPECT_THAT(rows.err, AllOf(HasSubstr("runs.jsonl:3"), HasSubstr("nested deeper than 64")));
+  // A runs.jsonl that is a FIFO would wait for a writer; /dev/zero would be one endless line.
+  fs::remove(b / "runs.jsonl");
+  ASSERT_EQ(::mkfifo((b / "runs.jsonl").c_str(), 0600), 0);
+  const Outcome fifo = cli({"compare", a.string(), b.string()});
+  EXPECT_EQ(fifo.rc, kExitFailure) << fifo.err;
+  EXPECT_THAT(fifo.err, HasSubstr("runs.jsonl: is a FIFO, not a regular file"));
   write(b / "bench.json", deep("minutes"));
   const Outcome manifest = cli({"compare", a.string(), b.string()});
   EXPECT_EQ(manifest.rc, kExitFailure) << manifest.err;
   EXPECT_THAT(manifest.err,
               AllOf(HasSubstr((b / "bench.json").string()), HasSubstr("nested deeper than 64")));
+}
+
+TEST(BadInput, ABenchOfMoreThanAMillionRunsIsRefusedBeforeItStarts) {
+  const test::TempDir dir("overtake-bad-input");
+  const Outcome o = cli({"bench", "--seeds", "1-1000000", "--traffic", "faithful,calm", "--minutes",
+                         "0.01", "--quiet", "--out", (dir.path() / "b").string()});
+  EXPECT_EQ(o.rc, kExitUsage) << o.err;
+  EXPECT_THAT(o.err, HasSubstr("make more than 1000000 runs"));
+  EXPECT_FALSE(fs::exists(dir.path() / "b" / "runs.jsonl"));
 }
 
 TEST(BadInput, AMapThatIsNotARegularFileIsRefusedAtOnce) {

@@ -25,6 +25,8 @@ namespace overtake::app {
 /// The files of a bench's output folder: every finished run, and what was run.
 inline constexpr const char* kBenchRunsFile = "runs.jsonl";
 inline constexpr const char* kBenchManifestFile = "bench.json";
+/// The most runs one bench holds: a million 30-minute runs are some 20 days of one core's time.
+inline constexpr std::size_t kMaxBenchRuns = 1'000'000;
 
 /// What to run.
 struct BenchSpec {
@@ -65,7 +67,8 @@ struct BenchCombo {
 [[nodiscard]] std::vector<std::uint64_t> parse_seed_list(const std::string& text);
 /// Parses "I/N" (1 <= I <= N). Throws UsageError naming --shard.
 [[nodiscard]] std::pair<int, int> parse_shard(const std::string& text);
-/// Every combination in the fixed order policy, traffic, seed.
+/// Every combination in the fixed order policy, traffic, seed. Throws UsageError when they are
+/// more than kMaxBenchRuns.
 [[nodiscard]] std::vector<BenchCombo> bench_combinations(const BenchSpec& spec);
 
 /// Progress of a bench: runs done of total, simulated metres so far, wall seconds elapsed.

@@ -11,6 +11,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include <nlohmann/json.hpp>
@@ -20,6 +21,13 @@
 #include "overtake/sim/scorecard.hpp"
 
 namespace overtake::app {
+
+/// The file names a suite writes into its --out.
+inline constexpr const char* kSuiteTableFile = "suite.md";
+inline constexpr const char* kSuiteVerdictsFile = "suite.json";
+/// The first line of every table a suite writes.
+inline constexpr std::string_view kSuiteTableHeader =
+    "| scenario | policy | result | incidents | collisions (at fault) | distance m | why |";
 
 struct SuiteSpec {
   std::filesystem::path dir;  ///< its *.json files, in name order (not recursive)
@@ -92,7 +100,22 @@ struct SuiteOutcome {
     const SuiteSpec& spec, const std::atomic<bool>* stop,
     const std::function<void(std::size_t done, std::size_t total)>& progress);
 
-/// The pass/fail table (markdown).
+/// The *.json entries of a suite's folder, in name order (not recursive), and the suite
+/// verdicts among them that are skipped.
+struct ScenarioFolder {
+  std::vector<std::filesystem::path> files;
+  std::vector<std::string> skipped;  ///< a suite's own suite.json: not a scenario
+};
+/// Lists a scenarios folder. Throws UsageError when it cannot be listed or holds no *.json.
+[[nodiscard]] ScenarioFolder list_scenario_folder(const std::filesystem::path& dir);
+/// Why `file` cannot be read as a scenario (a folder, not a regular file, a dangling link, a
+/// loop of links), or empty when it can be tried.
+[[nodiscard]] std::string unreadable_scenario(const std::filesystem::path& file);
+/// Whether `file` is a suite's verdicts / a suite's table, as run_suite writes them.
+[[nodiscard]] bool is_suite_verdicts(const std::filesystem::path& file);
+[[nodiscard]] bool is_suite_table(const std::filesystem::path& file);
+
+/// The pass/fail table (markdown): one row a verdict, its cells escaped.
 [[nodiscard]] std::string suite_table(const SuiteOutcome& outcome);
 /// Every verdict as JSON.
 [[nodiscard]] nlohmann::json suite_json(const SuiteOutcome& outcome);
