@@ -87,7 +87,10 @@ eval::BenchData load_bench_for_compare(const std::filesystem::path& dir,
     }
   }
   if (b.runs.empty()) throw std::runtime_error(runs_path.string() + " holds no finished run");
-  const std::size_t total = b.manifest.value("combinations", std::size_t{0});
+  const json& combinations =
+      b.manifest.contains("combinations") ? b.manifest["combinations"] : json();
+  const std::size_t total =
+      combinations.is_number_unsigned() ? combinations.get<std::size_t>() : std::size_t{0};
   if (total > b.runs.size() && b.manifest.value("shard", std::string("1/1")) == "1/1") {
     notes.push_back(dir.string() + " is unfinished: " + std::to_string(b.runs.size()) + " of " +
                     std::to_string(total) + " runs");

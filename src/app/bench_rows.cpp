@@ -4,6 +4,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <limits>
 #include <map>
 #include <stdexcept>
 #include <string>
@@ -49,13 +50,24 @@ ManifestSweep sweep_of(const json& manifest) {
   BenchSpec spec;
   spec.policies = manifest.at("policies").get<std::vector<std::string>>();
   spec.traffic = manifest.at("traffic").get<std::vector<std::string>>();
-  spec.seeds = manifest.at("seeds").get<std::vector<std::uint64_t>>();
+  // Whole numbers that fit, or the manifest is refused: a seed of 2.8e76 is read as a double,
+  // and converting it to an integer would be undefined (found by the bench_folder harness).
+  if (!manifest.at("seeds").is_array()) throw std::invalid_argument("its seeds are not a list");
+  for (const json& seed : manifest.at("seeds")) {
+    if (!seed.is_number_unsigned()) {
+      throw std::invalid_argument("a seed is " + json_text(seed) +
+                                  ", not a whole number from 0 to " +
+                                  std::to_string(std::numeric_limits<std::uint64_t>::max()));
+    }
+    spec.seeds.push_back(seed.get<std::uint64_t>());
+  }
   m.all = bench_combinations(spec);
   if (manifest.contains("shard")) {
     std::tie(m.shard_index, m.shard_count) = parse_shard(manifest["shard"].get<std::string>());
   }
   if (manifest.contains("combinations") &&
-      manifest["combinations"].get<std::size_t>() != m.all.size()) {
+      (!manifest["combinations"].is_number_unsigned() ||
+       manifest["combinations"].get<std::size_t>() != m.all.size())) {
     throw std::invalid_argument("its combinations (" + json_text(manifest["combinations"]) +
                                 ") are not its policies x traffic x seeds (" +
                                 std::to_string(m.all.size()) + ")");

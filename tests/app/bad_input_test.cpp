@@ -97,6 +97,17 @@ TEST(BadInput, DeepJsonInABenchIsAnErrorNamingTheFileAndLine) {
   const Outcome fifo = cli({"compare", a.string(), b.string()});
   EXPECT_EQ(fifo.rc, kExitFailure) << fifo.err;
   EXPECT_THAT(fifo.err, HasSubstr("runs.jsonl: is a FIFO, not a regular file"));
+  // A seed beyond every integer is read as a double: it was converted to one regardless
+  // (undefined behaviour, found by the bench_folder fuzz harness).
+  fs::remove(b / "runs.jsonl");
+  fs::copy_file(a / "runs.jsonl", b / "runs.jsonl");
+  json with_seeds = json::parse(read_file(a / "bench.json"));
+  with_seeds["seeds"] = json::parse("[1, 27777777777777777777777777777777777777777777777777]");
+  write(b / "bench.json", with_seeds.dump());
+  const Outcome seed = cli({"compare", a.string(), b.string()});
+  EXPECT_EQ(seed.rc, kExitFailure) << seed.err;
+  EXPECT_THAT(seed.err, AllOf(HasSubstr("bench.json is not a bench's manifest"),
+                              HasSubstr("a seed is 2.7777777777777777e+49, not a whole number")));
   write(b / "bench.json", deep("minutes"));
   const Outcome manifest = cli({"compare", a.string(), b.string()});
   EXPECT_EQ(manifest.rc, kExitFailure) << manifest.err;
