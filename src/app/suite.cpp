@@ -79,6 +79,21 @@ void check_out(const SuiteSpec& spec) {
                        "away, or give another --out");
     }
   }
+  // Its replays and logs are a suite's when its verdicts are there: otherwise a replays/ or
+  // logs/ folder with anything in it is someone else's, and a failed run's files would be
+  // written over theirs.
+  std::error_code ec;
+  if (std::filesystem::exists(out / kSuiteVerdictsFile, ec)) return;
+  for (const char* folder : {"replays", "logs"}) {
+    const std::filesystem::path dir = out / folder;
+    if (std::filesystem::exists(std::filesystem::symlink_status(dir, ec)) &&
+        !std::filesystem::is_empty(dir, ec)) {
+      throw UsageError("--out: " + dir.string() +
+                       " holds files no overtake suite wrote there (no suite.json beside it), "
+                       "which a failed run's files would replace; move it away, or give "
+                       "another --out");
+    }
+  }
 }
 
 std::string incident_text(const sim::Incident& i) {

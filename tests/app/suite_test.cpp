@@ -313,6 +313,13 @@ TEST(ScenarioSuite, WritesOnlyWhereItMay) {
     EXPECT_EQ(read_file(other / name), "{\"mine\": true}\n");
     EXPECT_EQ(fs::exists(other / "suite.json"), std::string(name) == "suite.json");
   }
+  // Nor are the files of a replays/ or logs/ folder beside no suite's verdicts.
+  const fs::path theirs = dir.path() / "theirs";
+  fs::create_directories(theirs / "replays");
+  std::ofstream(theirs / "replays" / "a-reference.otr") << "my own replay\n";
+  EXPECT_THAT(error_of(theirs), HasSubstr("--out: " + (theirs / "replays").string() +
+                                          " holds files no overtake suite wrote there"));
+  EXPECT_EQ(read_file(theirs / "replays" / "a-reference.otr"), "my own replay\n");
   // A suite's verdicts in the scenarios folder (left by an older overtake) are not a scenario.
   fs::copy_file(scenarios / "out" / "suite.json", scenarios / "suite.json");
   spec.out.reset();
