@@ -241,6 +241,11 @@ void add_run_flags(CLI::App& cmd, RunFlags& f) {
          "Scenario instead of random traffic: scripted (ego start, cars, timed events) or cut\n"
          "from a recorded run by `overtake cut` (docs/scenarios.md)")
       ->check(CLI::ExistingFile);
+  cmd.add_flag(
+      "!--no-warm-up", f.opts.warm_up,
+      "A scenario cut from a run of a planner from outside carries a warm-up: what the planner\n"
+      "was told before the start, played to it first so that it comes in step with the run;\n"
+      "with this flag it starts afresh at the scenario's start");
   f.minutes = cmd.add_option("--minutes", f.opts.minutes,
                              "Simulated minutes to drive (default 30, or the scenario's duration)");
   cmd.add_option("--seed", f.opts.seed, "Seed of the traffic and latency draws (0 to 2^64 - 1)")

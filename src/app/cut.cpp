@@ -4,6 +4,7 @@
 #include <cmath>
 #include <iostream>
 #include <sstream>
+#include <unordered_map>
 
 #include <nlohmann/json.hpp>
 
@@ -11,6 +12,7 @@
 #include "overtake/app/commands.hpp"
 #include "overtake/app/config.hpp"
 #include "overtake/app/io.hpp"
+#include "overtake/app/planners.hpp"
 #include "overtake/app/report.hpp"
 #include "overtake/app/scenario_file.hpp"
 #include "overtake/core/hash.hpp"
@@ -38,6 +40,23 @@ void check_cut_window(double before_s, double after_s, double lead_in_s) {
                      fixed_text(after_s, 2) + " s leave " + fixed_text(before_s + after_s, 2) +
                      " s to judge; together they must make at least " +
                      fixed_text(kMinCutJudgedS, 0) + " s (the lead-in is not judged)");
+  }
+}
+
+void parse_warm_up(const std::string& text, double& seconds, bool& all) {
+  all = text == "all";
+  seconds = 0.0;
+  if (all) return;
+  std::size_t used = 0;
+  try {
+    seconds = std::stod(text, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  if (used == 0 || used != text.size() || !std::isfinite(seconds) || seconds < 0.0 ||
+      seconds > kMaxCutWindowS) {
+    throw UsageError("--warm-up: '" + text + "' is neither a time from 0 to " +
+                     fixed_text(kMaxCutWindowS, 0) + " s nor all");
   }
 }
 
@@ -185,6 +204,16 @@ std::optional<int> fixed_steps_per_call(const replay::Replay& r) {
   return std::nullopt;
 }
 
+/// How the run's planner is brought on a command line, from its report's provenance.
+PlannerCall run_planner(const replay::Replay& r, const std::string& policy) {
+  try {
+    const nlohmann::json j = nlohmann::json::parse(r.end_json);
+    return call_from_description(policy, j.at("config").value("planner", nlohmann::json()));
+  } catch (const std::exception&) {
+    return call_from_description(policy, nlohmann::json());
+  }
+}
+
 std::string map_reference(const std::optional<std::filesystem::path>& map,
                           const std::filesystem::path& out) {
   if (!map) return {};
@@ -241,23 +270,40 @@ CutResult cut_replay(const CutOptions& opts) {
   }
   result.incident = incident_near(r, opts.at_s);
 
-  // The last checkpoint at or before the start.
-  const replay::ReplayCheckpoint* from = nullptr;
-  for (const replay::ReplayCheckpoint& c : r.checkpoints) {
-    if (c.t_s <= result.asked_start_s + kEps) from = &c;
+  // What the run's planner answered, bit for bit, by the step it was told at (a run of a
+  // planner from outside recorded in lock-step carries them).
+  std::unordered_map<long, const std::vector<core::Vec2>*> answers;
+  bool exact_answers = !r.paths.empty();
+  for (const replay::ReplayPath& p : r.paths) {
+    if (!p.has_exact) {
+      exact_answers = false;
+      break;
+    }
+    answers[p.step] = &p.exact;
   }
-  if (!from) {
-    throw ConfigError(name + ": no checkpoint at or before t " +
-                      fixed_text(result.asked_start_s, 2) + " s (the first is at " +
-                      fixed_text(r.checkpoints.front().t_s, 2) + " s)");
-  }
-  sim::Checkpoint cp;
-  try {
-    cp =
-        sim::decode_checkpoint(from->bytes, name + ": checkpoint at t " + fixed_text(from->t_s, 2));
-  } catch (const core::StateError& e) {
-    throw ConfigError(e.what());
-  }
+  if (!exact_answers) answers.clear();
+  const bool warm_up = opts.warm_up_all || opts.warm_up_s > 0.0;
+  const double warm_start_t =
+      opts.warm_up_all ? first_t : std::max(first_t, result.asked_start_s - opts.warm_up_s);
+
+  // The last checkpoint at or before the start (or the warm-up's start).
+  const auto checkpoint_before = [&](double t) {
+    const replay::ReplayCheckpoint* from = nullptr;
+    for (const replay::ReplayCheckpoint& c : r.checkpoints) {
+      if (c.t_s <= t + kEps) from = &c;
+    }
+    if (!from) {
+      throw ConfigError(name + ": no checkpoint at or before t " + fixed_text(t, 2) +
+                        " s (the first is at " + fixed_text(r.checkpoints.front().t_s, 2) + " s)");
+    }
+    try {
+      return sim::decode_checkpoint(from->bytes,
+                                    name + ": checkpoint at t " + fixed_text(from->t_s, 2));
+    } catch (const core::StateError& e) {
+      throw ConfigError(e.what());
+    }
+  };
+  sim::Checkpoint cp = checkpoint_before(result.asked_start_s);
   const auto profile = sim::parse_traffic_profile(cp.info.traffic);
   if (!profile)
     throw ConfigError(name + ": a run of " + cp.info.traffic + " traffic cannot be cut");
@@ -277,20 +323,30 @@ CutResult cut_replay(const CutOptions& opts) {
   const Config config = load_config(opts.config);
   const bool same_config = config_hash(config) == cp.info.config_hash;
 
-  sim::Checkpoint start = cp;
-  sim::RecordedTraffic recorded;
   auto policy = planner::make_policy(cp.info.policy, track->line, config.planner);
   std::string why_not_exact;
-  if (!policy) {
+  if (!policy && !exact_answers) {
     why_not_exact = "the run's planner (" + cp.info.policy +
-                    ") is not a built-in policy, so the run cannot be driven on from the "
-                    "checkpoint";
+                    ") is not a built-in policy and the replay does not carry its exact answers "
+                    "(recorded before replays kept them, or in real time), so the run cannot be "
+                    "driven on from the checkpoint";
   } else if (!same_config) {
     why_not_exact = "the parameters differ from the run's (config hash " + config_hash(config) +
                     ", the run's " + cp.info.config_hash + ")";
   }
+  // A planner from outside, driven on with its recorded answers: from the checkpoint before the
+  // warm-up, whose cycles are kept.
+  const bool keep_warm_up = why_not_exact.empty() && !policy && warm_up;
+  if (keep_warm_up && warm_start_t + kEps < cp.info.t_s) cp = checkpoint_before(warm_start_t);
+
+  sim::Checkpoint start = cp;
+  sim::RecordedTraffic recorded;
+  sim::WarmUp warm;
+  warm.in_step_cycles = opts.in_step_cycles;
+  warm.from_run_start = opts.warm_up_all;
   if (why_not_exact.empty()) {
-    // Drive the run on from the checkpoint with its own policy, to the exact start.
+    // Drive the run on from the checkpoint with its own policy (or its recorded answers), to
+    // the exact start.
     sim::World world(track->map, track->line, config.world, *profile, cp.info.seed);
     world.keep_moved_cars(true);
     Redrive watch(world, r);
@@ -298,18 +354,34 @@ CutResult cut_replay(const CutOptions& opts) {
     ro.restore = cp.run;
     ro.observer = &watch;
     ro.steps_per_call = fixed_steps_per_call(r);
+    const auto plan = [&](const core::Telemetry& t) {
+      if (policy) return policy->plan(t);
+      const auto it = answers.find(world.steps());
+      if (it == answers.end()) {
+        throw ConfigError(name + ": the replay holds no answer of the planner at t " +
+                          fixed_text(world.time_s(), 2) + " s");
+      }
+      return core::normal_plan(*it->second);
+    };
+    bool warming = keep_warm_up;
     try {
-      (void)planner::restore_policy_state(*policy, cp.planner);
+      if (policy) (void)planner::restore_policy_state(*policy, cp.planner);
       sim::Stepper run(world, ro);
       const auto cycle = [&] {
-        run.apply(policy->plan(run.telemetry()), 0.0);
+        core::Telemetry told = run.telemetry();
+        core::PlanResult answer = plan(told);
+        if (warming && world.time_s() + kEps >= warm_start_t) {
+          warm.cycles.push_back({world.steps(), std::move(told), answer.path});
+        }
+        run.apply(std::move(answer), 0.0);
         run.step_one_call();
       };
       while (!run.finished() && world.time_s() + kEps < result.asked_start_s) cycle();
+      warming = false;
       start.info.step = world.steps();
       start.info.t_s = world.time_s();
       start.run = run.save();
-      start.planner = planner::save_policy_state(*policy);
+      start.planner = policy ? planner::save_policy_state(*policy) : std::string();
       if (opts.replayed) {
         watch.start_recording();
         while (!run.finished() && world.steps() < end_step) cycle();
@@ -321,22 +393,39 @@ CutResult cut_replay(const CutOptions& opts) {
     if (watch.diverged()) {
       why_not_exact = "driven on from the checkpoint, the run does not replay the same (" +
                       *watch.diverged() + "): it was recorded by another build";
+      cp = checkpoint_before(result.asked_start_s);
       start = cp;
       recorded.clear();
+      warm.cycles.clear();
     } else {
       result.exact_start = true;
+      result.has_warm_up = keep_warm_up;
     }
   }
   if (!result.exact_start && opts.replayed) {
     recorded = bodies_from_frames(r, cp.info.step, end_step, track->map, config.road);
   }
-  result.planner_state = !start.planner.empty()
-                             ? std::string("restored")
-                             : "the planner starts afresh: its state is not in the checkpoint (" +
-                                   cp.info.policy + " keeps state overtake cannot see)";
+  if (!start.planner.empty()) {
+    result.planner_state = "restored";
+  } else if (result.has_warm_up) {
+    result.warm_up_cycles = warm.cycles.size();
+    result.warm_up_start_s = warm.cycles.empty()
+                                 ? start.info.t_s
+                                 : static_cast<double>(warm.cycles.front().step) * r.header.step_s;
+    result.planner_state = "brought in step by the warm-up: the " +
+                           std::to_string(warm.cycles.size()) + " cycles it was told from t " +
+                           fixed_text(result.warm_up_start_s, 2) +
+                           " s are played to it before the start";
+  } else {
+    result.planner_state = "the planner starts afresh: its state is not in the checkpoint (" +
+                           cp.info.policy + " keeps state overtake cannot see)";
+    if (why_not_exact.empty() && !policy) result.planner_state += "; no warm-up (--warm-up 0)";
+  }
   if (!why_not_exact.empty()) result.planner_state += "; " + why_not_exact;
   result.start_s = start.info.t_s;
   result.policy = cp.info.policy;
+  result.drive_command = planner_command_line(run_planner(r, cp.info.policy)) + " --scenario " +
+                         shell_quote(opts.out.string());
   result.end_s = std::max(result.start_s, end_t);
 
   const std::string policy_name = cp.info.policy.empty() ? "the planner" : cp.info.policy;
@@ -402,6 +491,20 @@ CutResult cut_replay(const CutOptions& opts) {
     check_size(traffic, "replayed traffic");
     cut["recorded_traffic"] = pack_blob(traffic);
   }
+  if (result.has_warm_up) {
+    const std::string told = sim::encode_warm_up(warm);
+    if (told.size() > kMaxWarmUpBytes) {
+      throw UsageError("the warm-up from t " + fixed_text(result.warm_up_start_s, 2) + " s is " +
+                       std::to_string(told.size() >> 20U) + " MB, more than the " +
+                       std::to_string(kMaxWarmUpBytes >> 20U) +
+                       " MB a scenario may carry; give a shorter --warm-up");
+    }
+    cut["warm_up"] = {{"start_s", result.warm_up_start_s},
+                      {"cycles", warm.cycles.size()},
+                      {"in_step_cycles", warm.in_step_cycles},
+                      {"from_run_start", warm.from_run_start},
+                      {"telemetry", pack_blob(told)}};
+  }
   j["cut"] = std::move(cut);
   const std::string text = json_text(j, 2) + "\n";
   result.file_bytes = text.size();
@@ -415,6 +518,7 @@ Subcommand register_cut(CLI::App& app) {
     std::string traffic = "reactive";
     std::string expect;
     std::string config, map;
+    std::string warm_up = fixed_text(kDefaultWarmUpS, 0);
     bool quiet = false;
   };
   auto st = std::make_shared<State>();
@@ -436,6 +540,12 @@ Subcommand register_cut(CLI::App& app) {
   cmd->add_option("--lead-in", st->o.lead_in_s,
                   "Start this many seconds earlier still, for a planner that keeps its own\n"
                   "state (a target speed starting at 0) to settle; not judged")
+      ->capture_default_str();
+  cmd->add_option("--warm-up", st->warm_up,
+                  "For a run of a planner from outside (a program, a plugin, Python): the\n"
+                  "seconds before the start whose telemetry the scenario carries, played to the\n"
+                  "planner before it drives so that it comes in step; `all`: from the run's first\n"
+                  "cycle; 0: none")
       ->capture_default_str();
   cmd->add_option("--traffic", st->traffic,
                   "reactive: the cars start from their recorded state and keep driving by\n"
@@ -459,6 +569,7 @@ Subcommand register_cut(CLI::App& app) {
               throw UsageError("--traffic: '" + st->traffic + "' is neither reactive nor replayed");
             }
             o.replayed = st->traffic == "replayed";
+            parse_warm_up(st->warm_up, o.warm_up_s, o.warm_up_all);
             if (!st->config.empty()) o.config = st->config;
             if (!st->map.empty()) o.map = st->map;
             if (!st->expect.empty()) {
@@ -478,8 +589,7 @@ Subcommand register_cut(CLI::App& app) {
               }
               std::cout << "  planner: " << res.planner_state << "\n";
               if (!res.incident.empty()) std::cout << "  near the moment: " << res.incident << "\n";
-              std::cout << "drive it: overtake drive --scenario " << o.out.string() << " --policy "
-                        << (res.policy.empty() ? "POLICY" : res.policy) << "\n";
+              std::cout << "drive it: " << res.drive_command << "\n";
             }
             return 0;
           }};

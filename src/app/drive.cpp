@@ -14,6 +14,7 @@
 #include "overtake/planner/policy.hpp"
 #include "overtake/sim/checkpoint.hpp"
 #include "overtake/sim/recorded_traffic.hpp"
+#include "overtake/sim/warm_up.hpp"
 #include "overtake/sim/world.hpp"
 
 namespace overtake::app {
@@ -37,6 +38,7 @@ struct CutStart {
   sim::Checkpoint checkpoint;
   sim::TrafficProfile profile = sim::TrafficProfile::faithful;
   std::optional<sim::RecordedTraffic> recorded;
+  std::optional<sim::WarmUp> warm_up;
 };
 
 CutStart prepare_cut(const Track& track, const Config& config, const sim::Scenario& scenario) {
@@ -49,6 +51,13 @@ CutStart prepare_cut(const Track& track, const Config& config, const sim::Scenar
       out.recorded =
           sim::decode_recorded_traffic(cut.recorded, name + ": cut.recorded_traffic",
                                        config.road.lane_count, track.map.waypoints.size());
+    }
+    if (!cut.warm_up.empty()) {
+      out.warm_up = sim::decode_warm_up(cut.warm_up, name + ": cut.warm_up.telemetry");
+      if (static_cast<long>(out.warm_up->cycles.size()) != cut.warm_up_cycles) {
+        throw ConfigError(name + ": cut.warm_up.cycles says " + std::to_string(cut.warm_up_cycles) +
+                          ", its telemetry holds " + std::to_string(out.warm_up->cycles.size()));
+      }
     }
   } catch (const core::StateError& e) {
     throw ConfigError(e.what());
@@ -205,6 +214,14 @@ DriveResult drive_on(const Track& track, const Config& config, const DriveOption
   run.observer = observers.get();
 
   const PlannerEntry* entry = opts.external ? nullptr : catalog_of(opts).find(opts.policy);
+  // A planner from outside keeps state no checkpoint holds. Driven in lock-step, its answers
+  // are recorded exactly (a cut of the run drives the world on with them), and a cut
+  // scenario's warm-up is played to it before it drives.
+  const bool outside = opts.external || entry->kind != PlannerKind::builtin;
+  const bool lock_step =
+      opts.external ? opts.external->lock_step : !(entry->program && entry->program->realtime);
+  if (writer && outside && lock_step) writer->set_exact_paths(true);
+  if (cut && cut->warm_up && outside && lock_step && opts.warm_up) run.warm_up = &*cut->warm_up;
   if (opts.external) {
     result.report = opts.external->loop(world, run);
   } else if (entry->program) {

@@ -23,6 +23,7 @@
 #include "overtake/app/interrupt.hpp"
 #include "overtake/app/io.hpp"
 #include "overtake/app/report.hpp"
+#include "overtake/app/reproduce.hpp"
 #include "overtake/app/slurm.hpp"
 #include "overtake/core/hash.hpp"
 #include "overtake/core/road.hpp"
@@ -143,20 +144,8 @@ std::vector<std::string> map_tags(const std::vector<std::optional<std::filesyste
 /// for a planner program.
 std::string planner_command(const HuntSpec& spec) {
   const PlannerEntry* e = spec.planners ? spec.planners->find(spec.policy) : nullptr;
-  const std::string named = e ? shell_quote(e->name + "=" + e->source) : std::string();
-  if (!e || e->kind == PlannerKind::builtin) return "overtake drive --policy " + spec.policy;
-  switch (e->kind) {
-    case PlannerKind::plugin:
-      return "overtake drive --policy-lib " + named;
-    case PlannerKind::python:
-      return "overtake drive --policy-py " + named;
-    case PlannerKind::program:
-      return "overtake sim --planner-cmd " + shell_quote(e->source) + " --planner-name " +
-             shell_quote(e->name);
-    case PlannerKind::builtin:
-      break;
-  }
-  return "overtake drive --policy " + spec.policy;
+  if (e) return planner_command_line(call_of(*e));
+  return planner_command_line({PlannerKind::builtin, spec.policy, {}, {}, 4567});
 }
 
 std::string rerun_command(const HuntSpec& spec, const Combo& c, const std::string& replay) {
@@ -271,6 +260,7 @@ json hunt_sweep(const HuntSpec& spec, const Config& config) {
           {"maps", maps},
           {"first_seed", spec.first_seed},
           {"before_s", spec.before_s},
+          {"warm_up", spec.warm_up_all ? json("all") : json(spec.warm_up_s)},
           {"after_s", spec.after_s},
           {"params_hash", config_hash(config)},
           {"shards", spec.shard_count}};
@@ -356,6 +346,38 @@ void check_hunt_spec(const HuntSpec& spec) {
   (void)load_config(spec.config);
   (void)load_hunt_tracks(spec);
 }
+
+namespace {
+
+/// Drives a group's two scenarios at once with the hunt's planner: do they repeat the failure
+/// at its step? When one does not, the reactive one is driven a second time: a planner that
+/// answers differently when told the same is named.
+void check_group(const HuntSpec& spec, const Track& track, const Config& config,
+                 const FailureMark& mark, HuntGroup& g, const std::atomic<bool>* stop) {
+  DriveOptions base;
+  base.policy = spec.policy;
+  base.planners = spec.planners;
+  const auto log_of = [&](const std::string& scenario, const char* what) {
+    return spec.out / "logs" /
+           (std::filesystem::path(scenario).stem().string() + "." + what + ".log");
+  };
+  base.planner_log = log_of(g.reactive, "check");
+  const ReproCheck reactive =
+      check_reproduction(track, config, base, spec.out / g.reactive, mark, stop);
+  base.planner_log = log_of(g.replayed, "check");
+  const ReproCheck replayed =
+      check_reproduction(track, config, base, spec.out / g.replayed, mark, stop);
+  g.reproduces_reactive = reactive.text;
+  g.reproduces_replayed = replayed.text;
+  g.reproduced = reactive.reproduced && replayed.reproduced;
+  if (g.reproduced || reactive.stopped || replayed.stopped) return;
+  base.planner_log = log_of(g.reactive, "again");
+  const ReproCheck again =
+      check_reproduction(track, config, base, spec.out / g.reactive, mark, stop);
+  if (!again.stopped) g.nondeterministic = drives_differ(reactive.report, again.report);
+}
+
+}  // namespace
 
 HuntOutcome run_hunt(const HuntSpec& spec, const std::atomic<bool>* stop,
                      const std::function<void(const HuntProgress&)>& progress) {
@@ -517,7 +539,8 @@ HuntOutcome run_hunt(const HuntSpec& spec, const std::atomic<bool>* stop,
       std::vector<const sim::Incident*> failures;
       for (const sim::Incident& i : found) failures.push_back(&i);
       if (planner_failed) failures.push_back(nullptr);
-      std::vector<std::size_t> new_groups;  // their scenarios are cut once the run is written
+      std::vector<std::size_t> new_groups;       // their scenarios are cut once the run is written
+      std::map<std::size_t, FailureMark> marks;  // each new group's first failure
       for (const sim::Incident* i : failures) {
         HuntFailure f;
         f.run = k;
@@ -543,6 +566,10 @@ HuntOutcome run_hunt(const HuntSpec& spec, const std::atomic<bool>* stop,
           g.situation = f.situation;
           g.repro = f.rerun;  // until its scenario is cut
           g.cut_error = "not cut yet";
+          FailureMark mark;
+          mark.t_s = f.t_s;
+          if (i) mark.incident = *i;
+          marks[out.groups.size()] = mark;
           new_groups.push_back(out.groups.size());
           out.groups.push_back(std::move(g));
         }
@@ -564,6 +591,8 @@ HuntOutcome run_hunt(const HuntSpec& spec, const std::atomic<bool>* stop,
           co.before_s = spec.before_s;
           co.after_s = spec.after_s;
           co.replayed = replayed;
+          co.warm_up_s = spec.warm_up_s;
+          co.warm_up_all = spec.warm_up_all;
           co.config = spec.config;
           co.map = c.map;
           co.out = spec.out / (stem + (replayed ? ".replayed.json" : ".reactive.json"));
@@ -582,8 +611,9 @@ HuntOutcome run_hunt(const HuntSpec& spec, const std::atomic<bool>* stop,
         if (g.cut_error.empty()) {
           g.reactive = stem + ".reactive.json";
           g.replayed = stem + ".replayed.json";
-          g.repro = "overtake drive --scenario " + (spec.out / g.reactive).string() + " --policy " +
-                    spec.policy;
+          g.repro = planner_command(spec) + " --scenario " +
+                    shell_quote((spec.out / g.reactive).string());
+          check_group(spec, *tracks[c.map_index], config, marks.at(gi), g, &halt);
         } else {
           std::filesystem::remove(spec.out / (stem + ".reactive.json"), ec);
         }
@@ -644,14 +674,26 @@ std::string hunt_markdown(const HuntSpec& spec, const HuntOutcome& o) {
      << (o.error.empty() ? "" : " (stopped by an error: " + o.error + ")") << ": "
      << o.failures.size() << (o.failures.size() == 1 ? " failure" : " failures") << " in "
      << o.groups.size() << (o.groups.size() == 1 ? " situation" : " situations") << ".\n\n";
-  os << "| situation | failures | scenario (reactive / replayed) | reproduce "
-        "|\n|---|---:|---|---|\n";
+  for (const HuntGroup& g : o.groups) {
+    if (g.nondeterministic.empty()) continue;
+    os << "**The planner is not deterministic**: " << g.nondeterministic << " (" << g.reactive
+       << "). Its cut scenarios cannot be trusted to repeat its failures.\n\n";
+    break;
+  }
+  os << "| situation | failures | scenario (reactive / replayed) | repeats the failure (reactive "
+        "/ replayed) | reproduce |\n|---|---:|---|---|---|\n";
   for (const HuntGroup& g : o.groups) {
     const std::string scenarios = g.reactive.empty() && g.replayed.empty()
                                       ? "could not cut: " + g.cut_error
                                       : g.reactive + " / " + g.replayed;
-    os << "| " << g.situation << " | " << g.failures.size() << " | " << scenarios << " | `"
-       << g.repro << "` |\n";
+    const std::string repeats =
+        g.reproduces_reactive.empty()
+            ? std::string("-")
+            : g.reproduces_reactive + " / " + g.reproduces_replayed +
+                  (g.nondeterministic.empty() ? std::string()
+                                              : "; NOT DETERMINISTIC: " + g.nondeterministic);
+    os << "| " << g.situation << " | " << g.failures.size() << " | " << scenarios << " | "
+       << repeats << " | `" << g.repro << "` |\n";
   }
   os << "\n| # | t s | what | seed | traffic | map | replay | run again "
         "|\n|---:|---:|---|---:|---|---|---|---|\n";
@@ -678,12 +720,17 @@ nlohmann::json hunt_json(const HuntSpec& spec, const HuntOutcome& o) {
   }
   json groups = json::array();
   for (const HuntGroup& g : o.groups) {
-    groups.push_back({{"situation", g.situation},
-                      {"failures", g.failures},
-                      {"reactive", g.reactive},
-                      {"replayed", g.replayed},
-                      {"cut_error", g.cut_error},
-                      {"repro", g.repro}});
+    groups.push_back(
+        {{"situation", g.situation},
+         {"failures", g.failures},
+         {"reactive", g.reactive},
+         {"replayed", g.replayed},
+         {"cut_error", g.cut_error},
+         {"reproduces", {{"reactive", g.reproduces_reactive}, {"replayed", g.reproduces_replayed}}},
+         {"reproduced", g.reproduced},
+         {"nondeterministic",
+          g.nondeterministic.empty() ? json(nullptr) : json(g.nondeterministic)},
+         {"repro", g.repro}});
   }
   json j = {{"policy", spec.policy},
             {"minutes", spec.minutes},
@@ -738,6 +785,13 @@ HuntShard read_hunt_shard(const std::filesystem::path& dir) {
       x.reactive = g.at("reactive").get<std::string>();
       x.replayed = g.at("replayed").get<std::string>();
       x.cut_error = g.at("cut_error").get<std::string>();
+      if (g.contains("reproduces")) {
+        x.reproduces_reactive = g.at("reproduces").at("reactive").get<std::string>();
+        x.reproduces_replayed = g.at("reproduces").at("replayed").get<std::string>();
+        x.reproduced = g.at("reproduced").get<bool>();
+        if (g.at("nondeterministic").is_string())
+          x.nondeterministic = g.at("nondeterministic").get<std::string>();
+      }
       h.groups.emplace(x.situation, std::move(x));
     }
     (void)h.report.at("shard").at("sweep");
@@ -889,8 +943,9 @@ HuntOutcome merge_hunt(const std::vector<std::filesystem::path>& dirs,
       copy_scenario(f.from->dir, out, group.replayed);
       group.repro = group.reactive.empty()
                         ? f.failure->rerun
-                        : "overtake drive --scenario " + (out / group.reactive).string() +
-                              " --policy " + spec.policy;
+                        : planner_command_line(
+                              call_from_description(spec.policy, sweep.value("planner", json()))) +
+                              " --scenario " + shell_quote((out / group.reactive).string());
       o.groups.push_back(std::move(group));
     }
     o.groups[it->second].failures.push_back(index);
@@ -981,6 +1036,7 @@ Subcommand register_hunt(CLI::App& app) {
     SlurmOptions slurm;
     std::vector<std::string> merge_dirs;
     std::string merge_out;
+    std::string warm_up = fixed_text(kDefaultWarmUpS, 0);
   };
   auto st = std::make_shared<State>();
   st->spec.jobs = static_cast<int>(std::max(1U, std::thread::hardware_concurrency()));
@@ -1020,6 +1076,12 @@ Subcommand register_hunt(CLI::App& app) {
                   "The cut scenarios start this long before (0-3600 s, as `overtake cut`)")
       ->capture_default_str();
   cmd->add_option("--after", st->spec.after_s, "... and end this long after the failure (0-3600 s)")
+      ->capture_default_str();
+  cmd->add_option("--warm-up", st->warm_up,
+                  "A failure of a planner from outside (a program, a plugin, Python) is cut with\n"
+                  "this many seconds of what the planner was told before the scenario, played\n"
+                  "to it first so that it comes in step (`all`: from the run's first cycle; 0:\n"
+                  "none), as `overtake cut --warm-up`")
       ->capture_default_str();
   cmd->add_option("--config", st->config, "JSON parameter overrides")->check(CLI::ExistingFile);
   cmd->add_option("--jobs,-j", st->spec.jobs, "Runs in parallel (default: all cores)")
@@ -1090,6 +1152,7 @@ Subcommand register_hunt(CLI::App& app) {
           }
         }
         spec.traffic = split_list(st->traffic);
+        parse_warm_up(st->warm_up, spec.warm_up_s, spec.warm_up_all);
         if (!st->config.empty()) spec.config = st->config;
         spec.out = st->out;
         if (!st->shard.empty())

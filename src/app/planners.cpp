@@ -1,5 +1,7 @@
 #include "overtake/app/planners.hpp"
 
+#include "overtake/app/io.hpp"
+
 #include <algorithm>
 #include <cctype>
 #include <cstddef>
@@ -97,6 +99,57 @@ std::string_view to_string(PlannerKind kind) {
       return "program";
   }
   return "builtin";
+}
+
+PlannerCall call_of(const PlannerEntry& entry) {
+  PlannerCall c;
+  c.kind = entry.kind;
+  c.name = entry.name;
+  c.source = entry.source;
+  if (entry.program) {
+    c.cwd = entry.program->cwd.string();
+    c.port = entry.program->port;
+  }
+  return c;
+}
+
+PlannerCall call_from_description(const std::string& name, const nlohmann::json& described) {
+  PlannerCall call{PlannerKind::builtin, name, {}, {}, ProgramSpec{}.port};
+  if (!described.is_object()) return call;
+  const auto text = [&](const char* key) {
+    const auto it = described.find(key);
+    return it != described.end() && it->is_string() ? it->get<std::string>() : std::string();
+  };
+  const std::string kind = text("kind");
+  call.kind = kind == "plugin"    ? PlannerKind::plugin
+              : kind == "python"  ? PlannerKind::python
+              : kind == "program" ? PlannerKind::program
+                                  : PlannerKind::builtin;
+  call.source = text("source");
+  call.cwd = text("cwd");
+  const auto port = described.find("port");
+  if (port != described.end() && port->is_number_integer()) call.port = port->get<int>();
+  return call;
+}
+
+std::string planner_command_line(const PlannerCall& c) {
+  const std::string named = shell_quote(c.name + "=" + c.source);
+  switch (c.kind) {
+    case PlannerKind::plugin:
+      return "overtake drive --policy-lib " + named;
+    case PlannerKind::python:
+      return "overtake drive --policy-py " + named;
+    case PlannerKind::program: {
+      std::string cmd = "overtake sim --planner-cmd " + shell_quote(c.source) + " --planner-name " +
+                        shell_quote(c.name);
+      if (!c.cwd.empty() && c.cwd != ".") cmd += " --planner-cwd " + shell_quote(c.cwd);
+      if (c.port != ProgramSpec{}.port) cmd += " --planner-port " + std::to_string(c.port);
+      return cmd;
+    }
+    case PlannerKind::builtin:
+      break;
+  }
+  return "overtake drive --policy " + shell_quote(c.name);
 }
 
 std::string PlannerEntry::describe() const {

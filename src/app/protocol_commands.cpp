@@ -219,6 +219,7 @@ int cmd_sim(SimArgs& a) {
   ExternalPlanner remote;
   remote.address = protocol::to_string(url.value());
   remote.name = a.name;
+  remote.lock_step = !a.realtime;
   remote.loop = [&](sim::World& world, const sim::RunOptions& run) {
     return a.realtime ? protocol::run_realtime(world, *connection, client, run)
                       : protocol::run_lock_step(world, *connection, client, run);

@@ -1,5 +1,6 @@
 #include "overtake/app/report.hpp"
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdio>
@@ -197,9 +198,56 @@ json report_to_json(const sim::RunReport& r, const RunProvenance& p) {
                  {"minutes", p.minutes},
                  {"params_hash", p.params_hash}};
   if (!p.scenario.empty()) j["config"]["scenario"] = p.scenario;
+  if (r.warm_up) j["warm_up"] = warm_up_to_json(*r.warm_up);
+  if (const std::string hint = map_hint(r, p); !hint.empty()) j["map_hint"] = hint;
   if (!p.planner.empty()) j["config"]["planner"] = json::parse(p.planner);
   if (!p.planner_log.empty()) j["config"]["planner_log"] = p.planner_log;
   return j;
+}
+
+std::string map_hint(const sim::RunReport& r, const RunProvenance& p) {
+  if (p.planner.empty() && p.planner_url.empty()) return {};
+  const double start_s = r.outcome.t_s - r.duration_s;
+  const auto off =
+      std::find_if(r.incidents.begin(), r.incidents.end(), [&](const sim::Incident& i) {
+        return i.type == sim::IncidentType::outside_lane && i.t_s <= start_s + kMapHintWithinS;
+      });
+  if (off == r.incidents.end()) return {};
+  return "the planner's path left the road " + fixed_text(off->t_s - start_s, 2) +
+         " s after the start: a planner program reads its own map file, and may be driving "
+         "another map than this run's (" +
+         p.map_path + "); give overtake the map the program reads with --map FILE";
+}
+
+json warm_up_to_json(const sim::WarmUpResult& w) {
+  const auto cycle = [](long c) { return c < 0 ? json(nullptr) : json(c); };
+  return {{"cycles", w.cycles},
+          {"played", w.played},
+          {"from_run_start", w.from_run_start},
+          {"in_step_cycles", w.in_step_cycles},
+          {"in_step", w.in_step},
+          {"in_step_after", w.in_step ? json(w.in_step_after) : json(nullptr)},
+          {"matched", w.matched},
+          {"first_difference", cycle(w.first_difference)},
+          {"first_difference_t_s",
+           w.first_difference < 0 ? json(nullptr) : json(w.first_difference_t_s)},
+          {"last_difference", cycle(w.last_difference)}};
+}
+
+std::string warm_up_text(const sim::WarmUpResult& w) {
+  std::string text = std::to_string(w.played) + " of " + std::to_string(w.cycles) +
+                     " cycles told before the start" +
+                     (w.from_run_start ? std::string(" (from the run's first)") : std::string());
+  if (w.in_step) {
+    text += ": in step after " + std::to_string(w.in_step_after) + " (" +
+            std::to_string(w.in_step_cycles) + " answers in a row as recorded";
+    if (w.first_difference < 0) text += "; every answer matched";
+    return text + ")";
+  }
+  text += ": NOT IN STEP, reproduction not guaranteed (";
+  if (w.played < w.cycles) return text + "the warm-up did not finish)";
+  return text + std::to_string(w.matched) + " answers matched; the last differed at cycle " +
+         std::to_string(w.last_difference + 1) + "; a longer --warm-up, or all, may help)";
 }
 
 std::string format_scorecard(const sim::RunReport& r, const RunProvenance& p) {
@@ -223,6 +271,8 @@ std::string format_scorecard(const sim::RunReport& r, const RunProvenance& p) {
     }
   }
   if (r.outcome.ended_early()) os << "  ENDED EARLY: " << sim::ended_early_text(r.outcome) << "\n";
+  if (r.warm_up) os << "  warm-up            " << warm_up_text(*r.warm_up) << "\n";
+  if (const std::string hint = map_hint(r, p); !hint.empty()) os << "  HINT: " << hint << "\n";
   os << printf_string("  simulated         %8.1f min   distance %8.2f mi   mean speed %6.2f mph\n",
                       r.duration_s / 60.0, core::metres_to_miles(r.distance_m),
                       core::mps_to_mph(r.mean_speed_mps));

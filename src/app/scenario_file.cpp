@@ -8,6 +8,7 @@
 
 #include "overtake/app/config.hpp"
 #include "overtake/core/base64.hpp"
+#include "overtake/sim/warm_up.hpp"
 
 #include <zlib.h>
 
@@ -152,6 +153,7 @@ void parse_cut(const json& j, sim::ScenarioCut& cut, std::vector<std::string>& e
     } else {
       cut.from_replay = text_of(f, "replay", "scenario.cut.from", errors);
       cut.incident = text_of(f, "incident", "scenario.cut.from", errors);
+      if (f.contains("policy")) cut.from_policy = text_of(f, "policy", "scenario.cut.from", errors);
     }
   }
   const auto blob = [&](const char* key, std::string& out, bool required) {
@@ -167,6 +169,32 @@ void parse_cut(const json& j, sim::ScenarioCut& cut, std::vector<std::string>& e
   };
   blob("checkpoint", cut.checkpoint, true);
   blob("recorded_traffic", cut.recorded, cut.replayed);
+  if (c.has("warm_up")) {
+    const json& w = j["warm_up"];
+    if (!w.is_object()) {
+      errors.push_back("scenario.cut.warm_up: expected an object");
+    } else {
+      Fields f(w, "scenario.cut.warm_up", errors);
+      cut.warm_up_start_s = f.number("start_s", 0.0, true, 0.0, kMaxDurationS);
+      cut.warm_up_cycles = std::lround(
+          f.number("cycles", 0.0, true, 0.0, static_cast<double>(sim::kMaxWarmUpCycles)));
+      (void)f.number("in_step_cycles", 0.0, false, 1.0, 100000.0);  // also in the bytes
+      if (f.has("from_run_start") && !w["from_run_start"].is_boolean()) {
+        errors.push_back("scenario.cut.warm_up.from_run_start: expected true or false");
+      }
+      if (!f.has("telemetry")) {
+        errors.push_back("scenario.cut.warm_up.telemetry: missing");
+      } else {
+        try {
+          cut.warm_up = unpack_blob(text_of(w, "telemetry", "scenario.cut.warm_up", errors),
+                                    "scenario.cut.warm_up.telemetry", kMaxWarmUpBytes);
+        } catch (const ConfigError& e) {
+          errors.emplace_back(e.what());
+        }
+      }
+      f.check_unknown();
+    }
+  }
   c.check_unknown();
 }
 
@@ -184,8 +212,8 @@ std::string pack_blob(std::string_view bytes) {
   return core::base64_encode(out);
 }
 
-std::string unpack_blob(std::string_view text, std::string_view what) {
-  constexpr std::size_t kMaxBytes = kMaxBlobBytes;
+std::string unpack_blob(std::string_view text, std::string_view what, std::size_t max_bytes) {
+  const std::size_t kMaxBytes = max_bytes;
   const std::optional<std::string> packed = core::base64_decode(text);
   if (!packed) throw ConfigError(std::string(what) + ": not base64");
   z_stream z{};

@@ -606,22 +606,6 @@ void validate_slurm_options(const SlurmOptions& o, std::size_t runs) {
   }
 }
 
-std::string shell_quote(std::string_view text) {
-  const bool safe = !text.empty() && std::all_of(text.begin(), text.end(), [](char c) {
-    return std::isalnum(static_cast<unsigned char>(c)) != 0 ||
-           std::string_view("_-./=:,+@%").find(c) != std::string_view::npos;
-  });
-  if (safe) return std::string(text);
-  std::string out = "'";
-  for (char c : text) {
-    if (c == '\'')
-      out += "'\\''";
-    else
-      out += c;
-  }
-  return out + "'";
-}
-
 std::string slurm_batch_script(const SlurmArray& a, const SlurmOptions& o) {
   const std::string n = std::to_string(o.tasks);
   const std::string cpus = std::to_string(o.cpus_per_task);

@@ -75,7 +75,8 @@ void ReplayEncoder::append_incidents(std::span<const sim::Incident> incidents,
   }
 }
 
-void ReplayEncoder::append_path(std::span<const core::Vec2> path, std::string& out) const {
+void ReplayEncoder::append_path(std::span<const core::Vec2> path, std::string& out,
+                                bool exact) const {
   const std::size_t count = std::min(path.size(), kMaxPathPoints);
   const std::size_t at = begin_record(out, ReplayRecordKind::path);
   put_u16(out, static_cast<std::uint16_t>(count));
@@ -88,6 +89,19 @@ void ReplayEncoder::append_path(std::span<const core::Vec2> path, std::string& o
     put_delta(out, py, y);
     x = px;
     y = py;
+  }
+  if (exact) {
+    put_u32(out, static_cast<std::uint32_t>(count));
+    std::uint64_t bx = 0;
+    std::uint64_t by = 0;
+    for (std::size_t i = 0; i < count; ++i) {
+      const auto nx = std::bit_cast<std::uint64_t>(path[i].x);
+      const auto ny = std::bit_cast<std::uint64_t>(path[i].y);
+      put_u64(out, nx ^ bx);
+      put_u64(out, ny ^ by);
+      bx = nx;
+      by = ny;
+    }
   }
   end_record(out, at);
 }

@@ -458,6 +458,27 @@ class Decoder {
           y = in_range(kind, at, y + *dy, INT32_MIN, INT32_MAX, "a path point", "y");
           path.points[i] = {static_cast<double>(x) / kCmPerM, static_cast<double>(y) / kCmPerM};
         }
+        if (r.remaining() >= kExactCountBytes) {  // added later within version 2
+          const std::uint32_t n = r.u32();
+          if (n != m) {
+            bad_record(
+                kind, at,
+                "its exact points are " + std::to_string(n) + ", its points " + std::to_string(m));
+          }
+          need(p.size() - r.remaining() + std::size_t{n} * kExactPointBytes);
+          path.exact.resize(n);
+          std::uint64_t bx = 0;
+          std::uint64_t by = 0;
+          for (core::Vec2& e : path.exact) {
+            bx ^= r.u64();
+            by ^= r.u64();
+            e = {std::bit_cast<double>(bx), std::bit_cast<double>(by)};
+            if (!std::isfinite(e.x) || !std::isfinite(e.y)) {
+              bad_record(kind, at, "an exact path point that is not finite");
+            }
+          }
+          path.has_exact = true;
+        }
         sink_.path(std::move(path));
         return;
       }

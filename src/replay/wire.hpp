@@ -30,6 +30,11 @@ inline constexpr std::size_t kCollisionClassBytes = 2;  // u8 collision kind, u8
 // After the class (added later within version 2): u32 the collision's contact, counting from 1
 // (0: not a collision, or not known).
 inline constexpr std::size_t kContactBytes = 4;
+// At the end of a path record (added later within version 2, for runs of planners from
+// outside): u32 n, then n points, each x and y as the bits of the double the planner sent XOR
+// those of the point before's (0 before the first), u64 each.
+inline constexpr std::size_t kExactCountBytes = 4;
+inline constexpr std::size_t kExactPointBytes = 16;
 inline constexpr std::uint8_t kNoCollisionKind = 255;  // an incident that is not a collision
 inline constexpr std::uint16_t kNoSeconds = 65535;     // TTC or headway: none (or >= 655.35 s)
 inline constexpr std::size_t kMaxVarintBytes = 5;  // 35 bits: the zigzag of a difference of two i32
@@ -62,6 +67,9 @@ inline void put_u32(std::string& out, std::uint32_t v) {
 
 inline void put_i32(std::string& out, std::int32_t v) {
   put_u32(out, static_cast<std::uint32_t>(v));
+}
+inline void put_u64(std::string& out, std::uint64_t v) {
+  for (int i = 0; i < 8; ++i) out.push_back(static_cast<char>((v >> (8 * i)) & 0xff));
 }
 inline void put_f32(std::string& out, double v) {
   put_u32(out, std::bit_cast<std::uint32_t>(static_cast<float>(v)));
@@ -149,6 +157,11 @@ class Reader {
     const std::uint32_t v = byte(0) | (byte(1) << 8) | (byte(2) << 16) | (byte(3) << 24);
     at_ += 4;
     return v;
+  }
+  [[nodiscard]] std::uint64_t u64() {
+    const std::uint64_t lo = u32();
+    const std::uint64_t hi = u32();
+    return lo | (hi << 32U);
   }
   [[nodiscard]] std::int16_t i16() { return static_cast<std::int16_t>(u16()); }
   [[nodiscard]] std::size_t remaining() const { return b_.size() - at_; }

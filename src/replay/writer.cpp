@@ -33,7 +33,8 @@ struct ReplayWriter::Impl {
   std::uint64_t written = 0;
   std::string error;  // the first failure; nothing more is written after it
   bool finished = false;
-  bool in_place = false;  // a device or pipe: written directly, never renamed
+  bool exact_paths = false;  // paths also as sent, bit for bit
+  bool in_place = false;     // a device or pipe: written directly, never renamed
   sim::CheckpointInfo checkpoint_info;
 
   void fail(const std::string& what) {
@@ -169,8 +170,12 @@ void ReplayWriter::on_frame(const sim::Frame& frame, std::span<const sim::Incide
 void ReplayWriter::on_path(std::span<const core::Vec2> path) {
   Impl& m = *impl_;
   if (m.finished || !m.error.empty()) return;
-  m.encoder.append_path(path, m.pending);
+  m.encoder.append_path(path, m.pending, m.exact_paths);
   m.maybe_deflate();
+}
+
+void ReplayWriter::set_exact_paths(bool exact) {
+  impl_->exact_paths = exact;
 }
 
 void ReplayWriter::set_checkpoint_info(sim::CheckpointInfo info) {

@@ -191,6 +191,24 @@ void Stepper::emit_frame(std::size_t incidents_before) {
 
 RunReport run_drive(World& world, const PlannerFn& planner, const RunOptions& opts) {
   Stepper run(world, opts);
+  std::optional<WarmUpResult> warm_up;
+  if (opts.warm_up) {
+    warm_up.emplace();
+    try {
+      play_warm_up(*opts.warm_up, planner, opts.stop, *warm_up);
+    } catch (const std::exception& e) {
+      if (run.stop_requested()) {
+        run.end(RunEnd::stopped);
+      } else {
+        run.end(RunEnd::planner_failed, "in the warm-up, at its cycle " +
+                                            std::to_string(warm_up->played + 1) + " of " +
+                                            std::to_string(warm_up->cycles) + ": " + e.what());
+      }
+    }
+    if (run.stop_requested()) run.end(RunEnd::stopped);
+    warm_up->first_difference_t_s =
+        static_cast<double>(warm_up->first_difference_step) * world.params().step_s;
+  }
   while (!run.finished()) {
     if (run.stop_requested()) {
       run.end(RunEnd::stopped);
@@ -218,7 +236,9 @@ RunReport run_drive(World& world, const PlannerFn& planner, const RunOptions& op
     run.apply(std::move(plan), cycle, wall);
     run.step_one_call();
   }
-  return run.report();
+  RunReport report = run.report();
+  report.warm_up = std::move(warm_up);
+  return report;
 }
 
 }  // namespace overtake::sim

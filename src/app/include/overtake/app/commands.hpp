@@ -57,6 +57,9 @@ struct ExternalPlanner {
   RunLoop loop;
   std::string name;     ///< the report's `policy` (default: the address)
   std::string address;  ///< e.g. the remote planner's ws:// URL (shown on the scorecard)
+  /// Lock-step (run_drive: a recording keeps its exact answers, a cut scenario's warm-up is
+  /// played to it); false in real time.
+  bool lock_step = true;
 };
 
 /// Options of `overtake drive` (and, with `external`, of `overtake sim --planner`).
@@ -92,6 +95,9 @@ struct DriveOptions {
   std::optional<std::filesystem::path> planner_log;
   /// Also watches the run (not a flag: scenario suites; not owned).
   sim::RunObserver* watcher = nullptr;
+  /// A cut scenario's warm-up is played to a planner from outside before it starts
+  /// (`--no-warm-up`: the planner starts afresh at the scenario's start).
+  bool warm_up = true;
 };
 
 /// Checks flag values and names (UsageError naming the flag).

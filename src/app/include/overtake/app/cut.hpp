@@ -11,6 +11,7 @@
 #include <string>
 
 #include "overtake/sim/scenario.hpp"
+#include "overtake/sim/warm_up.hpp"
 
 namespace overtake::app {
 
@@ -20,6 +21,13 @@ inline constexpr double kMinCutJudgedS = 1.0;
 /// The longest a cut scenario reaches before or after its moment, and its longest lead-in (s):
 /// `cut` and `hunt` (which cuts a scenario of each failure it finds) take the same bounds.
 inline constexpr double kMaxCutWindowS = 3600.0;
+/// The default warm-up of a cut of a run of a planner from outside (s): long enough for the
+/// public planner programs' target speeds to climb from 0 to their cap (measured in
+/// docs/scenarios.md).
+inline constexpr double kDefaultWarmUpS = 60.0;
+
+/// Reads `--warm-up`: seconds (0 to kMaxCutWindowS) or "all". UsageError naming the flag.
+void parse_warm_up(const std::string& text, double& seconds, bool& all);
 
 /// Throws UsageError naming the flag (--before, --after, --lead-in) and the value when one is
 /// not a time from 0 to kMaxCutWindowS, or when --before and --after together judge less than
@@ -42,6 +50,13 @@ struct CutOptions {
   std::string description;
   /// What the scenario expects; default: no at-fault collision.
   std::optional<sim::ScenarioExpect> expect;
+  /// For a run of a planner from outside: the seconds before the start whose telemetry the
+  /// scenario carries, played to the planner before it drives (0: none) ...
+  double warm_up_s = kDefaultWarmUpS;
+  /// ... or every cycle from the run's first (`--warm-up all`).
+  bool warm_up_all = false;
+  /// The answers in a row that bring a planner in step.
+  int in_step_cycles = sim::kDefaultInStepCycles;
 };
 
 /// What was cut.
@@ -55,8 +70,14 @@ struct CutResult {
   std::string planner_state;  ///< "restored", or why the planner starts afresh
   std::string incident;       ///< the incident nearest the moment, if any ("collision ...")
   std::string policy;         ///< the planner that drove the run
+  /// The command that drives the scenario with that planner (`overtake drive --policy P
+  /// --scenario F`, `overtake sim --planner-cmd ... --scenario F`, ...).
+  std::string drive_command;
   std::size_t checkpoint_bytes = 0;
   std::size_t file_bytes = 0;
+  std::size_t warm_up_cycles = 0;  ///< cycles of the warm-up the scenario carries
+  double warm_up_start_s = 0.0;    ///< the run's time at its first
+  bool has_warm_up = false;
 };
 
 /// Cuts the scenario and writes it to `opts.out` (replacing it atomically). Throws UsageError

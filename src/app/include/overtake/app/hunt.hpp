@@ -15,6 +15,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "overtake/app/cut.hpp"
 #include "overtake/app/planners.hpp"
 
 namespace overtake::app {
@@ -35,6 +36,9 @@ struct HuntSpec {
   HuntTarget target = HuntTarget::collisions;
   double before_s = 15.0;  ///< the cut scenarios' window
   double after_s = 5.0;
+  /// The warm-up a cut of a planner from outside carries (CutOptions::warm_up_s, warm_up_all).
+  double warm_up_s = kDefaultWarmUpS;
+  bool warm_up_all = false;
   std::optional<std::filesystem::path> config;
   int jobs = 1;
   std::filesystem::path out = "hunt-out";
@@ -68,6 +72,14 @@ struct HuntGroup {
   std::string reactive;               ///< the first one's cut scenarios (relative paths)
   std::string replayed;
   std::string cut_error;  ///< why a scenario could not be cut (empty when both were)
+  /// Each scenario driven again at once by the planner: "yes", or "no: what happened
+  /// instead", with the warm-up's account (empty when not cut).
+  std::string reproduces_reactive;
+  std::string reproduces_replayed;
+  bool reproduced = false;  ///< both scenarios repeat the failure at its step
+  /// Set when the planner, told the same twice (the reactive scenario driven a second time after
+  /// a check failed), answered differently: how, from the first cycle that differed.
+  std::string nondeterministic;
   /// The one-line command that reproduces it: the reactive scenario, or the whole run.
   std::string repro;
 };

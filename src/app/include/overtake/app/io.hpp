@@ -23,4 +23,7 @@ inline constexpr std::uintmax_t kMaxReadBytes = 256ULL << 20;
 /// A path that is not a regular file (/dev/null, /dev/stdout, a pipe) is written in place.
 void write_file_atomic(const std::filesystem::path& path, std::string_view content);
 
+/// `text` quoted for sh: as it is when only safe characters, else in single quotes.
+[[nodiscard]] std::string shell_quote(std::string_view text);
+
 }  // namespace overtake::app

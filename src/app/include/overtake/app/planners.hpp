@@ -13,6 +13,8 @@
 #include <string_view>
 #include <vector>
 
+#include <nlohmann/json.hpp>
+
 #include "overtake/app/planner_process.hpp"
 #include "overtake/planner/policy.hpp"
 
@@ -119,6 +121,27 @@ void add_planner_flags(CLI::App& cmd, PlannerFlags& flags, PlannerFlagSet which)
 /// UsageError when the flags brought several and --policy names none of them.
 [[nodiscard]] std::string chosen_policy(const PlannerCatalog& catalog, const std::string& policy,
                                         bool given);
+
+/// How a command line brings a planner: its kind, name and source (as the run's provenance
+/// records them: `config.planner`).
+struct PlannerCall {
+  PlannerKind kind = PlannerKind::builtin;
+  std::string name;
+  std::string source;  ///< a plugin's path, module:function, or a program's command
+  std::string cwd;     ///< a program's working directory ("" or "." : the current one)
+  int port = 4567;     ///< where a program listens
+};
+/// The call of an entry.
+[[nodiscard]] PlannerCall call_of(const PlannerEntry& entry);
+/// The call of a planner named `name` that PlannerEntry::describe described (a JSON object:
+/// kind, source, cwd, port); a built-in policy when `described` is not such an object.
+[[nodiscard]] PlannerCall call_from_description(const std::string& name,
+                                                const nlohmann::json& described);
+/// The start of the command that drives with the planner, flags quoted for sh:
+/// `overtake drive --policy NAME` (built-in), `overtake drive --policy-lib NAME=LIB`,
+/// `overtake drive --policy-py NAME=MODULE:FN`, `overtake sim --planner-cmd CMD --planner-name
+/// NAME` (with --planner-cwd and --planner-port when they are not the defaults).
+[[nodiscard]] std::string planner_command_line(const PlannerCall& call);
 
 /// Splits `NAME=VALUE` (NAME: letters, digits, `_`, `-`, `.`; no space before the `=`) into
 /// its parts; without such a prefix the name is empty.

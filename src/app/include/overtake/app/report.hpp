@@ -45,6 +45,22 @@ struct RunProvenance {
 /// numbered `index`: what a failure is named and cut by.
 [[nodiscard]] sim::Incident contact_incident(const sim::Contact& contact, int index);
 
+/// How long after a run's start a path that leaves the road points at a planner driving
+/// another map (s).
+inline constexpr double kMapHintWithinS = 10.0;
+
+/// The hint for the commonest mistake with a planner program: it reads its own map file, and
+/// benched on another map its path leaves the road from its first seconds. Non-empty when a
+/// planner from outside (p.planner or p.planner_url set) booked an outside-lane incident within
+/// kMapHintWithinS of the run's start.
+[[nodiscard]] std::string map_hint(const sim::RunReport& r, const RunProvenance& p);
+
+/// The warm-up as the report's `warm_up` key.
+[[nodiscard]] nlohmann::json warm_up_to_json(const sim::WarmUpResult& w);
+/// The warm-up in one line: "1461 cycles told before the start, in step after 25" or "NOT IN
+/// STEP ...".
+[[nodiscard]] std::string warm_up_text(const sim::WarmUpResult& w);
+
 /// The JSON report. Deterministic for a given run apart from the `timing` key.
 [[nodiscard]] nlohmann::json report_to_json(const sim::RunReport& r, const RunProvenance& p);
 

@@ -28,6 +28,9 @@ inline constexpr std::size_t kMaxScenarioEvents = 10000;
 /// to: the library's largest, 20 s of replayed traffic, is 0.98 MB; a checkpoint is 21 KB.
 /// `cut` refuses a window whose replayed traffic would be larger.
 inline constexpr std::size_t kMaxBlobBytes = std::size_t{16} << 20U;
+/// The most bytes a cut scenario's warm-up may inflate to: what a planner was told and answered
+/// takes about 1 to 2 KB a cycle (a 10-minute run played whole is 12 to 25 MB).
+inline constexpr std::size_t kMaxWarmUpBytes = std::size_t{256} << 20U;
 
 /// Reads a scenario from JSON; errors (ConfigError) name `source` and the key.
 [[nodiscard]] sim::Scenario parse_scenario(const nlohmann::json& j, std::string_view source,
@@ -42,7 +45,8 @@ inline constexpr std::size_t kMaxBlobBytes = std::size_t{16} << 20U;
 [[nodiscard]] std::string pack_blob(std::string_view bytes);
 /// The bytes back; a ConfigError naming `what` when the text is not base64 of exactly one
 /// whole zlib stream (nothing after its end), or inflates beyond kMaxBlobBytes.
-[[nodiscard]] std::string unpack_blob(std::string_view text, std::string_view what);
+[[nodiscard]] std::string unpack_blob(std::string_view text, std::string_view what,
+                                      std::size_t max_bytes = kMaxBlobBytes);
 
 /// Reads a scenario file.
 [[nodiscard]] sim::Scenario load_scenario(const std::filesystem::path& path,

@@ -15,6 +15,8 @@
 #include <string_view>
 #include <vector>
 
+#include "overtake/app/io.hpp"
+
 namespace CLI {
 class App;
 }
@@ -100,9 +102,6 @@ struct SlurmArray {
                                   const std::atomic<bool>* stop);
 
 // ----- the pieces, for tests ---------------------------------------------------------------
-
-/// `text` quoted for sh: as it is when only safe characters, else in single quotes.
-[[nodiscard]] std::string shell_quote(std::string_view text);
 
 /// The batch script of the array.
 [[nodiscard]] std::string slurm_batch_script(const SlurmArray& array, const SlurmOptions& options);

@@ -130,7 +130,9 @@ class ReplayEncoder {
   void append_incidents(std::span<const sim::Incident> incidents, std::string& out) const;
   /// The path the planner sent at a cycle (at most 65535 points are kept); its first point is
   /// coded against the ego of the last frame appended.
-  void append_path(std::span<const core::Vec2> path, std::string& out) const;
+  /// With `exact`, the points as sent follow, bit for bit (for a run of a planner from
+  /// outside, whose answers `overtake cut` drives the world with again).
+  void append_path(std::span<const core::Vec2> path, std::string& out, bool exact = false) const;
   /// The last record: the run's report as JSON.
   static void append_end(std::string_view report_json, std::string& out);
   /// A checkpoint of the run at the last frame appended (its encoded bytes).
@@ -176,6 +178,10 @@ class ReplayWriter final : public sim::RunObserver {
   /// What the run's checkpoints are of (traffic, seed, track, map and config hashes,
   /// policy); the step and time come with each checkpoint.
   void set_checkpoint_info(sim::CheckpointInfo info);
+  /// Store each path as sent, bit for bit, besides its centimetres: for a run of a planner
+  /// from outside (its state is in no checkpoint), so that `overtake cut` can drive the run on
+  /// from a checkpoint with its answers and tell it again what it was told (docs/scenarios.md).
+  void set_exact_paths(bool exact);
 
   /// Writes the end record (the run's report, JSON), completes the stream and gives the file
   /// its name. Throws ReplayError naming the file when anything could not be written (the
@@ -195,6 +201,10 @@ class ReplayWriter final : public sim::RunObserver {
 struct ReplayPath {
   long step = 0;
   std::vector<core::Vec2> points;
+  /// The points as the planner sent them, bit for bit, when the run stored them
+  /// (ReplayWriter::set_exact_paths); empty otherwise.
+  std::vector<core::Vec2> exact;
+  bool has_exact = false;  ///< the record carried them (an empty path has none to carry)
 };
 
 /// An incident the referee counted at frame `step`.

@@ -22,6 +22,7 @@
 #include "overtake/sim/frame.hpp"
 #include "overtake/sim/recorded_traffic.hpp"
 #include "overtake/sim/scorecard.hpp"
+#include "overtake/sim/warm_up.hpp"
 #include "overtake/sim/world.hpp"
 
 namespace overtake::sim {
@@ -125,6 +126,10 @@ struct RunOptions {
   double checkpoint_every_s = 0.0;
   /// The planner's state for those checkpoints; unset: the planner keeps none overtake sees.
   std::function<std::string()> planner_state;
+  /// When set (a cut scenario driven by a planner from outside): run_drive first plays this
+  /// window to the planner (play_warm_up; the world does not move), and the report says how
+  /// it went (RunReport::warm_up). Not owned.
+  const WarmUp* warm_up = nullptr;
 };
 
 /// The course of one run. Made before the first step (the watcher sees the first frame
@@ -191,7 +196,8 @@ class Stepper {
 };
 
 /// The lock-step loop: telemetry -> planner -> path -> K steps, until the duration is
-/// reached, the planner fails (the run ends as planner_failed, or as stopped when the stop
+/// reached (after RunOptions::warm_up, when set: a planner that fails in it ends the run at its
+/// start), the planner fails (the run ends as planner_failed, or as stopped when the stop
 /// flag was set meanwhile) or the user stops it. Returns the report (also on failure).
 [[nodiscard]] RunReport run_drive(World& world, const PlannerFn& planner, const RunOptions& opts);
 

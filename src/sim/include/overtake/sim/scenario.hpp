@@ -47,6 +47,13 @@ struct ScenarioCut {
   std::string map;          ///< the map it needs (a path as written in the file; "" built-in)
   std::string from_replay;  ///< the replay it was cut from, as the cut named it
   std::string incident;     ///< the incident near the moment, as the cut named it
+  /// A cut of a run of a planner from outside: what it was told and answered before the start
+  /// (sim::encode_warm_up's bytes; empty when the scenario has none), played to such a planner
+  /// before the scenario starts (docs/scenarios.md).
+  std::string warm_up;
+  double warm_up_start_s = 0.0;  ///< the run's time at the warm-up's first cycle
+  long warm_up_cycles = 0;       ///< as the file says (checked against the bytes)
+  std::string from_policy;       ///< the planner of the run it was cut from
 };
 
 /// What a scenario expects of a planner, over the judged part (after the lead-in); unset

@@ -5,6 +5,7 @@
 
 #include <array>
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -15,6 +16,7 @@
 #include "overtake/sim/frame.hpp"
 #include "overtake/sim/referee.hpp"
 #include "overtake/sim/safety.hpp"
+#include "overtake/sim/warm_up.hpp"
 
 namespace overtake::sim {
 
@@ -103,6 +105,8 @@ struct RunReport {
     return plan_status_unknown_cycles == 0 || planner_cycles > plan_status_unknown_cycles;
   }
   RunOutcome outcome;
+  /// A cut scenario's warm-up, when one was played before the run (RunOptions::warm_up).
+  std::optional<WarmUpResult> warm_up;
 };
 
 /// Tracks lane changes and time per lane from the ego's d (with hysteresis: the lane counts
