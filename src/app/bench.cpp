@@ -120,6 +120,29 @@ std::string runs_text(std::vector<json> runs) {
   return out;
 }
 
+// Per planner whose runs carry a map hint (report.cpp, map_hint): how many, and the hint.
+std::string map_hints_markdown(const std::vector<json>& runs) {
+  std::map<std::string, std::pair<std::size_t, std::size_t>> counts;  // policy: hinted, runs
+  std::map<std::string, std::string> hint;
+  for (const json& r : runs) {
+    const auto config = r.find("config");
+    if (config == r.end() || !config->is_object()) continue;
+    const std::string policy = config->value("policy", "");
+    ++counts[policy].second;
+    const auto h = r.find("map_hint");
+    if (h == r.end() || !h->is_string()) continue;
+    ++counts[policy].first;
+    if (!hint.count(policy)) hint[policy] = h->get<std::string>();
+  }
+  std::string text;
+  for (const auto& [policy, n] : counts) {
+    if (n.first == 0) continue;
+    text += "\n**Hint for " + policy + "**: in " + std::to_string(n.first) + " of " +
+            std::to_string(n.second) + " runs " + hint[policy] + ".\n";
+  }
+  return text;
+}
+
 void write_outputs(const std::filesystem::path& out, const std::vector<json>& runs,
                    const json& manifest, BenchOutcome& outcome) {
   write_file_atomic(out / kRunsFile, runs_text(runs));
@@ -133,7 +156,7 @@ void write_outputs(const std::filesystem::path& out, const std::vector<json>& ru
                      {"pairs", s.pairs},
                      {"verdicts", eval::verdict_method(eval::family_size(s.pairs))}};
   write_file_atomic(out / "summary.json", json_text(summary, 2) + "\n");
-  outcome.summary_markdown = eval::summary_markdown(s.rows, s.pairs);
+  outcome.summary_markdown = eval::summary_markdown(s.rows, s.pairs) + map_hints_markdown(runs);
   write_file_atomic(out / "summary.md", outcome.summary_markdown);
   outcome.runs_done = runs.size();
 }

@@ -350,8 +350,8 @@ void check_hunt_spec(const HuntSpec& spec) {
 namespace {
 
 /// Drives a group's two scenarios at once with the hunt's planner: do they repeat the failure
-/// at its step? When one does not, the reactive one is driven a second time: a planner that
-/// answers differently when told the same is named.
+/// at its step? The reactive one is driven a second time: a planner that answers differently
+/// when told the same is named.
 void check_group(const HuntSpec& spec, const Track& track, const Config& config,
                  const FailureMark& mark, HuntGroup& g, const std::atomic<bool>* stop) {
   DriveOptions base;
@@ -370,11 +370,13 @@ void check_group(const HuntSpec& spec, const Track& track, const Config& config,
   g.reproduces_reactive = reactive.text;
   g.reproduces_replayed = replayed.text;
   g.reproduced = reactive.reproduced && replayed.reproduced;
-  if (g.reproduced || reactive.stopped || replayed.stopped) return;
+  if (reactive.stopped || replayed.stopped) return;
+  // Told the same twice: a planner whose answers differ is not deterministic (even when its
+  // failure happened to come again).
   base.planner_log = log_of(g.reactive, "again");
   const ReproCheck again =
       check_reproduction(track, config, base, spec.out / g.reactive, mark, stop);
-  if (!again.stopped) g.nondeterministic = drives_differ(reactive.report, again.report);
+  if (!again.stopped) g.nondeterministic = drives_differ(reactive, again);
 }
 
 }  // namespace

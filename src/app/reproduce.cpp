@@ -1,6 +1,7 @@
 #include "overtake/app/reproduce.hpp"
 
 #include <cmath>
+#include <span>
 
 #include "overtake/app/report.hpp"
 #include "overtake/app/scenario_file.hpp"
@@ -38,6 +39,24 @@ std::string instead(const sim::RunReport& r, const FailureMark& f) {
                     : "the planner did not fail";
 }
 
+/// Keeps the digest of every answer of a drive, with the time it was told at.
+class AnswerLog final : public sim::RunObserver {
+ public:
+  AnswerLog(std::vector<std::pair<double, std::uint64_t>>& out, double step_s)
+      : out_(out), step_s_(step_s) {}
+  void on_frame(const sim::Frame& frame, std::span<const sim::Incident> /*new*/) override {
+    t_s_ = static_cast<double>(frame.step) * step_s_;
+  }
+  void on_path(std::span<const core::Vec2> path) override {
+    out_.emplace_back(t_s_, sim::answer_digest(path));
+  }
+
+ private:
+  std::vector<std::pair<double, std::uint64_t>>& out_;
+  double step_s_;
+  double t_s_ = 0.0;
+};
+
 }  // namespace
 
 ReproCheck check_reproduction(const Track& track, const Config& config, DriveOptions base,
@@ -49,6 +68,8 @@ ReproCheck check_reproduction(const Track& track, const Config& config, DriveOpt
   base.record.reset();
   base.live.reset();
   if (sc.duration_s) base.minutes = *sc.duration_s / 60.0;
+  AnswerLog log(check.answers, config.world.step_s);
+  base.watcher = &log;
   const DriveResult d = drive_on(track, config, base, {}, stop, &sc);
   check.report = d.report;
   if (d.report.outcome.end == sim::RunEnd::stopped) {
@@ -75,12 +96,21 @@ ReproCheck check_reproduction(const Track& track, const Config& config, DriveOpt
   return check;
 }
 
-std::string drives_differ(const sim::RunReport& a, const sim::RunReport& b) {
+std::string drives_differ(const ReproCheck& x, const ReproCheck& y) {
+  const sim::RunReport& a = x.report;
+  const sim::RunReport& b = y.report;
   if (a.warm_up && b.warm_up) {
     const long k = sim::first_disagreement(*a.warm_up, *b.warm_up);
     if (k >= 0) {
       return "told the same twice, it answered differently at warm-up cycle " +
              std::to_string(k + 1);
+    }
+  }
+  // Up to the first answer that differs, both drives were told the same.
+  for (std::size_t k = 0; k < std::min(x.answers.size(), y.answers.size()); ++k) {
+    if (x.answers[k] != y.answers[k]) {
+      return "told the same twice, it answered differently at cycle " + std::to_string(k + 1) +
+             " of the scenario (t " + fixed_text(x.answers[k].first, 2) + " s)";
     }
   }
   const std::size_t n = std::min(a.incidents.size(), b.incidents.size());

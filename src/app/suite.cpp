@@ -267,6 +267,7 @@ SuiteOutcome run_suite(const SuiteSpec& spec, const std::atomic<bool>* stop,
       }
       v.distance_m = judged_distance_m(r.report, watch.trace);
       v.duration_s = r.report.duration_s;
+      if (r.report.warm_up) v.warm_up = warm_up_text(*r.report.warm_up);
       v.pass = v.failures.empty();
       if (spec.out) {
         if (v.pass) {

@@ -100,6 +100,9 @@ std::string suite_table(const SuiteOutcome& o) {
     std::string why;
     for (const std::string& f : v.failures) why += (why.empty() ? "" : "; ") + f;
     if (!v.replay.empty()) why += " (replay: " + v.replay + ")";
+    if (!v.warm_up.empty() && !(v.pass && v.warm_up.find("NOT IN STEP") == std::string::npos)) {
+      why += (why.empty() ? "warm-up: " : "; warm-up: ") + v.warm_up;
+    }
     os << "| " << table_cell(v.file) << " | " << table_cell(v.policy) << " | "
        << (v.pass ? "pass" : "**FAIL**") << " | " << v.incidents << " | " << v.collisions << " ("
        << v.at_fault_collisions << ") | " << fixed_text(v.distance_m, 1) << " | " << table_cell(why)
@@ -124,7 +127,8 @@ nlohmann::json suite_json(const SuiteOutcome& o) {
                     {"at_fault_collisions", v.at_fault_collisions},
                     {"distance_m", v.distance_m},
                     {"duration_s", v.duration_s},
-                    {"replay", v.replay}});
+                    {"replay", v.replay},
+                    {"warm_up", v.warm_up.empty() ? json(nullptr) : json(v.warm_up)}});
   }
   return {{"passed", o.passed},
           {"failed", o.failed},

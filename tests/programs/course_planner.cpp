@@ -9,6 +9,9 @@
 //   --never-listen      never open the port (sleep)
 //   --exit-at-start     exit at once with status 3
 //   --port P            listen on P instead of 4567
+//   --random            not deterministic: each new point of an answer moves by up to 0.5 m,
+//                       drawn from the operating system's random numbers (as a planner whose
+//                       answers depend on threads, clocks or random numbers)
 
 // GCC 12 may report a false maybe-uninitialized inside Beast's HTTP parser (boost::optional)
 // depending on inlining (seen with the sanitizers), as in src/protocol/server.cpp.
@@ -22,6 +25,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <random>
 #include <string>
 #include <thread>
 
@@ -41,6 +45,7 @@ struct Args {
   long hang_after = -1;
   bool never_listen = false;
   bool exit_at_start = false;
+  bool random = false;
   unsigned short port = 4567;
 };
 
@@ -57,6 +62,8 @@ Args parse(int argc, char** argv) {
       a.never_listen = true;
     } else if (arg == "--exit-at-start") {
       a.exit_at_start = true;
+    } else if (arg == "--random") {
+      a.random = true;
     } else if (arg == "--port") {
       a.port = static_cast<unsigned short>(value());
     } else {
@@ -111,7 +118,13 @@ int main(int argc, char** argv) {
       if (event && event.value()) {
         if (args.hang_after >= 0 && answered >= args.hang_after) sleep_forever();
         if (args.crash_after >= 0 && answered >= args.crash_after) std::abort();
-        const auto plan = policy->plan(*event.value());
+        auto plan = policy->plan(*event.value());
+        if (args.random) {
+          std::random_device device;
+          std::uniform_real_distribution<double> shift(-0.5, 0.5);
+          const std::size_t kept = event.value()->previous_path.size();
+          for (std::size_t i = kept; i < plan.path.size(); ++i) plan.path[i].y += shift(device);
+        }
         reply = overtake::protocol::format_control(plan.path);
         ++answered;
       }

@@ -247,6 +247,40 @@ TEST_F(ReplayTest, RoundTripKeepsEveryFieldBitForBit) {
                           [](const ReplayFrame& f) { return std::isfinite(f.safety.headway_s); }));
 }
 
+// A run of a planner from outside keeps each path as sent, bit for bit (overtake cut drives the
+// world on with them); other runs keep centimetres only.
+TEST_F(ReplayTest, ExactPathsComeBackBitForBitWhenAsked) {
+  const auto file = dir_ / "exact.otr";
+  World world(map_, line_, params_, TrafficProfile::faithful, 5);
+  ReplayWriter writer(file, header());
+  writer.set_exact_paths(true);
+  std::vector<std::vector<core::Vec2>> sent;
+  RunOptions opts;
+  opts.duration_s = 3.0;
+  opts.observer = &writer;
+  (void)run_drive(
+      world,
+      [&](const core::Telemetry& t) {
+        core::PlanResult r = cruise()(t);
+        r.path.front().x += 1e-9 * static_cast<double>(sent.size());  // below a centimetre
+        sent.push_back(r.path);
+        return r;
+      },
+      opts);
+  writer.finish(kReport);
+  const Replay r = read_replay(file);
+  ASSERT_EQ(r.paths.size(), sent.size());
+  for (std::size_t k = 0; k < sent.size(); ++k) {
+    ASSERT_TRUE(r.paths[k].has_exact);
+    EXPECT_EQ(r.paths[k].exact, sent[k]) << "path " << k;
+  }
+  record(dir_ / "plain.otr", 3.0);
+  for (const ReplayPath& p : read_replay(dir_ / "plain.otr").paths) {
+    EXPECT_FALSE(p.has_exact);
+    EXPECT_TRUE(p.exact.empty());
+  }
+}
+
 TEST_F(ReplayTest, ChecksAReplayWithoutKeepingIt) {
   const auto file = dir_ / "run.otr";
   (void)record(file, 5.0);

@@ -77,8 +77,8 @@ struct HuntGroup {
   std::string reproduces_reactive;
   std::string reproduces_replayed;
   bool reproduced = false;  ///< both scenarios repeat the failure at its step
-  /// Set when the planner, told the same twice (the reactive scenario driven a second time after
-  /// a check failed), answered differently: how, from the first cycle that differed.
+  /// Set when the planner, told the same twice (the reactive scenario driven a second time),
+  /// answered differently: how, from the first cycle that differed.
   std::string nondeterministic;
   /// The one-line command that reproduces it: the reactive scenario, or the whole run.
   std::string repro;

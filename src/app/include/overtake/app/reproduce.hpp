@@ -8,6 +8,8 @@
 #include <filesystem>
 #include <optional>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "overtake/app/commands.hpp"
 #include "overtake/sim/scorecard.hpp"
@@ -27,6 +29,8 @@ struct ReproCheck {
   bool stopped = false;  ///< the drive was stopped (Ctrl-C): nothing was checked
   std::string text;      ///< "yes", or "no: what happened instead"; with the warm-up's account
   sim::RunReport report;
+  /// Each answer of the drive, as the world read it (sim::answer_digest), with its run time.
+  std::vector<std::pair<double, std::uint64_t>> answers;
 };
 
 /// Drives the scenario at `scenario` with the planner `base` names (its policy, planners and
@@ -41,6 +45,6 @@ struct ReproCheck {
 /// "" when two drives of one scenario went the same; else how they differed, the first
 /// warm-up cycle whose answers differed when there is one ("told the same twice, it answered
 /// differently at warm-up cycle 12 (t 25.48 s)"), else the first incident that differed.
-[[nodiscard]] std::string drives_differ(const sim::RunReport& a, const sim::RunReport& b);
+[[nodiscard]] std::string drives_differ(const ReproCheck& a, const ReproCheck& b);
 
 }  // namespace overtake::app

@@ -66,6 +66,9 @@ struct ScenarioVerdict {
   double distance_m = 0.0;  ///< in the judged part
   double duration_s = 0.0;  ///< of the whole run
   std::string replay;       ///< of a failed run, when the suite had an --out
+  /// A cut scenario's warm-up, played to a planner from outside: "in step after N of M cycles",
+  /// or "NOT IN STEP ..." (its result is then not the recorded run's); empty when none was.
+  std::string warm_up;
 };
 
 /// The expectations of `scenario` checked against a run of it (the judged part starts
