@@ -1,9 +1,11 @@
 // World checkpoints (in replays and cut scenarios): sim::decode_checkpoint, then restoring
 // what it read into a world of its traffic on the built-in track (the world, the scorecard
 // and the stepper, then a few steps), and the reference policy's state; and recorded traffic
-// (a replayed cut's cars): sim::decode_recorded_traffic, then a world following it. The first
-// byte chooses which. Bad bytes are refused with core::StateError naming the part and the
-// field; anything else (a crash, a sanitizer report, an index out of range) is a finding.
+// (a replayed cut's cars): sim::decode_recorded_traffic, then a world following it; and a cut's
+// warm-up (what a planner from outside was told): sim::decode_warm_up, then played to a planner
+// that answers each telemetry's queued path. The first byte chooses which. Bad bytes are refused
+// with core::StateError naming the part and the field; anything else (a crash, a sanitizer report,
+// an index out of range) is a finding.
 
 #include <cstddef>
 #include <cstdint>
@@ -20,6 +22,7 @@
 #include "overtake/sim/params.hpp"
 #include "overtake/sim/recorded_traffic.hpp"
 #include "overtake/sim/run.hpp"
+#include "overtake/sim/warm_up.hpp"
 #include "overtake/sim/world.hpp"
 
 namespace {
@@ -66,13 +69,24 @@ void replay_cars(std::string_view bytes) {
   (void)world.telemetry();
 }
 
+void play(std::string_view bytes) {
+  const sim::WarmUp w = sim::decode_warm_up(bytes, "fuzz");
+  sim::WarmUpResult r;
+  sim::play_warm_up(
+      w, [](const core::Telemetry& t) { return core::normal_plan(t.previous_path); }, nullptr, r);
+  (void)sim::first_disagreement(r, r);
+  (void)sim::encode_warm_up(w);
+}
+
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   if (size == 0) return 0;
   const std::string_view bytes(reinterpret_cast<const char*>(data) + 1, size - 1);
   try {
-    if (data[0] & 1U) {
+    if (data[0] & 2U) {
+      play(bytes);
+    } else if (data[0] & 1U) {
       replay_cars(bytes);
     } else {
       restore_run(sim::decode_checkpoint(bytes, "fuzz"));

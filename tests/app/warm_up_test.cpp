@@ -108,6 +108,20 @@ TEST_F(WarmUpTest, AFailureOfTheExampleProgramIsHuntedCutAndRepeatedAtItsStep) {
       EXPECT_GE(i["t_s"].get<double>(), 100.04) << traffic << " " << i.dump();
     }
   }
+  // A suite of the hunt's scenarios with the program: the warm-up is played there too, so both
+  // repeat the at-fault collision, and the suite fails them for it.
+  ASSERT_EQ(
+      run({"bench", "--scenarios", (out / "scenarios").string(), "--planner-cmd", example(),
+           "--planner-name", "example", "--jobs", "2", "--quiet", "--out", path("suite").string()}),
+      1)
+      << err_;
+  const json suite = json::parse(read_file(path("suite") / "suite.json"));
+  ASSERT_EQ(suite["verdicts"].size(), 2u) << suite.dump(2);
+  for (const json& v : suite["verdicts"]) {
+    EXPECT_FALSE(v["pass"].get<bool>());
+    EXPECT_THAT(v["failures"].dump(), HasSubstr("side_contact at t 100.04 s")) << v.dump();
+    EXPECT_THAT(v["warm_up"].get<std::string>(), HasSubstr("in step after")) << v.dump();
+  }
   // Without the warm-up the program starts afresh in a car at speed: it asks for a standstill.
   const fs::path afresh = path("afresh.json");
   ASSERT_EQ(run({"sim", "--planner-cmd", example(), "--planner-name", "example", "--scenario",
