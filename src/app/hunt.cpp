@@ -351,8 +351,8 @@ namespace {
 
 /// Drives a group's two scenarios at once with the hunt's planner: do they repeat the failure
 /// at its step? The reactive one is driven a second time: a planner that answers differently
-/// when told the same is named.
-void check_group(const HuntSpec& spec, const Track& track, const Config& config,
+/// when told the same is named. False when a warm-up did not bring the planner in step.
+bool check_group(const HuntSpec& spec, const Track& track, const Config& config,
                  const FailureMark& mark, HuntGroup& g, const std::atomic<bool>* stop) {
   DriveOptions base;
   base.policy = spec.policy;
@@ -370,13 +370,18 @@ void check_group(const HuntSpec& spec, const Track& track, const Config& config,
   g.reproduces_reactive = reactive.text;
   g.reproduces_replayed = replayed.text;
   g.reproduced = reactive.reproduced && replayed.reproduced;
-  if (reactive.stopped || replayed.stopped) return;
+  g.nondeterministic.clear();
+  const auto in_step = [](const ReproCheck& r) {
+    return !r.report.warm_up || r.report.warm_up->in_step;
+  };
+  if (reactive.stopped || replayed.stopped) return true;
   // Told the same twice: a planner whose answers differ is not deterministic (even when its
   // failure happened to come again).
   base.planner_log = log_of(g.reactive, "again");
   const ReproCheck again =
       check_reproduction(track, config, base, spec.out / g.reactive, mark, stop);
   if (!again.stopped) g.nondeterministic = drives_differ(reactive, again);
+  return in_step(reactive) && in_step(replayed);
 }
 
 }  // namespace
@@ -585,39 +590,50 @@ HuntOutcome run_hunt(const HuntSpec& spec, const std::atomic<bool>* stop,
         HuntGroup& g = out.groups[gi];
         const HuntFailure& f = out.failures[g.failures.front()];
         const std::string stem = "scenarios/" + slug(base + "-t" + fixed_text(f.t_s, 2));
-        g.cut_error.clear();
-        for (const bool replayed : {false, true}) {
-          CutOptions co;
-          co.replay = kept;
-          co.at_s = f.t_s;
-          co.before_s = spec.before_s;
-          co.after_s = spec.after_s;
-          co.replayed = replayed;
-          co.warm_up_s = spec.warm_up_s;
-          co.warm_up_all = spec.warm_up_all;
-          co.config = spec.config;
-          co.map = c.map;
-          co.out = spec.out / (stem + (replayed ? ".replayed.json" : ".reactive.json"));
-          co.description = "Found by overtake hunt: " + f.what + " of " + spec.policy + " at t " +
-                           fixed_text(f.t_s, 2) + " s (" + f.situation + "; " + c.traffic +
-                           " traffic, seed " + std::to_string(c.seed) + ", map " + f.map + ").";
-          try {
-            (void)cut_replay(co);
-          } catch (const std::exception& e) {
-            // The failure stays, with its replay and the command that drives its run again.
-            g.cut_error =
-                (replayed ? "replayed traffic: " : "reactive traffic: ") + std::string(e.what());
-            break;
+        // Cut with the hunt's warm-up; a planner from outside that does not come in step in it
+        // is cut again with every cycle from the run's first (its state is then the run's, if
+        // it is deterministic), and checked again.
+        const auto cut_and_check = [&](bool all) {
+          g.cut_error.clear();
+          for (const bool replayed : {false, true}) {
+            CutOptions co;
+            co.replay = kept;
+            co.at_s = f.t_s;
+            co.before_s = spec.before_s;
+            co.after_s = spec.after_s;
+            co.replayed = replayed;
+            co.warm_up_s = spec.warm_up_s;
+            co.warm_up_all = all;
+            co.config = spec.config;
+            co.map = c.map;
+            co.out = spec.out / (stem + (replayed ? ".replayed.json" : ".reactive.json"));
+            co.description = "Found by overtake hunt: " + f.what + " of " + spec.policy + " at t " +
+                             fixed_text(f.t_s, 2) + " s (" + f.situation + "; " + c.traffic +
+                             " traffic, seed " + std::to_string(c.seed) + ", map " + f.map + ").";
+            try {
+              (void)cut_replay(co);
+            } catch (const std::exception& e) {
+              // The failure stays, with its replay and the command that drives its run again.
+              g.cut_error =
+                  (replayed ? "replayed traffic: " : "reactive traffic: ") + std::string(e.what());
+              break;
+            }
           }
-        }
-        if (g.cut_error.empty()) {
+          if (!g.cut_error.empty()) {
+            std::filesystem::remove(spec.out / (stem + ".reactive.json"), ec);
+            return true;
+          }
           g.reactive = stem + ".reactive.json";
           g.replayed = stem + ".replayed.json";
           g.repro = planner_command(spec) + " --scenario " +
                     shell_quote((spec.out / g.reactive).string());
-          check_group(spec, *tracks[c.map_index], config, marks.at(gi), g, &halt);
-        } else {
-          std::filesystem::remove(spec.out / (stem + ".reactive.json"), ec);
+          return check_group(spec, *tracks[c.map_index], config, marks.at(gi), g, &halt);
+        };
+        if (!cut_and_check(spec.warm_up_all) && g.nondeterministic.empty() && !halt) {
+          (void)cut_and_check(true);
+          if (g.cut_error.empty()) {
+            g.warm_up = "all (" + fixed_text(spec.warm_up_s, 0) + " s did not bring it in step)";
+          }
         }
       }
       if (!new_groups.empty()) write_reports();
@@ -692,6 +708,7 @@ std::string hunt_markdown(const HuntSpec& spec, const HuntOutcome& o) {
         g.reproduces_reactive.empty()
             ? std::string("-")
             : g.reproduces_reactive + " / " + g.reproduces_replayed +
+                  (g.warm_up.empty() ? std::string() : "; warm-up " + g.warm_up) +
                   (g.nondeterministic.empty() ? std::string()
                                               : "; NOT DETERMINISTIC: " + g.nondeterministic);
     os << "| " << g.situation << " | " << g.failures.size() << " | " << scenarios << " | "
@@ -730,6 +747,7 @@ nlohmann::json hunt_json(const HuntSpec& spec, const HuntOutcome& o) {
          {"cut_error", g.cut_error},
          {"reproduces", {{"reactive", g.reproduces_reactive}, {"replayed", g.reproduces_replayed}}},
          {"reproduced", g.reproduced},
+         {"warm_up", g.warm_up.empty() ? json(nullptr) : json(g.warm_up)},
          {"nondeterministic",
           g.nondeterministic.empty() ? json(nullptr) : json(g.nondeterministic)},
          {"repro", g.repro}});
@@ -791,6 +809,8 @@ HuntShard read_hunt_shard(const std::filesystem::path& dir) {
         x.reproduces_reactive = g.at("reproduces").at("reactive").get<std::string>();
         x.reproduces_replayed = g.at("reproduces").at("replayed").get<std::string>();
         x.reproduced = g.at("reproduced").get<bool>();
+        if (g.contains("warm_up") && g.at("warm_up").is_string())
+          x.warm_up = g.at("warm_up").get<std::string>();
         if (g.at("nondeterministic").is_string())
           x.nondeterministic = g.at("nondeterministic").get<std::string>();
       }

@@ -77,6 +77,9 @@ struct HuntGroup {
   std::string reproduces_reactive;
   std::string reproduces_replayed;
   bool reproduced = false;  ///< both scenarios repeat the failure at its step
+  /// Set when the hunt's warm-up did not bring a planner from outside in step and the scenarios
+  /// were cut again from the run's first cycle (`--warm-up all`): says so.
+  std::string warm_up;
   /// Set when the planner, told the same twice (the reactive scenario driven a second time),
   /// answered differently: how, from the first cycle that differed.
   std::string nondeterministic;
