@@ -134,6 +134,27 @@ TEST_F(WarmUpTest, AFailureOfTheExampleProgramIsHuntedCutAndRepeatedAtItsStep) {
   EXPECT_GT(r["incident_counts"]["max_acceleration"].get<int>(), 0) << r["incidents"].dump();
 }
 
+// A window too short to bring the program in step (1 s, where its target speed needs about 11 s
+// to climb to its cap): the hunt cuts the failure again with every cycle from the run's first,
+// and then it repeats in step.
+TEST_F(WarmUpTest, AHuntCutsAgainFromTheRunsStartWhenTheWarmUpIsTooShort) {
+  const fs::path out = path("hunt");
+  ASSERT_EQ(run({"hunt",     "--planner-cmd",  example(), "--planner-name", "example", "--traffic",
+                 "faithful", "--first-seed",   "6",       "--minutes",      "2",       "--failures",
+                 "1",        "--budget-hours", "0.034",   "--warm-up",      "1",       "--jobs",
+                 "1",        "--quiet",        "--out",   out.string()}),
+            0)
+      << err_;
+  const json hunt = json::parse(read_file(out / "hunt.json"));
+  ASSERT_EQ(hunt["groups"].size(), 1u) << hunt.dump(2);
+  const json& g = hunt["groups"][0];
+  EXPECT_EQ(g["warm_up"], "all (1 s did not bring it in step)") << g.dump(2);
+  EXPECT_TRUE(g["reproduced"].get<bool>()) << g.dump(2);
+  const json file = json::parse(read_file(out / g["reactive"].get<std::string>()));
+  EXPECT_TRUE(file["cut"]["warm_up"]["from_run_start"].get<bool>());
+  EXPECT_DOUBLE_EQ(file["cut"]["warm_up"]["start_s"].get<double>(), 0.0);
+}
+
 // A program whose answers move by a random amount: told the same twice, it answers differently,
 // and hunt names it, with the first cycle that differed.
 TEST_F(WarmUpTest, APlannerThatIsNotDeterministicIsNamed) {
