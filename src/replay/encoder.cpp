@@ -1,5 +1,6 @@
 // The record encoder: frames, paths, incidents and the end record (docs/replay.md).
 
+#include "overtake/core/wire_number.hpp"
 #include "wire.hpp"
 
 namespace overtake::replay {
@@ -91,16 +92,36 @@ void ReplayEncoder::append_path(std::span<const core::Vec2> path, std::string& o
     y = py;
   }
   if (exact) {
+    // The points as the world reads them: whole numbers of 1e-4 m when every one is (always,
+    // for coordinates of 1 m to 1,000 km), else their bits.
+    std::vector<std::int64_t> units;
+    units.reserve(2 * count);
+    for (std::size_t i = 0; i < count && units.size() == 2 * i; ++i) {
+      for (const double v : {path[i].x, path[i].y}) {
+        const auto u = units_of_exact(core::wire_round(v));
+        const std::int64_t before = units.size() >= 2 ? units[units.size() - 2] : 0;
+        if (!u || std::abs(*u - before) > kMaxExactStep) break;
+        units.push_back(*u);
+      }
+    }
     put_u32(out, static_cast<std::uint32_t>(count));
-    std::uint64_t bx = 0;
-    std::uint64_t by = 0;
-    for (std::size_t i = 0; i < count; ++i) {
-      const auto nx = std::bit_cast<std::uint64_t>(path[i].x);
-      const auto ny = std::bit_cast<std::uint64_t>(path[i].y);
-      put_u64(out, nx ^ bx);
-      put_u64(out, ny ^ by);
-      bx = nx;
-      by = ny;
+    const bool decimal = units.size() == 2 * count;
+    put_u8(out, decimal ? 1 : 0);
+    if (decimal) {
+      for (std::size_t k = 0; k < units.size(); ++k) {
+        put_delta(out, units[k], k >= 2 ? units[k - 2] : 0);
+      }
+    } else {
+      std::uint64_t bx = 0;
+      std::uint64_t by = 0;
+      for (std::size_t i = 0; i < count; ++i) {
+        const auto nx = std::bit_cast<std::uint64_t>(core::wire_round(path[i].x));
+        const auto ny = std::bit_cast<std::uint64_t>(core::wire_round(path[i].y));
+        put_u64(out, nx ^ bx);
+        put_u64(out, ny ^ by);
+        bx = nx;
+        by = ny;
+      }
     }
   }
   end_record(out, at);

@@ -458,21 +458,40 @@ class Decoder {
           y = in_range(kind, at, y + *dy, INT32_MIN, INT32_MAX, "a path point", "y");
           path.points[i] = {static_cast<double>(x) / kCmPerM, static_cast<double>(y) / kCmPerM};
         }
-        if (r.remaining() >= kExactCountBytes) {  // added later within version 2
+        if (r.remaining() >= kExactHeadBytes) {  // added later within version 2
           const std::uint32_t n = r.u32();
-          if (n != m) {
-            bad_record(
-                kind, at,
-                "its exact points are " + std::to_string(n) + ", its points " + std::to_string(m));
+          const std::uint8_t form = r.u8();
+          if (n != m || form > 1) {
+            bad_record(kind, at,
+                       "its exact points are " + std::to_string(n) + " of form " +
+                           std::to_string(form) + ", its points " + std::to_string(m));
           }
-          need(p.size() - r.remaining() + std::size_t{n} * kExactPointBytes);
           path.exact.resize(n);
-          std::uint64_t bx = 0;
-          std::uint64_t by = 0;
-          for (core::Vec2& e : path.exact) {
-            bx ^= r.u64();
-            by ^= r.u64();
-            e = {std::bit_cast<double>(bx), std::bit_cast<double>(by)};
+          if (form == 1) {
+            std::int64_t ux = 0;
+            std::int64_t uy = 0;
+            for (std::size_t i = 0; i < n; ++i) {
+              const auto dx = r.delta();
+              const auto dy = dx ? r.delta() : std::nullopt;
+              if (!dy) {
+                bad_varint(kind, at, r,
+                           "its exact points (from point " + std::to_string(i + 1) + ")", p.size());
+              }
+              ux += *dx;
+              uy += *dy;
+              path.exact[i] = {exact_of_units(ux), exact_of_units(uy)};
+            }
+          } else {
+            need(p.size() - r.remaining() + std::size_t{n} * kExactPointBytes);
+            std::uint64_t bx = 0;
+            std::uint64_t by = 0;
+            for (core::Vec2& e : path.exact) {
+              bx ^= r.u64();
+              by ^= r.u64();
+              e = {std::bit_cast<double>(bx), std::bit_cast<double>(by)};
+            }
+          }
+          for (const core::Vec2& e : path.exact) {
             if (!std::isfinite(e.x) || !std::isfinite(e.y)) {
               bad_record(kind, at, "an exact path point that is not finite");
             }

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <bit>
+#include <charconv>
 #include <climits>
 #include <cmath>
 #include <cstdint>
@@ -31,10 +32,34 @@ inline constexpr std::size_t kCollisionClassBytes = 2;  // u8 collision kind, u8
 // (0: not a collision, or not known).
 inline constexpr std::size_t kContactBytes = 4;
 // At the end of a path record (added later within version 2, for runs of planners from
-// outside): u32 n, then n points, each x and y as the bits of the double the planner sent XOR
-// those of the point before's (0 before the first), u64 each.
-inline constexpr std::size_t kExactCountBytes = 4;
-inline constexpr std::size_t kExactPointBytes = 16;
+// outside): the points as the world reads them (wire-rounded), exactly. u32 n, u8 form, then
+// form 1: 2n zigzag varints, each coordinate in units of 1e-4 m (a whole number: the rounded
+// value is that decimal) less the same axis's of the point before (0 before the first);
+// form 0: 2n u64, each coordinate's bits XOR those of the same axis's before.
+inline constexpr std::size_t kExactHeadBytes = 5;
+inline constexpr std::size_t kExactPointBytes = 16;  // form 0
+inline constexpr double kExactUnitsPerM = 1e4;
+inline constexpr std::int64_t kMaxExactStep = 10'000'000'000;  // fits a 5-byte zigzag varint
+
+// The double a decimal count of 1e-4 m units reads as (nearest, as the wire's text is read).
+inline double exact_of_units(std::int64_t units) {
+  char buf[40];
+  auto end = std::to_chars(buf, buf + sizeof buf - 4, units).ptr;
+  for (const char c : std::string_view("e-4")) *end++ = c;
+  double v = 0.0;
+  std::from_chars(buf, end, v);
+  return v;
+}
+
+// `v` as a count of 1e-4 m units when it reads back exactly from it.
+inline std::optional<std::int64_t> units_of_exact(double v) {
+  if (!(std::abs(v) < 1e9)) return std::nullopt;
+  const auto units = static_cast<std::int64_t>(std::llround(v * kExactUnitsPerM));
+  if (std::bit_cast<std::uint64_t>(exact_of_units(units)) != std::bit_cast<std::uint64_t>(v)) {
+    return std::nullopt;
+  }
+  return units;
+}
 inline constexpr std::uint8_t kNoCollisionKind = 255;  // an incident that is not a collision
 inline constexpr std::uint16_t kNoSeconds = 65535;     // TTC or headway: none (or >= 655.35 s)
 inline constexpr std::size_t kMaxVarintBytes = 5;  // 35 bits: the zigzag of a difference of two i32
