@@ -101,6 +101,16 @@ void Referee::count(IncidentType type, const EgoFrame& f, double value) {
   incident_free_m_ = 0.0;
 }
 
+void Referee::forget_counts() {
+  incidents_.clear();
+  counts_ = {};
+  peaks_ = {};
+  distance_m_ = 0.0;
+  incident_free_m_ = 0.0;
+  best_incident_free_m_ = 0.0;
+  exact_outside_lane_ = 0;
+}
+
 void Referee::observe(const EgoFrame& f) {
   // Distance, then the new position joins the ring.
   if (ring_filled_ > 0) {

@@ -82,6 +82,7 @@ Stepper::Stepper(World& world, const RunOptions& options)
       archive(ar);
       skipped.archive_contacts(ar);
       scorecard_ = Scorecard(world_);
+      scorecard_.continue_rubric(skipped);
       total_steps_ = world_.steps() + std::lround(options.duration_s / world_.params().step_s);
     }
     ar.expect_end();

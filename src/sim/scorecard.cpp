@@ -48,6 +48,11 @@ void LaneTracker::observe(double d_m, double dt_s) {
   settled_ = lane;
 }
 
+void Scorecard::continue_rubric(const Scorecard& run) {
+  referee_ = run.referee_;
+  referee_.forget_counts();
+}
+
 Scorecard::Scorecard(const World& world)
     : referee_(world.params().referee, world.params().step_s, world.params().road),
       safety_(world.params().safety, world.params().step_s, world.params().road, world.params().car,

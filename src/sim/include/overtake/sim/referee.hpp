@@ -92,6 +92,10 @@ class Referee {
   void set_initial_speed(double speed_mps) { prev_block_mean_speed_ = speed_mps; }
   /// Feeds the state after one step. Frames must come once per step, in order.
   void observe(const EgoFrame& frame);
+  /// Forgets what was counted (incidents, counts, peaks, distances) and keeps how it counts:
+  /// its blocks and groups, latches and recent positions. A cut scenario's referee goes on
+  /// from the run's, so that it counts at the same steps as the run did.
+  void forget_counts();
 
   [[nodiscard]] const std::vector<Incident>& incidents() const { return incidents_; }
   [[nodiscard]] std::array<int, kIncidentTypeCount> counts() const;

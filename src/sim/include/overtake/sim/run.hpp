@@ -112,8 +112,9 @@ struct RunOptions {
   /// draw are the checkpoint's, not the options').
   std::string_view restore;
   /// What of `restore` is taken: the whole run (it goes on as if it had never stopped), or
-  /// the world and the latency draw only (a cut scenario: the scorecard starts afresh and
-  /// the run lasts `duration_s` from the checkpoint's time).
+  /// the world and the latency draw only (a cut scenario: the scorecard counts afresh, its
+  /// referee going on from the run's so that the rubric counts at the same steps, and the run
+  /// lasts `duration_s` from the checkpoint's time).
   enum class RestoreScope : std::uint8_t {
     whole_run,
     world

@@ -156,6 +156,10 @@ class Scorecard {
   /// Writes or restores the contacts (a part of its own, after the stepper's: checkpoints of
   /// builds before contacts end without it, and restore with none). Call after archive().
   void archive_contacts(core::StateArchive& ar);
+  /// A cut scenario's scorecard, made afresh at its start: its referee goes on from `run`'s
+  /// (the run restored from the checkpoint), having forgotten what it counted, so that the
+  /// rubric's blocks, groups and latches fall at the steps they fell in the run.
+  void continue_rubric(const Scorecard& run);
 
  private:
   Referee referee_;
