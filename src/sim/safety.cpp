@@ -497,6 +497,15 @@ void SafetyMonitor::archive_track(core::StateArchive& ar, Track& t, bool is_ego)
   }
 }
 
+void SafetyMonitor::forget_counts() {
+  summary_ = SafetySummary{};
+  in_episode_ = false;
+  episode_contact_ = false;
+  open_contacts_.clear();
+  contacts_begun_ = 0;
+  contact_id_.reset();
+}
+
 void SafetyMonitor::archive(core::StateArchive& ar) {
   ar.part("safety");
   ar.io(step_, "step");

@@ -1,5 +1,6 @@
 #include "overtake/sim/scorecard.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -51,6 +52,15 @@ void LaneTracker::observe(double d_m, double dt_s) {
 void Scorecard::continue_rubric(const Scorecard& run) {
   referee_ = run.referee_;
   referee_.forget_counts();
+  safety_ = run.safety_;
+  safety_.forget_counts();
+  lanes_ = run.lanes_;
+  lanes_.forget_counts();
+}
+
+void LaneTracker::forget_counts() {
+  changes_ = 0;
+  std::fill(time_in_lane_s_.begin(), time_in_lane_s_.end(), 0.0);
 }
 
 Scorecard::Scorecard(const World& world)

@@ -113,8 +113,9 @@ struct RunOptions {
   std::string_view restore;
   /// What of `restore` is taken: the whole run (it goes on as if it had never stopped), or
   /// the world and the latency draw only (a cut scenario: the scorecard counts afresh, its
-  /// referee going on from the run's so that the rubric counts at the same steps, and the run
-  /// lasts `duration_s` from the checkpoint's time).
+  /// referee, safety monitor and lane tracker going on from the run's so that the rubric counts
+  /// at the same steps and contacts are classified alike, and the run lasts `duration_s` from
+  /// the checkpoint's time).
   enum class RestoreScope : std::uint8_t {
     whole_run,
     world

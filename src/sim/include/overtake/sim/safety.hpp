@@ -216,6 +216,11 @@ class SafetyMonitor {
   [[nodiscard]] SafetySummary summary() const;
   /// Contacts begun so far.
   [[nodiscard]] int contacts_begun() const { return contacts_begun_; }
+  /// Forgets what was counted (the summary, near-miss episodes, contacts) and keeps the tracks
+  /// (each body's lanes and when it entered them, its recent states): a cut scenario's monitor
+  /// goes on from the run's, so that a contact is classified as in the run. A contact going on
+  /// at the start is forgotten (its next touch begins one).
+  void forget_counts();
 
   /// Writes or restores its tracks, figures and episodes (a checkpoint).
   void archive(core::StateArchive& ar);

@@ -118,6 +118,8 @@ class LaneTracker {
   [[nodiscard]] int lane_changes() const { return changes_; }
   [[nodiscard]] const std::vector<double>& time_in_lane_s() const { return time_in_lane_s_; }
   void archive(core::StateArchive& ar);
+  /// Forgets the lane changes and time per lane counted, keeping the lane it is settled in.
+  void forget_counts();
 
  private:
   core::RoadParams road_;
@@ -156,9 +158,10 @@ class Scorecard {
   /// Writes or restores the contacts (a part of its own, after the stepper's: checkpoints of
   /// builds before contacts end without it, and restore with none). Call after archive().
   void archive_contacts(core::StateArchive& ar);
-  /// A cut scenario's scorecard, made afresh at its start: its referee goes on from `run`'s
-  /// (the run restored from the checkpoint), having forgotten what it counted, so that the
-  /// rubric's blocks, groups and latches fall at the steps they fell in the run.
+  /// A cut scenario's scorecard, made afresh at its start: its referee, safety monitor and lane
+  /// tracker go on from `run`'s (the run restored from the checkpoint), having forgotten what
+  /// they counted, so that the rubric's blocks, groups and latches fall at the steps they fell
+  /// in the run, and a contact is classified from the same history.
   void continue_rubric(const Scorecard& run);
 
  private:
