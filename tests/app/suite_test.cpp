@@ -5,16 +5,20 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <chrono>
+#include <csignal>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <thread>
 
 #include "overtake/app/commands.hpp"
 #include "overtake/app/config.hpp"
 #include "overtake/app/hunt.hpp"
 #include "overtake/app/io.hpp"
 #include "overtake/app/suite.hpp"
+#include "process_support.hpp"
 #include "temp_dir.hpp"
 
 namespace overtake::app {
@@ -536,17 +540,24 @@ namespace {
 TEST(Hunt, CtrlCKeepsWhatWasFound) {
   TempDir dir;
   const fs::path out = dir.path() / "hunt";
-  // SIGINT after 3 s of a hunt that would go on for hours.
-  const std::string cmd = "timeout --preserve-status -s INT 3 " + std::string(OVERTAKE_BINARY_DIR) +
-                          "/overtake hunt --policy seed001 --traffic faithful --minutes 2 "
-                          "--failures 1000 --budget-hours 1000 --jobs 2 --quiet --out " +
-                          out.string() + " 2>/dev/null";
-  const int rc = std::system(cmd.c_str());
-  ASSERT_TRUE(WIFEXITED(rc));
-  EXPECT_EQ(WEXITSTATUS(rc), 130);
+  // SIGINT to a hunt that would go on for hours, once it has kept a failure (hunt.json is
+  // written after each one): waiting for that, not for a fixed time, holds on a loaded machine.
+  const pid_t pid = test::start_overtake(
+      {"hunt", "--policy", "seed001", "--traffic", "faithful", "--minutes", "2", "--failures",
+       "1000", "--budget-hours", "1000", "--jobs", "2", "--quiet", "--out", out.string()},
+      dir.path() / "stdout", dir.path() / "stderr");
+  const auto until = std::chrono::steady_clock::now() + std::chrono::minutes(2);
+  while (!fs::exists(out / "hunt.json") && std::chrono::steady_clock::now() < until) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  ::kill(pid, SIGINT);
+  const auto status = test::exit_status(pid, std::chrono::minutes(1));
+  ASSERT_TRUE(status.has_value()) << "the hunt did not end within a minute of Ctrl-C";
+  EXPECT_EQ(*status, 130);
   const json j = read_json_file(out / "hunt.json");
   EXPECT_TRUE(j["interrupted"].get<bool>());
   EXPECT_GE(j["runs"].get<int>(), 1);
+  EXPECT_GE(j["failures"].size(), 1U);
   for (const json& f : j["failures"]) EXPECT_TRUE(fs::exists(out / f["replay"].get<std::string>()));
   EXPECT_TRUE(fs::is_empty(out / "runs"));  // no run's replay left half-kept
 }
