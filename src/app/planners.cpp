@@ -109,12 +109,14 @@ PlannerCall call_of(const PlannerEntry& entry) {
   if (entry.program) {
     c.cwd = entry.program->cwd.string();
     c.port = entry.program->port;
+    c.reply_timeout_s = entry.program->reply_timeout_s;
   }
   return c;
 }
 
 PlannerCall call_from_description(const std::string& name, const nlohmann::json& described) {
-  PlannerCall call{PlannerKind::builtin, name, {}, {}, ProgramSpec{}.port};
+  PlannerCall call{PlannerKind::builtin,         name, {}, {}, ProgramSpec{}.port,
+                   ProgramSpec{}.reply_timeout_s};
   if (!described.is_object()) return call;
   const auto text = [&](const char* key) {
     const auto it = described.find(key);
@@ -141,7 +143,8 @@ std::string planner_command_line(const PlannerCall& c) {
       return "overtake drive --policy-py " + named;
     case PlannerKind::program: {
       std::string cmd = "overtake sim --planner-cmd " + shell_quote(c.source) + " --planner-name " +
-                        shell_quote(c.name);
+                        shell_quote(c.name) + " --reply-timeout " +
+                        fixed_text(c.reply_timeout_s, 1);
       if (!c.cwd.empty() && c.cwd != ".") cmd += " --planner-cwd " + shell_quote(c.cwd);
       if (c.port != ProgramSpec{}.port) cmd += " --planner-port " + std::to_string(c.port);
       return cmd;

@@ -127,9 +127,10 @@ void add_planner_flags(CLI::App& cmd, PlannerFlags& flags, PlannerFlagSet which)
 struct PlannerCall {
   PlannerKind kind = PlannerKind::builtin;
   std::string name;
-  std::string source;  ///< a plugin's path, module:function, or a program's command
-  std::string cwd;     ///< a program's working directory ("" or "." : the current one)
-  int port = 4567;     ///< where a program listens
+  std::string source;            ///< a plugin's path, module:function, or a program's command
+  std::string cwd;               ///< a program's working directory ("" or "." : the current one)
+  int port = 4567;               ///< where a program listens
+  double reply_timeout_s = 5.0;  ///< a program's longest wait for one reply (`sim`'s is 2 s)
 };
 /// The call of an entry.
 [[nodiscard]] PlannerCall call_of(const PlannerEntry& entry);
@@ -140,7 +141,8 @@ struct PlannerCall {
 /// The start of the command that drives with the planner, flags quoted for sh:
 /// `overtake drive --policy NAME` (built-in), `overtake drive --policy-lib NAME=LIB`,
 /// `overtake drive --policy-py NAME=MODULE:FN`, `overtake sim --planner-cmd CMD --planner-name
-/// NAME` (with --planner-cwd and --planner-port when they are not the defaults).
+/// NAME --reply-timeout S` (the program's, as bench and hunt gave it; with --planner-cwd and
+/// --planner-port when they are not the defaults).
 [[nodiscard]] std::string planner_command_line(const PlannerCall& call);
 
 /// Splits `NAME=VALUE` (NAME: letters, digits, `_`, `-`, `.`; no space before the `=`) into
