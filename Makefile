@@ -1,19 +1,27 @@
 # overtake: the two commands of the README, and a few more for development.
-#   make demo   install what is missing, build the binary (Release), drive the built-in track, print
-#               the scorecard and write the drive as a page to open in a browser
-#   make check  install what is missing, build, run every test (also under ASan + UBSan), fuzz every parser briefly
+#   make demo   install what the binary needs and is missing (scripts/install-deps.sh --demo), build
+#               the binary (Release), drive the built-in track, print the scorecard and write the
+#               drive as a page to open in a browser
+#   make check  install everything that is missing, build, run every test (also under ASan + UBSan),
+#               fuzz every parser briefly
 #   make fuzz   the libFuzzer harnesses (fuzz/) for FUZZ_SECONDS each; findings in build/fuzz/findings
 #   make format-check  the C++ sources against .clang-format (make format fixes them)
 #   make tidy   clang-tidy (.clang-tidy) over src/, with the release build's compile commands
-.PHONY: all deps build demo check test test-asan fuzz-build fuzz-smoke fuzz bench format \
+.PHONY: all deps deps-demo build demo check test test-asan fuzz-build fuzz-smoke fuzz bench format \
         format-check tidy clean
 
 FUZZ_SECONDS ?= 600
 
 all: build
 
+# Everything: the build, the tests, the sanitizer and fuzz builds, format, clang-tidy, the cluster
+# and browser tests (scripts/install-deps.sh --help lists the packages).
 deps:
 	@scripts/install-deps.sh
+
+# What the demo needs: configuring the release preset, the binary with its web pages, the drive.
+deps-demo:
+	@scripts/install-deps.sh --demo
 
 build: deps
 	@cmake --preset release >/dev/null
@@ -21,7 +29,7 @@ build: deps
 
 # Only the binary is built (not the tests and benchmarks): the drive, its scorecard, and the
 # drive as one self-contained page to open in a browser.
-demo: deps
+demo: deps-demo
 	@cmake --preset release >/dev/null
 	@cmake --build --preset release --target overtake
 	@mkdir -p build/demo

@@ -8,9 +8,10 @@
 #include <memory>
 #include <string>
 
-#include "overtake/app/commands.hpp"
 #include "overtake/core/units.hpp"
 #include "overtake/planner/policy.hpp"
+#include "overtake/run/config.hpp"
+#include "overtake/run/drive.hpp"
 #include "overtake/sim/scorecard.hpp"
 #include "overtake/sim/world.hpp"
 
@@ -18,8 +19,8 @@ namespace {
 
 using namespace overtake;
 
-const app::Track& default_track() {
-  static const auto track = app::load_track(std::nullopt);
+const run::Track& default_track() {
+  static const auto track = run::load_track(std::nullopt);
   return *track;
 }
 
@@ -35,7 +36,7 @@ sim::World profile_world(const benchmark::State& state, const core::Map& map,
                          const core::ReferenceLine& line) {
   const auto profile =
       state.range(0) == 0 ? sim::TrafficProfile::faithful : sim::TrafficProfile::calm;
-  return {map, line, app::default_config().world, profile, 1};
+  return {map, line, run::default_config().world, profile, 1};
 }
 
 // Steps `world` along lane 1 (its path refilled off the clock), `after_step` on the clock
@@ -80,7 +81,7 @@ BENCHMARK(BM_ScoredStep)->Arg(0)->Arg(1);
 // The telemetry snapshot a planner gets each cycle (with wire rounding).
 void BM_Telemetry(benchmark::State& state) {
   const auto& track = default_track();
-  sim::World world(track.map, track.line, app::default_config().world,
+  sim::World world(track.map, track.line, run::default_config().world,
                    sim::TrafficProfile::faithful, 1);
   world.apply_path(lane_path(world, 1600));
   for (int i = 0; i < 1500; ++i) world.step();  // 30 s: every car placed
@@ -107,7 +108,7 @@ BENCHMARK(BM_ToFrenet)->Arg(1)->Arg(0);
 // One walkthrough planning cycle on a live telemetry.
 void BM_WalkthroughPlan(benchmark::State& state) {
   const auto& track = default_track();
-  const app::Config config = app::default_config();
+  const run::Config config = run::default_config();
   sim::World world(track.map, track.line, config.world, sim::TrafficProfile::faithful, 1);
   auto policy = planner::make_policy("walkthrough", track.line, config.planner);
   for (int i = 0; i < 500; ++i) {  // get up to speed so that the path is reused
@@ -122,12 +123,12 @@ BENCHMARK(BM_WalkthroughPlan);
 
 // A whole 30-minute drive with the walkthrough policy: wall time and ratio to real time.
 void BM_Drive30Minutes(benchmark::State& state) {
-  app::DriveOptions o;
+  run::DriveOptions o;
   o.minutes = 30.0;
   o.traffic = state.range(0) == 0 ? "faithful" : "calm";
   double simulated_s = 0.0;
   for (auto _ : state) {
-    const auto r = app::drive(o);
+    const auto r = run::drive(o);
     simulated_s += r.report.duration_s;
   }
   state.counters["x_real_time"] = benchmark::Counter(simulated_s, benchmark::Counter::kIsRate);
@@ -154,13 +155,13 @@ double resident_bytes() {
 // 10 simulated seconds and at the end. Nothing in a run grows with its length (timing is
 // kept in a fixed-size sketch), so a 4-hour drive ends where a 10-minute one does.
 void BM_DriveMemory(benchmark::State& state) {
-  app::DriveOptions o;
+  run::DriveOptions o;
   o.minutes = static_cast<double>(state.range(0));
   double first = 0.0;
   double last = 0.0;
   for (auto _ : state) {
     first = 0.0;
-    const auto r = app::drive(o, [&](double, double) {
+    const auto r = run::drive(o, [&](double, double) {
       last = resident_bytes();
       if (first == 0.0) first = last;
     });

@@ -8,9 +8,10 @@
 #include <memory>
 #include <string>
 
-#include "overtake/app/commands.hpp"
-#include "overtake/app/scenario_file.hpp"
 #include "overtake/planner/policy.hpp"
+#include "overtake/run/config.hpp"
+#include "overtake/run/drive.hpp"
+#include "overtake/run/scenario_file.hpp"
 #include "overtake/sim/checkpoint.hpp"
 #include "overtake/sim/run.hpp"
 #include "overtake/sim/world.hpp"
@@ -19,8 +20,8 @@ namespace {
 
 using namespace overtake;
 
-const app::Track& track() {
-  static const auto t = app::load_track(std::nullopt);
+const run::Track& track() {
+  static const auto t = run::load_track(std::nullopt);
   return *t;
 }
 
@@ -30,7 +31,7 @@ sim::TrafficProfile profile_of(const benchmark::State& state) {
 
 /// A reference drive of 5 minutes, stopped at a cycle's start.
 struct Drive {
-  app::Config config = app::default_config();
+  run::Config config = run::default_config();
   std::unique_ptr<sim::World> world;
   std::unique_ptr<planner::Policy> policy;
   std::unique_ptr<sim::Stepper> run;
@@ -64,7 +65,7 @@ void BM_CheckpointTake(benchmark::State& state) {
   }
   const std::string encoded = sim::encode_checkpoint(d.take());
   state.counters["bytes"] = static_cast<double>(bytes);
-  state.counters["packed_bytes"] = static_cast<double>(app::pack_blob(encoded).size());
+  state.counters["packed_bytes"] = static_cast<double>(run::pack_blob(encoded).size());
   state.SetLabel(state.range(0) == 0 ? "faithful" : "calm");
 }
 BENCHMARK(BM_CheckpointTake)->Arg(0)->Arg(1)->Unit(benchmark::kMicrosecond);
@@ -75,7 +76,7 @@ BENCHMARK(BM_CheckpointTake)->Arg(0)->Arg(1)->Unit(benchmark::kMicrosecond);
 void BM_CheckpointRestore(benchmark::State& state) {
   Drive d(profile_of(state));
   const std::string encoded = sim::encode_checkpoint(d.take());
-  const app::Config config = app::default_config();
+  const run::Config config = run::default_config();
   const bool make = state.range(1) == 1;
   auto world =
       std::make_unique<sim::World>(track().map, track().line, config.world, profile_of(state), 1);

@@ -9,7 +9,7 @@
 //   the difference is the boundary's cost (the telemetry converted to the original's units
 //   and arrays, the call through the library, the answer checked and copied back);
 // - PluginBoundary/PluginWatched: the plugin as drive and bench run it, each call watched
-//   for its reply timeout (app::watch_policy): the difference is the watchdog's cost;
+//   for its reply timeout (planners::watch_policy): the difference is the watchdog's cost;
 // - PluginPolicies/Walkthrough and PluginPolicies/KeepLane: a built-in policy and the
 //   example plugin (examples/plugin), for scale.
 // The plugins are the modules the tests build (OVERTAKE_BUILD_TESTS).
@@ -21,8 +21,8 @@
 #include <string>
 #include <vector>
 
-#include "overtake/app/plan_watch.hpp"
 #include "overtake/planner/policy.hpp"
+#include "overtake/planners/plan_watch.hpp"
 #include "overtake/plugin/plugin.hpp"
 #include "overtake/sim/world.hpp"
 #include "recording.hpp"
@@ -107,8 +107,8 @@ BENCHMARK(BM_PluginBoundary_Plugin)->Name("PluginBoundary/Plugin");
 void BM_PluginBoundary_PluginWatched(benchmark::State& state) {
   const plugin::LoadedPlugin p = plugin::load_plugin(OVERTAKE_MINIMAL_PLUGIN);
   replay(state, [&p] {
-    return app::watch_policy(p.make(track().line, config().planner), "the plugin minimal", 5.0,
-                             nullptr);
+    return planners::watch_policy(p.make(track().line, config().planner), "the plugin minimal", 5.0,
+                                  nullptr);
   });
 }
 BENCHMARK(BM_PluginBoundary_PluginWatched)->Name("PluginBoundary/PluginWatched");

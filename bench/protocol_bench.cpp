@@ -10,18 +10,19 @@
 
 #include <boost/asio/io_context.hpp>
 
-#include "overtake/app/commands.hpp"
 #include "overtake/protocol/client.hpp"
 #include "overtake/protocol/codec.hpp"
 #include "overtake/protocol/server.hpp"
+#include "overtake/run/config.hpp"
+#include "overtake/run/drive.hpp"
 #include "overtake/sim/world.hpp"
 
 namespace {
 
 using namespace overtake;
 
-std::shared_ptr<const app::Track> track() {
-  static const auto t = app::load_track(std::nullopt);
+std::shared_ptr<const run::Track> track() {
+  static const auto t = run::load_track(std::nullopt);
   return t;
 }
 
@@ -29,7 +30,7 @@ std::shared_ptr<const app::Track> track() {
 // queue ahead of the ego.
 core::Telemetry snapshot() {
   const auto t = track();
-  sim::World world(t->map, t->line, app::default_config().world, sim::TrafficProfile::faithful, 1);
+  sim::World world(t->map, t->line, run::default_config().world, sim::TrafficProfile::faithful, 1);
   const auto lane_path = [&](int n) {
     std::vector<core::Vec2> path;
     const double s0 = world.ego().frenet.s_m;
@@ -84,7 +85,7 @@ void BM_ProtocolRoundTrip(benchmark::State& state) {
   boost::asio::io_context ioc;
   protocol::PlannerSetup setup;
   setup.line = std::shared_ptr<const core::ReferenceLine>(track(), &track()->line);
-  setup.params = app::default_config().planner;
+  setup.params = run::default_config().planner;
   protocol::ServeOptions opts;
   opts.port = 0;
   opts.status_lines = false;
@@ -101,7 +102,7 @@ void BM_ProtocolRoundTrip(benchmark::State& state) {
         protocol::parse_planner_url("ws://127.0.0.1:" + std::to_string(port)).value(), client);
     protocol::RemotePlanner remote(connection, client);
     const auto t = track();
-    sim::World world(t->map, t->line, app::default_config().world, sim::TrafficProfile::faithful,
+    sim::World world(t->map, t->line, run::default_config().world, sim::TrafficProfile::faithful,
                      1);
     int k = 0;
     for (auto _ : state) {

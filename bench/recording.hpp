@@ -8,21 +8,21 @@
 #include <string>
 #include <vector>
 
-#include "overtake/app/commands.hpp"
-#include "overtake/app/config.hpp"
 #include "overtake/core/random.hpp"
 #include "overtake/planner/policy.hpp"
+#include "overtake/run/config.hpp"
+#include "overtake/run/drive.hpp"
 #include "overtake/sim/world.hpp"
 
 namespace overtake::benchmarks {
 
-inline const app::Track& track() {
-  static const auto t = app::load_track(std::nullopt);
+inline const run::Track& track() {
+  static const auto t = run::load_track(std::nullopt);
   return *t;
 }
 
-inline const app::Config& config() {
-  static const app::Config c = app::default_config();
+inline const run::Config& config() {
+  static const run::Config c = run::default_config();
   return c;
 }
 

@@ -16,12 +16,12 @@
 #include <memory>
 #include <vector>
 
-#include "overtake/app/commands.hpp"
-#include "overtake/app/config.hpp"
 #include "overtake/core/cpu_clock.hpp"
 #include "overtake/core/random.hpp"
 #include "overtake/planner/policy.hpp"
 #include "overtake/planner/reference/reference_policy.hpp"
+#include "overtake/run/config.hpp"
+#include "overtake/run/drive.hpp"
 #include "overtake/sim/world.hpp"
 #include "recording.hpp"
 

@@ -1,6 +1,6 @@
 // A bench folder as `overtake compare` and the Python module's compare() read it: the input's
 // first line is its bench.json, the rest its runs.jsonl, written into a folder of the harness's
-// own and compared with itself (app::compare_bench_folders): the manifest read as a JSON file
+// own and compared with itself (batch::compare_bench_folders): the manifest read as a JSON file
 // (nesting, size), each line read and checked against the manifest (a duplicate, another
 // sweep's run, map, length or build), the rows read and the comparison made. A bad folder is
 // refused with std::runtime_error (UsageError, ConfigError) naming the file; anything else is a
@@ -17,7 +17,7 @@
 #include <string>
 #include <string_view>
 
-#include "overtake/app/bench.hpp"
+#include "overtake/batch/bench.hpp"
 #include "overtake/eval/compare.hpp"
 
 namespace {
@@ -48,13 +48,13 @@ void write(const std::filesystem::path& p, std::string_view text) {
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   const std::string_view text(reinterpret_cast<const char*>(data), size);
   const std::size_t eol = text.find('\n');
-  write(folder() / overtake::app::kBenchManifestFile, text.substr(0, eol));
-  write(folder() / overtake::app::kBenchRunsFile,
+  write(folder() / overtake::batch::kBenchManifestFile, text.substr(0, eol));
+  write(folder() / overtake::batch::kBenchRunsFile,
         eol == std::string_view::npos ? std::string_view() : text.substr(eol + 1));
   try {
     overtake::eval::CompareOptions options;
     options.resamples = 200;  // the intervals' code, at a tenth of its cost
-    (void)overtake::app::compare_bench_folders(folder(), folder(), options);
+    (void)overtake::batch::compare_bench_folders(folder(), folder(), options);
   } catch (const std::runtime_error&) {
   }
   return 0;

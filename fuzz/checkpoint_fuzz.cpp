@@ -12,12 +12,12 @@
 #include <memory>
 #include <string_view>
 
-#include "overtake/app/resources.hpp"
 #include "overtake/core/map.hpp"
 #include "overtake/core/reference_line.hpp"
 #include "overtake/core/state_archive.hpp"
 #include "overtake/planner/params.hpp"
 #include "overtake/planner/policy.hpp"
+#include "overtake/run/resources.hpp"
 #include "overtake/sim/checkpoint.hpp"
 #include "overtake/sim/params.hpp"
 #include "overtake/sim/recorded_traffic.hpp"

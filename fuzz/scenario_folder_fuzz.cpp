@@ -1,11 +1,11 @@
 // A scenarios folder as `overtake bench --scenarios DIR` reads it, without driving: the input
 // is up to 8 entries separated by a line "%%", each a name line and its contents. A name that
 // starts with '@' makes a link to itself (a loop), '+' a folder, '>' a link to nowhere; any
-// other makes a file. The folder is listed (app::list_scenario_folder), each entry is checked
-// (app::unreadable_scenario) and read as a scenario (app::load_scenario on the default road), and
-// the verdicts are written as the suite writes them (the table, the JSON). Refusals are UsageError
-// and ConfigError; anything else, a table that is not one row a verdict, or JSON that is not valid
-// UTF-8, is a finding.
+// other makes a file. The folder is listed (scenarios::list_scenario_folder), each entry is checked
+// (scenarios::unreadable_scenario) and read as a scenario (run::load_scenario on the default road),
+// and the verdicts are written as the suite writes them (the table, the JSON). Refusals are
+// UsageError and ConfigError; anything else, a table that is not one row a verdict, or JSON that is
+// not valid UTF-8, is a finding.
 
 #include <stdlib.h>
 #include <unistd.h>
@@ -18,17 +18,21 @@
 #include <string>
 #include <string_view>
 
-#include "overtake/app/commands.hpp"
-#include "overtake/app/config.hpp"
-#include "overtake/app/scenario_file.hpp"
-#include "overtake/app/suite.hpp"
+#include "overtake/base/errors.hpp"
+#include "overtake/base/text.hpp"
 #include "overtake/core/road.hpp"
 #include "overtake/core/text_check.hpp"
+#include "overtake/run/config.hpp"
+#include "overtake/run/drive.hpp"
+#include "overtake/run/scenario_file.hpp"
+#include "overtake/scenarios/suite.hpp"
 
 namespace {
 
 namespace fs = std::filesystem;
-namespace app = overtake::app;
+namespace base = overtake::base;
+namespace run = overtake::run;
+namespace scenarios = overtake::scenarios;
 
 constexpr std::size_t kMaxEntries = 8;
 
@@ -90,35 +94,35 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       out.write(body.data(), static_cast<std::streamsize>(body.size()));
     }
   }
-  app::ScenarioFolder listed;
+  scenarios::ScenarioFolder listed;
   try {
-    listed = app::list_scenario_folder(folder());
-  } catch (const app::UsageError&) {
+    listed = scenarios::list_scenario_folder(folder());
+  } catch (const base::UsageError&) {
     return 0;
   }
-  app::SuiteOutcome outcome;
+  scenarios::SuiteOutcome outcome;
   outcome.skipped = listed.skipped;
   for (const fs::path& f : listed.files) {
-    app::ScenarioVerdict v;
+    scenarios::ScenarioVerdict v;
     v.file = f.filename().string();
     v.policy = "reference";
-    if (const std::string why = app::unreadable_scenario(f); !why.empty()) {
+    if (const std::string why = scenarios::unreadable_scenario(f); !why.empty()) {
       v.failures.push_back("cannot read: " + why);
     } else {
       try {
-        v.name = app::load_scenario(f, overtake::core::RoadParams{}).name;
+        v.name = run::load_scenario(f, overtake::core::RoadParams{}).name;
         v.pass = true;
-      } catch (const app::ConfigError& e) {
+      } catch (const run::ConfigError& e) {
         v.failures.push_back(e.what());
       }
     }
     (v.pass ? outcome.passed : outcome.failed) += 1;
     outcome.verdicts.push_back(std::move(v));
   }
-  const std::string table = app::suite_table(outcome);
+  const std::string table = scenarios::suite_table(outcome);
   // The header, its rule, a row a verdict, a blank line and the count.
   check(static_cast<std::size_t>(std::count(table.begin(), table.end(), '\n')) ==
         outcome.verdicts.size() + 4);
-  check(overtake::core::is_valid_utf8(app::json_text(app::suite_json(outcome), 2)));
+  check(overtake::core::is_valid_utf8(base::json_text(scenarios::suite_json(outcome), 2)));
   return 0;
 }

@@ -1,7 +1,7 @@
 // Text from outside that overtake checks before a library reads it, or writes into JSON: a
 // plugin's failure reason, a file name, any JSON text. Each property failing is a finding:
 // - core::valid_utf8 gives valid UTF-8 and gives valid text back unchanged; the text as JSON
-//   (as app::json_text writes it, stray bytes as U+FFFD) parses back to valid UTF-8, the same
+//   (as base::json_text writes it, stray bytes as U+FFFD) parses back to valid UTF-8, the same
 //   text when it was valid;
 // - core::json_too_deep_at finds a `[` or `{` when it finds anything; when it finds nothing, a
 //   text that parses is a value no deeper than core::kMaxJsonDepth, and it writes and reads

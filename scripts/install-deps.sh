@@ -3,23 +3,42 @@
 # web pages' Node packages (web/package-lock.json) with npm ci.
 # Installs only what is missing; says what it installs; uses sudo when not root.
 #
+#   scripts/install-deps.sh [--all | --demo] [--dry-run]
+#
+# Two sets (scripts/install-deps.sh --help lists them):
+#   --all (the default; make check): everything the build, the tests, the sanitizer and fuzz
+#         builds, the format and clang-tidy checks and the cluster and browser tests need;
+#   --demo (make demo): only what configuring the release preset and building the `overtake`
+#         binary need, and what the demo runs.
+# --dry-run installs nothing: it prints the set, what it would install and whether it would run
+# npm ci in web/.
+#
 # OVERTAKE_WEB=OFF scripts/install-deps.sh: for builds without the web pages (the CMake option
 # OVERTAKE_WEB=OFF, e.g. the `noweb` and `asan` presets): no Node.js, npm, web/node_modules or
 # Chromium (the browser test's), only what the C++ layers need.
 set -euo pipefail
 
 root="$(cd "$(dirname "$0")/.." && pwd)"
-web_pages=true
-case "${OVERTAKE_WEB:-ON}" in
-  OFF|off|Off|0|NO|no|FALSE|false) web_pages=false ;;
-esac
 
-packages=(
-  cmake ninja-build g++ make pkg-config
+# What `cmake --preset release` and `cmake --build --preset release --target overtake` need. The
+# release preset builds the tests and the benchmarks too (OVERTAKE_BUILD_TESTS and
+# OVERTAKE_BUILD_BENCH are ON), so configuring it looks for GoogleTest (with gmock, which the
+# tests link) and Google Benchmark even when only the binary is built.
+demo_packages=(
+  # The compiler and the build: CMake, Ninja (the presets' generator); make runs the Makefile.
+  cmake ninja-build g++ make
+  # Found at configure time (CMakeLists.txt) and linked or included by the binary.
   libeigen3-dev nlohmann-json3-dev libcli11-dev libboost-dev zlib1g-dev
+  # Python planners (--policy-py): the interpreter embedded in the binary (OVERTAKE_PYTHON=ON).
+  python3-dev python3-pybind11
+  # Looked for at configure time by the release preset (tests and benchmarks ON).
   libgtest-dev libgmock-dev libbenchmark-dev
-  # Python planners (--policy-py) and the Python module (OVERTAKE_PYTHON), with its tests.
-  python3-dev python3-pybind11 python3-numpy python3-pytest
+)
+# The rest of what `make check` needs.
+check_packages=(
+  pkg-config
+  # The Python module (OVERTAKE_PYTHON) and its tests; the Python example planner.
+  python3-numpy python3-pytest
   # The fuzz harnesses (make fuzz-smoke, make fuzz): clang, and libFuzzer with the sanitizer
   # runtimes of the same version (libclang-rt-14-dev on Debian 12).
   clang libclang-rt-dev
@@ -28,8 +47,60 @@ packages=(
   # The `cluster` tests: `bench --slurm` on a Slurm cluster of their own (scripts/local-slurm.sh).
   slurmctld slurmd slurm-client munge
 )
-if $web_pages; then
-  packages+=(chromium)
+
+usage() {
+  cat <<EOF
+Usage: scripts/install-deps.sh [--all | --demo] [--dry-run]
+
+Installs the Debian packages overtake needs that are missing (with sudo when not root), then
+the web pages' Node packages with npm ci in web/ when web/node_modules is missing or stale.
+
+  --all      everything (the default; make check): the build, the tests and benchmarks, the
+             sanitizer and fuzz builds, format and clang-tidy, the cluster tests (Slurm, munge)
+             and the browser test (Chromium):
+               ${demo_packages[*]}
+               ${check_packages[*]}
+               chromium, and Node.js and npm (any installed node and npm will do)
+  --demo     what make demo needs: configuring the release preset, building the overtake
+             binary with its web pages, and running the drive:
+               ${demo_packages[*]}
+               Node.js and npm (any installed node and npm will do)
+  --dry-run  install nothing; print the set, what would be installed, and whether npm ci
+             would run
+  -h, --help this text
+
+OVERTAKE_WEB=OFF scripts/install-deps.sh: for builds without the web pages (the CMake option
+OVERTAKE_WEB=OFF, e.g. the noweb and asan presets): no Node.js, npm, web/node_modules or
+Chromium, in either set.
+EOF
+}
+
+set_name=all
+dry_run=false
+for arg in "$@"; do
+  case "$arg" in
+    --all) set_name=all ;;
+    --demo) set_name=demo ;;
+    --dry-run) dry_run=true ;;
+    -h|--help) usage; exit 0 ;;
+    *)
+      echo "install-deps: unknown argument '$arg' (scripts/install-deps.sh --help)" >&2
+      exit 2
+      ;;
+  esac
+done
+
+web_pages=true
+case "${OVERTAKE_WEB:-ON}" in
+  OFF|off|Off|0|NO|no|FALSE|false) web_pages=false ;;
+esac
+
+packages=("${demo_packages[@]}")
+if [ "$set_name" = all ]; then
+  packages+=("${check_packages[@]}")
+  if $web_pages; then
+    packages+=(chromium)
+  fi
 fi
 
 missing=()
@@ -47,8 +118,21 @@ if $web_pages; then
   command -v npm >/dev/null 2>&1 || missing+=(npm)
 fi
 
-if [ ${#missing[@]} -eq 0 ]; then
-  echo "install-deps: all ${wanted} packages present"
+# Which set, when it is not the default.
+set_note=""
+[ "$set_name" = demo ] && set_note=" (the demo's set)"
+
+if $dry_run; then
+  listed=("${packages[@]}")
+  $web_pages && listed+=(nodejs npm)
+  echo "install-deps: dry run, set ${set_name}: ${wanted} packages: ${listed[*]}"
+  if [ ${#missing[@]} -eq 0 ]; then
+    echo "install-deps: would install nothing: all ${wanted} packages present"
+  else
+    echo "install-deps: would install ${missing[*]}"
+  fi
+elif [ ${#missing[@]} -eq 0 ]; then
+  echo "install-deps: all ${wanted} packages present${set_note}"
 else
   sudo_cmd=()
   if [ "$(id -u)" -ne 0 ]; then
@@ -59,7 +143,7 @@ else
       exit 1
     fi
   fi
-  echo "install-deps: installing ${missing[*]}"
+  echo "install-deps: installing ${missing[*]}${set_note}"
   export DEBIAN_FRONTEND=noninteractive
   "${sudo_cmd[@]}" apt-get update -qq
   "${sudo_cmd[@]}" apt-get install -y -qq --no-install-recommends "${missing[@]}"
@@ -67,17 +151,24 @@ else
 fi
 
 if ! $web_pages; then
-  echo "install-deps: OVERTAKE_WEB=OFF: no Node.js, npm ci or Chromium (the web pages are not built)"
+  if [ "$set_name" = all ]; then
+    echo "install-deps: OVERTAKE_WEB=OFF: no Node.js, npm ci or Chromium (the web pages are not built)"
+  else
+    echo "install-deps: OVERTAKE_WEB=OFF: no Node.js or npm ci (the web pages are not built)"
+  fi
   exit 0
 fi
 
 # The web pages' packages: npm ci when web/node_modules is missing or was installed from
 # another package-lock.json (the stamp holds the lockfile's hash; the web build checks it).
+# The demo needs them too: the binary embeds the pages, and the demo writes the drive as one.
 web="$root/web"
 stamp="$web/node_modules/.overtake-lock-sha256"
 want="$(sha256sum "$web/package-lock.json" | cut -d' ' -f1)"
 if [ -f "$stamp" ] && [ "$(cat "$stamp")" = "$want" ]; then
   echo "install-deps: web/node_modules up to date"
+elif $dry_run; then
+  echo "install-deps: would run npm ci in web/ ($( [ -d "$web/node_modules" ] && echo stale || echo missing ))"
 else
   echo "install-deps: npm ci in web/ ($( [ -d "$web/node_modules" ] && echo stale || echo missing ))"
   (cd "$web" && npm ci --no-audit --no-fund --loglevel=error)

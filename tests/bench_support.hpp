@@ -8,7 +8,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "overtake/app/io.hpp"
+#include "overtake/base/io.hpp"
 
 namespace overtake::test {
 
@@ -27,7 +27,7 @@ inline std::string stable_runs(const std::filesystem::path& dir) {
 
 /// summary.json without the planners' timing.
 inline std::string untimed_summary(const std::filesystem::path& dir) {
-  nlohmann::json s = nlohmann::json::parse(app::read_file(dir / "summary.json"));
+  nlohmann::json s = nlohmann::json::parse(base::read_file(dir / "summary.json"));
   for (auto& r : s["rows"]) r.erase("timing");
   return s.dump();
 }

@@ -8,17 +8,66 @@
 #include <set>
 #include <thread>
 
-#include "overtake/app/bench.hpp"
 #include "overtake/app/cli.hpp"
-#include "overtake/app/commands.hpp"
 #include "overtake/app/interrupt.hpp"
-#include "overtake/app/planner_process.hpp"
-#include "overtake/app/slurm.hpp"
-#include "overtake/app/suite.hpp"
-#include "overtake/app/viewer.hpp"
+#include "overtake/base/errors.hpp"
+#include "overtake/base/io.hpp"
+#include "overtake/base/text.hpp"
+#include "overtake/batch/bench.hpp"
+#include "overtake/batch/bench_page.hpp"
+#include "overtake/batch/pool.hpp"
+#include "overtake/batch/suite_run.hpp"
+#include "overtake/cluster/slurm.hpp"
 #include "overtake/core/units.hpp"
+#include "overtake/planners/catalog.hpp"
+#include "overtake/run/drive.hpp"
+#include "overtake/run/pages.hpp"
+#include "overtake/sandbox/planner_process.hpp"
+#include "overtake/scenarios/suite.hpp"
 
 namespace overtake::app {
+
+using base::kExitFailure;
+using base::kExitInterrupted;
+using base::kExitOk;
+using base::split_list;
+using base::stderr_is_terminal;
+using base::UsageError;
+using batch::bench_combinations;
+using batch::BenchOutcome;
+using batch::BenchProgress;
+using batch::BenchSpec;
+using batch::check_bench_out;
+using batch::check_bench_spec;
+using batch::kBenchFiles;
+using batch::kBenchManifestFile;
+using batch::kBenchRunsFile;
+using batch::kBenchSummaryJsonFile;
+using batch::load_bench_runs;
+using batch::merge_bench;
+using batch::parse_seed_list;
+using batch::parse_shard;
+using batch::run_bench;
+using batch::run_suite;
+using batch::Shard;
+using batch::SuiteSpec;
+using batch::write_bench_report;
+using cluster::check_programs_for_slurm;
+using cluster::run_slurm_array;
+using cluster::slurm_array_here;
+using cluster::slurm_shard_runs;
+using cluster::SlurmArray;
+using cluster::SlurmOptions;
+using cluster::SlurmShardState;
+using planners::catalog_from_flags;
+using planners::PlannerCatalog;
+using planners::PlannerFlags;
+using planners::PlannerFlagSet;
+using run::embedded_page;
+using run::kReportPageName;
+using run::kViewerPageName;
+using scenarios::suite_table;
+using scenarios::SuiteOutcome;
 namespace {
 
 std::string duration_text(double s) {
@@ -62,6 +111,32 @@ std::size_t lines_in(const std::filesystem::path& file) {
   return n;
 }
 
+// The files a bench writes, as the command line names them: {runs.jsonl,summary.md,...}.
+std::string bench_files_text() {
+  std::string text = "{";
+  for (const char* name : kBenchFiles) {
+    text += std::string(text.size() > 1 ? "," : "") + name;
+  }
+  return text + "}";
+}
+
+// The pages come from the binary: checked before any run, so that none is run in vain.
+void check_pages() {
+  (void)embedded_page(kReportPageName);
+  (void)embedded_page(kViewerPageName);
+}
+
+// Writes the bench report page of `out` (and its replays' pages) to `html`.
+void write_report_page(const std::filesystem::path& out, const std::filesystem::path& html,
+                       bool quiet) {
+  const auto pages =
+      write_bench_report(out, html, embedded_page(kReportPageName), embedded_page(kViewerPageName));
+  if (!quiet) {
+    std::cout << "report: " << html.string() << " (" << pages.size() << " replay page"
+              << (pages.size() == 1 ? "" : "s") << " linked)\n";
+  }
+}
+
 // A bench as a Slurm array of `tasks`: task I runs shard I with --resume; a shard is finished
 // when it holds every run of its slice and its summary; the shards merge as `bench merge`.
 SlurmArray bench_array(const BenchSpec& spec, int tasks, std::vector<std::string> args,
@@ -89,7 +164,7 @@ SlurmArray bench_array(const BenchSpec& spec, int tasks, std::vector<std::string
     const std::size_t want = slice(task);
     try {
       const std::size_t have = load_bench_runs(shard).size();
-      st.finished = have == want && fs::exists(shard / "summary.json");
+      st.finished = have == want && fs::exists(shard / kBenchSummaryJsonFile);
       st.so_far = std::to_string(have) + " of " + std::to_string(want) + " runs";
     } catch (const std::exception& e) {  // not finished: the merge names what is wrong
       st.so_far = e.what();
@@ -111,44 +186,287 @@ SlurmArray bench_array(const BenchSpec& spec, int tasks, std::vector<std::string
       std::cout << o.summary_markdown << "\n";
       std::printf("%zu runs in %zu Slurm tasks (%d submitted again) in %.1f s\n", o.runs_done,
                   shards.size(), resubmitted, wall_s);
-      std::cout << "written: " << out.string()
-                << "/{runs.jsonl,summary.md,summary.csv,summary.json,pairs.csv,bench.json}\n";
+      std::cout << "written: " << out.string() << "/" << bench_files_text() << "\n";
       for (const auto& r : o.replays) std::cout << "replay: " << r.string() << "\n";
     }
-    if (html) {
-      const auto pages = write_bench_report(out, *html, embedded_page(kReportPageName),
-                                            embedded_page(kViewerPageName));
-      if (!quiet) {
-        std::cout << "report: " << html->string() << " (" << pages.size() << " replay page"
-                  << (pages.size() == 1 ? "" : "s") << " linked)\n";
-      }
-    }
+    if (html) write_report_page(out, *html, quiet);
     return kExitOk;
   };
   return a;
 }
 
+// The flags of `overtake bench` and `overtake bench merge`.
+struct BenchState {
+  BenchSpec spec;
+  std::string policies = "reference,walkthrough,seed000,seed001,seed002,seed003,seed004";
+  std::string seeds = "1-20";
+  std::string traffic = "faithful,calm";
+  std::string map, config, out = "bench-out", shard, html;
+  bool quiet = false;
+  PlannerFlags planners;
+  CLI::Option* policies_opt = nullptr;
+  std::vector<std::string> merge_dirs;
+  std::string merge_out, merge_html;
+  std::string scenarios;
+  std::vector<CLI::Option*> sweep_opts;  // flags a scenario suite does not take
+  CLI::Option* out_opt = nullptr;
+  SlurmOptions slurm;
+};
+
+// The policies to run: --policies (its default only when no flag brought a planner), and
+// every planner brought by a flag.
+std::vector<std::string> chosen_policies(const BenchState& st, const PlannerCatalog& planners) {
+  const auto brought = planners.added_names();
+  std::vector<std::string> policies;
+  if (st.policies_opt->count() > 0 || brought.empty()) policies = split_list(st.policies);
+  for (const auto& name : brought) {
+    if (std::find(policies.begin(), policies.end(), name) == policies.end())
+      policies.push_back(name);
+  }
+  return policies;
+}
+
+// `overtake bench merge`.
+int run_merge(const BenchState& st) {
+  if (!st.merge_html.empty()) check_pages();
+  const BenchOutcome o = merge_bench(
+      std::vector<std::filesystem::path>(st.merge_dirs.begin(), st.merge_dirs.end()), st.merge_out);
+  std::cout << "merged " << o.runs_done << " runs into " << st.merge_out << "\n\n"
+            << o.summary_markdown;
+  for (const auto& r : o.replays) std::cout << "replay: " << r.string() << "\n";
+  if (!st.merge_html.empty()) write_report_page(st.merge_out, st.merge_html, false);
+  return kExitOk;
+}
+
+// Refuses the flags a Slurm bench, or a scenario suite, does not take.
+void check_modes(const BenchState& st, bool on_slurm) {
+  if (on_slurm && !st.scenarios.empty())
+    throw UsageError("--slurm: a scenario suite (--scenarios) runs here, not on Slurm");
+  if (on_slurm && !st.shard.empty())
+    throw UsageError("--slurm makes the shards itself; --shard is for arrays of your own");
+  if (on_slurm && st.spec.force)
+    throw UsageError(
+        "--force: a bench on Slurm merges into --out, which must not hold "
+        "files of the names a bench writes; choose another --out");
+  if (st.scenarios.empty()) return;
+  for (const CLI::Option* o : st.sweep_opts) {
+    if (o->count() > 0) {
+      throw UsageError(o->get_name() +
+                       ": a scenario suite (--scenarios) runs each scenario as its file "
+                       "says; seeds, minutes and traffic do not apply");
+    }
+  }
+}
+
+// `overtake bench --scenarios DIR`: the suite, its table, and its exit status.
+int run_scenarios(const BenchState& st) {
+  SuiteSpec suite;
+  suite.dir = st.scenarios;
+  suite.planners = catalog_from_flags(st.planners);
+  suite.policies = chosen_policies(st, *suite.planners);
+  if (!st.config.empty()) suite.config = st.config;
+  if (!st.map.empty()) suite.map = st.map;
+  suite.jobs = st.spec.jobs;
+  if (st.out_opt->count() > 0) suite.out = st.out;
+  const bool draw = !st.quiet && stderr_is_terminal();
+  SuiteOutcome o;
+  {
+    const InterruptScope interrupt;
+    o = run_suite(suite, &InterruptScope::flag(), [&](std::size_t done, std::size_t all) {
+      if (draw) std::fprintf(stderr, "\r  scenarios: %zu/%zu   ", done, all);
+    });
+    if (draw) std::fprintf(stderr, "\n");
+  }
+  for (const std::string& f : o.skipped) {
+    std::cerr << "bench: skipped " << (suite.dir / f).string()
+              << ": a suite's verdicts, not a scenario\n";
+  }
+  if (!st.quiet) {
+    std::cout << suite_table(o);
+    if (suite.out && o.write_errors.empty()) {
+      std::cout << "written: " << suite.out->string() << "/{suite.md,suite.json}\n";
+    }
+  }
+  for (const std::string& e : o.write_errors) std::cerr << "bench: " << e << "\n";
+  if (!o.write_errors.empty()) return kExitFailure;
+  if (o.interrupted) {
+    std::cerr << "bench: interrupted; " << o.verdicts.size() << " scenario runs judged\n";
+    return kExitInterrupted;
+  }
+  return o.failed > 0 ? kExitFailure : kExitOk;
+}
+
+// The sweep the flags name.
+BenchSpec bench_spec_of(const BenchState& st) {
+  BenchSpec spec = st.spec;
+  spec.planners = catalog_from_flags(st.planners);
+  spec.policies = chosen_policies(st, *spec.planners);
+  spec.traffic = split_list(st.traffic);
+  spec.seeds = parse_seed_list(st.seeds);
+  if (!st.map.empty()) spec.map = st.map;
+  if (!st.config.empty()) spec.config = st.config;
+  spec.out = st.out;
+  if (!st.shard.empty()) {
+    const Shard shard = parse_shard(st.shard);
+    spec.shard_index = shard.index;
+    spec.shard_count = shard.count;
+  }
+  return spec;
+}
+
+// `overtake bench --slurm TASKS`: everything the tasks would refuse is refused here, before
+// anything is submitted.
+int run_on_slurm(const BenchState& st, const CLI::App& cmd, const BenchSpec& spec) {
+  check_bench_spec(spec);
+  check_programs_for_slurm(*spec.planners, st.planners.network);
+  std::optional<std::filesystem::path> html;
+  if (!st.html.empty()) {
+    check_pages();
+    html = st.html;
+  }
+  const SlurmArray array =
+      bench_array(spec, st.slurm.tasks,
+                  task_arguments(cmd, {"out", "jobs", "resume", "quiet", "html", "shard", "force"}),
+                  html, st.quiet);
+  const InterruptScope interrupt;
+  return run_slurm_array(array, st.slurm, &InterruptScope::flag());
+}
+
+// The bench run here under Ctrl-C, with its progress bar.
+BenchOutcome run_bench_here(const BenchState& st, const BenchSpec& spec) {
+  const double total_sim_s =
+      spec.minutes * 60.0 * static_cast<double>(bench_combinations(spec).size()) / spec.shard_count;
+  const bool draw = !st.quiet && stderr_is_terminal();
+  BenchOutcome o;
+  const InterruptScope interrupt;
+  try {
+    o = run_bench(spec, &InterruptScope::flag(), [&](const BenchProgress& p) {
+      if (draw) draw_progress(p, total_sim_s);
+    });
+  } catch (...) {
+    if (draw) std::fprintf(stderr, "\n");
+    throw;
+  }
+  if (draw) std::fprintf(stderr, "\n");
+  return o;
+}
+
+// `overtake bench`: the sweep here, its summary and report page.
+int run_sweep(const BenchState& st, const BenchSpec& spec) {
+  if (spec.planners->has_programs() && !st.quiet) {
+    const auto network = sandbox::parse_planner_network(st.planners.network);
+    if (network == sandbox::PlannerNetwork::automatic) {
+      const sandbox::NetworkCheck check = sandbox::check_planner_network(*network);
+      if (!check.isolated) {
+        std::fprintf(stderr,
+                     "bench: planner programs run one at a time on the host's network: %s\n",
+                     check.why.c_str());
+      }
+    }
+  }
+  if (!st.html.empty()) check_pages();
+  const BenchOutcome o = run_bench_here(st, spec);
+  if (o.interrupted) {
+    std::cerr << "bench: interrupted; " << o.runs_done << " finished runs kept in "
+              << (spec.out / kBenchRunsFile).string() << "; rerun with --resume to finish\n";
+    return kExitInterrupted;
+  }
+  if (!st.quiet) {
+    std::cout << o.summary_markdown << "\n";
+    const double hours_per_minute =
+        o.wall_s > 0 ? (o.simulated_s / 3600.0) / (o.wall_s / 60.0) : 0.0;
+    std::printf(
+        "%zu runs (%zu new) in %.1f s on %d jobs: %.1f simulated hours per wall-clock "
+        "minute\n",
+        o.runs_done, o.runs_new, o.wall_s, spec.jobs, hours_per_minute);
+    std::cout << "written: " << spec.out.string() << "/" << bench_files_text() << "\n";
+    for (const auto& r : o.replays) std::cout << "replay: " << r.string() << "\n";
+  }
+  if (!st.html.empty()) write_report_page(spec.out, st.html, st.quiet);
+  return kExitOk;
+}
+
+// The flags of the sweep, a scenario suite and the runs' output.
+void add_sweep_flags(CLI::App& cmd, BenchState& st) {
+  st.policies_opt = cmd.add_option("--policies", st.policies,
+                                   "Comma-separated policies (built-in ones, and the names of\n"
+                                   "planners brought by the flags below). Default: every\n"
+                                   "built-in policy, or only the brought ones when any are")
+                        ->capture_default_str();
+  add_planner_flags(cmd, st.planners, PlannerFlagSet::all);
+  st.sweep_opts.push_back(
+      cmd.add_option("--seeds", st.seeds, "Seeds: a range and/or list, e.g. 1-20 or 1,5,9-12")
+          ->capture_default_str());
+  st.sweep_opts.push_back(cmd.add_option("--minutes", st.spec.minutes, "Simulated minutes per run")
+                              ->capture_default_str());
+  st.sweep_opts.push_back(
+      cmd.add_option("--traffic", st.traffic, "Comma-separated traffic profiles (faithful, calm)")
+          ->capture_default_str());
+  cmd.add_option(
+         "--scenarios", st.scenarios,
+         "Instead of the sweep: run every scenario file (*.json) of this folder with every\n"
+         "policy and judge it by what it expects (default: no at-fault collision); prints a\n"
+         "pass/fail table (with --out, not this folder: suite.md, suite.json and the failed\n"
+         "runs' replays) and exits with status 1 when any fails (docs/scenarios.md)")
+      ->check(CLI::ExistingDirectory);
+  cmd.add_option("--map", st.map, "Map file; default: the built-in track")
+      ->check(CLI::ExistingFile);
+  cmd.add_option("--config", st.config, "JSON parameter overrides")->check(CLI::ExistingFile);
+  cmd.add_option("--steps-per-call", st.spec.steps_per_call,
+                 "Fixed steps per reply (1-1000); default: drawn 1-3 by seed")
+      ->check(CLI::Range(1, 1000));
+  cmd.add_option("--jobs,-j", st.spec.jobs, "Runs in parallel (default: all cores)")
+      ->capture_default_str();
+}
+
+// The flags of where the results go and how.
+void add_output_flags(CLI::App& cmd, BenchState& st) {
+  st.out_opt = cmd.add_option("--out,-o", st.out, "Output folder")->capture_default_str();
+  cmd.add_option("--shard", st.shard, "Run only slice I of N (e.g. 3/8) of the combinations");
+  cmd.add_flag("--resume", st.spec.resume,
+               "Continue an interrupted bench in --out, skipping finished runs (its rows must\n"
+               "be this bench's, each once, and of this build of overtake)");
+  cmd.add_flag("--force", st.spec.force,
+               "Write into --out even when it holds files of the names a bench writes\n"
+               "(summary.md, summary.csv, summary.json, pairs.csv, replays/, logs/) that no\n"
+               "bench wrote (the folder has no bench.json): they are replaced. A bench's own\n"
+               "results are never replaced (--resume continues them)");
+  cmd.add_option(
+      "--record-worst", st.spec.record_worst,
+      "After the bench, run the N runs with most incidents again (ties: lower seed first;\n"
+      "deterministic, so the same runs) recording replays into --out/replays/\n"
+      "<policy>-<traffic>-seed<N>.otr, for `overtake view`");
+  cmd.add_option("--html", st.html,
+                 "Also write the bench report page (summary table and charts per policy, each run\n"
+                 "linked to its replay when recorded) to this file, and each recorded replay's\n"
+                 "self-contained page beside it (replays/*.html)");
+  cmd.add_flag("--quiet,-q", st.quiet, "No progress bar or summary");
+}
+
+// `overtake bench merge`'s flags.
+CLI::App* add_merge_command(CLI::App& cmd, BenchState& st) {
+  auto* merge =
+      cmd.add_subcommand("merge", "Join the output folders of the shards of one bench into --out.");
+  merge->add_option("dirs", st.merge_dirs, "Shard output folders")
+      ->required()
+      ->check(CLI::ExistingDirectory);
+  merge
+      ->add_option("--out,-o", st.merge_out,
+                   "Folder for the joined output (the shards' replays are copied\n"
+                   "into its replays/)")
+      ->required();
+  merge->add_option(
+      "--html", st.merge_html,
+      "Also write the bench report page of the joined output to this file, each run\n"
+      "linked to its replay when a shard recorded it (pages written into --out/replays/)");
+  return merge;
+}
+
 }  // namespace
 
 Subcommand register_bench(CLI::App& app) {
-  struct State {
-    BenchSpec spec;
-    std::string policies = "reference,walkthrough,seed000,seed001,seed002,seed003,seed004";
-    std::string seeds = "1-20";
-    std::string traffic = "faithful,calm";
-    std::string map, config, out = "bench-out", shard, html;
-    bool quiet = false;
-    PlannerFlags planners;
-    CLI::Option* policies_opt = nullptr;
-    std::vector<std::string> merge_dirs;
-    std::string merge_out, merge_html;
-    std::string scenarios;
-    std::vector<CLI::Option*> sweep_opts;  // flags a scenario suite does not take
-    CLI::Option* out_opt = nullptr;
-    SlurmOptions slurm;
-  };
-  auto st = std::make_shared<State>();
-  st->spec.jobs = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  auto st = std::make_shared<BenchState>();
+  st->spec.jobs = batch::default_jobs();
   auto* cmd = app.add_subcommand(
       "bench",
       "Run every combination of policies x traffic profiles x seeds in parallel and summarise\n"
@@ -157,244 +475,19 @@ Subcommand register_bench(CLI::App& app) {
       "for the number of figures judged; no interval or verdict below 8 seeds (runs.jsonl,\n"
       "summary.md, summary.csv, summary.json, pairs.csv in --out; docs/evaluation.md).\n"
       "`overtake bench merge` joins shards; `overtake compare` compares two benches.");
-  st->policies_opt = cmd->add_option("--policies", st->policies,
-                                     "Comma-separated policies (built-in ones, and the names of\n"
-                                     "planners brought by the flags below). Default: every\n"
-                                     "built-in policy, or only the brought ones when any are")
-                         ->capture_default_str();
-  add_planner_flags(*cmd, st->planners, PlannerFlagSet::all);
-  st->sweep_opts.push_back(
-      cmd->add_option("--seeds", st->seeds, "Seeds: a range and/or list, e.g. 1-20 or 1,5,9-12")
-          ->capture_default_str());
-  st->sweep_opts.push_back(
-      cmd->add_option("--minutes", st->spec.minutes, "Simulated minutes per run")
-          ->capture_default_str());
-  st->sweep_opts.push_back(
-      cmd->add_option("--traffic", st->traffic, "Comma-separated traffic profiles (faithful, calm)")
-          ->capture_default_str());
-  cmd->add_option(
-         "--scenarios", st->scenarios,
-         "Instead of the sweep: run every scenario file (*.json) of this folder with every\n"
-         "policy and judge it by what it expects (default: no at-fault collision); prints a\n"
-         "pass/fail table (with --out, not this folder: suite.md, suite.json and the failed\n"
-         "runs' replays) and exits with status 1 when any fails (docs/scenarios.md)")
-      ->check(CLI::ExistingDirectory);
-  cmd->add_option("--map", st->map, "Map file; default: the built-in track")
-      ->check(CLI::ExistingFile);
-  cmd->add_option("--config", st->config, "JSON parameter overrides")->check(CLI::ExistingFile);
-  cmd->add_option("--steps-per-call", st->spec.steps_per_call,
-                  "Fixed steps per reply (1-1000); default: drawn 1-3 by seed")
-      ->check(CLI::Range(1, 1000));
-  cmd->add_option("--jobs,-j", st->spec.jobs, "Runs in parallel (default: all cores)")
-      ->capture_default_str();
-  st->out_opt = cmd->add_option("--out,-o", st->out, "Output folder")->capture_default_str();
-  cmd->add_option("--shard", st->shard, "Run only slice I of N (e.g. 3/8) of the combinations");
-  cmd->add_flag("--resume", st->spec.resume,
-                "Continue an interrupted bench in --out, skipping finished runs (its rows must\n"
-                "be this bench's, each once, and of this build of overtake)");
-  cmd->add_flag("--force", st->spec.force,
-                "Write into --out even when it holds files of the names a bench writes\n"
-                "(summary.md, summary.csv, summary.json, pairs.csv, replays/, logs/) that no\n"
-                "bench wrote (the folder has no bench.json): they are replaced. A bench's own\n"
-                "results are never replaced (--resume continues them)");
-  cmd->add_option(
-      "--record-worst", st->spec.record_worst,
-      "After the bench, run the N runs with most incidents again (ties: lower seed first;\n"
-      "deterministic, so the same runs) recording replays into --out/replays/\n"
-      "<policy>-<traffic>-seed<N>.otr, for `overtake view`");
-  cmd->add_option(
-      "--html", st->html,
-      "Also write the bench report page (summary table and charts per policy, each run\n"
-      "linked to its replay when recorded) to this file, and each recorded replay's\n"
-      "self-contained page beside it (replays/*.html)");
-  cmd->add_flag("--quiet,-q", st->quiet, "No progress bar or summary");
+  add_sweep_flags(*cmd, *st);
+  add_output_flags(*cmd, *st);
   add_slurm_flags(*cmd, st->slurm, "bench");
-  auto* merge = cmd->add_subcommand(
-      "merge", "Join the output folders of the shards of one bench into --out.");
-  merge->add_option("dirs", st->merge_dirs, "Shard output folders")
-      ->required()
-      ->check(CLI::ExistingDirectory);
-  merge
-      ->add_option("--out,-o", st->merge_out,
-                   "Folder for the joined output (the shards' replays are copied\n"
-                   "into its replays/)")
-      ->required();
-  merge->add_option(
-      "--html", st->merge_html,
-      "Also write the bench report page of the joined output to this file, each run\n"
-      "linked to its replay when a shard recorded it (pages written into --out/replays/)");
-
-  return {
-      cmd, [st, merge, cmd] {
-        if (merge->parsed()) {
-          if (!st->merge_html.empty()) {  // the pages come from the binary: check first
-            (void)embedded_page(kReportPageName);
-            (void)embedded_page(kViewerPageName);
-          }
-          const BenchOutcome o = merge_bench(
-              std::vector<std::filesystem::path>(st->merge_dirs.begin(), st->merge_dirs.end()),
-              st->merge_out);
-          std::cout << "merged " << o.runs_done << " runs into " << st->merge_out << "\n\n"
-                    << o.summary_markdown;
-          for (const auto& r : o.replays) std::cout << "replay: " << r.string() << "\n";
-          if (!st->merge_html.empty()) {
-            const auto pages =
-                write_bench_report(st->merge_out, st->merge_html, embedded_page(kReportPageName),
-                                   embedded_page(kViewerPageName));
-            std::cout << "report: " << st->merge_html << " (" << pages.size() << " replay page"
-                      << (pages.size() == 1 ? "" : "s") << " linked)\n";
-          }
-          return kExitOk;
-        }
-        const bool on_slurm = slurm_requested(*cmd);
-        if (on_slurm && !st->scenarios.empty())
-          throw UsageError("--slurm: a scenario suite (--scenarios) runs here, not on Slurm");
-        if (on_slurm && !st->shard.empty())
-          throw UsageError("--slurm makes the shards itself; --shard is for arrays of your own");
-        if (on_slurm && st->spec.force)
-          throw UsageError(
-              "--force: a bench on Slurm merges into --out, which must not hold "
-              "files of the names a bench writes; choose another --out");
-        if (!st->scenarios.empty()) {
-          for (const CLI::Option* o : st->sweep_opts) {
-            if (o->count() > 0) {
-              throw UsageError(o->get_name() +
-                               ": a scenario suite (--scenarios) runs each scenario as its file "
-                               "says; seeds, minutes and traffic do not apply");
-            }
-          }
-          SuiteSpec suite;
-          suite.dir = st->scenarios;
-          suite.planners = catalog_from_flags(st->planners);
-          const auto brought = suite.planners->added_names();
-          if (st->policies_opt->count() > 0 || brought.empty())
-            suite.policies = split_list(st->policies);
-          for (const auto& name : brought) {
-            if (std::find(suite.policies.begin(), suite.policies.end(), name) ==
-                suite.policies.end())
-              suite.policies.push_back(name);
-          }
-          if (!st->config.empty()) suite.config = st->config;
-          if (!st->map.empty()) suite.map = st->map;
-          suite.jobs = st->spec.jobs;
-          if (st->out_opt->count() > 0) suite.out = st->out;
-          const bool draw = !st->quiet && stderr_is_terminal();
-          SuiteOutcome o;
-          {
-            const InterruptScope interrupt;
-            o = run_suite(suite, &InterruptScope::flag(), [&](std::size_t done, std::size_t all) {
-              if (draw) std::fprintf(stderr, "\r  scenarios: %zu/%zu   ", done, all);
-            });
-            if (draw) std::fprintf(stderr, "\n");
-          }
-          for (const std::string& f : o.skipped) {
-            std::cerr << "bench: skipped " << (suite.dir / f).string()
-                      << ": a suite's verdicts, not a scenario\n";
-          }
-          if (!st->quiet) {
-            std::cout << suite_table(o);
-            if (suite.out && o.write_errors.empty()) {
-              std::cout << "written: " << suite.out->string() << "/{suite.md,suite.json}\n";
-            }
-          }
-          for (const std::string& e : o.write_errors) std::cerr << "bench: " << e << "\n";
-          if (!o.write_errors.empty()) return kExitFailure;
-          if (o.interrupted) {
-            std::cerr << "bench: interrupted; " << o.verdicts.size() << " scenario runs judged\n";
-            return kExitInterrupted;
-          }
-          return o.failed > 0 ? kExitFailure : kExitOk;
-        }
-        BenchSpec spec = st->spec;
-        spec.planners = catalog_from_flags(st->planners);
-        const auto added = spec.planners->added_names();
-        if (st->policies_opt->count() > 0 || added.empty())
-          spec.policies = split_list(st->policies);
-        for (const auto& name : added) {  // every planner brought by a flag is benched
-          if (std::find(spec.policies.begin(), spec.policies.end(), name) == spec.policies.end())
-            spec.policies.push_back(name);
-        }
-        spec.traffic = split_list(st->traffic);
-        spec.seeds = parse_seed_list(st->seeds);
-        if (!st->map.empty()) spec.map = st->map;
-        if (!st->config.empty()) spec.config = st->config;
-        spec.out = st->out;
-        if (!st->shard.empty())
-          std::tie(spec.shard_index, spec.shard_count) = parse_shard(st->shard);
-        if (on_slurm) {
-          // Everything the tasks would refuse is refused here, before anything is submitted.
-          check_bench_spec(spec);
-          check_programs_for_slurm(*spec.planners, st->planners.network);
-          std::optional<std::filesystem::path> html;
-          if (!st->html.empty()) {
-            (void)embedded_page(kReportPageName);
-            (void)embedded_page(kViewerPageName);
-            html = st->html;
-          }
-          const SlurmArray array = bench_array(
-              spec, st->slurm.tasks,
-              task_arguments(*cmd, {"out", "jobs", "resume", "quiet", "html", "shard", "force"}),
-              html, st->quiet);
-          const InterruptScope interrupt;
-          return run_slurm_array(array, st->slurm, &InterruptScope::flag());
-        }
-        if (spec.planners->has_programs() && !st->quiet) {
-          std::string why;
-          if (!private_network_available(&why) && st->planners.network == "auto") {
-            std::fprintf(stderr,
-                         "bench: planner programs run one at a time on the host's network: %s\n",
-                         why.c_str());
-          }
-        }
-        const double total_sim_s = spec.minutes * 60.0 *
-                                   static_cast<double>(bench_combinations(spec).size()) /
-                                   spec.shard_count;
-        const bool draw = !st->quiet && stderr_is_terminal();
-        // The pages come from the binary: check that they are there before any run.
-        if (!st->html.empty()) {
-          (void)embedded_page(kReportPageName);
-          (void)embedded_page(kViewerPageName);
-        }
-        BenchOutcome o;
-        {
-          const InterruptScope interrupt;
-          try {
-            o = run_bench(spec, &InterruptScope::flag(), [&](const BenchProgress& p) {
-              if (draw) draw_progress(p, total_sim_s);
-            });
-          } catch (...) {
-            if (draw) std::fprintf(stderr, "\n");
-            throw;
-          }
-          if (draw) std::fprintf(stderr, "\n");
-        }
-        if (o.interrupted) {
-          std::cerr << "bench: interrupted; " << o.runs_done << " finished runs kept in "
-                    << (spec.out / "runs.jsonl").string() << "; rerun with --resume to finish\n";
-          return kExitInterrupted;
-        }
-        if (!st->quiet) {
-          std::cout << o.summary_markdown << "\n";
-          const double hours_per_minute =
-              o.wall_s > 0 ? (o.simulated_s / 3600.0) / (o.wall_s / 60.0) : 0.0;
-          std::printf(
-              "%zu runs (%zu new) in %.1f s on %d jobs: %.1f simulated hours per wall-clock "
-              "minute\n",
-              o.runs_done, o.runs_new, o.wall_s, spec.jobs, hours_per_minute);
-          std::cout << "written: " << spec.out.string()
-                    << "/{runs.jsonl,summary.md,summary.csv,summary.json,pairs.csv,bench.json}\n";
-          for (const auto& r : o.replays) std::cout << "replay: " << r.string() << "\n";
-        }
-        if (!st->html.empty()) {
-          const auto pages = write_bench_report(spec.out, st->html, embedded_page(kReportPageName),
-                                                embedded_page(kViewerPageName));
-          if (!st->quiet) {
-            std::cout << "report: " << st->html << " (" << pages.size() << " replay page"
-                      << (pages.size() == 1 ? "" : "s") << " linked)\n";
-          }
-        }
-        return kExitOk;
-      }};
+  auto* merge = add_merge_command(*cmd, *st);
+  return {cmd, [st, merge, cmd] {
+            if (merge->parsed()) return run_merge(*st);
+            const bool on_slurm = slurm_requested(*cmd);
+            check_modes(*st, on_slurm);
+            if (!st->scenarios.empty()) return run_scenarios(*st);
+            const BenchSpec spec = bench_spec_of(*st);
+            if (on_slurm) return run_on_slurm(*st, *cmd, spec);
+            return run_sweep(*st, spec);
+          }};
 }
 
 }  // namespace overtake::app

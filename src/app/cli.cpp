@@ -9,47 +9,51 @@
 #include <cstdio>
 #include <cstring>
 #include <iostream>
+#include <optional>
+#include <string_view>
 #include <thread>
+#include <vector>
 
 #include "overtake/app/cli.hpp"
-#include "overtake/app/commands.hpp"
 #include "overtake/app/interrupt.hpp"
-#include "overtake/app/io.hpp"
 #include "overtake/app/progress.hpp"
-#include "overtake/app/viewer.hpp"
+#include "overtake/base/build_info.hpp"
+#include "overtake/base/errors.hpp"
+#include "overtake/base/io.hpp"
+#include "overtake/base/text.hpp"
 #include "overtake/core/hash.hpp"
 #include "overtake/core/track.hpp"
 #include "overtake/core/units.hpp"
 #include "overtake/planner/policy.hpp"
+#include "overtake/planners/catalog.hpp"
+#include "overtake/run/config.hpp"
+#include "overtake/run/drive.hpp"
+#include "overtake/run/pages.hpp"
+#include "overtake/run/report.hpp"
 
 namespace overtake::app {
 
-std::vector<std::string> split_list(const std::string& text) {
-  std::vector<std::string> out;
-  std::string cur;
-  for (char c : text) {
-    if (c == ',') {
-      if (!cur.empty()) out.push_back(cur);
-      cur.clear();
-    } else if (c != ' ') {
-      cur += c;
-    }
-  }
-  if (!cur.empty()) out.push_back(cur);
-  return out;
-}
-
-void check_unique_names(const std::vector<std::string>& names, const std::string& flag) {
-  for (std::size_t i = 0; i < names.size(); ++i) {
-    for (std::size_t j = 0; j < i; ++j) {
-      if (names[j] == names[i]) {
-        throw UsageError(flag + ": '" + names[i] + "' is named twice (items " +
-                         std::to_string(j + 1) + " and " + std::to_string(i + 1) +
-                         "); each is driven once, name it once");
-      }
-    }
-  }
-}
+using base::json_text;
+using base::kExitFailure;
+using base::kExitInterrupted;
+using base::kExitOk;
+using base::kExitUsage;
+using base::overtake_version;
+using base::same_file;
+using base::UsageError;
+using base::write_file_atomic;
+using planners::catalog_from_flags;
+using planners::chosen_policy;
+using planners::PlannerFlags;
+using planners::PlannerFlagSet;
+using run::Config;
+using run::config_to_json;
+using run::drive;
+using run::DriveOptions;
+using run::DriveResult;
+using run::format_scorecard;
+using run::load_config;
+using run::report_to_json;
 
 std::string policy_help() {
   std::string out = "Policy (built-in planner). Available:";
@@ -130,10 +134,6 @@ int cmd_track(const core::TrackSpec& spec, const std::optional<std::filesystem::
 }
 
 }  // namespace
-
-bool stderr_is_terminal() {
-  return ::isatty(STDERR_FILENO) != 0;
-}
 
 void print_live_address(const std::string& url) {
   std::fprintf(stderr, "live view at %s (the run goes at real time; Ctrl-C stops it)\n",
@@ -217,17 +217,6 @@ void flush_stdout_or_throw() {
                              (err ? std::string(" (") + std::strerror(err) + ")" : std::string()) +
                              "; the output is incomplete");
   }
-}
-
-bool same_file(const std::filesystem::path& a, const std::filesystem::path& b) {
-  std::error_code ec;
-  if (std::filesystem::exists(a, ec) && std::filesystem::exists(b, ec)) {
-    const bool eq = std::filesystem::equivalent(a, b, ec);
-    if (!ec) return eq;
-  }
-  const auto ca = std::filesystem::weakly_canonical(std::filesystem::absolute(a), ec);
-  const auto cb = std::filesystem::weakly_canonical(std::filesystem::absolute(b), ec);
-  return !ec && ca == cb;
 }
 
 void add_run_flags(CLI::App& cmd, RunFlags& f) {
@@ -372,6 +361,84 @@ Subcommand register_config(CLI::App& app) {
           }};
 }
 
+namespace {
+
+// The commands as the overview lists them (what people do first comes first), each with the
+// line that says what it is for.
+struct CommandLine {
+  const char* name;
+  const char* summary;
+};
+constexpr CommandLine kCommands[] = {
+    {"drive", "drive a built-in, plugin or Python planner among traffic; print its scorecard"},
+    {"sim", "drive a planner program written for the original simulator (its protocol)"},
+    {"serve", "serve a planner over the original protocol, for the original simulator"},
+    {"bench", "run policies x traffic x seeds in parallel; summarise with intervals"},
+    {"compare", "compare two bench folders: paired differences and verdicts"},
+    {"hunt", "drive a planner until it fails; cut each failure into a scenario"},
+    {"cut", "cut a scenario from a recorded run, at a moment"},
+    {"view", "watch a replay in the browser"},
+    {"track", "generate a closed highway loop map in the original file format"},
+    {"calibrate", "measure the traffic as a planner sees it, against the original's"},
+    {"config", "print the parameters in effect as JSON"},
+};
+
+// The number of single-character edits (insertions, deletions, substitutions, swaps of two
+// neighbours) that turn `a` into `b`.
+std::size_t edit_distance(std::string_view a, std::string_view b) {
+  std::vector<std::vector<std::size_t>> d(a.size() + 1, std::vector<std::size_t>(b.size() + 1));
+  for (std::size_t i = 0; i <= a.size(); ++i) d[i][0] = i;
+  for (std::size_t j = 0; j <= b.size(); ++j) d[0][j] = j;
+  for (std::size_t i = 1; i <= a.size(); ++i) {
+    for (std::size_t j = 1; j <= b.size(); ++j) {
+      const std::size_t cost = a[i - 1] == b[j - 1] ? 0 : 1;
+      d[i][j] = std::min({d[i - 1][j] + 1, d[i][j - 1] + 1, d[i - 1][j - 1] + cost});
+      if (i > 1 && j > 1 && a[i - 1] == b[j - 2] && a[i - 2] == b[j - 1])
+        d[i][j] = std::min(d[i][j], d[i - 2][j - 2] + 1);
+    }
+  }
+  return d[a.size()][b.size()];
+}
+
+// The command of that name, or null (CLI11 2.1 throws for an unknown name).
+const CLI::App* find_command(const CLI::App& app, std::string_view name) {
+  const auto found = app.get_subcommands([&](const CLI::App* c) { return c->get_name() == name; });
+  return found.empty() ? nullptr : found.front();
+}
+
+}  // namespace
+
+std::string command_overview(const CLI::App& app) {
+  std::string out =
+      "usage: overtake <command> [options]\n\n" + app.get_description() + "\n\ncommands:\n";
+  for (const CommandLine& c : kCommands) {
+    if (find_command(app, c.name) == nullptr) continue;
+    std::string line = "  " + std::string(c.name);
+    line.resize(14, ' ');
+    out += line + c.summary + "\n";
+  }
+  return out +
+         "\n`overtake <command> --help` gives a command's options; `overtake --version` the " +
+         "build.\n";
+}
+
+std::optional<std::string> nearest_command(const CLI::App& app, std::string_view typed) {
+  std::optional<std::string> best;
+  std::size_t best_distance = 0;
+  for (const CLI::App* command : app.get_subcommands([](const CLI::App*) { return true; })) {
+    const std::string& name = command->get_name();
+    const std::size_t distance = edit_distance(typed, name);
+    if (!best || distance < best_distance) {
+      best = name;
+      best_distance = distance;
+    }
+  }
+  // Further than this, the word was not a mistyped command but something else.
+  const std::size_t allowed = std::max<std::size_t>(2, typed.size() / 3);
+  if (best && best_distance <= allowed) return best;
+  return std::nullopt;
+}
+
 int run_cli(int argc, const char* const* argv) {
   CLI::App app{
       "overtake: a headless highway simulator with the rules of the Udacity Term 3 simulator,\n"
@@ -382,6 +449,20 @@ int run_cli(int argc, const char* const* argv) {
       register_drive(app),     register_track(app), register_config(app), register_bench(app),
       register_compare(app),   register_serve(app), register_sim(app),    register_view(app),
       register_calibrate(app), register_cut(app),   register_hunt(app)};
+  // `overtake` alone: what it can do, as `git` does.
+  if (argc <= 1) {
+    std::cout << command_overview(app);
+    return kExitOk;
+  }
+  // A first word that is no option and no command: most often a command mistyped.
+  const std::string_view first = argv[1];
+  if (!first.empty() && first[0] != '-' && find_command(app, first) == nullptr) {
+    const std::optional<std::string> near = nearest_command(app, first);
+    std::cerr << "overtake: '" << first << "' is not a command"
+              << (near ? "; did you mean '" + *near + "'?" : std::string("."))
+              << " Run `overtake` alone to list the commands.\n";
+    return kExitUsage;
+  }
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

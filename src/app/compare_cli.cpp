@@ -6,13 +6,26 @@
 #include <iostream>
 #include <set>
 
-#include "overtake/app/bench.hpp"
 #include "overtake/app/cli.hpp"
-#include "overtake/app/commands.hpp"
-#include "overtake/app/config.hpp"
-#include "overtake/app/io.hpp"
+#include "overtake/base/errors.hpp"
+#include "overtake/base/io.hpp"
+#include "overtake/base/text.hpp"
+#include "overtake/batch/bench.hpp"
+#include "overtake/run/config.hpp"
+#include "overtake/run/drive.hpp"
 
 namespace overtake::app {
+
+using base::json_text;
+using base::kExitFailure;
+using base::kExitOk;
+using base::kExitUsage;
+using base::same_file;
+using base::UsageError;
+using base::write_file_atomic;
+using batch::compare_bench_folders;
+using batch::parse_metric_list;
+using batch::parse_policy_pair;
 
 Subcommand register_compare(CLI::App& app) {
   struct State {
@@ -62,8 +75,7 @@ Subcommand register_compare(CLI::App& app) {
             if (!st->figures.empty()) o.metrics = parse_metric_list(st->figures);
             // The comparison never takes the place of a bench's own files.
             for (const std::string& dir : {st->before, st->after}) {
-              for (const char* name : {"runs.jsonl", "bench.json", "summary.md", "summary.csv",
-                                       "summary.json", "pairs.csv"}) {
+              for (const char* name : batch::kBenchFiles) {
                 const std::filesystem::path file = std::filesystem::path(dir) / name;
                 if (!st->json.empty() && same_file(st->json, file)) {
                   throw UsageError("--json: " + st->json + " is " + file.string() +

@@ -1,4 +1,4 @@
-#include "overtake/app/commands.hpp"
+#include "overtake/app/cli.hpp"
 
 int main(int argc, char** argv) {
   return overtake::app::run_cli(argc, argv);

@@ -3,9 +3,12 @@
 #include <cstdio>
 
 #include "overtake/app/cli.hpp"
+#include "overtake/base/io.hpp"
 #include "overtake/core/units.hpp"
 
 namespace overtake::app {
+
+using base::stderr_is_terminal;
 
 ProgressLine::ProgressLine(bool enabled, double total_s)
     : enabled_(enabled && stderr_is_terminal()), total_s_(total_s) {}

@@ -15,21 +15,45 @@
 #include <boost/asio/io_context.hpp>
 
 #include "overtake/app/cli.hpp"
-#include "overtake/app/commands.hpp"
 #include "overtake/app/interrupt.hpp"
-#include "overtake/app/io.hpp"
-#include "overtake/app/plan_watch.hpp"
-#include "overtake/app/program_planner.hpp"
 #include "overtake/app/progress.hpp"
-#include "overtake/app/viewer.hpp"
+#include "overtake/base/errors.hpp"
+#include "overtake/base/io.hpp"
 #include "overtake/core/hash.hpp"
 #include "overtake/core/units.hpp"
 #include "overtake/planner/policy.hpp"
+#include "overtake/planners/catalog.hpp"
+#include "overtake/planners/external.hpp"
+#include "overtake/planners/plan_watch.hpp"
+#include "overtake/planners/program_planner.hpp"
 #include "overtake/protocol/client.hpp"
 #include "overtake/protocol/server.hpp"
+#include "overtake/run/config.hpp"
+#include "overtake/run/drive.hpp"
+#include "overtake/run/pages.hpp"
 #include "overtake/sim/world.hpp"
 
 namespace overtake::app {
+
+using base::kExitOk;
+using base::UsageError;
+using planners::catalog_from_flags;
+using planners::chosen_policy;
+using planners::ExternalPlanner;
+using planners::PlannerEntry;
+using planners::PlannerFlags;
+using planners::PlannerFlagSet;
+using planners::program_isolated;
+using planners::watch_policy;
+using run::Config;
+using run::drive_loaded;
+using run::DriveInputs;
+using run::DriveOptions;
+using run::DriveResult;
+using run::load_config;
+using run::load_drive_inputs;
+using run::load_track;
+using run::validate_drive_options;
 namespace {
 
 constexpr std::size_t kMinFrameBytes = 1024;
@@ -68,11 +92,7 @@ int cmd_serve(const ServeArgs& a) {
   check_limits(a.max_frame_bytes, a.max_path_points);
   const auto catalog = catalog_from_flags(a.planners);
   const std::string policy = chosen_policy(*catalog, a.policy, a.policy_given);
-  const PlannerEntry* entry = catalog->find(policy);
-  if (!entry) {
-    throw UsageError("--policy: unknown policy '" + policy +
-                     "' (available: " + catalog->names_text() + ")");
-  }
+  const PlannerEntry* entry = &catalog->require(policy);
   const Config config = load_config(optional_path(a.config));
   const auto track = load_track(optional_path(a.map));
 

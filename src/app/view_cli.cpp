@@ -1,11 +1,14 @@
 // `overtake view FILE`: the replay viewer in the browser, served or as one file.
 
 #include "overtake/app/cli.hpp"
-#include "overtake/app/commands.hpp"
 #include "overtake/app/interrupt.hpp"
-#include "overtake/app/viewer.hpp"
+#include "overtake/run/drive.hpp"
+#include "overtake/run/pages.hpp"
 
 namespace overtake::app {
+
+using run::run_view;
+using run::ViewOptions;
 
 Subcommand register_view(CLI::App& app) {
   struct State {

@@ -13,15 +13,17 @@
 #include <optional>
 #include <string>
 
-#include "overtake/app/bench.hpp"
-#include "overtake/app/commands.hpp"
-#include "overtake/app/config.hpp"
-#include "overtake/app/report.hpp"
+#include "overtake/base/errors.hpp"
+#include "overtake/batch/bench.hpp"
 #include "overtake/core/map.hpp"
 #include "overtake/eval/summary.hpp"
 #include "overtake/planner/policy.hpp"
+#include "overtake/planners/catalog.hpp"
 #include "overtake/python/bridge.hpp"
 #include "overtake/python/python_policy.hpp"
+#include "overtake/run/config.hpp"
+#include "overtake/run/drive.hpp"
+#include "overtake/run/report.hpp"
 #include "overtake/sim/run.hpp"
 #include "overtake/sim/world.hpp"
 
@@ -61,11 +63,11 @@ py::object to_python(const nlohmann::json& j) {
 }
 
 // Options of a drive from keyword arguments, as `overtake drive` takes them from flags.
-app::DriveOptions drive_options(const std::optional<std::string>& map, std::uint64_t seed,
+run::DriveOptions drive_options(const std::optional<std::string>& map, std::uint64_t seed,
                                 const std::string& traffic,
                                 const std::optional<std::string>& config,
                                 const std::optional<int>& steps_per_call, double minutes) {
-  app::DriveOptions o;
+  run::DriveOptions o;
   if (map) o.map = *map;
   if (config) o.config = *config;
   o.seed = seed;
@@ -73,19 +75,19 @@ app::DriveOptions drive_options(const std::optional<std::string>& map, std::uint
   o.minutes = minutes;
   o.steps_per_call = steps_per_call.value_or(0);
   if (steps_per_call && *steps_per_call <= 0) {
-    throw app::UsageError("steps_per_call must be between 1 and 1000 (got " +
-                          std::to_string(*steps_per_call) + ")");
+    throw base::UsageError("steps_per_call must be between 1 and 1000 (got " +
+                           std::to_string(*steps_per_call) + ")");
   }
   return o;
 }
 
 // A catalog with one Python planner of that name, for the report's config.
-std::shared_ptr<app::PlannerCatalog> catalog_with(const std::string& name, std::string source,
-                                                  planner::PolicyFactory make) {
-  auto catalog = std::make_shared<app::PlannerCatalog>();
-  app::PlannerEntry e;
+std::shared_ptr<planners::PlannerCatalog> catalog_with(const std::string& name, std::string source,
+                                                       planner::PolicyFactory make) {
+  auto catalog = std::make_shared<planners::PlannerCatalog>();
+  planners::PlannerEntry e;
   e.name = name;
-  e.kind = app::PlannerKind::python;
+  e.kind = planners::PlannerKind::python;
   e.source = std::move(source);
   e.make = std::move(make);
   catalog->add(std::move(e), "name");
@@ -123,22 +125,22 @@ class World {
   World(const std::optional<std::string>& map, std::uint64_t seed, const std::string& traffic,
         const std::optional<std::string>& config, const std::optional<int>& steps_per_call,
         double minutes, const std::string& name) {
-    app::DriveOptions o = drive_options(map, seed, traffic, config, steps_per_call, minutes);
+    run::DriveOptions o = drive_options(map, seed, traffic, config, steps_per_call, minutes);
     o.policy = name;
     o.planners = catalog_with(name, "overtake.World", {});
-    app::validate_drive_options(o);
-    inputs_ = app::load_drive_inputs(o);
+    run::validate_drive_options(o);
+    inputs_ = run::load_drive_inputs(o);
   }
 
   py::dict reset(const std::optional<std::uint64_t>& seed) {
     const OneCallAtATime one(busy_, "World.reset()");
     if (seed) inputs_.options.seed = *seed;
-    const app::DriveOptions& o = inputs_.options;
+    const run::DriveOptions& o = inputs_.options;
     stepper_.reset();
-    const app::Track& track = *inputs_.track;
+    const run::Track& track = *inputs_.track;
     world_ = std::make_unique<sim::World>(track.map, track.line, inputs_.config.world,
                                           *sim::parse_traffic_profile(o.traffic), o.seed);
-    provenance_ = app::drive_provenance(track, inputs_.config, o, nullptr);
+    provenance_ = run::drive_provenance(track, inputs_.config, o, nullptr);
     sim::RunOptions run;
     run.duration_s = o.minutes * 60.0;
     if (o.steps_per_call > 0) run.steps_per_call = o.steps_per_call;
@@ -181,7 +183,7 @@ class World {
 
   py::object report() const {
     const OneCallAtATime one(busy_, "World.report()");
-    return to_python(app::report_to_json(stepper().report(), provenance_));
+    return to_python(run::report_to_json(stepper().report(), provenance_));
   }
 
   [[nodiscard]] bool done() const { return stepper().finished(); }
@@ -203,7 +205,7 @@ class World {
     const auto& all = referee.incidents();
     py::list fresh;
     for (std::size_t i = incidents_before; i < all.size(); ++i) {
-      fresh.append(to_python(app::incident_to_json(all[i])));
+      fresh.append(to_python(run::incident_to_json(all[i])));
     }
     for (const auto& i : fresh) incidents_.append(i);
     py::dict counts;
@@ -231,8 +233,8 @@ class World {
     return *stepper_;
   }
 
-  app::DriveInputs inputs_;
-  app::RunProvenance provenance_;
+  run::DriveInputs inputs_;
+  run::RunProvenance provenance_;
   std::unique_ptr<sim::World> world_;
   std::unique_ptr<sim::Stepper> stepper_;  // refers to world_: reset before it
   py::list incidents_;
@@ -247,14 +249,14 @@ class BuiltinPolicy {
   BuiltinPolicy(const std::string& name, const std::optional<std::string>& map,
                 const std::optional<std::string>& config)
       : name_(name),
-        config_(app::load_config(config ? std::optional<std::filesystem::path>(*config)
+        config_(run::load_config(config ? std::optional<std::filesystem::path>(*config)
                                         : std::nullopt)),
-        track_(app::load_track(map ? std::optional<std::filesystem::path>(*map) : std::nullopt)) {
+        track_(run::load_track(map ? std::optional<std::filesystem::path>(*map) : std::nullopt)) {
     policy_ = planner::make_policy(name, track_->line, config_.planner);
     if (!policy_) {
       std::string names;
       for (const auto& p : planner::list_policies()) names += (names.empty() ? "" : ", ") + p.name;
-      throw app::UsageError("unknown policy '" + name + "' (available: " + names + ")");
+      throw base::UsageError("unknown policy '" + name + "' (available: " + names + ")");
     }
   }
 
@@ -283,8 +285,8 @@ class BuiltinPolicy {
 
  private:
   std::string name_;
-  app::Config config_;
-  std::shared_ptr<const app::Track> track_;
+  run::Config config_;
+  std::shared_ptr<const run::Track> track_;
   std::unique_ptr<planner::Policy> policy_;  // refers to track_: declared after it
   std::string status_ = "normal";
   bool busy_ = false;  // a call runs (OneCallAtATime)
@@ -305,7 +307,7 @@ py::object drive(const py::object& policy, const std::optional<std::string>& map
                  std::uint64_t seed, const std::string& traffic, double minutes,
                  const std::optional<std::string>& config, const std::optional<int>& steps_per_call,
                  const std::optional<std::string>& name) {
-  app::DriveOptions o = drive_options(map, seed, traffic, config, steps_per_call, minutes);
+  run::DriveOptions o = drive_options(map, seed, traffic, config, steps_per_call, minutes);
   // Ctrl-C (or a planner's KeyboardInterrupt, SystemExit) stops the run and is raised again
   // here: a loop over drives must end, not go on with the next one.
   const auto stops = std::make_shared<python::DriveInterruption>();
@@ -315,7 +317,7 @@ py::object drive(const py::object& policy, const std::optional<std::string>& map
     std::string label = name.value_or("");
     if (label.empty()) {
       label = py::str(py::getattr(policy, "__name__", py::str("python")));
-      if (!usable_name(label) || app::PlannerCatalog().find(label)) label = "python";
+      if (!usable_name(label) || planners::PlannerCatalog().find(label)) label = "python";
     }
     const std::string source =
         std::string(py::str(py::getattr(policy, "__module__", py::str("?")))) + ":" +
@@ -324,7 +326,7 @@ py::object drive(const py::object& policy, const std::optional<std::string>& map
                               python::callable_policy_factory(python::share(policy), label, stops));
     o.policy = label;
   } else {
-    throw app::UsageError("policy must be a built-in policy's name or a callable");
+    throw base::UsageError("policy must be a built-in policy's name or a callable");
   }
   // Python's signal handlers run only when the main thread runs bytecode, which a built-in
   // policy never does: the run looks for a signal Python has noted every 10 simulated
@@ -333,16 +335,16 @@ py::object drive(const py::object& policy, const std::optional<std::string>& map
     py::gil_scoped_acquire gil;
     if (PyErr_CheckSignals() != 0) stops->keep(py::error_already_set());
   };
-  app::DriveResult result;
+  run::DriveResult result;
   try {
     py::gil_scoped_release nogil;
-    result = app::drive(o, check_signals, stops->stop_flag());
+    result = run::drive(o, check_signals, stops->stop_flag());
   } catch (const std::exception&) {
     stops->raise_if_kept();  // what stopped it, rather than what it ended with
     throw;
   }
   stops->raise_if_kept();
-  return to_python(app::report_to_json(result.report, result.provenance));
+  return to_python(run::report_to_json(result.report, result.provenance));
 }
 
 }  // namespace
@@ -357,9 +359,9 @@ PYBIND11_MODULE(_overtake, m) {
   py::register_exception_translator([](std::exception_ptr p) {
     try {
       if (p) std::rethrow_exception(p);
-    } catch (const app::UsageError& e) {
+    } catch (const base::UsageError& e) {
       PyErr_SetString(PyExc_ValueError, e.what());
-    } catch (const app::ConfigError& e) {
+    } catch (const run::ConfigError& e) {
       PyErr_SetString(PyExc_ValueError, e.what());
     } catch (const core::MapError& e) {
       PyErr_SetString(PyExc_ValueError, e.what());
@@ -404,10 +406,10 @@ PYBIND11_MODULE(_overtake, m) {
          const std::optional<std::string>& figures) {
         eval::CompareOptions o;
         try {
-          for (const auto& p : pairs) o.pairs.push_back(app::parse_policy_pair(p));
-          if (figures) o.metrics = app::parse_metric_list(*figures);
-          return to_python(app::compare_bench_folders(before, after, o));
-        } catch (const app::UsageError& e) {
+          for (const auto& p : pairs) o.pairs.push_back(batch::parse_policy_pair(p));
+          if (figures) o.metrics = batch::parse_metric_list(*figures);
+          return to_python(batch::compare_bench_folders(before, after, o));
+        } catch (const base::UsageError& e) {
           throw py::value_error(e.what());
         }
       },
@@ -418,7 +420,7 @@ PYBIND11_MODULE(_overtake, m) {
       "bench_summary",
       [](const std::string& folder) {
         std::vector<std::string> notes;
-        const eval::BenchData b = app::load_bench_for_compare(folder, notes);
+        const eval::BenchData b = batch::load_bench_for_compare(folder, notes);
         std::vector<std::string> traffic;
         if (b.manifest.contains("traffic") && b.manifest["traffic"].is_array()) {
           for (const auto& t : b.manifest["traffic"]) traffic.push_back(t.get<std::string>());

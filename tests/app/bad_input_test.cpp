@@ -15,12 +15,18 @@
 #include <nlohmann/json.hpp>
 
 #include "overtake/app/cli.hpp"
-#include "overtake/app/io.hpp"
-#include "overtake/app/resources.hpp"
+#include "overtake/base/errors.hpp"
+#include "overtake/base/io.hpp"
 #include "overtake/core/text_check.hpp"
+#include "overtake/run/resources.hpp"
 #include "temp_dir.hpp"
 
 namespace overtake::app {
+
+using base::kExitFailure;
+using base::kExitOk;
+using base::kExitUsage;
+using base::read_file;
 namespace {
 
 using nlohmann::json;

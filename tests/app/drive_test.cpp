@@ -6,10 +6,21 @@
 #include <filesystem>
 #include <fstream>
 
-#include "overtake/app/commands.hpp"
-#include "overtake/app/io.hpp"
+#include "overtake/app/cli.hpp"
+#include "overtake/base/errors.hpp"
+#include "overtake/base/io.hpp"
+#include "overtake/run/drive.hpp"
+#include "overtake/run/report.hpp"
 
 namespace overtake::app {
+
+using base::read_file;
+using base::UsageError;
+using base::write_file_atomic;
+using run::drive;
+using run::DriveOptions;
+using run::DriveResult;
+using run::report_to_json;
 namespace {
 
 using nlohmann::json;

@@ -11,15 +11,33 @@
 #include <set>
 
 #include "overtake/app/cli.hpp"
-#include "overtake/app/commands.hpp"
-#include "overtake/app/cut.hpp"
-#include "overtake/app/hunt.hpp"
-#include "overtake/app/io.hpp"
+#include "overtake/base/errors.hpp"
+#include "overtake/base/io.hpp"
+#include "overtake/batch/hunt.hpp"
 #include "overtake/replay/replay.hpp"
+#include "overtake/run/drive.hpp"
+#include "overtake/scenarios/cut.hpp"
 #include "process_support.hpp"
 #include "temp_dir.hpp"
 
 namespace overtake::app {
+
+using base::kExitFailure;
+using base::kExitUsage;
+using base::read_file;
+using base::UsageError;
+using base::write_file_atomic;
+using batch::check_hunt_out;
+using batch::check_hunt_spec;
+using batch::hunt_max_runs;
+using batch::hunt_run_name;
+using batch::HuntFailure;
+using batch::HuntOutcome;
+using batch::HuntSpec;
+using batch::run_hunt;
+using scenarios::cut_replay;
+using scenarios::CutOptions;
+using scenarios::kMaxCutWindowS;
 namespace {
 
 namespace fs = std::filesystem;

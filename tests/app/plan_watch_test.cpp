@@ -21,8 +21,9 @@
 
 #include <nlohmann/json.hpp>
 
-#include "overtake/app/io.hpp"
-#include "overtake/app/plan_watch.hpp"
+#include "overtake/base/errors.hpp"
+#include "overtake/base/io.hpp"
+#include "overtake/planners/plan_watch.hpp"
 #include "process_support.hpp"
 
 namespace overtake {
@@ -64,14 +65,14 @@ class SlowPolicy final : public planner::Policy {
 
 TEST(PlanWatch, CallsWithinTheTimeoutAreLeftAlone) {
   SlowPolicy policy(30ms, true);
-  app::PlanWatch watch(policy, "the planner p", 0.5, nullptr);
+  planners::PlanWatch watch(policy, "the planner p", 0.5, nullptr);
   for (int i = 0; i < 5; ++i) EXPECT_EQ(watch.plan({}).path.size(), 1u);
   EXPECT_EQ(policy.interrupts.load(), 0);
 }
 
 TEST(PlanWatch, ACallPastItsTimeoutIsInterruptedAndSaysSo) {
   SlowPolicy policy(60s, true);
-  app::PlanWatch watch(policy, "the Python planner slow (slow.py:plan)", 0.2, nullptr);
+  planners::PlanWatch watch(policy, "the Python planner slow (slow.py:plan)", 0.2, nullptr);
   const auto t0 = std::chrono::steady_clock::now();
   try {
     (void)watch.plan({});
@@ -87,7 +88,7 @@ TEST(PlanWatch, ACallPastItsTimeoutIsInterruptedAndSaysSo) {
 TEST(PlanWatch, AStopInterruptsTheRunningCallAtOnce) {
   SlowPolicy policy(60s, true);
   std::atomic<bool> stop{false};
-  app::PlanWatch watch(policy, "the planner p", 3600.0, &stop);
+  planners::PlanWatch watch(policy, "the planner p", 3600.0, &stop);
   std::thread stopper([&] {
     std::this_thread::sleep_for(100ms);
     stop = true;
@@ -109,7 +110,8 @@ int status_of_child(bool stop_it, std::string* message) {
     ::dup2(err[1], 2);
     SlowPolicy policy(60s, false);
     std::atomic<bool> stop{false};
-    app::PlanWatch watch(policy, "the plugin stuck (./libstuck.so)", stop_it ? 3600.0 : 0.2, &stop);
+    planners::PlanWatch watch(policy, "the plugin stuck (./libstuck.so)", stop_it ? 3600.0 : 0.2,
+                              &stop);
     std::thread stopper([&] {
       std::this_thread::sleep_for(100ms);
       if (stop_it) stop = true;
@@ -131,7 +133,7 @@ int status_of_child(bool stop_it, std::string* message) {
 TEST(PlanWatch, APlannerThatCannotBeInterruptedEndsTheProcess) {
   std::string message;
   const auto t0 = std::chrono::steady_clock::now();
-  EXPECT_EQ(status_of_child(false, &message), app::kExitPlannerStuck);
+  EXPECT_EQ(status_of_child(false, &message), base::kExitPlannerStuck);
   EXPECT_LT(std::chrono::steady_clock::now() - t0, 2s);
   EXPECT_NE(message.find("the plugin stuck (./libstuck.so) has not returned from plan() in 0.20 s"),
             std::string::npos)
@@ -171,9 +173,9 @@ TEST_F(PlanWatchCli, APluginThatNeverReturnsEndsTheBenchKeepingFinishedRuns) {
        "--seeds", "1-2", "--minutes", "0.2", "--jobs", "1", "--planner-reply-timeout", "0.5",
        "--out", out.string(), "--quiet"},
       root_ / "stdout", root_ / "stderr");
-  EXPECT_EQ(test::exit_status(pid, std::chrono::seconds(60)), app::kExitPlannerStuck);
+  EXPECT_EQ(test::exit_status(pid, std::chrono::seconds(60)), base::kExitPlannerStuck);
   EXPECT_LT(std::chrono::steady_clock::now() - t0, 30s);
-  const std::string err = app::read_file(root_ / "stderr");
+  const std::string err = base::read_file(root_ / "stderr");
   EXPECT_NE(err.find("the plugin never_returns ("), std::string::npos) << err;
   EXPECT_NE(err.find("has not returned from plan() in 0.50 s"), std::string::npos) << err;
   std::ifstream rows(out / "runs.jsonl");
@@ -197,12 +199,12 @@ TEST_F(PlanWatchCli, CtrlCEndsADriveWhosePluginNeverReturnsWithinASecond) {
   const auto t0 = std::chrono::steady_clock::now();
   ::kill(pid, SIGINT);
   EXPECT_EQ(test::exit_status(pid, std::chrono::seconds(10)), 130)
-      << app::read_file(root_ / "stderr");
+      << base::read_file(root_ / "stderr");
   EXPECT_LT(std::chrono::steady_clock::now() - t0,
             1500ms);  // within a second by design (a 0.5 s grace), with room for a loaded machine
-  EXPECT_NE(app::read_file(root_ / "stderr").find("stopped while the plugin never_returns"),
+  EXPECT_NE(base::read_file(root_ / "stderr").find("stopped while the plugin never_returns"),
             std::string::npos)
-      << app::read_file(root_ / "stderr");
+      << base::read_file(root_ / "stderr");
 }
 
 // `serve` with a plugin that never returns: the one thread that serves is stuck in it, yet
@@ -210,7 +212,7 @@ TEST_F(PlanWatchCli, CtrlCEndsADriveWhosePluginNeverReturnsWithinASecond) {
 TEST_F(PlanWatchCli, CtrlCEndsServeEvenWhenItsPluginNeverReturns) {
   const auto listening_port = [this]() -> std::string {
     for (int i = 0; i < 500; ++i) {
-      const std::string err = app::read_file(root_ / "serve.err");
+      const std::string err = base::read_file(root_ / "serve.err");
       const std::size_t at = err.find("listening on ws://127.0.0.1:");
       if (at != std::string::npos) {
         const std::size_t from = at + std::string("listening on ws://127.0.0.1:").size();
@@ -227,7 +229,7 @@ TEST_F(PlanWatchCli, CtrlCEndsServeEvenWhenItsPluginNeverReturns) {
          "--port", "0", "--planner-reply-timeout", "600"},
         root_ / "serve.out", root_ / "serve.err");
     const std::string port = listening_port();
-    ASSERT_FALSE(port.empty()) << app::read_file(root_ / "serve.err");
+    ASSERT_FALSE(port.empty()) << base::read_file(root_ / "serve.err");
     const pid_t client =
         test::start_overtake({"sim", "--planner", "ws://127.0.0.1:" + port, "--minutes", "1",
                               "--reply-timeout", "600", "--quiet"},
@@ -237,11 +239,11 @@ TEST_F(PlanWatchCli, CtrlCEndsServeEvenWhenItsPluginNeverReturns) {
     ::kill(server, SIGINT);
     const auto status = test::exit_status(server, std::chrono::seconds(10));
     EXPECT_LT(std::chrono::steady_clock::now() - t0, 1500ms);
-    EXPECT_EQ(status, stuck ? 130 : 0) << app::read_file(root_ / "serve.err");
+    EXPECT_EQ(status, stuck ? 130 : 0) << base::read_file(root_ / "serve.err");
     if (stuck) {
-      EXPECT_NE(app::read_file(root_ / "serve.err").find("stopped while the plugin never_returns"),
+      EXPECT_NE(base::read_file(root_ / "serve.err").find("stopped while the plugin never_returns"),
                 std::string::npos)
-          << app::read_file(root_ / "serve.err");
+          << base::read_file(root_ / "serve.err");
     }
     (void)test::exit_status(client, std::chrono::seconds(20));
   }

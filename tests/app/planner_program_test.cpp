@@ -24,9 +24,10 @@
 
 #include <nlohmann/json.hpp>
 
-#include "overtake/app/commands.hpp"
-#include "overtake/app/planner_process.hpp"
-#include "overtake/app/planners.hpp"
+#include "overtake/base/errors.hpp"
+#include "overtake/planners/catalog.hpp"
+#include "overtake/run/drive.hpp"
+#include "overtake/sandbox/planner_process.hpp"
 #include "process_support.hpp"
 
 namespace overtake {
@@ -90,22 +91,22 @@ class PlannerProgramTest : public ::testing::Test {
 };
 
 TEST(PlannerCatalogTest, NamesFromFlagsAndTheirErrors) {
-  EXPECT_EQ(app::split_named("course=./planner.so"),
+  EXPECT_EQ(planners::split_named("course=./planner.so"),
             (std::pair<std::string, std::string>{"course", "./planner.so"}));
-  EXPECT_EQ(app::split_named("./build/planner").first, "");
+  EXPECT_EQ(planners::split_named("./build/planner").first, "");
 
-  app::PlannerFlags flags;
+  planners::PlannerFlags flags;
   flags.commands = {"./build/path_planning", "./other --x"};
   flags.names = {"", "mine"};  // "": the program's own name
-  auto catalog = app::catalog_from_flags(flags);
+  auto catalog = planners::catalog_from_flags(flags);
   EXPECT_EQ(catalog->added_names(), (std::vector<std::string>{"path_planning", "mine"}));
-  const app::PlannerEntry* e = catalog->find("mine");
+  const planners::PlannerEntry* e = catalog->find("mine");
   ASSERT_NE(e, nullptr);
-  EXPECT_EQ(e->kind, app::PlannerKind::program);
+  EXPECT_EQ(e->kind, planners::PlannerKind::program);
   EXPECT_EQ(e->program->command, "./other --x");
   EXPECT_EQ(e->program->port, 4567);
   ASSERT_NE(catalog->find("reference"), nullptr);
-  EXPECT_EQ(catalog->find("reference")->kind, app::PlannerKind::builtin);
+  EXPECT_EQ(catalog->find("reference")->kind, planners::PlannerKind::builtin);
   EXPECT_EQ(catalog->find("nobody"), nullptr);
 
   // A command is a shell command, whole: a variable before the program is a variable, and the
@@ -113,7 +114,7 @@ TEST(PlannerCatalogTest, NamesFromFlagsAndTheirErrors) {
   flags.names.clear();
   flags.commands = {"OMP_NUM_THREADS=1 ./build/path_planning --fast", "exec 'my dir/planner'",
                     "A=\"x y\" env B=2 ./third"};
-  catalog = app::catalog_from_flags(flags);
+  catalog = planners::catalog_from_flags(flags);
   EXPECT_EQ(catalog->added_names(),
             (std::vector<std::string>{"path_planning", "planner", "third"}));
   EXPECT_EQ(catalog->find("path_planning")->program->command,
@@ -121,31 +122,31 @@ TEST(PlannerCatalogTest, NamesFromFlagsAndTheirErrors) {
 
   flags.commands = {"mine=./path_planning"};  // the old NAME=CMD: a variable, and no program
   try {
-    (void)app::catalog_from_flags(flags);
+    (void)planners::catalog_from_flags(flags);
     ADD_FAILURE() << "an assignment alone was taken for a program";
-  } catch (const app::UsageError& err) {
+  } catch (const base::UsageError& err) {
     EXPECT_NE(std::string(err.what()).find("--planner-name"), std::string::npos) << err.what();
   }
   flags.commands = {"./p", "./q"};
   flags.names = {"only-one"};
-  EXPECT_THROW((void)app::catalog_from_flags(flags), app::UsageError);
+  EXPECT_THROW((void)planners::catalog_from_flags(flags), base::UsageError);
   flags.names = {"reference", "q"};  // a built-in policy's name
-  EXPECT_THROW((void)app::catalog_from_flags(flags), app::UsageError);
+  EXPECT_THROW((void)planners::catalog_from_flags(flags), base::UsageError);
   flags.names = {"a", "a"};
-  EXPECT_THROW((void)app::catalog_from_flags(flags), app::UsageError);
+  EXPECT_THROW((void)planners::catalog_from_flags(flags), base::UsageError);
   flags.commands = {"   "};
   flags.names.clear();
-  EXPECT_THROW((void)app::catalog_from_flags(flags), app::UsageError);
+  EXPECT_THROW((void)planners::catalog_from_flags(flags), base::UsageError);
 }
 
 TEST(PlannerProcessTest, OutputGoesToTheLogAndStopEndsTheWholeGroup) {
   const fs::path log =
       fs::temp_directory_path() / ("overtake-keeper-" + std::to_string(::getpid()) + ".log");
-  app::PlannerProcessOptions o;
+  sandbox::PlannerProcessOptions o;
   o.command = "echo started; sleep 30 & sleep 30";
   o.log = log;
   o.isolated = false;
-  app::PlannerProcess p(o);
+  sandbox::PlannerProcess p(o);
   for (int i = 0; i < 200 && read_text(log).empty(); ++i)
     std::this_thread::sleep_for(std::chrono::milliseconds(10));
   EXPECT_EQ(p.ended(), "");
@@ -158,12 +159,12 @@ TEST(PlannerProcessTest, OutputGoesToTheLogAndStopEndsTheWholeGroup) {
 TEST(PlannerProcessTest, ALogIsCutAtItsLimitAndTheProgramIsNotHeldUp) {
   const fs::path log =
       fs::temp_directory_path() / ("overtake-cut-" + std::to_string(::getpid()) + ".log");
-  app::PlannerProcessOptions o;
+  sandbox::PlannerProcessOptions o;
   o.command = "head -c 3000000 /dev/zero | tr '\\0' x; echo done >&2; exit 4";
   o.log = log;
   o.isolated = false;
   o.log_max_bytes = 1000;
-  app::PlannerProcess p(o);
+  sandbox::PlannerProcess p(o);
   std::string ended;
   for (int i = 0; i < 1000 && ended.empty(); ++i) {  // it writes 3 MB: it must not block
     ended = p.ended();
@@ -181,11 +182,11 @@ TEST(PlannerProcessTest, ALogIsCutAtItsLimitAndTheProgramIsNotHeldUp) {
 TEST(PlannerProcessTest, AProgramThatExitsSaysHow) {
   const fs::path log =
       fs::temp_directory_path() / ("overtake-exit-" + std::to_string(::getpid()) + ".log");
-  app::PlannerProcessOptions o;
+  sandbox::PlannerProcessOptions o;
   o.command = "exit 7";
   o.log = log;
   o.isolated = false;
-  app::PlannerProcess p(o);
+  sandbox::PlannerProcess p(o);
   std::string ended;
   for (int i = 0; i < 300 && ended.empty(); ++i) {
     ended = p.ended();
@@ -193,7 +194,7 @@ TEST(PlannerProcessTest, AProgramThatExitsSaysHow) {
   }
   EXPECT_EQ(ended, "exited with status 7");
   o.cwd = "/no/such/folder";
-  EXPECT_THROW(app::PlannerProcess{o}, std::runtime_error);
+  EXPECT_THROW(sandbox::PlannerProcess{o}, std::runtime_error);
   fs::remove(log);
 }
 
@@ -224,7 +225,7 @@ sockaddr_in loopback(int port) {
 // one and holds it, so that whatever else runs on this machine, 4567 included, plays no part.)
 TEST(PlannerProcessTest, IsolatedProgramsShareOnePortAndNobodyElseReachesThem) {
   std::string why;
-  if (!app::private_network_available(&why)) GTEST_SKIP() << why;
+  if (!sandbox::private_network_available(&why)) GTEST_SKIP() << why;
   const fs::path dir = fs::temp_directory_path() / ("overtake-iso-" + std::to_string(::getpid()));
   fs::create_directories(dir);
   const int port = free_port();
@@ -233,14 +234,14 @@ TEST(PlannerProcessTest, IsolatedProgramsShareOnePortAndNobodyElseReachesThem) {
   ASSERT_EQ(::bind(host, reinterpret_cast<const sockaddr*>(&at), sizeof at), 0);
   ASSERT_EQ(::listen(host, 4), 0);
 
-  app::PlannerProcessOptions o;
+  sandbox::PlannerProcessOptions o;
   o.command = course_planner().string() + " --port " + std::to_string(port);
   o.isolated = true;
   o.log = dir / "a.log";
-  app::PlannerProcess a(o);
+  sandbox::PlannerProcess a(o);
   o.log = dir / "b.log";
-  app::PlannerProcess b(o);
-  const auto connect_in = [port](app::PlannerProcess& p) {
+  sandbox::PlannerProcess b(o);
+  const auto connect_in = [port](sandbox::PlannerProcess& p) {
     for (int i = 0; i < 500; ++i) {
       const int fd = p.open_socket();
       if (fd < 0) return false;
@@ -310,12 +311,12 @@ TEST(PlannerProcessTest, OnlyStandardInputOutputAndErrorReachTheProgram) {
   fs::create_directories(dir);
   std::ofstream held(dir / "results.jsonl");  // open, inheritable
   for (const bool isolated : {false, true}) {
-    if (isolated && !app::private_network_available()) continue;
-    app::PlannerProcessOptions o;
+    if (isolated && !sandbox::private_network_available()) continue;
+    sandbox::PlannerProcessOptions o;
     o.command = "exec ls -l /proc/self/fd";
     o.log = dir / "fds.log";
     o.isolated = isolated;
-    app::PlannerProcess p(o);
+    sandbox::PlannerProcess p(o);
     ASSERT_TRUE(eventually([&] { return !p.ended().empty(); }, std::chrono::seconds(10)));
     p.stop();
     const std::string text = read_text(o.log);
@@ -346,18 +347,18 @@ TEST(PlannerProcessTest, WhatAProgramStartsEndsWithItsRunEvenWhenOvertakeIsKille
       fs::temp_directory_path() / ("overtake-daemons-" + std::to_string(::getpid()));
   fs::create_directories(dir);
   for (const bool namespaces : {true, false}) {
-    if (namespaces && !app::private_network_available()) continue;
+    if (namespaces && !sandbox::private_network_available()) continue;
     SCOPED_TRACE(namespaces ? "PID namespace" : "subreaper");
     const std::string tag = std::to_string(::getpid()) + (namespaces ? "1" : "2");
-    app::PlannerProcessOptions o;
+    sandbox::PlannerProcessOptions o;
     o.command = daemonising(tag);
     o.log = dir / "daemons.log";
     o.isolated = false;
     o.namespaces = namespaces;
     {
-      app::PlannerProcess p(o);
+      sandbox::PlannerProcess p(o);
       EXPECT_EQ(p.containment(),
-                namespaces ? app::Containment::pid_namespace : app::Containment::subreaper);
+                namespaces ? sandbox::Containment::pid_namespace : sandbox::Containment::subreaper);
       ASSERT_TRUE(
           eventually([&] { return processes_with(tag).size() == 2; }, std::chrono::seconds(10)));
       p.stop(0.2);
@@ -370,7 +371,7 @@ TEST(PlannerProcessTest, WhatAProgramStartsEndsWithItsRunEvenWhenOvertakeIsKille
     o.command = daemonising(killed_tag);
     const pid_t child = ::fork();
     if (child == 0) {
-      app::PlannerProcess p(o);
+      sandbox::PlannerProcess p(o);
       ::pause();
       _exit(0);
     }
@@ -397,11 +398,11 @@ TEST(PlannerProcessTest, AProcessThatIgnoresSigchldStillStopsItsProgram) {
   ignore.sa_handler = SIG_IGN;
   ::sigaction(SIGCHLD, &ignore, &old);
   {
-    app::PlannerProcessOptions o;
+    sandbox::PlannerProcessOptions o;
     o.command = "exit 7";
     o.log = log;
     o.isolated = false;
-    app::PlannerProcess p(o);
+    sandbox::PlannerProcess p(o);
     EXPECT_TRUE(eventually([&] { return !p.ended().empty(); }, std::chrono::seconds(5)));
     EXPECT_EQ(p.ended(), "exited with status 7");
     const auto t0 = std::chrono::steady_clock::now();
@@ -415,7 +416,7 @@ TEST(PlannerProcessTest, AProcessThatIgnoresSigchldStillStopsItsProgram) {
 // The program runs as the user who runs overtake, not as root of its user namespace. (As
 // root, the test runs overtake as the user nobody, to go through the user namespace.)
 TEST_F(PlannerProgramTest, TheProgramRunsAsTheUserNotAsRoot) {
-  if (!app::private_network_available()) GTEST_SKIP() << "no namespaces on this machine";
+  if (!sandbox::private_network_available()) GTEST_SKIP() << "no namespaces on this machine";
   std::vector<std::string> prefix;
   std::string uid = std::to_string(::getuid());
   if (::getuid() == 0) {
@@ -525,7 +526,7 @@ TEST_F(PlannerProgramTest, TheScorecardSaysWhenTheHostsNetworkWasUsed) {
                  "--planner-log", (root_ / "planner.log").string()}),
             0)
       << err_;
-  if (app::private_network_available()) {
+  if (sandbox::private_network_available()) {
     EXPECT_EQ(out_.find("the host's"), std::string::npos) << out_;
   }
 }

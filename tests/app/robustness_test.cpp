@@ -15,12 +15,14 @@
 #include <unistd.h>
 
 #include "overtake/app/cli.hpp"
-#include "overtake/app/commands.hpp"
-#include "overtake/app/io.hpp"
+#include "overtake/base/io.hpp"
 #include "overtake/replay/replay.hpp"
+#include "overtake/run/drive.hpp"
 #include "process_support.hpp"
 
 namespace overtake::app {
+
+using base::read_file;
 namespace {
 
 using nlohmann::json;

@@ -14,12 +14,31 @@
 #include "bench_support.hpp"
 #include "overtake/app/cli.hpp"
 #include "overtake/app/interrupt.hpp"
-#include "overtake/app/io.hpp"
-#include "overtake/app/slurm.hpp"
+#include "overtake/base/errors.hpp"
+#include "overtake/base/io.hpp"
+#include "overtake/base/text.hpp"
+#include "overtake/cluster/slurm.hpp"
 #include "process_support.hpp"
 #include "temp_dir.hpp"
 
 namespace overtake::app {
+
+using base::kExitFailure;
+using base::kExitInterrupted;
+using base::kExitUsage;
+using base::read_file;
+using base::shell_quote;
+using base::UsageError;
+using base::write_file_atomic;
+using cluster::parse_sbatch_job_id;
+using cluster::parse_scontrol_job;
+using cluster::parse_squeue_tasks;
+using cluster::slurm_batch_script;
+using cluster::slurm_shard_runs;
+using cluster::SlurmArray;
+using cluster::SlurmJobEnd;
+using cluster::SlurmOptions;
+using cluster::validate_slurm_options;
 namespace {
 
 using nlohmann::json;

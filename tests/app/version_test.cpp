@@ -16,13 +16,20 @@
 
 #include <unistd.h>
 
-#include "overtake/app/bench.hpp"
-#include "overtake/app/build_info.hpp"
-#include "overtake/app/io.hpp"
-#include "overtake/app/viewer.hpp"
+#include "overtake/base/build_info.hpp"
+#include "overtake/base/io.hpp"
+#include "overtake/batch/bench.hpp"
+#include "overtake/run/pages.hpp"
 #include "process_support.hpp"
 
 namespace overtake::app {
+
+using base::build_revision;
+using base::overtake_version;
+using base::project_version;
+using base::read_file;
+using batch::BenchSpec;
+using batch::run_bench;
 namespace {
 
 namespace fs = std::filesystem;

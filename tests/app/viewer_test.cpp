@@ -27,20 +27,52 @@
 #include <boost/beast/websocket.hpp>
 #pragma GCC diagnostic pop
 
-#include "overtake/app/bench.hpp"
-#include "overtake/app/commands.hpp"
-#include "overtake/app/io.hpp"
-#include "overtake/app/resources.hpp"
-#include "overtake/app/viewer.hpp"
+#include "overtake/app/cli.hpp"
+#include "overtake/base/build_info.hpp"
+#include "overtake/base/errors.hpp"
+#include "overtake/base/io.hpp"
+#include "overtake/batch/bench.hpp"
+#include "overtake/batch/bench_page.hpp"
 #include "overtake/core/base64.hpp"
 #include "overtake/planner/policy.hpp"
 #include "overtake/replay/replay.hpp"
+#include "overtake/run/config.hpp"
+#include "overtake/run/drive.hpp"
+#include "overtake/run/pages.hpp"
+#include "overtake/run/report.hpp"
+#include "overtake/run/resources.hpp"
 #include "overtake/sim/world.hpp"
 #include "overtake/view/page.hpp"
 #include "overtake/view/server.hpp"
 #include "zlib_support.hpp"
 
 namespace overtake::app {
+
+using base::overtake_version;
+using base::read_file;
+using base::UsageError;
+using base::write_file_atomic;
+using batch::bench_replay_name;
+using batch::BenchOutcome;
+using batch::BenchSpec;
+using batch::load_bench_runs;
+using batch::merge_bench;
+using batch::run_bench;
+using batch::write_bench_report;
+using run::Config;
+using run::drive;
+using run::DriveOptions;
+using run::DriveResult;
+using run::embedded_page;
+using run::kReportPageName;
+using run::kViewerPageName;
+using run::load_config;
+using run::load_track;
+using run::replay_header_for;
+using run::replay_report_json;
+using run::report_to_json;
+using run::RunProvenance;
+using run::write_viewer_html;
 namespace {
 
 using nlohmann::json;

@@ -12,15 +12,25 @@
 #include <fstream>
 
 #include "overtake/app/cli.hpp"
-#include "overtake/app/commands.hpp"
-#include "overtake/app/cut.hpp"
-#include "overtake/app/io.hpp"
-#include "overtake/app/planner_process.hpp"
-#include "overtake/app/scenario_file.hpp"
+#include "overtake/base/errors.hpp"
+#include "overtake/base/io.hpp"
+#include "overtake/run/config.hpp"
+#include "overtake/run/drive.hpp"
+#include "overtake/run/scenario_file.hpp"
+#include "overtake/sandbox/planner_process.hpp"
+#include "overtake/scenarios/cut.hpp"
 #include "process_support.hpp"
 #include "temp_dir.hpp"
 
 namespace overtake::app {
+
+using base::read_file;
+using base::UsageError;
+using run::ConfigError;
+using run::pack_blob;
+using run::parse_scenario;
+using sandbox::private_network_available;
+using scenarios::parse_warm_up;
 namespace {
 
 namespace fs = std::filesystem;

@@ -21,7 +21,7 @@
 #include <nlohmann/json.hpp>
 
 #include "bench_support.hpp"
-#include "overtake/app/io.hpp"
+#include "overtake/base/io.hpp"
 #include "process_support.hpp"
 #include "temp_dir.hpp"
 
@@ -80,8 +80,8 @@ class SlurmCluster : public ::testing::Test {
                         std::to_string(::getpid())},
                        out, dir_.path() / "start.err", 120s);
     started_ = true;
-    ASSERT_EQ(rc, 0) << app::read_file(dir_.path() / "start.err");
-    const std::string line = app::read_file(out);
+    ASSERT_EQ(rc, 0) << base::read_file(dir_.path() / "start.err");
+    const std::string line = base::read_file(out);
     const std::string prefix = "export SLURM_CONF=";
     ASSERT_EQ(line.rfind(prefix, 0), 0u) << line;
     std::string conf = line.substr(prefix.size());
@@ -93,7 +93,7 @@ class SlurmCluster : public ::testing::Test {
     if (!started_) return;
     const int rc = run({"/bin/bash", kScript.string(), "stop", cluster_dir().string()},
                        dir_.path() / "stop.out", dir_.path() / "stop.err", 120s);
-    EXPECT_EQ(rc, 0) << app::read_file(dir_.path() / "stop.err");
+    EXPECT_EQ(rc, 0) << base::read_file(dir_.path() / "stop.err");
     ::unsetenv("SLURM_CONF");
   }
 
@@ -104,7 +104,7 @@ class SlurmCluster : public ::testing::Test {
   std::string queue() {
     (void)run({on_path("squeue"), "--noheader", "--array", "--format=%i %T"}, path("squeue.out"),
               path("squeue.err"));
-    return app::read_file(path("squeue.out"));
+    return base::read_file(path("squeue.out"));
   }
 
   test::TempDir dir_{"overtake-slurm-cluster"};
@@ -120,7 +120,7 @@ TEST_F(SlurmCluster, ABenchCancelledPartWayIsSubmittedAgainAndMergesIntoTheLocal
   local.push_back(path("local").string());
   local.insert(local.begin(), test::overtake_binary().string());
   ASSERT_EQ(run(local, path("local.out"), path("local.err"), 600s), 0)
-      << app::read_file(path("local.err"));
+      << base::read_file(path("local.err"));
 
   std::vector<std::string> slurm = sweep;
   for (const char* a : {"--slurm", "4", "--slurm-poll", "0.2", "--out"}) slurm.emplace_back(a);
@@ -155,32 +155,32 @@ TEST_F(SlurmCluster, ABenchCancelledPartWayIsSubmittedAgainAndMergesIntoTheLocal
     }
     std::this_thread::sleep_for(50ms);
   }
-  ASSERT_FALSE(job2.empty()) << "task 2 never ran:\n" << app::read_file(path("bench.err"));
+  ASSERT_FALSE(job2.empty()) << "task 2 never ran:\n" << base::read_file(path("bench.err"));
   while (lines(shard2) < 1 && std::chrono::steady_clock::now() < deadline) {
     std::this_thread::sleep_for(20ms);
   }
   const std::size_t written = lines(shard2);
   ASSERT_EQ(run({on_path("scancel"), job2}, path("scancel.out"), path("scancel.err")), 0)
-      << app::read_file(path("scancel.err"));
+      << base::read_file(path("scancel.err"));
 
   const auto status = test::exit_status(bench, 600s);
   reap.reaped = true;  // waited for (and killed, past the time)
-  const std::string err = app::read_file(path("bench.err"));
+  const std::string err = base::read_file(path("bench.err"));
   ASSERT_EQ(status, 0) << err;
   // It was running when cancelled, with `written` of its 4 runs: overtake submits it again,
   // and the new task goes on from what the first wrote.
   EXPECT_THAT(err, HasSubstr("slurm: task 2 (job " + job2 + ") ended CANCELLED"));
   EXPECT_THAT(err, HasSubstr("with " + std::to_string(written)));
   EXPECT_THAT(err, HasSubstr("submitting it again (retry 1 of 2)"));
-  const json state = json::parse(app::read_file(path("cluster-out") / "slurm" / "state.json"));
+  const json state = json::parse(base::read_file(path("cluster-out") / "slurm" / "state.json"));
   EXPECT_EQ(state["attempts"][1].size(), 2u);
   EXPECT_EQ(state["attempts"][0].size(), 1u);
-  EXPECT_THAT(app::read_file(path("bench.out")),
+  EXPECT_THAT(base::read_file(path("bench.out")),
               HasSubstr("16 runs in 4 Slurm tasks (1 submitted again)"));
   EXPECT_EQ(test::stable_runs(path("cluster-out")), test::stable_runs(path("local")));
   EXPECT_EQ(test::untimed_summary(path("cluster-out")), test::untimed_summary(path("local")));
-  EXPECT_EQ(app::read_file(path("cluster-out") / "pairs.csv"),
-            app::read_file(path("local") / "pairs.csv"));
+  EXPECT_EQ(base::read_file(path("cluster-out") / "pairs.csv"),
+            base::read_file(path("local") / "pairs.csv"));
   EXPECT_EQ(lines(path("cluster-out") / "runs.jsonl"), 16u);
   // Nothing of the array is left in the queue.
   EXPECT_EQ(queue(), "");

@@ -9,10 +9,10 @@
 #include <string>
 #include <vector>
 
-#include "overtake/app/commands.hpp"
-#include "overtake/app/config.hpp"
-#include "overtake/app/report.hpp"
 #include "overtake/planner/policy.hpp"
+#include "overtake/run/config.hpp"
+#include "overtake/run/drive.hpp"
+#include "overtake/run/report.hpp"
 #include "overtake/sim/checkpoint.hpp"
 #include "overtake/sim/run.hpp"
 #include "overtake/sim/world.hpp"
@@ -30,7 +30,7 @@ class Keeper final : public sim::RunObserver {
 };
 
 std::string report_text(const sim::RunReport& r) {
-  nlohmann::json j = app::report_to_json(r, {});
+  nlohmann::json j = run::report_to_json(r, {});
   j.erase("timing");
   return j.dump();
 }
@@ -42,15 +42,15 @@ struct Case {
   double duration_s;
 };
 
-const app::Track& default_track() {
-  static const auto track = app::load_track(std::nullopt);
+const run::Track& default_track() {
+  static const auto track = run::load_track(std::nullopt);
   return *track;
 }
 
 /// Runs the case whole, keeping checkpoints every `every_s`; returns its report.
 std::string run_whole(const Case& c, double every_s, Keeper& keeper) {
-  const app::Config config = app::default_config();
-  const app::Track& track = default_track();
+  const run::Config config = run::default_config();
+  const run::Track& track = default_track();
   sim::World world(track.map, track.line, config.world, c.profile, c.seed);
   auto policy = make_policy(c.policy, track.line, config.planner);
   sim::RunOptions opts;
@@ -69,8 +69,8 @@ std::string run_restored(const Case& c, sim::Checkpoint checkpoint) {
   checkpoint.info.policy = c.policy;
   const sim::Checkpoint read = sim::decode_checkpoint(sim::encode_checkpoint(checkpoint), "test");
   EXPECT_EQ(read, checkpoint);
-  const app::Config config = app::default_config();
-  const app::Track& track = default_track();
+  const run::Config config = run::default_config();
+  const run::Track& track = default_track();
   // Another seed: the random streams are part of the state.
   sim::World world(track.map, track.line, config.world, c.profile, c.seed + 1000);
   auto policy = make_policy(c.policy, track.line, config.planner);
@@ -124,8 +124,8 @@ TEST(CheckpointRestore, ARunStateDoesNotFitAnotherProfile) {
   Keeper keeper;
   (void)run_whole(c, 10.0, keeper);
   ASSERT_FALSE(keeper.kept.empty());
-  const app::Config config = app::default_config();
-  const app::Track& track = default_track();
+  const run::Config config = run::default_config();
+  const run::Track& track = default_track();
   sim::World calm(track.map, track.line, config.world, sim::TrafficProfile::calm, 5);
   sim::RunOptions opts;
   opts.restore = keeper.kept.back().run;
@@ -138,8 +138,8 @@ TEST(CheckpointRestore, ARunStateDoesNotFitAnotherProfile) {
 }
 
 TEST(CheckpointRestore, APolicyRefusesAnotherPolicysState) {
-  const app::Config config = app::default_config();
-  const app::Track& track = default_track();
+  const run::Config config = run::default_config();
+  const run::Track& track = default_track();
   auto seed = make_policy("seed001", track.line, config.planner);
   auto reference = make_policy("reference", track.line, config.planner);
   const std::string state = save_policy_state(*seed);

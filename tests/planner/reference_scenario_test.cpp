@@ -8,11 +8,11 @@
 #include <filesystem>
 #include <string>
 
-#include "overtake/app/commands.hpp"
-#include "overtake/app/config.hpp"
-#include "overtake/app/scenario_file.hpp"
 #include "overtake/core/units.hpp"
 #include "overtake/planner/policy.hpp"
+#include "overtake/run/config.hpp"
+#include "overtake/run/drive.hpp"
+#include "overtake/run/scenario_file.hpp"
 #include "overtake/sim/run.hpp"
 #include "overtake/sim/world.hpp"
 
@@ -27,10 +27,10 @@ struct ScenarioRun {
 };
 
 ScenarioRun run_scenario(const std::string& file, std::uint64_t seed) {
-  static const auto track = app::load_track(std::nullopt);
-  const app::Config config = app::default_config();
+  static const auto track = run::load_track(std::nullopt);
+  const run::Config config = run::default_config();
   ScenarioRun out;
-  out.scenario = app::load_scenario(
+  out.scenario = run::load_scenario(
       std::filesystem::path(OVERTAKE_SOURCE_DIR) / "tests/scenarios" / file, config.road);
   sim::World world(track->map, track->line, config.world, out.scenario);
   auto policy = make_policy("reference", track->line, config.planner);

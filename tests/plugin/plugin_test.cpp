@@ -19,15 +19,17 @@
 #include <dlfcn.h>
 #include <unistd.h>
 
-#include "overtake/app/commands.hpp"
-#include "overtake/app/io.hpp"
-#include "overtake/app/planners.hpp"
+#include "overtake/base/errors.hpp"
+#include "overtake/base/io.hpp"
 #include "overtake/core/text_check.hpp"
 #include "overtake/core/units.hpp"
 #include "overtake/planner_plugin.h"
+#include "overtake/planners/catalog.hpp"
 #include "overtake/plugin/plugin.hpp"
 #include "overtake/protocol/codec.hpp"
 #include "overtake/protocol/server.hpp"
+#include "overtake/run/drive.hpp"
+#include "overtake/run/report.hpp"
 #include "process_support.hpp"
 
 namespace overtake::plugin {
@@ -61,23 +63,23 @@ std::string load_error(const std::string& path) {
   return "";
 }
 
-const app::Track& track() {
-  static const auto t = app::load_track(std::nullopt);
+const run::Track& track() {
+  static const auto t = run::load_track(std::nullopt);
   return *t;
 }
 
 /// A drive of the plugin at `path` (under the plugin's own name).
-app::DriveResult drive_plugin(const std::string& path, double minutes, std::uint64_t seed,
+run::DriveResult drive_plugin(const std::string& path, double minutes, std::uint64_t seed,
                               const std::string& traffic = "faithful") {
-  app::PlannerFlags flags;
+  planners::PlannerFlags flags;
   flags.libs = {path};
-  app::DriveOptions o;
-  o.planners = app::catalog_from_flags(flags);
+  run::DriveOptions o;
+  o.planners = planners::catalog_from_flags(flags);
   o.policy = o.planners->added_names().at(0);
   o.minutes = minutes;
   o.seed = seed;
   o.traffic = traffic;
-  return app::drive(o);
+  return run::drive(o);
 }
 
 // ---- loading ---------------------------------------------------------------------------
@@ -139,9 +141,9 @@ TEST(PluginLoad, AMissingFunctionIsNamedWithTheFile) {
 }
 
 TEST(PluginLoad, TheCatalogTurnsARefusalIntoAUsageError) {
-  app::PlannerFlags flags;
+  planners::PlannerFlags flags;
   flags.libs = {misbehaving("old_major")};
-  EXPECT_THROW((void)app::catalog_from_flags(flags), app::UsageError);
+  EXPECT_THROW((void)planners::catalog_from_flags(flags), base::UsageError);
 }
 
 TEST(PluginLoad, TheLibraryStaysLoadedWhileAPolicyLives) {
@@ -265,8 +267,8 @@ TEST(PluginTelemetry, APluginBuiltAgainst2_0ReadsTheFieldsItKnows) {
 }
 
 TEST(PluginTelemetry, APluginBuiltAgainst2_0Drives) {
-  const app::DriveResult r = drive_plugin(misbehaving("keep_lane_v2_0"), 2.0, 1);
-  const json j = app::report_to_json(r.report, r.provenance);
+  const run::DriveResult r = drive_plugin(misbehaving("keep_lane_v2_0"), 2.0, 1);
+  const json j = run::report_to_json(r.report, r.provenance);
   EXPECT_EQ(j["end"], "completed") << j["ended_early"];
   EXPECT_EQ(j["incident_counts"]["collision"], 0);
   EXPECT_GT(j["distance_miles"].get<double>(), 1.0);
@@ -283,7 +285,7 @@ class FailingPlugin : public ::testing::TestWithParam<Failure> {};
 
 TEST_P(FailingPlugin, EndsTheRunAsPlannerFailedNamingThePlugin) {
   const Failure f = GetParam();
-  const app::DriveResult r = drive_plugin(misbehaving(f.mode), 0.5, 1);
+  const run::DriveResult r = drive_plugin(misbehaving(f.mode), 0.5, 1);
   EXPECT_EQ(r.report.outcome.end, sim::RunEnd::planner_failed);
   EXPECT_THAT(r.report.outcome.reason, HasSubstr(std::string("plugin misbehaving_") + f.mode));
   EXPECT_THAT(r.report.outcome.reason, HasSubstr(f.reason));
@@ -304,7 +306,7 @@ INSTANTIATE_TEST_SUITE_P(
     [](const ::testing::TestParamInfo<Failure>& p) { return std::string(p.param.mode); });
 
 TEST(FailingPlugin, AReasonThatFillsCreatesBufferIsCutShort) {
-  const app::DriveResult r = drive_plugin(misbehaving("create_unterminated"), 0.5, 1);
+  const run::DriveResult r = drive_plugin(misbehaving("create_unterminated"), 0.5, 1);
   EXPECT_EQ(r.report.outcome.end, sim::RunEnd::planner_failed);
   // The loader's buffer is 1024 bytes: 1023 characters and the NUL it puts at the end.
   const std::string reason = r.report.outcome.reason;
@@ -340,8 +342,8 @@ class ExamplePlugin : public ::testing::TestWithParam<std::tuple<const char*, in
 
 TEST_P(ExamplePlugin, DrivesWithoutCollisionsWithinTheLimits) {
   const auto [traffic, seed] = GetParam();
-  const app::DriveResult r = drive_plugin(OVERTAKE_KEEP_LANE_PLUGIN, 3.0, seed, traffic);
-  const json j = app::report_to_json(r.report, r.provenance);
+  const run::DriveResult r = drive_plugin(OVERTAKE_KEEP_LANE_PLUGIN, 3.0, seed, traffic);
+  const json j = run::report_to_json(r.report, r.provenance);
   EXPECT_EQ(j["end"], "completed") << j["ended_early"];
   EXPECT_EQ(j["incident_counts"]["collision"], 0);
   EXPECT_EQ(j["incident_counts"]["speeding"], 0);
@@ -415,7 +417,7 @@ TEST_F(PluginCli, DriveRefusesABadPluginBeforeRunning) {
 }
 
 TEST(FailingPlugin, AReasonCutInTheMiddleOfACharacterIsKeptAsValidUtf8) {
-  const app::DriveResult r = drive_plugin(misbehaving("cut_reason"), 0.5, 1);
+  const run::DriveResult r = drive_plugin(misbehaving("cut_reason"), 0.5, 1);
   const std::string reason = r.report.outcome.reason;
   // 511 whole "é" of the 1,023 bytes snprintf kept, and its last byte as U+FFFD.
   EXPECT_THAT(reason, HasSubstr("failed (status 5): "));

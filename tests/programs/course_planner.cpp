@@ -29,10 +29,10 @@
 #include <string>
 #include <thread>
 
-#include "overtake/app/commands.hpp"
-#include "overtake/app/config.hpp"
 #include "overtake/planner/policy.hpp"
 #include "overtake/protocol/codec.hpp"
+#include "overtake/run/config.hpp"
+#include "overtake/run/drive.hpp"
 
 namespace net = boost::asio;
 namespace websocket = boost::beast::websocket;
@@ -87,8 +87,8 @@ int main(int argc, char** argv) {
   if (args.exit_at_start) return 3;
   if (args.never_listen) sleep_forever();
 
-  const auto track = overtake::app::load_track(std::nullopt);
-  const auto config = overtake::app::default_config();
+  const auto track = overtake::run::load_track(std::nullopt);
+  const auto config = overtake::run::default_config();
   net::io_context ioc;
   tcp::acceptor acceptor(ioc, tcp::endpoint(net::ip::address_v4::any(), args.port));
   std::printf("Listening to port %u\n", static_cast<unsigned>(args.port));

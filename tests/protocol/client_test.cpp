@@ -13,8 +13,10 @@
 
 #include "original_planner.hpp"
 #include "overtake/app/cli.hpp"
-#include "overtake/app/io.hpp"
+#include "overtake/base/errors.hpp"
+#include "overtake/base/io.hpp"
 #include "overtake/planner/policy.hpp"
+#include "overtake/run/config.hpp"
 #include "test_support.hpp"
 
 namespace overtake::protocol {
@@ -31,7 +33,7 @@ FakeBehaviour walkthrough_planner(
     std::function<std::optional<FakeAction>(int index, const std::string& good)> misbehave = {}) {
   const auto track = default_track();
   auto policy = std::shared_ptr<planner::Policy>(
-      planner::make_policy("walkthrough", track->line, app::default_config().planner));
+      planner::make_policy("walkthrough", track->line, run::default_config().planner));
   return [policy, track, misbehave](std::string_view message, int index) {
     if (!is_event(message)) return FakeAction{};  // e.g. our answer to its ping
     std::string good(kManual);
@@ -48,7 +50,7 @@ FakeBehaviour walkthrough_planner(
 sim::RunReport lock_step(const std::string& url, double seconds, LogCapture& log,
                          std::chrono::milliseconds reply_timeout = 3s, int steps_per_call = 0) {
   const auto track = default_track();
-  sim::World world(track->map, track->line, app::default_config().world,
+  sim::World world(track->map, track->line, run::default_config().world,
                    sim::TrafficProfile::faithful, 3);
   ClientOptions o = quick_client(&log);
   o.reply_timeout = reply_timeout;
@@ -85,8 +87,8 @@ TEST(ProtocolClient, StallEndsTheRunWithAMessageAndTheReportIsKept) {
   const int rc = run_cli({"sim", "--planner", planner.url(), "--minutes", "1", "--reply-timeout",
                           "0.3", "--json", json_path.string(), "--quiet"});
   EXPECT_LT(std::chrono::steady_clock::now() - t0, 5s);
-  EXPECT_EQ(rc, app::kExitFailure);
-  const auto j = nlohmann::json::parse(app::read_file(json_path));
+  EXPECT_EQ(rc, base::kExitFailure);
+  const auto j = nlohmann::json::parse(base::read_file(json_path));
   std::filesystem::remove(json_path);
   const std::string why = j["ended_early"].get<std::string>();
   EXPECT_THAT(why, StartsWith("planner failed at t = "));
@@ -327,14 +329,14 @@ TEST(ProtocolClient, TheScorecardNamesSimAndThePlannersAddress) {
   const std::string address = server.url() + "/socket.io/?EIO=4&transport=websocket";
   ::testing::internal::CaptureStdout();
   EXPECT_EQ(run_cli({"sim", "--planner", server.url(), "--minutes", "0.05", "--quiet"}),
-            app::kExitOk);
+            base::kExitOk);
   EXPECT_THAT(::testing::internal::GetCapturedStdout(),
               StartsWith("overtake sim: planner at " + address +
                          ", faithful traffic, seed 1, map builtin:default\n"));
   ::testing::internal::CaptureStdout();
   EXPECT_EQ(run_cli({"sim", "--planner", server.url(), "--name", "mine", "--minutes", "0.05",
                      "--seed", "4", "--quiet"}),
-            app::kExitOk);
+            base::kExitOk);
   EXPECT_THAT(
       ::testing::internal::GetCapturedStdout(),
       StartsWith("overtake sim: planner mine at " + address + ", faithful traffic, seed 4"));
@@ -409,7 +411,7 @@ TEST(ProtocolClient, RejectsBadPlannerUrls) {
                           "ws://h:0", "ws://h:70000", "ws://h:x/", "ws://[::1", "127.0.0.1:4567"}) {
     EXPECT_FALSE(parse_planner_url(bad).ok()) << bad;
   }
-  EXPECT_EQ(run_cli({"sim", "--planner", "http://127.0.0.1:1", "--quiet"}), app::kExitUsage);
+  EXPECT_EQ(run_cli({"sim", "--planner", "http://127.0.0.1:1", "--quiet"}), base::kExitUsage);
 }
 
 // A planner over the protocol answers points only: overtake cannot know how it planned, so
@@ -424,8 +426,8 @@ TEST(ProtocolClient, ARemotePlannersPlanStatusIsUnknown) {
     const int rc = run_cli({"sim", "--planner", planner.url(), "--minutes", "0.1", "--json",
                             json_path.string(), "--quiet"});
     const std::string text = ::testing::internal::GetCapturedStdout();
-    ASSERT_EQ(rc, app::kExitOk);
-    const auto j = nlohmann::json::parse(app::read_file(json_path));
+    ASSERT_EQ(rc, base::kExitOk);
+    const auto j = nlohmann::json::parse(base::read_file(json_path));
     std::filesystem::remove(json_path);
     ASSERT_TRUE(j.contains("plan_status"));
     EXPECT_TRUE(j["plan_status"].is_null()) << j["plan_status"];
@@ -450,7 +452,7 @@ TEST(ProtocolClient, ARemotePlannersPlanStatusIsUnknown) {
           return std::nullopt;
         }));
     const auto track = default_track();
-    sim::World world(track->map, track->line, app::default_config().world,
+    sim::World world(track->map, track->line, run::default_config().world,
                      sim::TrafficProfile::faithful, 3);
     LogCapture log;
     const ClientOptions o = quick_client(&log);
@@ -491,7 +493,7 @@ TEST(ProtocolOriginalConvention, OldStylePlannerRecognisesNullTelemetryInRealTim
       return FakeAction{{original_planner_answer(m, stats)}};
     });
     const auto track = default_track();
-    sim::World world(track->map, track->line, app::default_config().world,
+    sim::World world(track->map, track->line, run::default_config().world,
                      sim::TrafficProfile::faithful, 3);
     LogCapture log;
     const ClientOptions o = quick_client(&log);
@@ -522,7 +524,7 @@ TEST(ProtocolClient, RealTimeStallEndsTheRunWhileTheWorldKeepsStepping) {
         return std::nullopt;
       }));
   const auto track = default_track();
-  sim::World world(track->map, track->line, app::default_config().world,
+  sim::World world(track->map, track->line, run::default_config().world,
                    sim::TrafficProfile::faithful, 3);
   LogCapture log;
   ClientOptions o = quick_client(&log);

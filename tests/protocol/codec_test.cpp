@@ -16,6 +16,7 @@
 #include "overtake/core/units.hpp"
 #include "overtake/core/wire_number.hpp"
 #include "overtake/protocol/codec.hpp"
+#include "overtake/run/config.hpp"
 #include "overtake/sim/world.hpp"
 #include "test_support.hpp"
 
@@ -385,7 +386,7 @@ TEST(ProtocolFraming, PacketsAndEventNames) {
 // numbers as our parser; the null form is recognised as empty.
 TEST(ProtocolOriginalConvention, OurTelemetrySurvivesTheOldHelper) {
   const auto track = testing::default_track();
-  sim::World world(track->map, track->line, app::default_config().world,
+  sim::World world(track->map, track->line, run::default_config().world,
                    sim::TrafficProfile::faithful, 5);
   testing::OriginalPlannerStats stats;
   for (int cycle = 0; cycle < 1500; ++cycle) {

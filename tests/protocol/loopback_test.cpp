@@ -10,8 +10,11 @@
 #include <unistd.h>
 
 #include "overtake/app/cli.hpp"
-#include "overtake/app/io.hpp"
+#include "overtake/base/errors.hpp"
+#include "overtake/base/io.hpp"
 #include "overtake/replay/replay.hpp"
+#include "overtake/run/drive.hpp"
+#include "overtake/run/report.hpp"
 #include "test_support.hpp"
 
 namespace overtake::protocol {
@@ -35,9 +38,9 @@ json without_timing(json j) {
   return j;
 }
 
-json in_process(const app::DriveOptions& o) {
-  const app::DriveResult r = app::drive(o);
-  return without_timing(app::report_to_json(r.report, r.provenance));
+json in_process(const run::DriveOptions& o) {
+  const run::DriveResult r = run::drive(o);
+  return without_timing(run::report_to_json(r.report, r.provenance));
 }
 
 json over_the_wire(const ServerFixture& server, const std::string& policy,
@@ -47,8 +50,8 @@ json over_the_wire(const ServerFixture& server, const std::string& policy,
   std::vector<std::string> args = {"sim",  "--planner", server.url(),  "--name",
                                    policy, "--json",    path.string(), "--quiet"};
   args.insert(args.end(), extra.begin(), extra.end());
-  EXPECT_EQ(run_cli(args), app::kExitOk);
-  json j = json::parse(app::read_file(path));
+  EXPECT_EQ(run_cli(args), base::kExitOk);
+  json j = json::parse(base::read_file(path));
   std::filesystem::remove(path);
   if (timing) *timing = j["timing"];
   EXPECT_TRUE(j["plan_status"].is_null()) << j["plan_status"];
@@ -68,7 +71,7 @@ TEST(ProtocolLoopback, LockStepOverTheWireEqualsInProcessDrive) {
     SCOPED_TRACE(v.policy + ", " + v.traffic + " seed " + std::to_string(v.seed) + " steps " +
                  std::to_string(v.steps_per_call));
     ServerFixture server(v.policy);
-    app::DriveOptions o;
+    run::DriveOptions o;
     o.policy = v.policy;
     o.minutes = 2.0;
     o.seed = v.seed;
@@ -101,7 +104,7 @@ TEST(ProtocolLoopback, AScenarioOverTheWireEqualsInProcessDrive) {
   const std::string scenario =
       std::string(OVERTAKE_SOURCE_DIR) + "/tests/scenarios/cut_in_20m.json";
   ServerFixture server("walkthrough");
-  app::DriveOptions o;
+  run::DriveOptions o;
   o.policy = "walkthrough";
   o.scenario = scenario;
   o.minutes_from_scenario = true;
@@ -131,15 +134,15 @@ TEST(ProtocolLoopback, SimRecordsTheSameRunAsDrive) {
   const auto dir = std::filesystem::temp_directory_path() /
                    ("overtake-loopback-record-" + std::to_string(::getpid()));
   std::filesystem::create_directories(dir);
-  app::DriveOptions o;
+  run::DriveOptions o;
   o.policy = "walkthrough";
   o.minutes = 0.5;
   o.seed = 7;
   o.record = dir / "drive.otr";
-  (void)app::drive(o);
+  (void)run::drive(o);
   EXPECT_EQ(run_cli({"sim", "--planner", server.url(), "--name", "walkthrough", "--minutes", "0.5",
                      "--seed", "7", "--record", (dir / "sim.otr").string(), "--quiet"}),
-            app::kExitOk);
+            base::kExitOk);
   const replay::Replay a = replay::read_replay(dir / "drive.otr");
   const replay::Replay b = replay::read_replay(dir / "sim.otr");
   // The same world states step by step, the same incidents, the same report.
@@ -159,7 +162,7 @@ TEST(ProtocolLoopback, SimRecordsTheSameRunAsDrive) {
   // Real time: every step, and the paths as they arrived.
   EXPECT_EQ(run_cli({"sim", "--planner", server.url(), "--minutes", "0.02", "--realtime",
                      "--record", (dir / "rt.otr").string(), "--quiet"}),
-            app::kExitOk);
+            base::kExitOk);
   const replay::Replay rt = replay::read_replay(dir / "rt.otr");
   EXPECT_EQ(rt.frames.size(), 61u);
   EXPECT_GT(rt.paths.size(), 20u);

@@ -13,8 +13,10 @@
 #include <unistd.h>
 
 #include "overtake/app/interrupt.hpp"
-#include "overtake/app/io.hpp"
+#include "overtake/base/errors.hpp"
+#include "overtake/base/io.hpp"
 #include "overtake/replay/replay.hpp"
+#include "overtake/run/config.hpp"
 #include "process_support.hpp"
 #include "test_support.hpp"
 
@@ -52,20 +54,20 @@ class SimSignal : public ::testing::Test {
     const auto until = std::chrono::steady_clock::now() + 20s;
     while (!running() && std::chrono::steady_clock::now() < until)
       std::this_thread::sleep_for(10ms);
-    ASSERT_TRUE(running()) << "the run did not start: " << app::read_file(dir_ / "err.txt");
+    ASSERT_TRUE(running()) << "the run did not start: " << base::read_file(dir_ / "err.txt");
     std::this_thread::sleep_for(200ms);
     const auto sent = std::chrono::steady_clock::now();
     ASSERT_EQ(::kill(pid, sig), 0);
     const auto status = test::exit_status(pid, 15s);
     ASSERT_TRUE(status) << "still running 15 s after the signal";
     EXPECT_LT(std::chrono::steady_clock::now() - sent, 3s) << "stops at the next step";
-    EXPECT_EQ(*status, app::kExitInterrupted) << app::read_file(dir_ / "err.txt");
+    EXPECT_EQ(*status, base::kExitInterrupted) << base::read_file(dir_ / "err.txt");
 
-    const std::string out = app::read_file(dir_ / "out.txt");
+    const std::string out = base::read_file(dir_ / "out.txt");
     EXPECT_THAT(out, HasSubstr("overtake sim: planner "));
     EXPECT_THAT(out, HasSubstr("ENDED EARLY: stopped"));
     ASSERT_TRUE(fs::exists(json)) << out;
-    const auto j = nlohmann::json::parse(app::read_file(json));
+    const auto j = nlohmann::json::parse(base::read_file(json));
     EXPECT_EQ(j["ended_early"], "stopped");
     EXPECT_GT(j["duration_s"].get<double>(), 0.0);
     EXPECT_LT(j["duration_s"].get<double>(), 600.0 * 60.0);
@@ -103,7 +105,7 @@ TEST_F(SimSignal, CtrlCStopsTheWaitForAStalledPlanner) {
     const auto t = parse_telemetry(message);
     const auto track = default_track();
     static const auto policy =
-        planner::make_policy("walkthrough", track->line, app::default_config().planner);
+        planner::make_policy("walkthrough", track->line, run::default_config().planner);
     return FakeAction{{t.ok() && t.value() ? format_control(policy->plan(*t.value()).path)
                                            : std::string(kManual)}};
   });

@@ -38,9 +38,10 @@
 #include <boost/beast/websocket.hpp>
 #pragma GCC diagnostic pop
 
-#include "overtake/app/commands.hpp"
 #include "overtake/protocol/client.hpp"
 #include "overtake/protocol/server.hpp"
+#include "overtake/run/config.hpp"
+#include "overtake/run/drive.hpp"
 
 namespace overtake::protocol::testing {
 
@@ -51,8 +52,8 @@ using tcp = net::ip::tcp;
 using namespace std::chrono_literals;
 
 /// The built-in track, loaded once.
-inline std::shared_ptr<const app::Track> default_track() {
-  static const auto track = app::load_track(std::nullopt);
+inline std::shared_ptr<const run::Track> default_track() {
+  static const auto track = run::load_track(std::nullopt);
   return track;
 }
 
@@ -93,7 +94,7 @@ class ServerFixture {
     const auto track = default_track();
     PlannerSetup setup;
     setup.line = std::shared_ptr<const core::ReferenceLine>(track, &track->line);
-    setup.params = app::default_config().planner;
+    setup.params = run::default_config().planner;
     setup.policy = std::move(policy);
     ServeOptions opts;
     opts.port = 0;
@@ -483,7 +484,7 @@ inline constexpr std::string_view kRecordedTelemetry =
 /// The first telemetry of a world on the default track (seed 1), as our client sends it.
 inline std::string start_telemetry() {
   const auto track = default_track();
-  const sim::World world(track->map, track->line, app::default_config().world,
+  const sim::World world(track->map, track->line, run::default_config().world,
                          sim::TrafficProfile::faithful, 1);
   return format_telemetry(world.telemetry());
 }

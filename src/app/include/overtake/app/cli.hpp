@@ -6,18 +6,17 @@
 #include <filesystem>
 #include <functional>
 #include <optional>
+#include <set>
 #include <stdexcept>
 #include <string>
+#include <string_view>
 #include <vector>
 
-#include "overtake/app/commands.hpp"
+#include "overtake/cluster/slurm.hpp"
+#include "overtake/planners/catalog.hpp"
+#include "overtake/run/drive.hpp"
 
 namespace overtake::app {
-
-/// Exit codes of the command line.
-inline constexpr int kExitOk = 0;
-inline constexpr int kExitFailure = 1;  ///< the work failed (bad file, planner failure, ...)
-inline constexpr int kExitUsage = 2;    ///< bad flags or values
 
 /// A registered subcommand: chosen when `command` was parsed; `run` returns the exit code.
 /// `run` may throw UsageError (exit 2) or any std::exception (exit 1); the message is printed.
@@ -25,6 +24,34 @@ struct Subcommand {
   CLI::App* command = nullptr;
   std::function<int()> run;
 };
+
+/// What the command line does with a finished run.
+struct RunOutputs {
+  std::optional<std::filesystem::path> json;  ///< write the JSON report here
+  bool quiet = false;
+  double wall_s = 0.0;  ///< the run's wall time, for the scorecard's last line
+  std::string mode;     ///< how it ran, appended to the wall time line (may be empty)
+};
+
+/// The one post-run path of `drive` and `sim`: prints the scorecard and the wall time, writes
+/// the JSON report, says where the replay went, and returns the exit status (0 completed,
+/// 1 ended early by the planner, 130 stopped by the user). With a live view, waits for
+/// Ctrl-C before returning (the page stays served).
+[[nodiscard]] int finish_run(const run::DriveResult& result, const run::DriveOptions& opts,
+                             const RunOutputs& out);
+
+/// What `overtake` alone prints: a usage line, then each command with the first line of its
+/// description.
+[[nodiscard]] std::string command_overview(const CLI::App& app);
+
+/// The command whose name is nearest to `typed` (fewest single-character edits), when it is
+/// near enough to be a slip of the keyboard.
+[[nodiscard]] std::optional<std::string> nearest_command(const CLI::App& app,
+                                                         std::string_view typed);
+
+/// The `overtake` command line. Returns the process exit code: 0 success, 1 failure, 2 bad
+/// usage.
+[[nodiscard]] int run_cli(int argc, const char* const* argv);
 
 /// Registration functions, one per command file.
 Subcommand register_drive(CLI::App& app);
@@ -55,17 +82,13 @@ class OutputClosed : public std::runtime_error {
 /// 0. Throws OutputClosed when the reader of a pipe has gone.
 void flush_stdout_or_throw();
 
-/// True when `a` and `b` name the same file (after resolving . and .., symbolic links of
-/// existing parts, and hard links of existing files).
-[[nodiscard]] bool same_file(const std::filesystem::path& a, const std::filesystem::path& b);
-
 /// The flags of every command that runs a drive (`drive`, `sim`): --map, --config,
 /// --scenario, --minutes, --seed, --traffic, --steps-per-call, --json, --record, --live with
 /// --port and --host, --quiet.
 struct RunFlags {
-  DriveOptions opts;
+  run::DriveOptions opts;
   std::string map, config, json, scenario, record;
-  LiveOptions live;
+  run::LiveOptions live;
   bool live_on = false;
   bool quiet = false;
   CLI::Option* minutes = nullptr;
@@ -81,15 +104,19 @@ void add_run_flags(CLI::App& cmd, RunFlags& flags);
 /// Says on stderr where a run's live view is served (LiveOptions::on_listening).
 void print_live_address(const std::string& url);
 
-/// Whether progress lines may be drawn (stderr is a terminal).
-[[nodiscard]] bool stderr_is_terminal();
-/// A comma-separated list of names (policies, traffic profiles); spaces and empty items
-/// are dropped.
-[[nodiscard]] std::vector<std::string> split_list(const std::string& text);
-/// Throws UsageError naming `flag` and the name when `names` holds one twice: a list flag
-/// (--policies, --traffic, --maps) names each thing once, or its runs would be driven, and
-/// their failures counted, twice.
-void check_unique_names(const std::vector<std::string>& names, const std::string& flag);
+/// Registers the planner flags on `cmd`.
+void add_planner_flags(CLI::App& cmd, planners::PlannerFlags& flags,
+                       planners::PlannerFlagSet which);
+
+/// Registers --slurm TASKS and the --slurm-* flags on `cmd` (`what`: "bench", "hunt").
+void add_slurm_flags(CLI::App& cmd, cluster::SlurmOptions& options, const std::string& what);
+/// Whether --slurm was given; UsageError when a --slurm-* flag was given without it.
+[[nodiscard]] bool slurm_requested(const CLI::App& cmd);
+/// The options given to `cmd`, as each task gives them again (--name=value; flags as --name),
+/// without the --slurm flags and those whose long name is in `leave_out`.
+[[nodiscard]] std::vector<std::string> task_arguments(const CLI::App& cmd,
+                                                      const std::set<std::string>& leave_out);
+
 /// The --policy flag's help: every built-in policy with its summary.
 [[nodiscard]] std::string policy_help();
 

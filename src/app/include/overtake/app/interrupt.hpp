@@ -25,7 +25,4 @@ class InterruptScope {
   void (*old_term_)(int);
 };
 
-/// Exit status of a command stopped by Ctrl-C (128 + SIGINT, as shells report it).
-inline constexpr int kExitInterrupted = 130;
-
 }  // namespace overtake::app

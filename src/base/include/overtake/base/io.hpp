@@ -1,0 +1,34 @@
+#pragma once
+// Files as every room reads and writes them: bounded reads, atomic writes, and whether two
+// paths name one file.
+
+#include <cstdint>
+#include <filesystem>
+#include <string>
+#include <string_view>
+
+namespace overtake::base {
+
+/// What read_file reads at most unless told otherwise: far more than any text file overtake
+/// reads (its largest, a bench's runs.jsonl of 10,000 runs, is about 20 MB).
+inline constexpr std::uintmax_t kMaxReadBytes = 256ULL << 20;
+
+/// The whole file; throws std::runtime_error naming the path when it cannot be read, when it
+/// is not a regular file (a device such as /dev/zero, a FIFO, a directory: opened without
+/// waiting for a writer, and never read) or when it holds more than max_bytes.
+[[nodiscard]] std::string read_file(const std::filesystem::path& path,
+                                    std::uintmax_t max_bytes = kMaxReadBytes);
+
+/// Writes through a temporary file and a rename, so that a reader never sees half a file
+/// and a failure leaves any previous file in place. Throws std::runtime_error naming the path.
+/// A path that is not a regular file (/dev/null, /dev/stdout, a pipe) is written in place.
+void write_file_atomic(const std::filesystem::path& path, std::string_view content);
+
+/// True when `a` and `b` name the same file (after resolving . and .., symbolic links of
+/// existing parts, and hard links of existing files).
+[[nodiscard]] bool same_file(const std::filesystem::path& a, const std::filesystem::path& b);
+
+/// Whether progress lines may be drawn (stderr is a terminal).
+[[nodiscard]] bool stderr_is_terminal();
+
+}  // namespace overtake::base

@@ -1,0 +1,63 @@
+#include "overtake/base/text.hpp"
+
+#include <algorithm>
+#include <cctype>
+#include <ios>
+#include <sstream>
+
+#include "overtake/base/errors.hpp"
+
+namespace overtake::base {
+
+std::string fixed_text(double value, int digits) {
+  std::ostringstream os;
+  os.setf(std::ios::fixed);
+  os.precision(digits);
+  os << value;
+  return os.str();
+}
+
+std::string shell_quote(std::string_view text) {
+  const bool safe = !text.empty() && std::all_of(text.begin(), text.end(), [](char c) {
+    return std::isalnum(static_cast<unsigned char>(c)) != 0 ||
+           std::string_view("_-./=:,+@%").find(c) != std::string_view::npos;
+  });
+  if (safe) return std::string(text);
+  std::string out = "'";
+  for (char c : text) {
+    if (c == '\'')
+      out += "'\\''";
+    else
+      out += c;
+  }
+  return out + "'";
+}
+
+std::vector<std::string> split_list(const std::string& text) {
+  std::vector<std::string> out;
+  std::string cur;
+  for (char c : text) {
+    if (c == ',') {
+      if (!cur.empty()) out.push_back(cur);
+      cur.clear();
+    } else if (c != ' ') {
+      cur += c;
+    }
+  }
+  if (!cur.empty()) out.push_back(cur);
+  return out;
+}
+
+void check_unique_names(const std::vector<std::string>& names, const std::string& flag) {
+  for (std::size_t i = 0; i < names.size(); ++i) {
+    for (std::size_t j = 0; j < i; ++j) {
+      if (names[j] == names[i]) {
+        throw UsageError(flag + ": '" + names[i] + "' is named twice (items " +
+                         std::to_string(j + 1) + " and " + std::to_string(i + 1) +
+                         "); each is driven once, name it once");
+      }
+    }
+  }
+}
+
+}  // namespace overtake::base

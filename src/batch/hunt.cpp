@@ -1,0 +1,1047 @@
+#include "overtake/batch/hunt.hpp"
+
+#include <algorithm>
+#include <array>
+#include <chrono>
+#include <cmath>
+#include <condition_variable>
+#include <cstdio>
+#include <iostream>
+#include <limits>
+#include <map>
+#include <mutex>
+#include <set>
+#include <sstream>
+#include <thread>
+
+#include "overtake/base/build_info.hpp"
+#include "overtake/base/errors.hpp"
+#include "overtake/base/io.hpp"
+#include "overtake/base/text.hpp"
+#include "overtake/batch/bench.hpp"
+#include "overtake/batch/merge.hpp"
+#include "overtake/batch/policies.hpp"
+#include "overtake/batch/pool.hpp"
+#include "overtake/batch/shard.hpp"
+#include "overtake/core/hash.hpp"
+#include "overtake/core/road.hpp"
+#include "overtake/core/text_check.hpp"
+#include "overtake/planners/catalog.hpp"
+#include "overtake/replay/replay.hpp"
+#include "overtake/run/config.hpp"
+#include "overtake/run/drive.hpp"
+#include "overtake/run/report.hpp"
+#include "overtake/scenarios/cut.hpp"
+#include "overtake/scenarios/reproduce.hpp"
+
+namespace overtake::batch {
+
+using base::build_revision;
+using base::check_unique_names;
+using base::fixed_text;
+using base::json_text;
+using base::read_file;
+using base::same_file;
+using base::shell_quote;
+using base::UsageError;
+using base::write_file_atomic;
+using planners::call_from_description;
+using planners::call_of;
+using planners::planner_command_line;
+using planners::PlannerEntry;
+using planners::PlannerKind;
+using run::Config;
+using run::config_hash;
+using run::contact_incident;
+using run::drive_on;
+using run::DriveOptions;
+using run::DriveResult;
+using run::kMaxJsonFileBytes;
+using run::load_config;
+using run::load_track;
+using run::read_json_file;
+using run::Track;
+using run::validate_drive_options;
+using scenarios::check_cut_window;
+using scenarios::check_reproduction;
+using scenarios::cut_replay;
+using scenarios::CutOptions;
+using scenarios::drives_differ;
+using scenarios::FailureMark;
+using scenarios::ReproCheck;
+namespace {
+
+using nlohmann::json;
+
+constexpr int kMaxFailures = 10000;
+/// The largest budget of simulated time (h; some 11 years), and the most runs a hunt takes.
+constexpr double kMaxBudgetHours = 100000.0;
+constexpr std::size_t kMaxHuntRuns = 100000000;
+/// Hex digits of a map's name's hash that tell apart maps whose slugs are the same.
+constexpr std::size_t kMapTagHashDigits = 8;
+/// The files a hunt writes into its folder, and the folders whose files it names after the runs
+/// (a folder of another's that holds them is not replaced without --force).
+constexpr std::array<const char*, 2> kHuntReports = {"hunt.json", "hunt.md"};
+constexpr std::array<const char*, 2> kHuntFolders = {"replays", "scenarios"};
+/// The folder of the runs in progress (their replays until a run is taken).
+constexpr const char* kRunsDir = "runs";
+/// Below this the ego counts as standing, below the next as slow.
+constexpr double kStandingMps = 0.5;
+constexpr double kSlowMps = 10.0;
+/// Further than this from its lane's centre, the ego is between lanes.
+constexpr double kBetweenLanesM = 1.0;
+/// An incident of the same type (and car) within this of the last is a repeat of it.
+constexpr double kRepeatS = 1.5;
+
+std::string map_name(const std::optional<std::filesystem::path>& map) {
+  return map ? map->string() : std::string("default");
+}
+
+std::string slug(const std::string& text) {
+  std::string out;
+  for (const char c : text) {
+    const bool keep = (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9');
+    if (keep) {
+      out += c;
+    } else if (!out.empty() && out.back() != '-') {
+      out += '-';
+    }
+  }
+  while (!out.empty() && out.back() == '-') out.pop_back();
+  return out.empty() ? "run" : out;
+}
+
+std::string what_of(const sim::Incident& i) {
+  std::string text(sim::to_string(i.type));
+  if (i.collision) {
+    text += " " + run::collision_text(*i.collision);
+  }
+  return text;
+}
+
+/// The situation of a failure: what happened, the traffic, and the ego then (standing, slow
+/// or at speed; in its lane or between lanes), read from the replay's frame.
+std::string situation_of(const sim::Incident& i, const std::string& traffic,
+                         const replay::Replay& r, const core::RoadParams& road) {
+  std::string speed = "ego at speed";
+  std::string where = "in its lane";
+  const auto step = static_cast<long>(std::lround(i.t_s / r.header.step_s));
+  for (const replay::ReplayFrame& f : r.frames) {
+    if (f.step != step) continue;
+    speed = f.speed_mps < kStandingMps ? "ego standing"
+            : f.speed_mps < kSlowMps   ? "ego slow"
+                                       : "ego at speed";
+    const int lane = std::clamp(core::lane_of(f.d_m, road), 0, road.lane_count - 1);
+    if (std::abs(f.d_m - core::lane_center_d(lane, road)) > kBetweenLanesM) where = "between lanes";
+    break;
+  }
+  return what_of(i) + ", " + traffic + " traffic, " + speed + ", " + where;
+}
+
+struct Combo {
+  std::uint64_t seed = 0;
+  std::size_t map_index = 0;  ///< into HuntSpec::maps
+  std::optional<std::filesystem::path> map;
+  std::string traffic;
+};
+
+Combo combo_of(const HuntSpec& spec, std::size_t k) {
+  const std::size_t per_seed = spec.maps.size() * spec.traffic.size();
+  const std::size_t within = k % per_seed;
+  const std::size_t m = within / spec.traffic.size();
+  return {spec.first_seed + k / per_seed, m, spec.maps[m],
+          spec.traffic[within % spec.traffic.size()]};
+}
+
+/// Each map's part of the names of its runs' files: its name as a slug, and where two maps'
+/// slugs are the same (mp/seed_2.csv, mp/seed-2.csv) a short hash of its whole name too, so
+/// that no run's replay takes the place of another's.
+std::vector<std::string> map_tags(const std::vector<std::optional<std::filesystem::path>>& maps) {
+  std::vector<std::string> tags;
+  for (const auto& m : maps) tags.push_back(slug(map_name(m)));
+  const auto clashes = [&](std::size_t i) {
+    return std::count(tags.begin(), tags.end(), tags[i]) > 1;
+  };
+  std::vector<std::string> out = tags;
+  for (std::size_t i = 0; i < maps.size(); ++i) {
+    if (clashes(i)) {
+      out[i] += "-" + core::hex64(core::fnv1a64(map_name(maps[i]))).substr(0, kMapTagHashDigits);
+    }
+  }
+  tags = out;
+  for (std::size_t i = 0; i < maps.size(); ++i) {  // hashes alike too: the map's place
+    if (clashes(i)) out[i] += "-m" + std::to_string(i + 1);
+  }
+  return out;
+}
+
+/// The command and flags that give a run the hunt's planner: `drive --policy P` for a
+/// built-in policy, the flag that brings a plugin or a Python planner, `sim --planner-cmd`
+/// for a planner program.
+std::string planner_command(const HuntSpec& spec) {
+  const PlannerEntry* e = spec.planners ? spec.planners->find(spec.policy) : nullptr;
+  if (e) return planner_command_line(call_of(*e));
+  return planner_command_line({PlannerKind::builtin, spec.policy, {}, {}, 4567});
+}
+
+std::string rerun_command(const HuntSpec& spec, const Combo& c, const std::string& replay) {
+  std::string cmd = planner_command(spec) + " --traffic " + c.traffic + " --seed " +
+                    std::to_string(c.seed) + " --minutes " + fixed_text(spec.minutes, 1);
+  if (c.map) cmd += " --map " + c.map->string();
+  if (spec.config) cmd += " --config " + spec.config->string();
+  return cmd + " --record " + replay;
+}
+
+/// A finished run, waiting to be taken in order.
+struct RunResult {
+  bool stopped = false;
+  std::string error;
+  sim::RunReport report;
+  std::filesystem::path replay;
+};
+
+}  // namespace
+
+std::size_t hunt_max_runs(const HuntSpec& spec) {
+  const double runs = std::floor(spec.budget_hours * 60.0 / spec.minutes + 1e-9);
+  // Saturated before the conversion: a budget check_spec refuses gives no wrapped count.
+  if (!(runs < static_cast<double>(kMaxHuntRuns))) return kMaxHuntRuns;
+  return static_cast<std::size_t>(std::max(1.0, runs));
+}
+
+std::string hunt_run_name(const HuntSpec& spec, std::size_t run) {
+  const Combo c = combo_of(spec, run);
+  return slug(spec.policy + "-" + map_tags(spec.maps)[c.map_index] + "-" + c.traffic + "-seed" +
+              std::to_string(c.seed));
+}
+
+namespace {
+
+void check_spec(const HuntSpec& spec) {
+  check_jobs(spec.jobs);
+  if (spec.failures < 1 || spec.failures > kMaxFailures) {
+    throw UsageError("--failures must be between 1 and " + std::to_string(kMaxFailures));
+  }
+  if (!(spec.budget_hours > 0.0) || !(spec.budget_hours <= kMaxBudgetHours)) {
+    std::ostringstream os;
+    os << "--budget-hours must be more than 0 and at most " << kMaxBudgetHours << " (got "
+       << spec.budget_hours << ")";
+    throw UsageError(os.str());
+  }
+  if (spec.maps.empty()) throw UsageError("--maps: no map given");
+  if (spec.traffic.empty()) throw UsageError("--traffic: no traffic profile given");
+  for (std::size_t i = 0; i < spec.maps.size(); ++i) {
+    for (std::size_t j = 0; j < i; ++j) {
+      const auto& a = spec.maps[j];
+      const auto& b = spec.maps[i];
+      if (a.has_value() == b.has_value() && (!a || same_file(*a, *b))) {
+        throw UsageError("--maps: " + map_name(b) + " is named twice (items " +
+                         std::to_string(j + 1) + " and " + std::to_string(i + 1) +
+                         "); each map is driven once, name it once");
+      }
+    }
+  }
+  check_unique_names(spec.traffic, "--traffic");
+  check_policy_names({spec.policy}, spec.planners);
+  DriveOptions o;  // what every run shares, and each traffic profile
+  o.policy = spec.policy;
+  o.planners = spec.planners;
+  o.minutes = spec.minutes;
+  validate_drive_options(o);
+  for (const auto& t : spec.traffic) {
+    o.traffic = t;
+    validate_drive_options(o);
+  }
+  // Each failure's scenarios are cut as `overtake cut` cuts them: the same bounds, checked now.
+  check_cut_window(spec.before_s, spec.after_s);
+  const std::size_t runs = hunt_max_runs(spec);
+  if (static_cast<double>(runs) >= static_cast<double>(kMaxHuntRuns)) {
+    throw UsageError("--budget-hours over --minutes gives more than " +
+                     std::to_string(kMaxHuntRuns - 1) +
+                     " runs; give a smaller budget or longer runs");
+  }
+  const std::size_t per_seed = spec.maps.size() * spec.traffic.size();
+  const std::uint64_t last_offset = (runs - 1) / per_seed;
+  if (spec.first_seed > std::numeric_limits<std::uint64_t>::max() - last_offset) {
+    throw UsageError("--first-seed: the hunt's seeds go from " + std::to_string(spec.first_seed) +
+                     " up " + std::to_string(last_offset) + " more, past the last seed (" +
+                     std::to_string(std::numeric_limits<std::uint64_t>::max()) + ")");
+  }
+  check_shard(spec.shard());
+  if (static_cast<std::size_t>(spec.shard_count) > hunt_max_runs(spec)) {
+    throw UsageError("--shard: " + std::to_string(spec.shard_count) + " shards of a hunt of " +
+                     std::to_string(hunt_max_runs(spec)) +
+                     " runs (--budget-hours over --minutes); a shard needs at least one run");
+  }
+}
+
+// What makes the shards of a hunt one hunt: every flag that changes what it finds.
+json hunt_sweep(const HuntSpec& spec, const Config& config) {
+  std::vector<std::string> maps;
+  for (const auto& m : spec.maps) maps.push_back(map_name(m));
+  json planner = nullptr;
+  const PlannerEntry* e = spec.planners ? spec.planners->find(spec.policy) : nullptr;
+  if (e && e->kind != PlannerKind::builtin) planner = json::parse(e->describe());
+  return {{"policy", spec.policy},
+          {"planner", planner},
+          {"minutes", spec.minutes},
+          {"failures", spec.failures},
+          {"budget_hours", spec.budget_hours},
+          {"find", static_cast<int>(spec.target)},
+          {"traffic", spec.traffic},
+          {"maps", maps},
+          {"first_seed", spec.first_seed},
+          {"before_s", spec.before_s},
+          {"warm_up", spec.warm_up_all ? json("all") : json(spec.warm_up_s)},
+          {"after_s", spec.after_s},
+          {"params_hash", config_hash(config)},
+          {"shards", spec.shard_count}};
+}
+
+}  // namespace
+
+namespace {
+
+// The hunt's maps, each once: two files with the same contents are one map driven twice.
+std::vector<std::shared_ptr<const Track>> load_hunt_tracks(const HuntSpec& spec) {
+  std::vector<std::shared_ptr<const Track>> tracks;
+  for (std::size_t i = 0; i < spec.maps.size(); ++i) {
+    tracks.push_back(load_track(spec.maps[i]));
+    for (std::size_t j = 0; j < i; ++j) {
+      if (tracks[j]->map.content_hash == tracks[i]->map.content_hash) {
+        throw UsageError("--maps: " + map_name(spec.maps[i]) + " is the same map as " +
+                         map_name(spec.maps[j]) + " (hash " +
+                         core::hex64(tracks[i]->map.content_hash) +
+                         "); each map is driven once, name it once");
+      }
+    }
+  }
+  return tracks;
+}
+
+// A replay of a run in progress, as the recorder names it: runK.otr, its FILE.partial or
+// FILE.N.partial. Nothing else in runs/ is removed.
+bool is_run_file(const std::string& name) {
+  std::size_t at = 0;
+  const auto digits = [&] {
+    const std::size_t from = at;
+    while (at < name.size() && name[at] >= '0' && name[at] <= '9') ++at;
+    return at > from;
+  };
+  const auto word = [&](std::string_view w) {
+    if (name.compare(at, w.size(), w) != 0) return false;
+    at += w.size();
+    return true;
+  };
+  if (!word("run") || !digits() || !word(".otr")) return false;
+  if (at == name.size()) return true;
+  if (word(".partial")) return at == name.size();
+  return word(".") && digits() && word(".partial") && at == name.size();
+}
+
+void remove_run_files(const std::filesystem::path& dir) {
+  std::error_code ec;
+  std::vector<std::filesystem::path> doomed;
+  for (const auto& e : std::filesystem::directory_iterator(dir, ec)) {
+    if (is_run_file(e.path().filename().string())) doomed.push_back(e.path());
+  }
+  for (const auto& p : doomed) std::filesystem::remove(p, ec);
+}
+
+}  // namespace
+
+void check_hunt_out(const std::filesystem::path& out, bool force, const std::string& who,
+                    const std::string& remedy) {
+  if (force) return;
+  std::error_code ec;
+  for (const char* name : kHuntReports) {
+    const std::filesystem::path file = out / name;
+    if (!std::filesystem::exists(std::filesystem::symlink_status(file, ec))) continue;
+    throw UsageError(who + file.string() + " exists" +
+                     (std::string(name) == "hunt.json" ? " (a hunt's results)" : "") +
+                     ": a hunt would replace it; " + remedy);
+  }
+  for (const char* name : kHuntFolders) {
+    const std::filesystem::path dir = out / name;
+    if (!std::filesystem::exists(std::filesystem::symlink_status(dir, ec))) continue;
+    if (!std::filesystem::is_directory(dir, ec) || !std::filesystem::is_empty(dir, ec)) {
+      throw UsageError(who + dir.string() +
+                       " is not empty and the folder holds no hunt.json: a hunt would replace "
+                       "files in it; " +
+                       remedy);
+    }
+  }
+}
+
+void check_hunt_spec(const HuntSpec& spec) {
+  check_spec(spec);
+  (void)load_config(spec.config);
+  (void)load_hunt_tracks(spec);
+}
+
+namespace {
+
+/// Drives a group's two scenarios at once with the hunt's planner: do they repeat the failure
+/// at its step? The reactive one is driven a second time: a planner that answers differently
+/// when told the same is named. False when a warm-up did not bring the planner in step.
+bool check_group(const HuntSpec& spec, const Track& track, const Config& config,
+                 const FailureMark& mark, HuntGroup& g, const std::atomic<bool>* stop) {
+  DriveOptions base;
+  base.policy = spec.policy;
+  base.planners = spec.planners;
+  const auto log_of = [&](const std::string& scenario, const char* what) {
+    return spec.out / "logs" /
+           (std::filesystem::path(scenario).stem().string() + "." + what + ".log");
+  };
+  base.planner_log = log_of(g.reactive, "check");
+  const ReproCheck reactive =
+      check_reproduction(track, config, base, spec.out / g.reactive, mark, stop);
+  base.planner_log = log_of(g.replayed, "check");
+  const ReproCheck replayed =
+      check_reproduction(track, config, base, spec.out / g.replayed, mark, stop);
+  g.reproduces_reactive = reactive.text;
+  g.reproduces_replayed = replayed.text;
+  g.reproduced = reactive.reproduced && replayed.reproduced;
+  g.nondeterministic.clear();
+  const auto in_step = [](const ReproCheck& r) {
+    return !r.report.warm_up || r.report.warm_up->in_step;
+  };
+  if (reactive.stopped || replayed.stopped) return true;
+  // Told the same twice: a planner whose answers differ is not deterministic (even when its
+  // failure happened to come again).
+  base.planner_log = log_of(g.reactive, "again");
+  const ReproCheck again =
+      check_reproduction(track, config, base, spec.out / g.reactive, mark, stop);
+  if (!again.stopped) g.nondeterministic = drives_differ(reactive, again);
+  return in_step(reactive) && in_step(replayed);
+}
+
+}  // namespace
+
+namespace {
+
+// What a hunt carries while it takes its runs in order, on the calling thread.
+struct Hunt {
+  Hunt(const HuntSpec& spec_in, const Config& config_in,
+       const std::vector<std::shared_ptr<const Track>>& tracks_in, const std::atomic<bool>* stop_in)
+      : spec(spec_in), config(config_in), tracks(tracks_in), stop(stop_in) {}
+
+  const HuntSpec& spec;
+  const Config& config;
+  const std::vector<std::shared_ptr<const Track>>& tracks;
+  const std::atomic<bool>* stop;  // the user's: also ends a group's checks at once
+  std::chrono::steady_clock::time_point wall0 = std::chrono::steady_clock::now();
+  HuntOutcome out;
+  HuntProgress prog;
+  std::map<std::string, std::size_t> group_of;
+  std::size_t taken = 0;  // runs taken in order (an interrupted one too)
+
+  [[nodiscard]] bool stopped() const { return stop && stop->load(); }
+};
+
+// Creates the hunt's folders in an --out it may write into.
+void open_hunt_out(const HuntSpec& spec) {
+  check_hunt_out(spec.out, spec.force,
+                 "--out: ", "move it away, choose another --out, or give --force to replace it");
+  std::error_code ec;
+  for (const char* sub : {kRunsDir, "replays", "scenarios", "logs"}) {
+    std::filesystem::create_directories(spec.out / sub, ec);
+    if (ec)
+      throw std::runtime_error((spec.out / sub).string() + ": cannot create (" + ec.message() +
+                               ")");
+  }
+}
+
+// Run k of the hunt, driven with its replay recorded into runs/. Throws "run K: why".
+RunResult drive_hunt_run(const HuntSpec& spec, const Config& config,
+                         const std::vector<std::shared_ptr<const Track>>& tracks, std::size_t k,
+                         const std::atomic<bool>* halt) {
+  const Combo c = combo_of(spec, k);
+  RunResult res;
+  DriveOptions o;
+  o.policy = spec.policy;
+  o.planners = spec.planners;
+  o.traffic = c.traffic;
+  o.seed = c.seed;
+  o.minutes = spec.minutes;
+  o.map = c.map;
+  res.replay = spec.out / kRunsDir / ("run" + std::to_string(k) + ".otr");
+  o.record = res.replay;
+  o.planner_log = spec.out / "logs" / ("run" + std::to_string(k) + ".log");
+  try {
+    const DriveResult r = drive_on(*tracks[c.map_index], config, o, {}, halt);
+    res.report = r.report;
+    res.stopped = r.report.outcome.end == sim::RunEnd::stopped;
+  } catch (const std::exception& e) {
+    throw std::runtime_error("run " + std::to_string(k) + ": " + e.what());
+  }
+  return res;
+}
+
+// The failures of a run, at most `room` of them: one per contact (a collision) or per episode
+// (another incident): the referee counts a contact, a speeding or a straddle again each
+// second it lasts; those repeats are the same failure.
+std::vector<sim::Incident> failures_in(const HuntSpec& spec, const sim::RunReport& report,
+                                       std::size_t room) {
+  std::vector<sim::Incident> found;
+  if (spec.target != HuntTarget::incidents) {
+    for (std::size_t n = 0; n < report.contacts.size(); ++n) {
+      const sim::Contact& contact = report.contacts[n];
+      if (spec.target == HuntTarget::at_fault && !contact.collision.at_fault) continue;
+      if (found.size() < room) found.push_back(contact_incident(contact, static_cast<int>(n)));
+    }
+    return found;
+  }
+  std::map<int, double> last_seen;  // type -> time of its last count
+  std::set<int> contacts_seen;
+  for (const sim::Incident& i : report.incidents) {
+    bool repeat = false;
+    if (i.type == sim::IncidentType::collision && i.contact >= 0) {
+      repeat = !contacts_seen.insert(i.contact).second;
+    } else {
+      const auto it = last_seen.find(static_cast<int>(i.type));
+      repeat = it != last_seen.end() && i.t_s - it->second <= kRepeatS;
+      last_seen[static_cast<int>(i.type)] = i.t_s;
+    }
+    if (!repeat && found.size() < room) found.push_back(i);
+  }
+  return found;
+}
+
+// The outcome (hunt.json) first: a hunt.md that cannot be written loses nothing found.
+void write_reports(Hunt& h) {
+  h.out.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - h.wall0).count();
+  write_file_atomic(h.spec.out / "hunt.json", json_text(hunt_json(h.spec, h.out), 2) + "\n");
+  write_file_atomic(h.spec.out / "hunt.md", hunt_markdown(h.spec, h.out));
+}
+
+// A failure of run k (an incident, or the planner's failure when `i` is null).
+HuntFailure failure_of(const Hunt& h, std::size_t k, const sim::Incident* i, const RunResult& res,
+                       const replay::Replay& r) {
+  const Combo c = combo_of(h.spec, k);
+  HuntFailure f;
+  f.run = k;
+  f.seed = c.seed;
+  f.traffic = c.traffic;
+  f.map = map_name(c.map);
+  if (i) {
+    f.t_s = i->t_s;
+    f.what = what_of(*i);
+    f.situation = situation_of(*i, c.traffic, r, h.config.road);
+  } else {
+    f.t_s = res.report.outcome.t_s;
+    f.what = "the planner failed: " + res.report.outcome.reason.substr(0, 200);
+    f.situation = "the planner failed, " + c.traffic + " traffic";
+  }
+  f.replay =
+      (std::filesystem::path("replays") / (hunt_run_name(h.spec, k) + ".otr")).generic_string();
+  f.rerun = rerun_command(h.spec, c, f.replay);
+  return f;
+}
+
+// Adds a run's failures to the outcome, each in its situation's group; the groups that are
+// new, with the failure each begins with (their scenarios are cut from it).
+std::map<std::size_t, FailureMark> add_failures(Hunt& h, std::size_t k, const RunResult& res,
+                                                const std::vector<const sim::Incident*>& failures,
+                                                const replay::Replay& r) {
+  std::map<std::size_t, FailureMark> marks;
+  for (const sim::Incident* i : failures) {
+    const HuntFailure f = failure_of(h, k, i, res, r);
+    const std::size_t index = h.out.failures.size();
+    h.out.failures.push_back(f);
+    auto [it, is_new] = h.group_of.emplace(f.situation, h.out.groups.size());
+    if (is_new) {
+      HuntGroup g;
+      g.situation = f.situation;
+      g.repro = f.rerun;  // until its scenario is cut
+      g.cut_error = "not cut yet";
+      FailureMark mark;
+      mark.t_s = f.t_s;
+      if (i) mark.incident = *i;
+      marks[h.out.groups.size()] = mark;
+      h.out.groups.push_back(std::move(g));
+    }
+    h.out.groups[it->second].failures.push_back(index);
+  }
+  h.prog.failures = h.out.failures.size();
+  h.prog.groups = h.out.groups.size();
+  return marks;
+}
+
+// Cuts a group's two scenarios from the replay of its first failure (`all`: with every cycle
+// from the run's first as the warm-up) and checks them; false when a warm-up did not bring the
+// planner in step. A cut that fails is said in the group (cut_error); the failure stays, with
+// its replay and the command that drives its run again.
+bool cut_and_check(Hunt& h, HuntGroup& g, const FailureMark& mark,
+                   const std::filesystem::path& kept, bool all) {
+  const HuntFailure& f = h.out.failures[g.failures.front()];
+  const Combo c = combo_of(h.spec, f.run);
+  const std::string stem =
+      "scenarios/" + slug(hunt_run_name(h.spec, f.run) + "-t" + fixed_text(f.t_s, 2));
+  g.cut_error.clear();
+  for (const bool replayed : {false, true}) {
+    CutOptions co;
+    co.replay = kept;
+    co.at_s = f.t_s;
+    co.before_s = h.spec.before_s;
+    co.after_s = h.spec.after_s;
+    co.replayed = replayed;
+    co.warm_up_s = h.spec.warm_up_s;
+    co.warm_up_all = all;
+    co.config = h.spec.config;
+    co.map = c.map;
+    co.out = h.spec.out / (stem + (replayed ? ".replayed.json" : ".reactive.json"));
+    co.description = "Found by overtake hunt: " + f.what + " of " + h.spec.policy + " at t " +
+                     fixed_text(f.t_s, 2) + " s (" + f.situation + "; " + c.traffic +
+                     " traffic, seed " + std::to_string(c.seed) + ", map " + f.map + ").";
+    try {
+      (void)cut_replay(co);
+    } catch (const std::exception& e) {
+      g.cut_error =
+          (replayed ? "replayed traffic: " : "reactive traffic: ") + std::string(e.what());
+      break;
+    }
+  }
+  if (!g.cut_error.empty()) {
+    std::error_code ec;
+    std::filesystem::remove(h.spec.out / (stem + ".reactive.json"), ec);
+    return true;
+  }
+  g.reactive = stem + ".reactive.json";
+  g.replayed = stem + ".replayed.json";
+  g.repro =
+      planner_command(h.spec) + " --scenario " + shell_quote((h.spec.out / g.reactive).string());
+  return check_group(h.spec, *h.tracks[c.map_index], h.config, mark, g, h.stop);
+}
+
+// Cuts a new group's scenarios with the hunt's warm-up; a planner from outside that does not
+// come in step in it is cut again with every cycle from the run's first (its state is then
+// the run's, if it is deterministic), and checked again.
+void cut_group(Hunt& h, HuntGroup& g, const FailureMark& mark, const std::filesystem::path& kept) {
+  if (!cut_and_check(h, g, mark, kept, h.spec.warm_up_all) && g.nondeterministic.empty() &&
+      !h.stopped()) {
+    (void)cut_and_check(h, g, mark, kept, true);
+    if (g.cut_error.empty()) {
+      g.warm_up = "all (" + fixed_text(h.spec.warm_up_s, 0) + " s did not bring it in step)";
+    }
+  }
+}
+
+// Takes run k, the next in order: counts it, keeps its failures (its replay, their groups,
+// their scenarios). False when the hunt takes no more (the run was interrupted, or enough
+// failures are found).
+bool take_run(Hunt& h, std::size_t k, RunResult&& res) {
+  ++h.taken;
+  if (res.stopped) return false;  // interrupted mid-run: not a finished run
+  ++h.out.runs;
+  h.out.simulated_s += res.report.duration_s;
+  if (h.out.shard) h.out.shard->run_seconds.emplace_back(k, res.report.duration_s);
+  h.prog.runs = h.out.runs;
+  h.prog.simulated_s = h.out.simulated_s;
+  const auto wanted = static_cast<std::size_t>(h.spec.failures);
+  // A planner that fails (stalls, crashes, sends what cannot be read) is a failure too.
+  const bool planner_failed =
+      res.report.outcome.end == sim::RunEnd::planner_failed && h.out.failures.size() < wanted;
+  const std::vector<sim::Incident> found =
+      failures_in(h.spec, res.report, wanted - std::min(wanted, h.out.failures.size()));
+  std::error_code ec;
+  if (found.empty() && !planner_failed) {
+    std::filesystem::remove(res.replay, ec);
+    return true;
+  }
+  const std::filesystem::path kept = h.spec.out / "replays" / (hunt_run_name(h.spec, k) + ".otr");
+  std::filesystem::rename(res.replay, kept, ec);
+  if (ec)
+    throw std::runtime_error(kept.string() + ": cannot keep the replay (" + ec.message() + ")");
+  const replay::Replay r = replay::read_replay(kept);
+  std::vector<const sim::Incident*> failures;
+  for (const sim::Incident& i : found) failures.push_back(&i);
+  if (planner_failed) failures.push_back(nullptr);
+  const std::map<std::size_t, FailureMark> marks = add_failures(h, k, res, failures, r);
+  // The failures are written before their scenarios are cut: a cut that fails loses none.
+  write_reports(h);
+  for (const auto& [gi, mark] : marks) cut_group(h, h.out.groups[gi], mark, kept);
+  if (!marks.empty()) write_reports(h);
+  return h.out.failures.size() < wanted;
+}
+
+// A hunt stopped by an error: what was found is kept (hunt.json says the hunt stopped on an
+// error; a shard that did is not finished), then the reason goes up to the command line.
+[[noreturn]] void end_on_error(Hunt& h, const std::string& failure) {
+  h.out.error = failure;
+  if (h.out.shard) h.out.shard->finished = false;
+  h.out.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - h.wall0).count();
+  std::string kept;
+  try {
+    write_file_atomic(h.spec.out / "hunt.json", json_text(hunt_json(h.spec, h.out), 2) + "\n");
+    kept = std::to_string(h.out.failures.size()) + " failure" +
+           (h.out.failures.size() == 1 ? "" : "s") + " found before it kept in " +
+           (h.spec.out / "hunt.json").string();
+  } catch (const std::exception& e) {
+    kept = "what was found could not be kept either (" + std::string(e.what()) + ")";
+  }
+  try {
+    write_file_atomic(h.spec.out / "hunt.md", hunt_markdown(h.spec, h.out));
+  } catch (const std::exception&) {  // hunt.json holds the outcome; the reason is said
+  }
+  throw std::runtime_error("hunt stopped: " + failure + "; " + kept);
+}
+
+}  // namespace
+
+HuntOutcome run_hunt(const HuntSpec& spec, const std::atomic<bool>* stop,
+                     const std::function<void(const HuntProgress&)>& progress) {
+  check_spec(spec);
+  const Config config = load_config(spec.config);
+  const std::vector<std::shared_ptr<const Track>> tracks = load_hunt_tracks(spec);
+  open_hunt_out(spec);
+  const std::size_t max_runs = hunt_max_runs(spec);
+  const Shard shard = spec.shard();
+  const std::size_t shard_runs = shard.size_of(max_runs);
+  Hunt h(spec, config, tracks, stop);
+  if (spec.shard_count > 1) {
+    h.out.shard.emplace();
+    h.out.shard->max_runs = max_runs;
+    h.out.shard->sweep = hunt_sweep(spec, config);
+    h.out.shard->revision = std::string(build_revision());
+  }
+  h.prog.budget_s = static_cast<double>(shard_runs) * spec.minutes * 60.0;
+  PoolOptions pool{spec.jobs, stop, PoolOrder::by_index, {}};
+  pool.tick = [&] {
+    h.prog.wall_s =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - h.wall0).count();
+    if (progress) progress(h.prog);
+  };
+  std::string failure;  // why the hunt stopped before its end, when something failed
+  try {
+    // Results are taken in run order, so the same options find the same failures whatever
+    // the number of jobs.
+    (void)run_pool<RunResult>(
+        shard_runs, pool,
+        [&](std::size_t j, const std::atomic<bool>* halt) {
+          return drive_hunt_run(spec, config, tracks, shard.item(j), halt);
+        },
+        [&](std::size_t j, RunResult&& res) { return take_run(h, shard.item(j), std::move(res)); });
+  } catch (const std::exception& e) {
+    failure = e.what();
+  }
+  // Runs past the last one taken are not part of the hunt; nor is a run an error cut short.
+  remove_run_files(spec.out / kRunsDir);
+  h.out.interrupted = h.stopped() && static_cast<int>(h.out.failures.size()) < spec.failures &&
+                      h.taken < shard_runs;
+  if (!failure.empty()) end_on_error(h, failure);
+  if (h.out.shard) h.out.shard->finished = !h.out.interrupted;
+  write_reports(h);
+  if (progress) {
+    h.prog.wall_s = h.out.wall_s;
+    progress(h.prog);
+  }
+  return h.out;
+}
+
+std::string hunt_markdown(const HuntSpec& spec, const HuntOutcome& o) {
+  std::ostringstream os;
+  const double hours = o.simulated_s / 3600.0;
+  os << "# hunt: " << spec.policy << "\n\n"
+     << o.runs << " runs of " << fixed_text(spec.minutes, 1) << " min, " << fixed_text(hours, 2)
+     << " simulated hours" << (o.interrupted ? " (interrupted)" : "")
+     << (o.error.empty() ? "" : " (stopped by an error: " + o.error + ")") << ": "
+     << o.failures.size() << (o.failures.size() == 1 ? " failure" : " failures") << " in "
+     << o.groups.size() << (o.groups.size() == 1 ? " situation" : " situations") << ".\n\n";
+  for (const HuntGroup& g : o.groups) {
+    if (g.nondeterministic.empty()) continue;
+    os << "**The planner is not deterministic**: " << g.nondeterministic << " (" << g.reactive
+       << "). Its cut scenarios cannot be trusted to repeat its failures.\n\n";
+    break;
+  }
+  os << "| situation | failures | scenario (reactive / replayed) | repeats the failure (reactive "
+        "/ replayed) | reproduce |\n|---|---:|---|---|---|\n";
+  for (const HuntGroup& g : o.groups) {
+    const std::string scenarios = g.reactive.empty() && g.replayed.empty()
+                                      ? "could not cut: " + g.cut_error
+                                      : g.reactive + " / " + g.replayed;
+    const std::string repeats =
+        g.reproduces_reactive.empty()
+            ? std::string("-")
+            : g.reproduces_reactive + " / " + g.reproduces_replayed +
+                  (g.warm_up.empty() ? std::string() : "; warm-up " + g.warm_up) +
+                  (g.nondeterministic.empty() ? std::string()
+                                              : "; NOT DETERMINISTIC: " + g.nondeterministic);
+    os << "| " << g.situation << " | " << g.failures.size() << " | " << scenarios << " | "
+       << repeats << " | `" << g.repro << "` |\n";
+  }
+  os << "\n| # | t s | what | seed | traffic | map | replay | run again "
+        "|\n|---:|---:|---|---:|---|---|---|---|\n";
+  for (std::size_t i = 0; i < o.failures.size(); ++i) {
+    const HuntFailure& f = o.failures[i];
+    os << "| " << i + 1 << " | " << fixed_text(f.t_s, 2) << " | " << f.what << " | " << f.seed
+       << " | " << f.traffic << " | " << f.map << " | " << f.replay << " | `" << f.rerun << "` |\n";
+  }
+  return os.str();
+}
+
+nlohmann::json hunt_json(const HuntSpec& spec, const HuntOutcome& o) {
+  json failures = json::array();
+  for (const HuntFailure& f : o.failures) {
+    failures.push_back({{"run", f.run},
+                        {"seed", f.seed},
+                        {"traffic", f.traffic},
+                        {"map", f.map},
+                        {"t_s", f.t_s},
+                        {"what", f.what},
+                        {"situation", f.situation},
+                        {"replay", f.replay},
+                        {"rerun", f.rerun}});
+  }
+  json groups = json::array();
+  for (const HuntGroup& g : o.groups) {
+    groups.push_back(
+        {{"situation", g.situation},
+         {"failures", g.failures},
+         {"reactive", g.reactive},
+         {"replayed", g.replayed},
+         {"cut_error", g.cut_error},
+         {"reproduces", {{"reactive", g.reproduces_reactive}, {"replayed", g.reproduces_replayed}}},
+         {"reproduced", g.reproduced},
+         {"warm_up", g.warm_up.empty() ? json(nullptr) : json(g.warm_up)},
+         {"nondeterministic",
+          g.nondeterministic.empty() ? json(nullptr) : json(g.nondeterministic)},
+         {"repro", g.repro}});
+  }
+  json j = {{"policy", spec.policy},
+            {"minutes", spec.minutes},
+            {"runs", o.runs},
+            {"simulated_hours", o.simulated_s / 3600.0},
+            {"interrupted", o.interrupted},
+            {"error", o.error.empty() ? json(nullptr) : json(o.error)},
+            {"failures", failures},
+            {"groups", groups},
+            {"timing", {{"wall_s", o.wall_s}}}};
+  if (o.shard) {
+    j["shard"] = {{"index", spec.shard_index},           {"count", spec.shard_count},
+                  {"finished", o.shard->finished},       {"max_runs", o.shard->max_runs},
+                  {"run_seconds", o.shard->run_seconds}, {"sweep", o.shard->sweep},
+                  {"revision", o.shard->revision}};
+  }
+  return j;
+}
+
+namespace {
+
+// One shard's hunt.json, read for merge_hunt.
+struct HuntShard {
+  std::filesystem::path dir;
+  json report;
+  std::vector<HuntFailure> failures;
+  std::map<std::string, HuntGroup> groups;  ///< by situation
+};
+
+HuntShard read_hunt_shard(const std::filesystem::path& dir) {
+  HuntShard h;
+  h.dir = dir;
+  const std::filesystem::path file = dir / "hunt.json";
+  try {
+    h.report = read_json_file(file);
+    for (const json& f : h.report.at("failures")) {
+      HuntFailure x;
+      x.run = f.at("run").get<std::size_t>();
+      x.seed = f.at("seed").get<std::uint64_t>();
+      x.traffic = f.at("traffic").get<std::string>();
+      x.map = f.at("map").get<std::string>();
+      x.t_s = f.at("t_s").get<double>();
+      x.what = f.at("what").get<std::string>();
+      x.situation = f.at("situation").get<std::string>();
+      x.replay = f.at("replay").get<std::string>();
+      x.rerun = f.at("rerun").get<std::string>();
+      h.failures.push_back(std::move(x));
+    }
+    for (const json& g : h.report.at("groups")) {
+      HuntGroup x;
+      x.situation = g.at("situation").get<std::string>();
+      x.reactive = g.at("reactive").get<std::string>();
+      x.replayed = g.at("replayed").get<std::string>();
+      x.cut_error = g.at("cut_error").get<std::string>();
+      if (g.contains("reproduces")) {
+        x.reproduces_reactive = g.at("reproduces").at("reactive").get<std::string>();
+        x.reproduces_replayed = g.at("reproduces").at("replayed").get<std::string>();
+        x.reproduced = g.at("reproduced").get<bool>();
+        if (g.contains("warm_up") && g.at("warm_up").is_string())
+          x.warm_up = g.at("warm_up").get<std::string>();
+        if (g.at("nondeterministic").is_string())
+          x.nondeterministic = g.at("nondeterministic").get<std::string>();
+      }
+      h.groups.emplace(x.situation, std::move(x));
+    }
+    const json& shard = h.report.at("shard");
+    (void)shard.at("sweep");
+    (void)shard.at("revision").get<std::string>();
+    (void)shard.at("index").get<int>();
+    (void)shard.at("count").get<int>();
+    (void)shard.at("finished").get<bool>();
+    (void)shard.at("max_runs").get<std::size_t>();
+  } catch (const std::exception& e) {
+    throw UsageError("merge: " + file.string() + " is not the report of a hunt shard (" + e.what() +
+                     "); run each shard with hunt --shard I/N");
+  }
+  return h;
+}
+
+// Copies `rel` of `from` to the same place under `to` (the merge's replays and scenarios).
+void copy_into(const std::filesystem::path& from, const std::filesystem::path& to,
+               const std::string& rel) {
+  if (rel.empty()) return;
+  std::error_code ec;
+  const std::filesystem::path dest = to / rel;
+  std::filesystem::create_directories(dest.parent_path(), ec);
+  if (!std::filesystem::copy_file(from / rel, dest,
+                                  std::filesystem::copy_options::overwrite_existing, ec) ||
+      ec) {
+    throw std::runtime_error(dest.string() + ": cannot copy " + (from / rel).string() + " here (" +
+                             ec.message() + ")");
+  }
+}
+
+// Copies a cut scenario of a shard (`rel` of `from`) into `to`, naming the replay it was cut
+// from where the merge put that replay: the merged folder stands alone.
+void copy_scenario(const std::filesystem::path& from, const std::filesystem::path& to,
+                   const std::string& rel) {
+  if (rel.empty()) return;
+  nlohmann::ordered_json j;
+  try {
+    const std::string text = read_file(from / rel, kMaxJsonFileBytes);
+    core::require_json_depth(text, (from / rel).string());
+    j = nlohmann::ordered_json::parse(text);
+  } catch (const std::exception& e) {  // unreadable, too deep, or not JSON
+    throw UsageError("merge: " + (from / rel).string() + " is not a scenario (" + e.what() + ")");
+  }
+  if (j.contains("cut") && j["cut"].contains("from") && j["cut"]["from"].contains("replay")) {
+    const std::filesystem::path replay = j["cut"]["from"]["replay"].get<std::string>();
+    j["cut"]["from"]["replay"] = (to / "replays" / replay.filename()).string();
+  }
+  std::error_code ec;
+  std::filesystem::create_directories((to / rel).parent_path(), ec);
+  write_file_atomic(to / rel, json_text(j, 2) + "\n");
+}
+
+}  // namespace
+
+namespace {
+
+MergeKind hunt_merge_kind() {
+  MergeKind k;
+  k.noun = "hunt";
+  k.other_sweep = "is a shard of another hunt than";
+  k.sweep_fields = "(policy, minutes, failures, budget, traffic, maps, seeds or parameters differ)";
+  k.results_files = {"hunt.json"};
+  k.holds_results = "a hunt";
+  k.check_out = [](const std::filesystem::path& out) {
+    check_hunt_out(out, false, "merge: --out: ", "move it away, or merge into a new folder");
+  };
+  return k;
+}
+
+MergePart merge_part(const HuntShard& h) {
+  const json& sh = h.report["shard"];
+  MergePart p;
+  p.dir = h.dir;
+  p.sweep = sh["sweep"];
+  p.revision = sh["revision"].get<std::string>();
+  p.shard = {sh["index"].get<int>(), sh["count"].get<int>()};
+  p.finished = sh["finished"].get<bool>();
+  return p;
+}
+
+// A failure found, and the shard it came from.
+struct Found {
+  const HuntShard* from;
+  const HuntFailure* failure;
+};
+
+// The first `failures` failures of the shards in run order (a shard keeps a run's failures in
+// order): what one hunt would have found.
+std::vector<Found> first_failures(const std::vector<HuntShard>& shards, std::size_t wanted) {
+  std::vector<Found> all;
+  for (const HuntShard& h : shards) {
+    for (const HuntFailure& f : h.failures) all.push_back({&h, &f});
+  }
+  std::stable_sort(all.begin(), all.end(),
+                   [](const Found& a, const Found& b) { return a.failure->run < b.failure->run; });
+  if (all.size() > wanted) all.resize(wanted);
+  return all;
+}
+
+// Adds a failure to the merged outcome, with its replay, and its group (with its scenarios)
+// when it begins one.
+void add_merged_failure(HuntOutcome& o, std::map<std::string, std::size_t>& group_of,
+                        const Found& f, const json& sweep, const std::filesystem::path& out) {
+  copy_into(f.from->dir, out, f.failure->replay);
+  const std::size_t index = o.failures.size();
+  o.failures.push_back(*f.failure);
+  auto [it, is_new] = group_of.emplace(f.failure->situation, o.groups.size());
+  if (is_new) {
+    // The shard's group of this situation began with this failure: none came before it.
+    const auto g = f.from->groups.find(f.failure->situation);
+    if (g == f.from->groups.end()) {
+      throw UsageError("merge: " + f.from->dir.string() + "/hunt.json lists a failure in '" +
+                       f.failure->situation + "' but no group of it");
+    }
+    HuntGroup group = g->second;
+    group.failures.clear();
+    copy_scenario(f.from->dir, out, group.reactive);
+    copy_scenario(f.from->dir, out, group.replayed);
+    const std::string policy = sweep["policy"].get<std::string>();
+    group.repro =
+        group.reactive.empty()
+            ? f.failure->rerun
+            : planner_command_line(call_from_description(policy, sweep.value("planner", json()))) +
+                  " --scenario " + shell_quote((out / group.reactive).string());
+    o.groups.push_back(std::move(group));
+  }
+  o.groups[it->second].failures.push_back(index);
+}
+
+}  // namespace
+
+HuntOutcome merge_hunt(const std::vector<std::filesystem::path>& dirs,
+                       const std::filesystem::path& out) {
+  if (dirs.empty()) throw UsageError("merge: name the hunt folders to join");
+  std::vector<HuntShard> shards;
+  std::vector<MergePart> parts;
+  for (const auto& dir : dirs) {
+    shards.push_back(read_hunt_shard(dir));
+    parts.push_back(merge_part(shards.back()));
+  }
+  check_merge(parts, out, hunt_merge_kind());
+  const json& first = shards.front().report["shard"];
+  const json sweep = first["sweep"];
+  const auto wanted = sweep["failures"].get<std::size_t>();
+  const std::vector<Found> all = first_failures(shards, wanted);
+  // The runs one hunt would have taken: up to the run of the last failure it kept, or all.
+  const std::size_t last_run =
+      all.size() == wanted ? all.back().failure->run : first["max_runs"].get<std::size_t>() - 1;
+  HuntOutcome o;
+  for (const HuntShard& h : shards) {
+    for (const json& r : h.report["shard"]["run_seconds"]) {
+      if (r[0].get<std::size_t>() > last_run) continue;
+      ++o.runs;
+      o.simulated_s += r[1].get<double>();
+    }
+    o.wall_s = std::max(o.wall_s, h.report["timing"].value("wall_s", 0.0));
+  }
+  std::error_code ec;
+  std::filesystem::create_directories(out, ec);
+  if (ec) {
+    throw std::runtime_error(out.string() + ": cannot create the output folder (" + ec.message() +
+                             ")");
+  }
+  std::map<std::string, std::size_t> group_of;
+  for (const Found& f : all) add_merged_failure(o, group_of, f, sweep, out);
+  HuntSpec spec;
+  spec.policy = sweep["policy"].get<std::string>();
+  spec.minutes = sweep["minutes"].get<double>();
+  write_file_atomic(out / "hunt.json", json_text(hunt_json(spec, o), 2) + "\n");
+  write_file_atomic(out / "hunt.md", hunt_markdown(spec, o));
+  return o;
+}
+
+}  // namespace overtake::batch
