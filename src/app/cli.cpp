@@ -408,6 +408,12 @@ const CLI::App* find_command(const CLI::App& app, std::string_view name) {
 
 }  // namespace
 
+std::vector<Subcommand> register_commands(CLI::App& app) {
+  return {register_drive(app),     register_track(app), register_config(app), register_bench(app),
+          register_compare(app),   register_serve(app), register_sim(app),    register_view(app),
+          register_calibrate(app), register_cut(app),   register_hunt(app)};
+}
+
 std::string command_overview(const CLI::App& app) {
   std::string out =
       "usage: overtake <command> [options]\n\n" + app.get_description() + "\n\ncommands:\n";
@@ -445,10 +451,7 @@ int run_cli(int argc, const char* const* argv) {
       "and planners to drive it. Run `overtake <command> --help` for a command's options."};
   app.require_subcommand(1);
   app.set_version_flag("--version", "overtake " + overtake_version());
-  const std::vector<Subcommand> commands{
-      register_drive(app),     register_track(app), register_config(app), register_bench(app),
-      register_compare(app),   register_serve(app), register_sim(app),    register_view(app),
-      register_calibrate(app), register_cut(app),   register_hunt(app)};
+  const std::vector<Subcommand> commands = register_commands(app);
   // `overtake` alone: what it can do, as `git` does.
   if (argc <= 1) {
     std::cout << command_overview(app);

@@ -36,10 +36,7 @@ Outcome run(std::vector<const char*> args) {
 // The commands a `--help` of each answers to, as CLI11 registered them.
 std::vector<std::string> registered_commands() {
   CLI::App app;
-  for (const auto& add : {register_drive, register_track, register_config, register_bench,
-                          register_compare, register_serve, register_sim, register_view,
-                          register_calibrate, register_cut, register_hunt})
-    static_cast<void>(add(app));
+  static_cast<void>(register_commands(app));
   std::vector<std::string> names;
   for (const CLI::App* c : app.get_subcommands([](const CLI::App*) { return true; }))
     names.push_back(c->get_name());

@@ -40,6 +40,9 @@ struct RunOutputs {
 [[nodiscard]] int finish_run(const run::DriveResult& result, const run::DriveOptions& opts,
                              const RunOutputs& out);
 
+/// Every command, registered on `app`.
+[[nodiscard]] std::vector<Subcommand> register_commands(CLI::App& app);
+
 /// What `overtake` alone prints: a usage line, then each command with the first line of its
 /// description.
 [[nodiscard]] std::string command_overview(const CLI::App& app);
