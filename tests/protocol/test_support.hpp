@@ -315,6 +315,10 @@ class FakePlanner {
         }
       }
       if (action.close_then_exit) {
+        // Sent at once (Nagle's algorithm off): a frame still held back for an acknowledgement
+        // when the socket is closed is thrown away with the reset that closing then sends
+        // (when our ping is still unread), and the client would rightly see only the reset.
+        ws.next_layer().set_option(tcp::no_delay(true), ec);
         const std::string close_frame("\x88\x02\x03\xe8", 4);  // close, code 1000
         co_await net::async_write(ws.next_layer(), net::buffer(close_frame),
                                   net::redirect_error(net::use_awaitable, ec));
