@@ -29,6 +29,8 @@ demo_packages=(
   cmake ninja-build g++ make
   # Found at configure time (CMakeLists.txt) and linked or included by the binary.
   libeigen3-dev nlohmann-json3-dev libcli11-dev libboost-dev zlib1g-dev
+  # `overtake tune`'s optimisers (NLopt, with its C++ header).
+  libnlopt-cxx-dev
   # Python planners (--policy-py): the interpreter embedded in the binary (OVERTAKE_PYTHON=ON).
   python3-dev python3-pybind11
   # Looked for at configure time by the release preset (tests and benchmarks ON).

@@ -376,6 +376,7 @@ constexpr CommandLine kCommands[] = {
     {"bench", "run policies x traffic x seeds in parallel; summarise with intervals"},
     {"compare", "compare two bench folders: paired differences and verdicts"},
     {"hunt", "drive a planner until it fails; cut each failure into a scenario"},
+    {"tune", "search a planner's parameters; validate the best on held-out seeds"},
     {"cut", "cut a scenario from a recorded run, at a moment"},
     {"view", "watch a replay in the browser"},
     {"track", "generate a closed highway loop map in the original file format"},
@@ -411,7 +412,7 @@ const CLI::App* find_command(const CLI::App& app, std::string_view name) {
 std::vector<Subcommand> register_commands(CLI::App& app) {
   return {register_drive(app),     register_track(app), register_config(app), register_bench(app),
           register_compare(app),   register_serve(app), register_sim(app),    register_view(app),
-          register_calibrate(app), register_cut(app),   register_hunt(app)};
+          register_calibrate(app), register_cut(app),   register_hunt(app),   register_tune(app)};
 }
 
 std::string command_overview(const CLI::App& app) {

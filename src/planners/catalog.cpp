@@ -308,6 +308,7 @@ std::shared_ptr<const PlannerCatalog> catalog_from_flags(const PlannerFlags& f) 
     e.source = spec;
     e.reply_timeout_s = f.reply_timeout_s;
     e.make = std::move(loaded.make);
+    e.with_keywords = std::move(loaded.with_keywords);
     catalog->add(std::move(e), "--policy-py");
   }
   if (!f.names.empty() && f.names.size() != f.commands.size()) {

@@ -441,22 +441,49 @@ class CallablePolicy final : public planner::Policy {
 
 }  // namespace
 
+std::string keyword_problem(const py::object& callable, const std::vector<std::string>& names) {
+  py::dict kw;
+  for (const auto& n : names) kw[py::str(n)] = 0.0;
+  py::object signature;
+  try {
+    signature = py::module_::import("inspect").attr("signature")(callable);
+  } catch (const py::error_already_set&) {
+    return {};  // no signature to read (a builtin): the call will say
+  }
+  try {
+    if (PyType_Check(callable.ptr()) != 0) {
+      signature.attr("bind_partial")(**kw);
+    } else {
+      signature.attr("bind_partial")(py::none(), **kw);
+    }
+  } catch (const py::error_already_set& e) {
+    return described(e).what;
+  }
+  return {};
+}
+
 planner::PolicyFactory callable_policy_factory(SharedObject callable, std::string label,
-                                               std::shared_ptr<DriveInterruption> stops) {
-  return [callable = std::move(callable), label = std::move(label), stops = std::move(stops)](
+                                               std::shared_ptr<DriveInterruption> stops,
+                                               std::map<std::string, double> keywords) {
+  return [callable = std::move(callable), label = std::move(label), stops = std::move(stops),
+          keywords = std::move(keywords)](
              const core::ReferenceLine&,
              const planner::PlannerParams&) -> std::unique_ptr<planner::Policy> {
     SharedObject target = callable;
     {
       py::gil_scoped_acquire gil;
+      py::dict kw;
+      for (const auto& [name, value] : keywords) kw[py::str(name)] = value;
       if (PyType_Check(callable->ptr()) != 0) {  // a class: one instance per run
         try {
-          target = share((*callable)());
+          target = share((*callable)(**kw));
         } catch (const py::error_already_set& e) {
           if (stops && DriveInterruption::stops_the_drive(e)) stops->keep(e);
           throw PythonError("Python planner " + label + ": making an instance raised " +
                             describe(e));
         }
+      } else if (!keywords.empty()) {  // a function: the keywords join each call
+        target = share(py::module_::import("functools").attr("partial")(*callable, **kw));
       }
     }
     return std::make_unique<CallablePolicy>(std::move(target), label, stops);

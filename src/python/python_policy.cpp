@@ -145,7 +145,22 @@ LoadedPython load_python_policy(const std::string& spec) {
   // pkg.planner:plan are both "planner".
   loaded.name = file ? std::filesystem::path(target).stem().string()
                      : module_name.substr(module_name.rfind('.') + 1);
-  loaded.make = callable_policy_factory(std::move(callable), spec);
+  loaded.make = callable_policy_factory(callable, spec);
+  loaded.with_keywords = [callable, spec](const std::map<std::string, double>& keywords) {
+    std::vector<std::string> names;
+    for (const auto& [name, value] : keywords) names.push_back(name);
+    std::string problem;
+    {
+      py::gil_scoped_acquire gil;
+      problem = keyword_problem(*callable, names);
+    }
+    if (!problem.empty()) {
+      std::string list;
+      for (const auto& n : names) list += (list.empty() ? "" : ", ") + n;
+      throw PythonError(spec + " cannot take the keyword arguments " + list + ": " + problem);
+    }
+    return callable_policy_factory(callable, spec, nullptr, keywords);
+  };
   return loaded;
 }
 

@@ -9,6 +9,8 @@
 //   --never-listen      never open the port (sleep)
 //   --exit-at-start     exit at once with status 3
 //   --port P            listen on P instead of 4567
+//   --speed-mps V       drive at V m/s (the walkthrough policy's target speed; a parameter
+//                       for the tests of `overtake tune`)
 //   --random            not deterministic: each new point of an answer moves by up to 0.5 m,
 //                       drawn from the operating system's random numbers (as a planner whose
 //                       answers depend on threads, clocks or random numbers)
@@ -47,6 +49,7 @@ struct Args {
   bool exit_at_start = false;
   bool random = false;
   unsigned short port = 4567;
+  double speed_mps = 0.0;  ///< 0: the config's
 };
 
 Args parse(int argc, char** argv) {
@@ -66,6 +69,8 @@ Args parse(int argc, char** argv) {
       a.random = true;
     } else if (arg == "--port") {
       a.port = static_cast<unsigned short>(value());
+    } else if (arg == "--speed-mps" && i + 1 < argc) {
+      a.speed_mps = std::atof(argv[++i]);
     } else {
       std::fprintf(stderr, "course_planner: unknown argument %s\n", arg.c_str());
       std::exit(2);
@@ -88,7 +93,8 @@ int main(int argc, char** argv) {
   if (args.never_listen) sleep_forever();
 
   const auto track = overtake::run::load_track(std::nullopt);
-  const auto config = overtake::run::default_config();
+  auto config = overtake::run::default_config();
+  if (args.speed_mps > 0.0) config.planner.walkthrough.target_speed_mps = args.speed_mps;
   net::io_context ioc;
   tcp::acceptor acceptor(ioc, tcp::endpoint(net::ip::address_v4::any(), args.port));
   std::printf("Listening to port %u\n", static_cast<unsigned>(args.port));

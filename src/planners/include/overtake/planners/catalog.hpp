@@ -6,6 +6,8 @@
 
 #include <deque>
 #include <filesystem>
+#include <functional>
+#include <map>
 #include <memory>
 #include <optional>
 #include <string>
@@ -47,6 +49,9 @@ struct PlannerEntry {
   PlannerKind kind = PlannerKind::builtin;
   std::string source;           ///< the plugin's path, module:function, or the command
   planner::PolicyFactory make;  ///< builtin, plugin and python
+  /// A Python planner's factory given keyword arguments (`overtake tune`); throws when the
+  /// callable cannot take them. Empty for the others.
+  std::function<planner::PolicyFactory(const std::map<std::string, double>&)> with_keywords;
   std::optional<ProgramSpec> program;
   /// A plugin's or Python planner's longest plan() call: past it the call is interrupted (a
   /// Python planner) or overtake ends (a plugin: code in this process cannot be stopped).

@@ -8,6 +8,7 @@
 #include <pybind11/pybind11.h>
 
 #include <atomic>
+#include <map>
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -75,7 +76,16 @@ class DriveInterruption {
 /// `stops` (may be null), a KeyboardInterrupt or SystemExit goes there instead of being a
 /// failure. The policies can be interrupted (planner::Policy::interrupt): the running call
 /// then raises TimeoutError or KeyboardInterrupt. Needs no GIL.
+/// `keywords` (may be empty) are given to each call of a function (`plan(telemetry, **kw)`)
+/// or to the class when making an instance (`Planner(**kw)`).
 [[nodiscard]] planner::PolicyFactory callable_policy_factory(
-    SharedObject callable, std::string label, std::shared_ptr<DriveInterruption> stops = nullptr);
+    SharedObject callable, std::string label, std::shared_ptr<DriveInterruption> stops = nullptr,
+    std::map<std::string, double> keywords = {});
+
+/// Why `callable` cannot take these keyword arguments (a function after the telemetry, a
+/// class when making an instance), as Python's inspect.signature says; "" when it can, or
+/// when Python cannot tell (a builtin without a signature). Needs the GIL.
+[[nodiscard]] std::string keyword_problem(const pybind11::object& callable,
+                                          const std::vector<std::string>& names);
 
 }  // namespace overtake::python

@@ -2,6 +2,8 @@
 // Python planners in-process (`--policy-py MODULE:FUNCTION`): the interpreter embedded, the
 // callable given the telemetry as the original sends it, its path taken back as a policy's.
 
+#include <functional>
+#include <map>
 #include <stdexcept>
 #include <string>
 
@@ -19,6 +21,9 @@ class PythonError : public std::runtime_error {
 struct LoadedPython {
   std::string name;
   planner::PolicyFactory make;
+  /// The factory of the same planner given keyword arguments (`plan(telemetry, **kw)`, or
+  /// `Planner(**kw)` for a class); throws PythonError when the callable cannot take them.
+  std::function<planner::PolicyFactory(const std::map<std::string, double>&)> with_keywords;
 };
 
 /// Imports MODULE and finds FUNCTION (`spec` is MODULE:FUNCTION). Throws PythonError.

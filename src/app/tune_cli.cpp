@@ -1,0 +1,153 @@
+// The `overtake tune` command line.
+
+#include <cstdio>
+#include <iostream>
+
+#include "overtake/app/cli.hpp"
+#include "overtake/app/interrupt.hpp"
+#include "overtake/base/errors.hpp"
+#include "overtake/base/io.hpp"
+#include "overtake/base/text.hpp"
+#include "overtake/batch/bench.hpp"
+#include "overtake/batch/pool.hpp"
+#include "overtake/batch/tune.hpp"
+
+namespace overtake::app {
+
+using base::kExitFailure;
+using base::kExitInterrupted;
+using base::kExitOk;
+using base::split_list;
+using base::stderr_is_terminal;
+using base::UsageError;
+using batch::parse_seed_list;
+using batch::TuneOutcome;
+using batch::TuneProgress;
+using batch::TuneSpec;
+
+namespace {
+
+struct TuneFlags {
+  std::vector<std::string> params;
+  std::vector<std::string> constraints{"at_fault_collisions<=0", "incidents<=0", "ended_early<=0"};
+  std::string traffic = "faithful";
+  std::string seeds = "1-8";
+  std::string validate_seeds;
+  std::string map;
+  std::string config;
+  double hours = 0.0;
+  planners::PlannerFlags planners;
+};
+
+void show_progress(const TuneProgress& p) {
+  const std::string best = p.best ? ", best " + base::fixed_text(*p.best, 3) : std::string();
+  if (stderr_is_terminal()) {
+    std::fprintf(stderr, "\r  tune: trial %d of %d, run %zu/%zu%s   ", p.trial, p.trials,
+                 p.runs_done, p.runs_total, best.c_str());
+    std::fflush(stderr);
+  }
+}
+
+TuneSpec spec_of(TuneSpec spec, const TuneFlags& f) {
+  for (const auto& p : f.params) spec.params.push_back(batch::parse_tune_param(p));
+  spec.constraints.clear();
+  for (const auto& c : f.constraints) {
+    if (c != "none") spec.constraints.push_back(batch::parse_tune_constraint(c));
+  }
+  spec.traffic = split_list(f.traffic);
+  spec.seeds = parse_seed_list(f.seeds);
+  if (!f.validate_seeds.empty()) spec.validation_seeds = parse_seed_list(f.validate_seeds);
+  if (!f.map.empty()) spec.map = f.map;
+  if (!f.config.empty()) spec.config = f.config;
+  if (f.hours > 0.0) {
+    // Simulated hours: each trial costs seeds x traffic profiles x minutes.
+    const double trial_h =
+        static_cast<double>(spec.seeds.size() * spec.traffic.size()) * spec.minutes / 60.0;
+    spec.trials = std::max(1, static_cast<int>(f.hours / trial_h));
+  }
+  spec.planners = planners::catalog_from_flags(f.planners);
+  return spec;
+}
+
+int report(const TuneSpec& spec, const TuneOutcome& o) {
+  std::cout << o.summary_markdown;
+  if (!o.best_command.empty()) std::cout << "\nbest command: " << o.best_command << "\n";
+  std::cout << "\nwrote " << (spec.out / batch::kTuneTrialsFile).string() << ", "
+            << (spec.out / batch::kTuneSummaryFile).string() << ", "
+            << (spec.out / batch::kTunePageFile).string();
+  if (o.best) std::cout << ", " << (spec.out / batch::kTuneBestFile).string();
+  std::cout << "\n";
+  if (o.interrupted) {
+    std::cerr << "overtake tune: interrupted; " << o.trials.size()
+              << " finished trials kept (--resume goes on)\n";
+    return kExitInterrupted;
+  }
+  if (!o.best) {
+    std::cerr << "overtake tune: no trial met the constraints\n";
+    return kExitFailure;
+  }
+  return kExitOk;
+}
+
+}  // namespace
+
+Subcommand register_tune(CLI::App& app) {
+  auto spec = std::make_shared<TuneSpec>();
+  auto f = std::make_shared<TuneFlags>();
+  CLI::App* cmd = app.add_subcommand(
+      "tune",
+      "Search a planner's parameters: each trial a bench on the same training seeds, proposed\n"
+      "by a derivative-free optimiser (NLopt); then the best against the start on held-out\n"
+      "seeds, paired, with intervals and verdicts. Writes trials.jsonl, best.json (a config\n"
+      "for --config), summary.md and tune.html into --out; Ctrl-C keeps every finished trial.");
+  cmd->add_option("--policy", spec->policy,
+                  "The planner searched: a built-in policy, --planner-cmd or --policy-py")
+      ->required();
+  cmd->add_option("--param", f->params,
+                  "NAME=LOW:HIGH[@START], repeatable: a built-in policy's config key (full path\n"
+                  "or a unique ending; starts at its config value), a program's {NAME}\n"
+                  "placeholder in --planner-cmd (else the environment variable NAME), or a\n"
+                  "Python planner's keyword argument (starts mid-range unless @START)")
+      ->required();
+  cmd->add_option("--objective", spec->objective,
+                  "The figure optimised (mean_speed_mph: higher is better; counts and rates:\n"
+                  "lower)")
+      ->capture_default_str();
+  cmd->add_option("--constraint", f->constraints,
+                  "FIGURE<=VALUE or FIGURE>=VALUE, repeatable, over a trial's runs together\n"
+                  "(`none`: no constraint)")
+      ->capture_default_str();
+  cmd->add_option("--seeds", f->seeds, "Training seeds (1-8, 1,4,9)")->capture_default_str();
+  cmd->add_option("--validate-seeds", f->validate_seeds,
+                  "Held-out seeds for the validation (none: no validation)");
+  cmd->add_option("--traffic", f->traffic, "Traffic profiles, comma-separated")
+      ->capture_default_str();
+  cmd->add_option("--minutes", spec->minutes, "Simulated minutes per run")
+      ->check(CLI::Range(0.1, 24.0 * 60.0))
+      ->capture_default_str();
+  cmd->add_option("--map", f->map, "A map file (the original's format; default: built-in)");
+  cmd->add_option("--config", f->config, "A config file the search starts from");
+  cmd->add_option("--trials", spec->trials, "The budget: trials at most")->capture_default_str();
+  cmd->add_option("--hours", f->hours,
+                  "The budget as simulated hours (training runs), when fewer trials than --trials")
+      ->check(CLI::Range(0.0, 1e7));
+  cmd->add_option("--algorithm", spec->algorithm, "sbplx, neldermead, bobyqa or cobyla")
+      ->capture_default_str();
+  cmd->add_option("--jobs", spec->jobs, "Runs of a trial at once")
+      ->default_val(batch::default_jobs());
+  cmd->add_option("--out", spec->out, "The output folder")->capture_default_str();
+  cmd->add_flag("--resume", spec->resume, "Go on with the search in --out");
+  cmd->add_flag("--force", spec->force, "Write into an --out that holds other files");
+  add_planner_flags(*cmd, f->planners, planners::PlannerFlagSet::all);
+  return {cmd, [spec, f] {
+            batch::check_jobs(spec->jobs);
+            TuneSpec s = spec_of(*spec, *f);
+            if (f->hours > 0.0) s.trials = std::min(s.trials, spec->trials);
+            const InterruptScope interrupt;
+            const TuneOutcome o = batch::run_tune(s, &InterruptScope::flag(), show_progress);
+            if (stderr_is_terminal()) std::fprintf(stderr, "\n");
+            return report(s, o);
+          }};
+}
+
+}  // namespace overtake::app

@@ -1,0 +1,910 @@
+// `overtake tune`: the parameters, how a trial gives them to the planner, the figures a trial
+// is judged by, the search (NLopt) with its record of trials, and the validation.
+
+#include "overtake/batch/tune.hpp"
+
+#include <algorithm>
+#include <charconv>
+#include <chrono>
+#include <cmath>
+#include <fstream>
+#include <limits>
+#include <regex>
+#include <set>
+
+#include <nlopt.hpp>
+
+#include "overtake/base/errors.hpp"
+#include "overtake/base/io.hpp"
+#include "overtake/base/text.hpp"
+#include "overtake/batch/bench.hpp"
+#include "overtake/eval/metrics.hpp"
+#include "overtake/run/config.hpp"
+
+namespace overtake::batch {
+namespace {
+
+using base::fixed_text;
+using base::UsageError;
+using nlohmann::json;
+namespace fs = std::filesystem;
+
+// ---- numbers and names -----------------------------------------------------------------
+
+std::optional<double> parse_number(std::string_view text) {
+  double v = 0.0;
+  const auto r = std::from_chars(text.data(), text.data() + text.size(), v);
+  if (r.ec != std::errc{} || r.ptr != text.data() + text.size() || !std::isfinite(v)) {
+    return std::nullopt;
+  }
+  return v;
+}
+
+// The shortest text that reads back as the same double (what a placeholder is replaced by).
+std::string number_text(double v) {
+  std::array<char, 32> buf{};
+  const auto r = std::to_chars(buf.data(), buf.data() + buf.size(), v);
+  return {buf.data(), r.ptr};
+}
+
+bool valid_param_name(std::string_view name) {
+  if (name.empty()) return false;
+  return std::all_of(name.begin(), name.end(), [](char c) {
+    return std::isalnum(static_cast<unsigned char>(c)) != 0 || c == '_' || c == '.';
+  });
+}
+
+bool identifier(std::string_view name) {
+  if (name.empty() || std::isdigit(static_cast<unsigned char>(name[0])) != 0) return false;
+  return std::all_of(name.begin(), name.end(), [](char c) {
+    return std::isalnum(static_cast<unsigned char>(c)) != 0 || c == '_';
+  });
+}
+
+std::string join(const std::vector<std::string>& names) {
+  std::string out;
+  for (const auto& n : names) out += (out.empty() ? "" : ", ") + n;
+  return out;
+}
+
+// The counts a trial reports besides overtake::eval's metrics.
+const std::vector<std::string>& count_names() {
+  static const std::vector<std::string> names = {
+      "incidents", "collisions", "at_fault_collisions", "near_misses", "ended_early", "runs"};
+  return names;
+}
+
+// ---- how a trial gives its parameters to the planner -----------------------------------
+
+// A parameter's place: a config key (as a JSON pointer), a program's placeholder or
+// environment variable, a Python keyword.
+struct Placement {
+  enum class Kind { config, placeholder, environment, keyword } kind = Kind::config;
+  std::string key;  ///< the config's JSON pointer, the placeholder's or variable's name
+};
+
+// Finds the config key a parameter names: the full dotted path, or a unique ending of one
+// ("behaviour.min_gap_m"); only the planner's keys (the world is what a planner is tested on).
+std::string config_pointer(const json& config, const std::string& name) {
+  std::vector<std::string> paths;
+  const std::function<void(const json&, const std::string&)> walk = [&](const json& j,
+                                                                        const std::string& at) {
+    for (const auto& [k, v] : j.items()) {
+      const std::string path = at.empty() ? k : at + "." + k;
+      if (v.is_object()) {
+        walk(v, path);
+      } else if (v.is_number()) {
+        paths.push_back(path);
+      }
+    }
+  };
+  walk(config, "");
+  std::vector<std::string> found;
+  for (const auto& p : paths) {
+    if (p == name) {
+      found = {p};
+      break;
+    }
+    if (p.size() > name.size() && p.ends_with(name) && p[p.size() - name.size() - 1] == '.') {
+      found.push_back(p);
+    }
+  }
+  if (found.empty()) {
+    throw UsageError("--param: '" + name +
+                     "' is not a numeric key of the config (`overtake config` lists them; a key "
+                     "may be named by its full path or a unique ending)");
+  }
+  if (found.size() > 1) {
+    std::string list;
+    for (const auto& f : found) list += (list.empty() ? "" : ", ") + f;
+    throw UsageError("--param: '" + name + "' names several config keys (" + list +
+                     "): give more of its path");
+  }
+  if (!found[0].starts_with("planner.")) {
+    throw UsageError("--param: '" + found[0] +
+                     "' is not the planner's: tune searches a planner's parameters, and the "
+                     "world, road and car are what planners are tested on");
+  }
+  std::string pointer = "/" + found[0];
+  std::replace(pointer.begin(), pointer.end(), '.', '/');
+  return pointer;
+}
+
+struct Target {
+  std::shared_ptr<const planners::PlannerCatalog> catalog;  ///< holds `entry`
+  const planners::PlannerEntry* entry = nullptr;
+  json base_config;  ///< built-in policies: the starting config, every key
+  std::vector<Placement> places;
+};
+
+Target resolve_target(const TuneSpec& spec) {
+  Target t;
+  t.catalog = spec.planners ? spec.planners : std::make_shared<const planners::PlannerCatalog>();
+  t.entry = &t.catalog->require(spec.policy);
+  using planners::PlannerKind;
+  switch (t.entry->kind) {
+    case PlannerKind::builtin:
+      t.base_config = run::config_to_json(run::load_config(spec.config));
+      for (const auto& p : spec.params) {
+        t.places.push_back({Placement::Kind::config, config_pointer(t.base_config, p.name)});
+      }
+      break;
+    case PlannerKind::program:
+      for (const auto& p : spec.params) {
+        const std::string placeholder = "{" + p.name + "}";
+        if (t.entry->program->command.find(placeholder) != std::string::npos) {
+          t.places.push_back({Placement::Kind::placeholder, placeholder});
+        } else if (identifier(p.name)) {
+          t.places.push_back({Placement::Kind::environment, p.name});
+        } else {
+          throw UsageError("--param: '" + p.name + "' is neither a placeholder {" + p.name +
+                           "} of the planner program's command nor a name an environment "
+                           "variable can have");
+        }
+      }
+      break;
+    case PlannerKind::python:
+      if (!t.entry->with_keywords) {
+        throw UsageError("--param: the Python planner " + spec.policy +
+                         " cannot be given keyword arguments");
+      }
+      for (const auto& p : spec.params) {
+        if (!identifier(p.name)) {
+          throw UsageError("--param: '" + p.name + "' cannot be a Python keyword argument");
+        }
+        t.places.push_back({Placement::Kind::keyword, p.name});
+      }
+      break;
+    case PlannerKind::plugin:
+      throw UsageError("--param: the plugin " + spec.policy +
+                       " takes no parameters from overtake (tune searches built-in policies, "
+                       "planner programs and Python planners)");
+  }
+  return t;
+}
+
+// The command of a program with the trial's parameters: placeholders replaced, variables set
+// before it.
+std::string program_command(const Target& t, const std::vector<double>& x) {
+  std::string command = t.entry->program->command;
+  std::string env;
+  for (std::size_t i = 0; i < x.size(); ++i) {
+    const Placement& p = t.places[i];
+    if (p.kind == Placement::Kind::placeholder) {
+      std::size_t at = 0;
+      while ((at = command.find(p.key, at)) != std::string::npos) {
+        command.replace(at, p.key.size(), number_text(x[i]));
+        at += 1;
+      }
+    } else if (p.kind == Placement::Kind::environment) {
+      env += p.key + "=" + number_text(x[i]) + " ";
+    }
+  }
+  return env.empty() ? command : "export " + env + "&& " + command;
+}
+
+json trial_config(const Target& t, const std::vector<double>& x) {
+  json c = t.base_config;
+  for (std::size_t i = 0; i < x.size(); ++i) c[json::json_pointer(t.places[i].key)] = x[i];
+  return c;
+}
+
+// The catalog a trial's bench runs: the tuned planner with the trial's parameters.
+std::shared_ptr<const planners::PlannerCatalog> trial_catalog(const Target& t, const TuneSpec& spec,
+                                                              const std::vector<double>& x) {
+  using planners::PlannerKind;
+  if (t.entry->kind == PlannerKind::builtin) return spec.planners;
+  auto catalog = std::make_shared<planners::PlannerCatalog>();
+  planners::PlannerEntry e = *t.entry;
+  if (e.kind == PlannerKind::program) {
+    e.program->command = program_command(t, x);
+    e.source = e.program->command;
+    catalog->add(std::move(e), "--planner-cmd");
+  } else {
+    std::map<std::string, double> keywords;
+    for (std::size_t i = 0; i < x.size(); ++i) keywords[t.places[i].key] = x[i];
+    e.make = e.with_keywords(keywords);
+    catalog->add(std::move(e), "--policy-py");
+  }
+  return catalog;
+}
+
+// ---- a trial's figures ------------------------------------------------------------------
+
+json figures_of(const std::vector<json>& rows, const std::string& where) {
+  std::vector<eval::RunRow> runs;
+  runs.reserve(rows.size());
+  for (const json& r : rows) runs.push_back(eval::read_run_row(r, where));
+  std::vector<const eval::RunRow*> all;
+  for (const auto& r : runs) all.push_back(&r);
+  json f = json::object();
+  for (const eval::Metric m : eval::all_metrics()) {
+    f[std::string(eval::info(m).name)] =
+        eval::available(m, all) ? json(eval::value(m, all)) : json(nullptr);
+  }
+  double incidents = 0, collisions = 0, at_fault = 0, near = 0, ended = 0;
+  for (const auto& r : runs) {
+    incidents += r.incidents;
+    collisions += r.collisions;
+    at_fault += r.at_fault_collisions;
+    near += r.near_misses;
+    ended += r.ended_early ? 1.0 : 0.0;
+  }
+  f["incidents"] = incidents;
+  f["collisions"] = collisions;
+  f["at_fault_collisions"] = at_fault;
+  f["near_misses"] = near;
+  f["ended_early"] = ended;
+  f["runs"] = static_cast<double>(runs.size());
+  return f;
+}
+
+void judge(TuneTrial& trial, const TuneSpec& spec) {
+  const json& obj = trial.figures[spec.objective];
+  trial.objective = obj.is_number() ? obj.get<double>() : std::numeric_limits<double>::quiet_NaN();
+  trial.feasible = std::isfinite(trial.objective);
+  trial.violations.clear();
+  if (!trial.feasible) trial.violations.push_back(spec.objective + " is not known");
+  for (const auto& c : spec.constraints) {
+    const json& v = trial.figures[c.figure];
+    if (!v.is_number()) {
+      trial.feasible = false;
+      trial.violations.push_back(c.figure + " is not known");
+      continue;
+    }
+    const double value = v.get<double>();
+    if (c.at_most ? value > c.bound : value < c.bound) {
+      trial.feasible = false;
+      trial.violations.push_back(c.figure + " = " + number_text(value) +
+                                 (c.at_most ? " > " : " < ") + number_text(c.bound));
+    }
+  }
+}
+
+// How far a trial is from meeting its constraints (0 when it does).
+double violation(const TuneTrial& trial, const TuneSpec& spec) {
+  double total = 0.0;
+  for (const auto& c : spec.constraints) {
+    const json& v = trial.figures[c.figure];
+    if (!v.is_number()) {
+      total += 1e6;
+      continue;
+    }
+    const double value = v.get<double>();
+    total += std::max(0.0, c.at_most ? value - c.bound : c.bound - value);
+  }
+  return total;
+}
+
+json trial_json(const TuneTrial& t, const TuneSpec& spec) {
+  json params = json::object();
+  for (const auto& p : spec.params) params[p.name] = t.params.at(p.name);
+  return {{"trial", t.number},
+          {"params", params},
+          {"objective", std::isfinite(t.objective) ? json(t.objective) : json(nullptr)},
+          {"feasible", t.feasible},
+          {"violations", t.violations},
+          {"figures", t.figures}};
+}
+
+// ---- the record ---------------------------------------------------------------------------
+
+std::vector<double> start_point(const TuneSpec& spec, const Target& t);
+
+json manifest_of(const TuneSpec& spec, const Target& t) {
+  json params = json::array();
+  const std::vector<double> start = start_point(spec, t);
+  for (std::size_t i = 0; i < spec.params.size(); ++i) {
+    const TuneParam& p = spec.params[i];
+    params.push_back({{"name", p.name}, {"low", p.low}, {"high", p.high}, {"start", start[i]}});
+  }
+  json constraints = json::array();
+  for (const auto& c : spec.constraints) {
+    constraints.push_back(c.figure + (c.at_most ? "<=" : ">=") + number_text(c.bound));
+  }
+  return {{"policy", spec.policy},
+          {"planner", t.entry->describe()},
+          {"params", params},
+          {"objective", spec.objective},
+          {"constraints", constraints},
+          {"traffic", spec.traffic},
+          {"seeds", spec.seeds},
+          {"minutes", spec.minutes},
+          {"map", spec.map ? spec.map->string() : ""},
+          {"start_config", t.base_config},
+          {"algorithm", spec.algorithm}};
+}
+
+std::vector<TuneTrial> read_trials(const fs::path& file, const TuneSpec& spec) {
+  std::vector<TuneTrial> trials;
+  std::ifstream in(file);
+  std::string line;
+  int number = 0;
+  while (std::getline(in, line)) {
+    ++number;
+    if (line.empty()) continue;
+    json j;
+    try {
+      j = json::parse(line);
+    } catch (const json::exception&) {
+      if (in.peek() == std::ifstream::traits_type::eof()) break;  // cut off by a kill
+      throw UsageError("--resume: " + file.string() + ":" + std::to_string(number) +
+                       " is not a trial (not JSON)");
+    }
+    TuneTrial t;
+    try {
+      t.number = j.at("trial").get<int>();
+      for (const auto& p : spec.params) t.params[p.name] = j.at("params").at(p.name).get<double>();
+      t.figures = j.at("figures");
+    } catch (const json::exception& e) {
+      throw UsageError("--resume: " + file.string() + ":" + std::to_string(number) +
+                       " is not a trial of this search (" + e.what() + ")");
+    }
+    if (t.number != static_cast<int>(trials.size()) + 1) {
+      throw UsageError("--resume: " + file.string() + ":" + std::to_string(number) + " is trial " +
+                       std::to_string(t.number) + ", expected " +
+                       std::to_string(trials.size() + 1));
+    }
+    judge(t, spec);
+    t.resumed = true;
+    trials.push_back(std::move(t));
+  }
+  return trials;
+}
+
+void append_line(const fs::path& file, const std::string& line) {
+  std::ofstream out(file, std::ios::app | std::ios::binary);
+  out << line << '\n';
+  out.flush();
+  if (!out) throw std::runtime_error("cannot write " + file.string());
+}
+
+std::string trial_folder_name(int number) {
+  std::string n = std::to_string(number);
+  return std::string(n.size() < 4 ? 4 - n.size() : 0, '0') + n;
+}
+
+// ---- the search ---------------------------------------------------------------------------
+
+class Search {
+ public:
+  Search(const TuneSpec& spec, Target target, const std::atomic<bool>* stop,
+         const std::function<void(const TuneProgress&)>& progress)
+      : spec_(spec), target_(std::move(target)), stop_(stop), progress_(progress) {}
+
+  std::vector<TuneTrial> trials;
+  bool interrupted = false;
+  bool budget_spent = false;
+
+  // The trial of these parameters: one already run (the same numbers: the optimiser asks
+  // again, or a resumed search asks what it asked before), or a new one.
+  const TuneTrial* evaluate(const std::vector<double>& x) {
+    for (const auto& t : trials) {
+      if (params_vector(t) == x) return &t;
+    }
+    if (static_cast<int>(trials.size()) >= spec_.trials) {
+      budget_spent = true;
+      return nullptr;
+    }
+    return run_trial(x);
+  }
+
+  [[nodiscard]] std::vector<double> params_vector(const TuneTrial& t) const {
+    std::vector<double> x;
+    for (const auto& p : spec_.params) x.push_back(t.params.at(p.name));
+    return x;
+  }
+
+  // What the optimiser minimises: the objective (negated when higher is better) of a
+  // feasible trial; past every feasible value, growing with the violation, for the others.
+  [[nodiscard]] double loss(const TuneTrial& t) const {
+    if (!t.feasible) return 1e12 + violation(t, spec_) * 1e3;
+    return tune_figure_higher_is_better(spec_.objective) ? -t.objective : t.objective;
+  }
+
+  [[nodiscard]] std::optional<int> best() const {
+    std::optional<int> b;
+    for (const auto& t : trials) {
+      if (!t.feasible) continue;
+      if (!b || loss(t) < loss(trials[static_cast<std::size_t>(*b - 1)])) b = t.number;
+    }
+    return b;
+  }
+
+ private:
+  const TuneTrial* run_trial(const std::vector<double>& x) {
+    if (stop_ != nullptr && stop_->load()) {
+      interrupted = true;
+      return nullptr;
+    }
+    TuneTrial t;
+    t.number = static_cast<int>(trials.size()) + 1;
+    for (std::size_t i = 0; i < x.size(); ++i) t.params[spec_.params[i].name] = x[i];
+    const fs::path dir = spec_.out / kTuneTrialsFolder / trial_folder_name(t.number);
+    std::error_code ignored;
+    fs::remove_all(dir, ignored);  // a trial cut off by Ctrl-C starts again
+    fs::create_directories(dir);
+    BenchSpec b;
+    b.policies = {spec_.policy};
+    b.traffic = spec_.traffic;
+    b.seeds = spec_.seeds;
+    b.minutes = spec_.minutes;
+    b.map = spec_.map;
+    b.jobs = spec_.jobs;
+    b.out = dir;
+    b.planners = trial_catalog(target_, spec_, x);
+    if (target_.entry->kind == planners::PlannerKind::builtin) {
+      base::write_file_atomic(dir / "config.json", trial_config(target_, x).dump(2) + "\n");
+      b.config = dir / "config.json";
+    } else {
+      b.config = spec_.config;
+    }
+    const auto started = std::chrono::steady_clock::now();
+    const BenchOutcome o = run_bench(b, stop_, [&](const BenchProgress& p) {
+      if (!progress_) return;
+      TuneProgress tp;
+      tp.trial = t.number;
+      tp.trials = spec_.trials;
+      tp.runs_done = p.done;
+      tp.runs_total = p.total;
+      if (const auto bi = best()) tp.best = trials[static_cast<std::size_t>(*bi - 1)].objective;
+      tp.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+      progress_(tp);
+    });
+    if (o.interrupted) {
+      interrupted = true;
+      return nullptr;
+    }
+    t.figures = figures_of(load_bench_runs(dir), (dir / kBenchRunsFile).string());
+    judge(t, spec_);
+    append_line(spec_.out / kTuneTrialsFile, trial_json(t, spec_).dump());
+    trials.push_back(std::move(t));
+    return &trials.back();
+  }
+
+  const TuneSpec& spec_;
+  Target target_;
+  const std::atomic<bool>* stop_;
+  const std::function<void(const TuneProgress&)>& progress_;
+};
+
+nlopt::algorithm algorithm_of(const std::string& name) {
+  if (name == "sbplx") return nlopt::LN_SBPLX;
+  if (name == "neldermead") return nlopt::LN_NELDERMEAD;
+  if (name == "bobyqa") return nlopt::LN_BOBYQA;
+  if (name == "cobyla") return nlopt::LN_COBYLA;
+  throw UsageError("--algorithm: unknown '" + name + "' (sbplx, neldermead, bobyqa, cobyla)");
+}
+
+std::vector<double> start_point(const TuneSpec& spec, const Target& t) {
+  std::vector<double> x;
+  for (std::size_t i = 0; i < spec.params.size(); ++i) {
+    const TuneParam& p = spec.params[i];
+    if (p.start) {
+      x.push_back(*p.start);
+    } else if (t.entry->kind == planners::PlannerKind::builtin) {
+      x.push_back(t.base_config[json::json_pointer(t.places[i].key)].get<double>());
+    } else {
+      x.push_back((p.low + p.high) / 2.0);
+    }
+  }
+  return x;
+}
+
+// Runs NLopt on the unit cube (each parameter scaled to [0, 1]) from the start.
+std::string optimise(Search& search, const TuneSpec& spec, const std::vector<double>& start) {
+  const std::size_t n = spec.params.size();
+  const auto to_x = [&](const std::vector<double>& u) {
+    std::vector<double> x(n);
+    for (std::size_t i = 0; i < n; ++i) {
+      const TuneParam& p = spec.params[i];
+      x[i] = i < u.size() && std::abs(u[i] - (start[i] - p.low) / (p.high - p.low)) < 1e-15
+                 ? start[i]  // the start exactly, not a number that rounds near it
+                 : std::clamp(p.low + u[i] * (p.high - p.low), p.low, p.high);
+    }
+    return x;
+  };
+  std::vector<double> u(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const TuneParam& p = spec.params[i];
+    u[i] = (start[i] - p.low) / (p.high - p.low);
+  }
+  nlopt::opt opt(algorithm_of(spec.algorithm), static_cast<unsigned>(n));
+  opt.set_lower_bounds(std::vector<double>(n, 0.0));
+  opt.set_upper_bounds(std::vector<double>(n, 1.0));
+  opt.set_initial_step(0.25);
+  opt.set_xtol_abs(1e-3);
+  opt.set_maxeval(std::max(spec.trials * 20, 100));  // asks for trials already run are free
+  // NLopt turns an exception in the objective into its own failure: a trial's error is kept
+  // here and thrown again once the optimiser has returned.
+  struct Data {
+    Search* search;
+    const std::function<std::vector<double>(const std::vector<double>&)>* to_x;
+    std::exception_ptr error;
+  };
+  const std::function<std::vector<double>(const std::vector<double>&)> convert = to_x;
+  Data data{&search, &convert, nullptr};
+  opt.set_min_objective(
+      [](const std::vector<double>& uu, std::vector<double>&, void* d) -> double {
+        auto* state = static_cast<Data*>(d);
+        const TuneTrial* t = nullptr;
+        try {
+          t = state->search->evaluate((*state->to_x)(uu));
+        } catch (...) {
+          state->error = std::current_exception();
+        }
+        if (t == nullptr) throw nlopt::forced_stop();
+        return state->search->loss(*t);
+      },
+      &data);
+  double value = 0.0;
+  try {
+    const nlopt::result r = opt.optimize(u, value);
+    switch (r) {
+      case nlopt::XTOL_REACHED:
+        return "the steps became smaller than 0.1% of each range";
+      case nlopt::FTOL_REACHED:
+        return "the objective stopped improving";
+      case nlopt::MAXEVAL_REACHED:
+        return "the optimiser asked for the same trials again and again";
+      default:
+        return "the optimiser ended (" + std::to_string(static_cast<int>(r)) + ")";
+    }
+  } catch (const nlopt::forced_stop&) {
+    if (data.error) std::rethrow_exception(data.error);
+    if (search.interrupted) return "interrupted";
+    return "the budget of " + std::to_string(spec.trials) + " trials";
+  } catch (const nlopt::roundoff_limited&) {
+    return "the optimiser reached the limit of its arithmetic";
+  }
+}
+
+// ---- the validation and the reports ---------------------------------------------------------
+
+json run_validation(const TuneSpec& spec, const Target& target, const std::vector<double>& start,
+                    const std::vector<double>& best, const std::atomic<bool>* stop,
+                    bool& interrupted) {
+  const fs::path dir = spec.out / kTuneValidationFolder;
+  std::error_code ignored;
+  fs::remove_all(dir, ignored);
+  for (const auto& [name, x] : {std::pair{"start", start}, std::pair{"best", best}}) {
+    BenchSpec b;
+    b.policies = {spec.policy};
+    b.traffic = spec.traffic;
+    b.seeds = spec.validation_seeds;
+    b.minutes = spec.minutes;
+    b.map = spec.map;
+    b.jobs = spec.jobs;
+    b.out = dir / name;
+    fs::create_directories(b.out);
+    b.planners = trial_catalog(target, spec, x);
+    if (target.entry->kind == planners::PlannerKind::builtin) {
+      base::write_file_atomic(b.out.parent_path() / (std::string(name) + "-config.json"),
+                              trial_config(target, x).dump(2) + "\n");
+      b.config = b.out.parent_path() / (std::string(name) + "-config.json");
+    } else {
+      b.config = spec.config;
+    }
+    const BenchOutcome o = run_bench(b, stop, nullptr);
+    if (o.interrupted) {
+      interrupted = true;
+      return nullptr;
+    }
+  }
+  return compare_bench_folders(dir / "start", dir / "best", {});
+}
+
+// Whether the training gain holds on the held-out seeds, from the validation's verdict on the
+// objective (a metric of the evaluation; a count is judged by its rate per 100 miles).
+std::string verdict_of(const TuneSpec& spec, const json& validation) {
+  std::string metric = spec.objective;
+  if (!eval::parse_metric(metric)) metric += "_per_100mi";
+  if (!eval::parse_metric(metric) || validation["comparisons"].empty()) {
+    return "The validation has no verdict on " + spec.objective + ".";
+  }
+  const json& f = validation["comparisons"][0]["figures"][metric];
+  if (f.is_null()) return "The validation has no verdict on " + metric + ".";
+  const std::string verdict = f["verdict"].get<std::string>();
+  std::string change = "change " + fixed_text(f["difference"].get<double>(), 3);
+  if (f["ci"].is_array()) {
+    change += " (95% interval " + fixed_text(f["ci"][0].get<double>(), 3) + " to " +
+              fixed_text(f["ci"][1].get<double>(), 3) + ")";
+  }
+  const std::string seeds = std::to_string(spec.validation_seeds.size()) + " held-out seeds";
+  if (verdict == "better") {
+    return "The gain holds on the held-out seeds: " + metric + " better on " + seeds + ", " +
+           change + ".";
+  }
+  if (verdict == "worse") {
+    return "The gain does NOT hold: on " + seeds + " the best is worse than the start in " +
+           metric + ", " + change + " (it fits its training seeds only).";
+  }
+  return "Not shown to hold: on " + seeds +
+         " the best is not different from the start beyond "
+         "noise in " +
+         metric + " (" + verdict + "), " + change + ".";
+}
+
+std::string summary_of(const TuneSpec& spec, const TuneOutcome& o) {
+  std::string s = "# overtake tune: " + spec.policy + "\n\n";
+  s +=
+      "Objective: " + spec.objective +
+      (tune_figure_higher_is_better(spec.objective) ? " (higher is better)" : " (lower is better)");
+  std::string cs;
+  for (const auto& c : spec.constraints) {
+    cs +=
+        (cs.empty() ? "" : ", ") + c.figure + (c.at_most ? " <= " : " >= ") + number_text(c.bound);
+  }
+  s += "; constraints: " + (cs.empty() ? std::string("none") : cs) + ".\n";
+  s += "Training: " + std::to_string(spec.seeds.size()) + " seeds x " + number_text(spec.minutes) +
+       " min per traffic profile; " + std::to_string(o.trials.size()) + " trials (" +
+       spec.algorithm + "); ended by " + o.stop_reason + ".\n\n";
+  s += "| trial |";
+  for (const auto& p : spec.params) s += " " + p.name + " |";
+  s += " " + spec.objective + " | feasible |\n|---:|";
+  for (std::size_t i = 0; i < spec.params.size(); ++i) s += "---:|";
+  s += "---:|---|\n";
+  const auto row = [&](const TuneTrial& t, const std::string& label) {
+    s += "| " + label + " |";
+    for (const auto& p : spec.params) s += " " + number_text(t.params.at(p.name)) + " |";
+    s += " " + (std::isfinite(t.objective) ? fixed_text(t.objective, 3) : std::string("-")) +
+         " | " + (t.feasible ? std::string("yes") : "no: " + t.violations.front()) + " |\n";
+  };
+  if (!o.trials.empty()) row(o.trials.front(), "1 (start)");
+  if (o.best && *o.best != 1) {
+    row(o.trials[static_cast<std::size_t>(*o.best - 1)], std::to_string(*o.best) + " (best)");
+  }
+  if (!o.best) s += "\nNo trial met the constraints.\n";
+  if (!o.validation.is_null()) {
+    s += "\n## Validation on held-out seeds\n\n" + o.validation_verdict + "\n\n```\n" +
+         eval::compare_text(o.validation) + "```\n";
+  } else if (o.best && spec.validation_seeds.empty()) {
+    s += "\nNo validation (no --validate-seeds).\n";
+  }
+  if (o.interrupted) s += "\nInterrupted: the trials above are those that finished.\n";
+  return s;
+}
+
+}  // namespace
+
+// ---- parsing ----------------------------------------------------------------------------
+
+TuneParam parse_tune_param(const std::string& text) {
+  const auto eq = text.find('=');
+  const auto bad = [&](const std::string& why) {
+    return UsageError("--param: '" + text + "': " + why +
+                      " (expected NAME=LOW:HIGH or NAME=LOW:HIGH@START)");
+  };
+  if (eq == std::string::npos) throw bad("no '='");
+  TuneParam p;
+  p.name = text.substr(0, eq);
+  if (!valid_param_name(p.name)) throw bad("'" + p.name + "' is not a parameter name");
+  std::string range = text.substr(eq + 1);
+  if (const auto at = range.find('@'); at != std::string::npos) {
+    p.start = parse_number(range.substr(at + 1));
+    if (!p.start) throw bad("the start '" + range.substr(at + 1) + "' is not a number");
+    range = range.substr(0, at);
+  }
+  const auto colon = range.find(':');
+  if (colon == std::string::npos) throw bad("no ':' between LOW and HIGH");
+  const auto low = parse_number(range.substr(0, colon));
+  const auto high = parse_number(range.substr(colon + 1));
+  if (!low || !high) throw bad("LOW and HIGH must be numbers");
+  if (!(*low < *high)) throw bad("LOW must be below HIGH");
+  p.low = *low;
+  p.high = *high;
+  if (p.start && (*p.start < p.low || *p.start > p.high)) throw bad("START is outside the range");
+  return p;
+}
+
+TuneConstraint parse_tune_constraint(const std::string& text) {
+  TuneConstraint c;
+  std::size_t at = text.find("<=");
+  c.at_most = at != std::string::npos;
+  if (!c.at_most) at = text.find(">=");
+  if (at == std::string::npos) {
+    throw UsageError("--constraint: '" + text + "' is not NAME<=VALUE or NAME>=VALUE");
+  }
+  c.figure = text.substr(0, at);
+  const auto& names = tune_figure_names();
+  if (std::find(names.begin(), names.end(), c.figure) == names.end()) {
+    throw UsageError("--constraint: '" + c.figure + "' is not a figure (" + join(names) + ")");
+  }
+  const auto bound = parse_number(text.substr(at + 2));
+  if (!bound) throw UsageError("--constraint: '" + text.substr(at + 2) + "' is not a number");
+  c.bound = *bound;
+  return c;
+}
+
+const std::vector<std::string>& tune_figure_names() {
+  static const std::vector<std::string> names = [] {
+    std::vector<std::string> n;
+    for (const eval::Metric m : eval::all_metrics()) n.emplace_back(eval::info(m).name);
+    for (const auto& c : count_names()) n.push_back(c);
+    return n;
+  }();
+  return names;
+}
+
+bool tune_figure_higher_is_better(const std::string& name) {
+  if (const auto m = eval::parse_metric(name)) return eval::info(*m).higher_is_better;
+  return false;  // the counts: fewer is better (runs is not an objective)
+}
+
+const std::vector<std::string>& tune_algorithm_names() {
+  static const std::vector<std::string> names = {"sbplx", "neldermead", "bobyqa", "cobyla"};
+  return names;
+}
+
+// ---- the whole search ---------------------------------------------------------------------
+
+void check_tune_spec(const TuneSpec& spec) {
+  if (spec.params.empty()) throw UsageError("--param: name at least one parameter to search");
+  std::set<std::string> seen;
+  for (const auto& p : spec.params) {
+    if (!seen.insert(p.name).second) {
+      throw UsageError("--param: '" + p.name + "' is given twice");
+    }
+  }
+  const auto& names = tune_figure_names();
+  if (std::find(names.begin(), names.end(), spec.objective) == names.end() ||
+      spec.objective == "runs") {
+    throw UsageError("--objective: '" + spec.objective + "' is not a figure (" + join(names) + ")");
+  }
+  (void)algorithm_of(spec.algorithm);
+  if (spec.seeds.empty()) throw UsageError("--seeds: no training seeds");
+  for (const auto s : spec.validation_seeds) {
+    if (std::find(spec.seeds.begin(), spec.seeds.end(), s) != spec.seeds.end()) {
+      throw UsageError("--validate-seeds: seed " + std::to_string(s) +
+                       " is also a training seed; held-out seeds must be others");
+    }
+  }
+  if (spec.trials < 1 || spec.trials > kMaxTuneTrials) {
+    throw UsageError("--trials must be between 1 and " + std::to_string(kMaxTuneTrials) + " (got " +
+                     std::to_string(spec.trials) + ")");
+  }
+  const Target t = resolve_target(spec);
+  const std::vector<double> start = start_point(spec, t);
+  for (std::size_t i = 0; i < start.size(); ++i) {
+    const TuneParam& p = spec.params[i];
+    if (start[i] < p.low || start[i] > p.high) {
+      throw UsageError("--param: " + p.name + " starts at " + number_text(start[i]) +
+                       " (its value in the config), outside its range " + number_text(p.low) + ":" +
+                       number_text(p.high) + "; widen the range or give @START");
+    }
+  }
+  if (t.entry->kind == planners::PlannerKind::python) {
+    std::map<std::string, double> keywords;
+    for (std::size_t i = 0; i < start.size(); ++i) keywords[spec.params[i].name] = start[i];
+    try {
+      (void)t.entry->with_keywords(keywords);
+    } catch (const std::exception& e) {
+      throw UsageError(std::string("--param: ") + e.what());
+    }
+  }
+  if (t.entry->kind == planners::PlannerKind::builtin) {
+    // Every trial's config must be one the planner takes: the corners of the box are checked.
+    for (std::size_t i = 0; i < start.size(); ++i) {
+      for (const double v : {spec.params[i].low, spec.params[i].high}) {
+        std::vector<double> x = start;
+        x[i] = v;
+        try {
+          (void)run::apply_config_json(run::default_config(), trial_config(t, x), "the trial");
+        } catch (const run::ConfigError& e) {
+          throw UsageError("--param: " + spec.params[i].name + "=" + number_text(v) +
+                           " is not a value the planner takes: " + e.what());
+        }
+      }
+    }
+  }
+  BenchSpec b;
+  b.policies = {spec.policy};
+  b.traffic = spec.traffic;
+  b.seeds = spec.seeds;
+  b.minutes = spec.minutes;
+  b.map = spec.map;
+  b.config = spec.config;
+  b.planners = spec.planners;
+  b.jobs = spec.jobs;
+  check_bench_spec(b);
+}
+
+TuneOutcome run_tune(const TuneSpec& spec, const std::atomic<bool>* stop,
+                     const std::function<void(const TuneProgress&)>& progress) {
+  const auto started = std::chrono::steady_clock::now();
+  check_tune_spec(spec);
+  Target target = resolve_target(spec);
+  const json manifest = manifest_of(spec, target);
+  const fs::path manifest_file = spec.out / kTuneManifestFile;
+  const fs::path trials_file = spec.out / kTuneTrialsFile;
+  Search search(spec, target, stop, progress);
+  if (spec.resume && fs::exists(manifest_file)) {
+    const json before = run::read_json_file(manifest_file);
+    if (before != manifest) {
+      throw UsageError("--resume: " + manifest_file.string() +
+                       " is another search (its policy, parameters, objective, constraints, "
+                       "seeds, map or starting config differ); start a new --out");
+    }
+    search.trials = read_trials(trials_file, spec);
+    // A line cut off by a kill is dropped: the file is written again from the trials.
+    std::string text;
+    for (const auto& t : search.trials) text += trial_json(t, spec).dump() + "\n";
+    base::write_file_atomic(trials_file, text);
+  } else {
+    if (fs::exists(manifest_file) || fs::exists(trials_file)) {
+      throw UsageError("--out: " + spec.out.string() +
+                       " holds a search already; --resume goes on with it, or choose another "
+                       "--out");
+    }
+    if (!spec.force && fs::exists(spec.out) && !fs::is_empty(spec.out)) {
+      throw UsageError("--out: " + spec.out.string() +
+                       " is not empty and holds no search; choose another --out (or --force)");
+    }
+    fs::create_directories(spec.out);
+    base::write_file_atomic(manifest_file, manifest.dump(2) + "\n");
+    base::write_file_atomic(trials_file, "");
+  }
+
+  TuneOutcome o;
+  const std::vector<double> start = start_point(spec, target);
+  if (search.evaluate(start) != nullptr && !search.interrupted) {
+    o.stop_reason = optimise(search, spec, start);
+  } else {
+    o.stop_reason = search.interrupted ? "interrupted" : "the budget";
+  }
+  o.interrupted = search.interrupted;
+  o.trials = search.trials;
+  o.best = search.best();
+  if (o.best) {
+    const TuneTrial& b = o.trials[static_cast<std::size_t>(*o.best - 1)];
+    const std::vector<double> x = search.params_vector(b);
+    if (target.entry->kind == planners::PlannerKind::builtin) {
+      // Only the keys searched: a file to give --config (over the starting config, if any).
+      json overrides = json::object();
+      for (std::size_t i = 0; i < x.size(); ++i) {
+        overrides[json::json_pointer(target.places[i].key)] = x[i];
+      }
+      o.best_config = overrides;
+    } else {
+      o.best_config = json::object();
+      for (const auto& [k, v] : b.params) o.best_config[k] = v;
+      if (target.entry->kind == planners::PlannerKind::program) {
+        o.best_command = program_command(target, x);
+      }
+    }
+    base::write_file_atomic(spec.out / kTuneBestFile, o.best_config.dump(2) + "\n");
+    if (!o.interrupted && !spec.validation_seeds.empty()) {
+      bool interrupted = false;
+      o.validation = run_validation(spec, target, start, x, stop, interrupted);
+      o.interrupted = interrupted;
+      if (!o.validation.is_null()) o.validation_verdict = verdict_of(spec, o.validation);
+    }
+  }
+  o.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+  o.summary_markdown = summary_of(spec, o);
+  base::write_file_atomic(spec.out / kTuneSummaryFile, o.summary_markdown);
+  base::write_file_atomic(spec.out / kTunePageFile, tune_page(spec, o));
+  return o;
+}
+
+}  // namespace overtake::batch

@@ -1,0 +1,149 @@
+// The page of a search (tune.html): the objective of each trial with the best so far drawn
+// over it, the trials that broke a constraint marked apart, every trial as a row, and the
+// validation. One file, no script: it opens from disk and prints as it shows.
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "overtake/base/text.hpp"
+#include "overtake/batch/tune.hpp"
+#include "overtake/eval/compare.hpp"
+
+namespace overtake::batch {
+namespace {
+
+using base::fixed_text;
+
+std::string html(std::string_view text) {
+  std::string out;
+  for (const char c : text) {
+    switch (c) {
+      case '<':
+        out += "&lt;";
+        break;
+      case '>':
+        out += "&gt;";
+        break;
+      case '&':
+        out += "&amp;";
+        break;
+      case '"':
+        out += "&quot;";
+        break;
+      default:
+        out += c;
+    }
+  }
+  return out;
+}
+
+std::string num(double v) {
+  return fixed_text(v, 1);
+}
+
+// The chart: trials along x, the objective along y; feasible trials as dots, the best so far
+// as a step line, the others as crosses under the axis.
+std::string chart(const TuneSpec& spec, const TuneOutcome& o) {
+  constexpr double kW = 760, kH = 280, kLeft = 60, kRight = 20, kTop = 20, kBottom = 50;
+  const bool higher = tune_figure_higher_is_better(spec.objective);
+  double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+  for (const auto& t : o.trials) {
+    if (!t.feasible) continue;
+    lo = std::min(lo, t.objective);
+    hi = std::max(hi, t.objective);
+  }
+  if (!std::isfinite(lo)) {
+    lo = 0;
+    hi = 1;
+  }
+  if (hi - lo < 1e-9) {
+    lo -= 0.5;
+    hi += 0.5;
+  }
+  const double pad = (hi - lo) * 0.08;
+  lo -= pad;
+  hi += pad;
+  const double n = std::max<double>(1.0, static_cast<double>(o.trials.size()));
+  const auto sx = [&](double trial) {
+    return kLeft + (kW - kLeft - kRight) * (n <= 1 ? 0.5 : (trial - 1) / (n - 1));
+  };
+  const auto sy = [&](double v) { return kTop + (kH - kTop - kBottom) * (hi - v) / (hi - lo); };
+  std::string s = "<svg xmlns='http://www.w3.org/2000/svg' width='" + num(kW) + "' height='" +
+                  num(kH) + "' role='img' aria-label='objective per trial'>\n";
+  s += "<rect x='" + num(kLeft) + "' y='" + num(kTop) + "' width='" + num(kW - kLeft - kRight) +
+       "' height='" + num(kH - kTop - kBottom) + "' fill='#fafafa' stroke='#ccc'/>\n";
+  for (int k = 0; k <= 4; ++k) {
+    const double v = lo + (hi - lo) * k / 4.0;
+    s += "<text x='" + num(kLeft - 6) + "' y='" + num(sy(v) + 4) +
+         "' text-anchor='end' font-size='11'>" + fixed_text(v, 2) + "</text>\n";
+  }
+  s += "<text x='" + num(kLeft) + "' y='" + num(kH - 8) + "' font-size='12'>trial 1 … " +
+       std::to_string(o.trials.size()) + " · " + html(spec.objective) +
+       " (dots: trials that met the constraints; line: best so far; red crosses: broke "
+       "one)</text>\n";
+  std::string line;
+  std::optional<double> best;
+  for (const auto& t : o.trials) {
+    const double x = sx(t.number);
+    if (t.feasible) {
+      if (!best || (higher ? t.objective > *best : t.objective < *best)) best = t.objective;
+      s += "<circle cx='" + num(x) + "' cy='" + num(sy(t.objective)) +
+           "' r='3.5' fill='#1f77b4'><title>trial " + std::to_string(t.number) + ": " +
+           fixed_text(t.objective, 3) + "</title></circle>\n";
+    } else {
+      const double y = kH - kBottom + 12;
+      s += "<path d='M" + num(x - 4) + " " + num(y - 4) +
+           "l8 8m0 -8l-8 8' stroke='#d62728' "
+           "stroke-width='2'><title>trial " +
+           std::to_string(t.number) + ": " +
+           html(t.violations.empty() ? "" : t.violations.front()) + "</title></path>\n";
+    }
+    if (best) line += (line.empty() ? "M" : " L") + num(x) + " " + num(sy(*best));
+  }
+  if (!line.empty()) {
+    s += "<path d='" + line + "' fill='none' stroke='#2ca02c' stroke-width='2'/>\n";
+  }
+  return s + "</svg>\n";
+}
+
+}  // namespace
+
+std::string tune_page(const TuneSpec& spec, const TuneOutcome& o) {
+  std::string s =
+      "<!doctype html>\n<html lang='en'><head><meta charset='utf-8'><title>overtake tune: " +
+      html(spec.policy) +
+      "</title>\n<style>body{font:14px system-ui,sans-serif;margin:2em;max-width:60em}"
+      "table{border-collapse:collapse}td,th{border:1px solid #ddd;padding:2px 8px;"
+      "text-align:right}tr.best{background:#e8f5e9}tr.broke{color:#a00}"
+      "pre{background:#f6f6f6;padding:1em;overflow:auto}</style></head><body>\n";
+  s += "<h1>overtake tune: " + html(spec.policy) + "</h1>\n<p>" + std::to_string(o.trials.size()) +
+       " trials of " + std::to_string(spec.trials) + " (" + html(spec.algorithm) +
+       "), each a bench of " + std::to_string(spec.seeds.size()) + " training seeds × " +
+       fixed_text(spec.minutes, 1) + " min; ended by " + html(o.stop_reason) + ".</p>\n";
+  s += chart(spec, o);
+  if (!o.validation.is_null()) {
+    s += "<h2>Validation on held-out seeds</h2>\n<p><b>" + html(o.validation_verdict) +
+         "</b></p>\n<pre>" + html(eval::compare_text(o.validation)) + "</pre>\n";
+  }
+  s += "<h2>Trials</h2>\n<table><tr><th>trial</th>";
+  for (const auto& p : spec.params) s += "<th>" + html(p.name) + "</th>";
+  s += "<th>" + html(spec.objective) + "</th><th>constraints</th></tr>\n";
+  for (const auto& t : o.trials) {
+    const bool is_best = o.best && *o.best == t.number;
+    s += std::string("<tr") +
+         (is_best       ? " class='best'"
+          : !t.feasible ? " class='broke'"
+                        : "") +
+         "><td>" + std::to_string(t.number) + "</td>";
+    for (const auto& p : spec.params) s += "<td>" + fixed_text(t.params.at(p.name), 4) + "</td>";
+    s += "<td>" + (std::isfinite(t.objective) ? fixed_text(t.objective, 3) : std::string("-")) +
+         "</td><td>";
+    std::string v;
+    for (const auto& w : t.violations) v += (v.empty() ? "" : "; ") + w;
+    s += html(t.feasible ? std::string("met") : v) + "</td></tr>\n";
+  }
+  return s + "</table>\n</body></html>\n";
+}
+
+}  // namespace overtake::batch
