@@ -20,6 +20,8 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdio>
+#include <cstdlib>
+#include <cstring>
 #include <exception>
 #include <new>
 #include <vector>
@@ -189,6 +191,7 @@ struct overtake_plugin_handle {
   int from_lane = -1;  // during a lane change: the lane it started from
   int cooldown = 0;
   double accel = 0.0;
+  double cruise_mps = kCruiseMps;  // the parameter "cruise_mps" (`overtake tune`) may change it
   // Speed and acceleration planned for each point of the last path sent.
   std::vector<double> sent_v, sent_a, kept_v, kept_a;
 
@@ -284,7 +287,7 @@ struct overtake_plugin_handle {
     const double horizon_t = static_cast<double>(keep) * dt;
 
     // The car ahead: in the target lane; in a lane the ego is still leaving, only when close.
-    double lead_gap = 1e9, lead_speed = kCruiseMps;
+    double lead_gap = 1e9, lead_speed = cruise_mps;
     const double close_m = kStandstillGapM + kHeadwayS * v;
     for (const Car& car : cars) {
       const double gap = road.ahead(ref_s, car.s + car.speed * horizon_t);
@@ -299,7 +302,7 @@ struct overtake_plugin_handle {
 
     // A lane change when held up, settled in the lane and clear alongside.
     const bool settled = std::abs(in.d - lane_center(lane, lane_width)) < 0.4;
-    if (settled && cooldown == 0 && lead_gap < 80.0 && lead_speed < kCruiseMps - kHeldUpMps) {
+    if (settled && cooldown == 0 && lead_gap < 80.0 && lead_speed < cruise_mps - kHeldUpMps) {
       int best = -1;
       for (int l : {lane - 1, lane + 1}) {
         if (l < 0 || l >= lanes) continue;
@@ -330,7 +333,7 @@ struct overtake_plugin_handle {
     }
 
     // Speed wanted: cruise, or the leader's speed corrected for the gap.
-    double target = kCruiseMps;
+    double target = cruise_mps;
     if (lead_gap < 1e8) {
       const double desired = kStandstillGapM + kHeadwayS * v;
       target = std::min(target, lead_speed + kGapGainPerS * (lead_gap - desired));
@@ -403,6 +406,21 @@ namespace {
 const overtake_plugin_info kInfo = {
     "keep_lane",
     "follows its lane at 49 mph with a time gap to the car ahead; overtakes when held up"};
+
+// The number given for `name` in a flat JSON object of numbers ({"cruise_mps":21.5}), as
+// overtake passes parameters; false when it is not there.
+bool json_number(const char* json, const char* name, double& value) {
+  if (json == nullptr) return false;
+  char key[64];
+  std::snprintf(key, sizeof key, "\"%s\"", name);
+  const char* at = std::strstr(json, key);
+  if (at == nullptr) return false;
+  at = std::strchr(at + std::strlen(key), ':');
+  if (at == nullptr) return false;
+  char* end = nullptr;
+  value = std::strtod(at + 1, &end);
+  return end != at + 1;
+}
 }  // namespace
 
 int overtake_plugin_abi_version(void) {
@@ -434,6 +452,13 @@ overtake_plugin_handle* overtake_plugin_create(const overtake_plugin_setup* setu
   h->lanes = setup->lane_count;
   h->lane_width = setup->lane_width;
   h->dt = setup->step_time;
+  if (json_number(setup->config_json, "cruise_mps", h->cruise_mps) &&
+      !(h->cruise_mps > 0.0 && h->cruise_mps <= kCruiseMps)) {
+    std::snprintf(error, error_size, "keep_lane: cruise_mps must be in (0, %g] (got %g)",
+                  kCruiseMps, h->cruise_mps);
+    delete h;
+    return nullptr;
+  }
   return h;
 }
 

@@ -161,8 +161,10 @@ typedef struct overtake_plugin_setup {
   double lane_width; /* m */
   /* s: the simulator's step, the time between two consecutive path points (0.02). */
   double step_time;
-  /* A JSON text the user passed for this plugin, or NULL when none (reserved: this version
-   * of overtake always passes NULL). */
+  /* Parameters for this plugin as a JSON object of numbers by name, e.g.
+   * {"cruise_mps":21.5}, or NULL when none: `overtake tune` passes each trial's values here
+   * (its --param names); drive and bench pass NULL. A plugin reads the names it knows and
+   * keeps its defaults for the rest. */
   const char* config_json;
 } overtake_plugin_setup;
 

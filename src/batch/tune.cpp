@@ -164,21 +164,17 @@ Target resolve_target(const TuneSpec& spec) {
       }
       break;
     case PlannerKind::python:
+    case PlannerKind::plugin:
       if (!t.entry->with_keywords) {
-        throw UsageError("--param: the Python planner " + spec.policy +
-                         " cannot be given keyword arguments");
+        throw UsageError("--param: " + t.entry->label() + " cannot be given parameters");
       }
       for (const auto& p : spec.params) {
-        if (!identifier(p.name)) {
+        if (t.entry->kind == PlannerKind::python && !identifier(p.name)) {
           throw UsageError("--param: '" + p.name + "' cannot be a Python keyword argument");
         }
         t.places.push_back({Placement::Kind::keyword, p.name});
       }
       break;
-    case PlannerKind::plugin:
-      throw UsageError("--param: the plugin " + spec.policy +
-                       " takes no parameters from overtake (tune searches built-in policies, "
-                       "planner programs and Python planners)");
   }
   return t;
 }
@@ -224,7 +220,8 @@ std::shared_ptr<const planners::PlannerCatalog> trial_catalog(const Target& t, c
     std::map<std::string, double> keywords;
     for (std::size_t i = 0; i < x.size(); ++i) keywords[t.places[i].key] = x[i];
     e.make = e.with_keywords(keywords);
-    catalog->add(std::move(e), "--policy-py");
+    const char* flag = e.kind == PlannerKind::plugin ? "--policy-lib" : "--policy-py";
+    catalog->add(std::move(e), flag);
   }
   return catalog;
 }
@@ -793,7 +790,8 @@ void check_tune_spec(const TuneSpec& spec) {
                        number_text(p.high) + "; widen the range or give @START");
     }
   }
-  if (t.entry->kind == planners::PlannerKind::python) {
+  if (t.entry->kind == planners::PlannerKind::python ||
+      t.entry->kind == planners::PlannerKind::plugin) {
     std::map<std::string, double> keywords;
     for (std::size_t i = 0; i < start.size(); ++i) keywords[spec.params[i].name] = start[i];
     try {

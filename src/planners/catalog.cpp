@@ -291,6 +291,12 @@ std::shared_ptr<const PlannerCatalog> catalog_from_flags(const PlannerFlags& f) 
     e.source = path;
     e.reply_timeout_s = f.reply_timeout_s;
     e.make = std::move(loaded.make);
+    e.with_keywords =
+        [with_config = std::move(loaded.with_config)](const std::map<std::string, double>& values) {
+          nlohmann::json j = nlohmann::json::object();
+          for (const auto& [key, value] : values) j[key] = value;
+          return with_config(j.dump());
+        };
     catalog->add(std::move(e), "--policy-lib");
   }
   for (const auto& text : f.python) {

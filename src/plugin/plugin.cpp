@@ -244,7 +244,8 @@ class FailedPolicy final : public planner::Policy {
 
 std::unique_ptr<planner::Policy> make_policy(const std::shared_ptr<const Library>& lib,
                                              const core::ReferenceLine& line,
-                                             const planner::PlannerParams& params) {
+                                             const planner::PlannerParams& params,
+                                             const std::string* config_json) {
   std::vector<overtake_waypoint> waypoints;
   for (const core::Waypoint& w : line.map().waypoints) {
     waypoints.push_back({w.x_m, w.y_m, w.s_m, w.dx, w.dy});
@@ -257,7 +258,7 @@ std::unique_ptr<planner::Policy> make_policy(const std::shared_ptr<const Library
   setup.lane_count = params.road.lane_count;
   setup.lane_width = params.road.lane_width_m;
   setup.step_time = params.step_s;
-  setup.config_json = nullptr;
+  setup.config_json = config_json != nullptr ? config_json->c_str() : nullptr;
   std::array<char, kCreateErrorSize> error{};  // empty text, as the header promises
   overtake_plugin_handle* handle = nullptr;
   try {
@@ -322,7 +323,13 @@ LoadedPlugin load_plugin(const std::filesystem::path& path) {
   lib->label = "plugin " + loaded.name + " (" + file + ")";
   std::shared_ptr<const Library> shared = std::move(lib);
   loaded.make = [shared](const core::ReferenceLine& line, const planner::PlannerParams& params) {
-    return make_policy(shared, line, params);
+    return make_policy(shared, line, params, nullptr);
+  };
+  loaded.with_config = [shared](const std::string& config_json) -> planner::PolicyFactory {
+    return [shared, config_json](const core::ReferenceLine& line,
+                                 const planner::PlannerParams& params) {
+      return make_policy(shared, line, params, &config_json);
+    };
   };
   return loaded;
 }

@@ -144,6 +144,28 @@ TEST(Tune, TunesAProgramsPlaceholder) {
   EXPECT_THAT(o.best_command, ::testing::Not(HasSubstr("{speed}")));
 }
 
+TEST(Tune, TunesAPluginsSetupParameter) {
+  const TempDir dir("overtake-tune");
+  planners::PlannerFlags flags;
+  flags.libs = {OVERTAKE_KEEP_LANE_PLUGIN};
+  TuneSpec spec;
+  spec.policy = "keep_lane";
+  spec.planners = planners::catalog_from_flags(flags);
+  spec.params = {parse_tune_param("cruise_mps=10:21.9@12")};  // given in its config_json
+  spec.constraints = {};
+  spec.seeds = {1};
+  spec.minutes = 0.5;
+  spec.trials = 4;
+  spec.jobs = 1;
+  spec.out = dir.path() / "out";
+  const TuneOutcome o = run_tune(spec, nullptr, nullptr);
+  ASSERT_TRUE(o.best.has_value());
+  const auto& best = o.trials[static_cast<std::size_t>(*o.best - 1)];
+  EXPECT_GT(best.params.at("cruise_mps"), 12.0);
+  EXPECT_GT(best.objective, o.trials.front().objective);
+  EXPECT_EQ(o.best_config, (json{{"cruise_mps", best.params.at("cruise_mps")}}));
+}
+
 TEST(Tune, BadInputIsRefusedBeforeAnyTrialNamingWhatIsWrong) {
   const TempDir dir("overtake-tune");
   const auto refused = [&](TuneSpec spec, const std::string& message) {

@@ -49,8 +49,9 @@ struct PlannerEntry {
   PlannerKind kind = PlannerKind::builtin;
   std::string source;           ///< the plugin's path, module:function, or the command
   planner::PolicyFactory make;  ///< builtin, plugin and python
-  /// A Python planner's factory given keyword arguments (`overtake tune`); throws when the
-  /// callable cannot take them. Empty for the others.
+  /// The factory given parameters by name (`overtake tune`): a Python planner's keyword
+  /// arguments (throws when the callable cannot take them), a plugin's setup config_json.
+  /// Empty for the others.
   std::function<planner::PolicyFactory(const std::map<std::string, double>&)> with_keywords;
   std::optional<ProgramSpec> program;
   /// A plugin's or Python planner's longest plan() call: past it the call is interrupted (a

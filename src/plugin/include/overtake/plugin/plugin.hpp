@@ -4,6 +4,7 @@
 
 #include <cstddef>
 #include <filesystem>
+#include <functional>
 #include <stdexcept>
 #include <string>
 
@@ -26,6 +27,9 @@ struct LoadedPlugin {
   std::string name;
   std::string summary;
   planner::PolicyFactory make;
+  /// The factory of policies created with `config_json` as the setup's config_json (a JSON
+  /// object of numbers by name: `overtake tune`'s parameters).
+  std::function<planner::PolicyFactory(const std::string& config_json)> with_config;
 };
 
 /// Loads the plugin at `path` (RTLD_NODELETE: its code stays mapped for good, for the threads
