@@ -226,6 +226,30 @@ std::shared_ptr<const planners::PlannerCatalog> trial_catalog(const Target& t, c
   return catalog;
 }
 
+// The bench of one point of the search: the planner with parameters `x` on `seeds`, into
+// `out` (a built-in policy's config with the values is written beside it, as `config_file`).
+BenchSpec bench_of(const TuneSpec& spec, const Target& t, const std::vector<double>& x,
+                   const std::vector<std::uint64_t>& seeds, const fs::path& out,
+                   const fs::path& config_file) {
+  fs::create_directories(out);
+  BenchSpec b;
+  b.policies = {spec.policy};
+  b.traffic = spec.traffic;
+  b.seeds = seeds;
+  b.minutes = spec.minutes;
+  b.map = spec.map;
+  b.jobs = spec.jobs;
+  b.out = out;
+  b.planners = trial_catalog(t, spec, x);
+  if (t.entry->kind == planners::PlannerKind::builtin) {
+    base::write_file_atomic(config_file, trial_config(t, x).dump(2) + "\n");
+    b.config = config_file;
+  } else {
+    b.config = spec.config;
+  }
+  return b;
+}
+
 // ---- a trial's figures ------------------------------------------------------------------
 
 json figures_of(const std::vector<json>& rows, const std::string& where) {
@@ -440,22 +464,7 @@ class Search {
     const fs::path dir = spec_.out / kTuneTrialsFolder / trial_folder_name(t.number);
     std::error_code ignored;
     fs::remove_all(dir, ignored);  // a trial cut off by Ctrl-C starts again
-    fs::create_directories(dir);
-    BenchSpec b;
-    b.policies = {spec_.policy};
-    b.traffic = spec_.traffic;
-    b.seeds = spec_.seeds;
-    b.minutes = spec_.minutes;
-    b.map = spec_.map;
-    b.jobs = spec_.jobs;
-    b.out = dir;
-    b.planners = trial_catalog(target_, spec_, x);
-    if (target_.entry->kind == planners::PlannerKind::builtin) {
-      base::write_file_atomic(dir / "config.json", trial_config(target_, x).dump(2) + "\n");
-      b.config = dir / "config.json";
-    } else {
-      b.config = spec_.config;
-    }
+    const BenchSpec b = bench_of(spec_, target_, x, spec_.seeds, dir, dir / "config.json");
     const auto started = std::chrono::steady_clock::now();
     const BenchOutcome o = run_bench(b, stop_, [&](const BenchProgress& p) {
       if (!progress_) return;
@@ -585,23 +594,8 @@ json run_validation(const TuneSpec& spec, const Target& target, const std::vecto
   std::error_code ignored;
   fs::remove_all(dir, ignored);
   for (const auto& [name, x] : {std::pair{"start", start}, std::pair{"best", best}}) {
-    BenchSpec b;
-    b.policies = {spec.policy};
-    b.traffic = spec.traffic;
-    b.seeds = spec.validation_seeds;
-    b.minutes = spec.minutes;
-    b.map = spec.map;
-    b.jobs = spec.jobs;
-    b.out = dir / name;
-    fs::create_directories(b.out);
-    b.planners = trial_catalog(target, spec, x);
-    if (target.entry->kind == planners::PlannerKind::builtin) {
-      base::write_file_atomic(b.out.parent_path() / (std::string(name) + "-config.json"),
-                              trial_config(target, x).dump(2) + "\n");
-      b.config = b.out.parent_path() / (std::string(name) + "-config.json");
-    } else {
-      b.config = spec.config;
-    }
+    const BenchSpec b = bench_of(spec, target, x, spec.validation_seeds, dir / name,
+                                 dir / (std::string(name) + "-config.json"));
     const BenchOutcome o = run_bench(b, stop, nullptr);
     if (o.interrupted) {
       interrupted = true;
