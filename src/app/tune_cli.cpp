@@ -39,13 +39,17 @@ struct TuneFlags {
   planners::PlannerFlags planners;
 };
 
-void show_progress(const TuneProgress& p) {
+// A terminal gets one line drawn over; anything else (a log) a line as each trial starts.
+void show_progress(const TuneProgress& p, int& shown) {
   const std::string best = p.best ? ", best " + base::fixed_text(*p.best, 3) : std::string();
   if (stderr_is_terminal()) {
     std::fprintf(stderr, "\r  tune: trial %d of %d, run %zu/%zu%s   ", p.trial, p.trials,
                  p.runs_done, p.runs_total, best.c_str());
-    std::fflush(stderr);
+  } else if (p.trial > shown) {
+    std::fprintf(stderr, "tune: trial %d of %d%s\n", p.trial, p.trials, best.c_str());
+    shown = p.trial;
   }
+  std::fflush(stderr);
 }
 
 TuneSpec spec_of(TuneSpec spec, const TuneFlags& f) {
@@ -144,7 +148,10 @@ Subcommand register_tune(CLI::App& app) {
             TuneSpec s = spec_of(*spec, *f);
             if (f->hours > 0.0) s.trials = std::min(s.trials, spec->trials);
             const InterruptScope interrupt;
-            const TuneOutcome o = batch::run_tune(s, &InterruptScope::flag(), show_progress);
+            int shown = 0;
+            const TuneOutcome o =
+                batch::run_tune(s, &InterruptScope::flag(),
+                                [&](const TuneProgress& p) { show_progress(p, shown); });
             if (stderr_is_terminal()) std::fprintf(stderr, "\n");
             return report(s, o);
           }};
