@@ -70,6 +70,17 @@ TuneSpec spec_of(TuneSpec spec, const TuneFlags& f) {
     spec.trials = std::max(1, static_cast<int>(f.hours / trial_h));
   }
   spec.planners = planners::catalog_from_flags(f.planners);
+  if (spec.policy.empty()) {
+    // One planner from outside and no --policy: that planner is the one searched.
+    const std::vector<std::string> added = spec.planners->added_names();
+    if (added.size() != 1) {
+      throw UsageError(
+          "--policy: name the planner searched (a built-in policy, or the name of a "
+          "--planner-cmd, --policy-py or --policy-lib); it may be left out only when one "
+          "planner comes from outside");
+    }
+    spec.policy = added.front();
+  }
   return spec;
 }
 
@@ -105,8 +116,8 @@ Subcommand register_tune(CLI::App& app) {
       "seeds, paired, with intervals and verdicts. Writes trials.jsonl, best.json (a config\n"
       "for --config), summary.md and tune.html into --out; Ctrl-C keeps every finished trial.");
   cmd->add_option("--policy", spec->policy,
-                  "The planner searched: a built-in policy, --planner-cmd or --policy-py")
-      ->required();
+                  "The planner searched: a built-in policy, or a --planner-cmd, --policy-py or\n"
+                  "--policy-lib by its name (default: the one planner from outside, when one)");
   cmd->add_option("--param", f->params,
                   "NAME=LOW:HIGH[@START], repeatable: a built-in policy's config key (full path\n"
                   "or a unique ending; starts at its config value), a program's {NAME}\n"

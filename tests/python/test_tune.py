@@ -6,9 +6,10 @@ from conftest import PLANNERS
 
 
 def test_tune_searches_a_python_planners_keyword(binary, tmp_path):
+    # No --policy: the one planner from outside is the one searched.
     out = tmp_path / "tune"
     p = subprocess.run([binary, "tune", "--policy-py", f"kw={PLANNERS / 'keyword_speed.py'}:Planner",
-                        "--policy", "kw", "--param", "speed_mps=8:20@10", "--seeds", "1",
+                        "--param", "speed_mps=8:20@10", "--seeds", "1",
                         "--minutes", "0.5", "--trials", "4", "--jobs", "1", "--constraint", "none",
                         "--out", str(out)], capture_output=True, text=True, timeout=600)
     assert p.returncode == 0, p.stderr
@@ -28,3 +29,15 @@ def test_a_keyword_the_planner_does_not_take_is_refused(binary, tmp_path):
     assert p.returncode == 2
     assert "sped_mps" in p.stderr and "unexpected keyword" in p.stderr
     assert not (tmp_path / "tune" / "trials.jsonl").exists()
+
+
+def test_without_policy_the_planner_searched_must_be_the_only_one_from_outside(binary, tmp_path):
+    two = ["--policy-py", f"kw={PLANNERS / 'keyword_speed.py'}:Planner",
+           "--policy-py", f"other={PLANNERS / 'keyword_speed.py'}:Planner"]
+    for planners in (two, []):
+        p = subprocess.run([binary, "tune", *planners, "--param", "speed_mps=8:20", "--seeds", "1",
+                            "--out", str(tmp_path / "tune")], capture_output=True, text=True,
+                           timeout=600)
+        assert p.returncode == 2, p.stderr
+        assert "--policy: name the planner searched" in p.stderr
+        assert not (tmp_path / "tune" / "trials.jsonl").exists()
