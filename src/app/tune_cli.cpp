@@ -33,7 +33,7 @@ struct TuneFlags {
   std::string traffic = "faithful";
   std::string seeds = "1-8";
   std::string validate_seeds;
-  std::string map;
+  std::vector<std::string> maps;
   std::string config;
   double hours = 0.0;
   planners::PlannerFlags planners;
@@ -61,7 +61,14 @@ TuneSpec spec_of(TuneSpec spec, const TuneFlags& f) {
   spec.traffic = split_list(f.traffic);
   spec.seeds = parse_seed_list(f.seeds);
   if (!f.validate_seeds.empty()) spec.validation_seeds = parse_seed_list(f.validate_seeds);
-  if (!f.map.empty()) spec.map = f.map;
+  for (const auto& m : f.maps) {
+    // "default" is the built-in track (as in hunt's --maps), anything else a map file.
+    if (m == "default") {
+      spec.maps.emplace_back(std::nullopt);
+    } else {
+      spec.maps.emplace_back(m);
+    }
+  }
   if (!f.config.empty()) spec.config = f.config;
   if (f.hours > 0.0) {
     // Simulated hours: each trial costs seeds x traffic profiles x minutes.
@@ -140,7 +147,10 @@ Subcommand register_tune(CLI::App& app) {
   cmd->add_option("--minutes", spec->minutes, "Simulated minutes per run")
       ->check(CLI::Range(0.1, 24.0 * 60.0))
       ->capture_default_str();
-  cmd->add_option("--map", f->map, "A map file (the original's format; default: built-in)");
+  cmd->add_option("--map", f->maps,
+                  "A map file (the original's format; default: the built-in track), repeatable:\n"
+                  "each trial drives every seed on every map, and its figures are over them\n"
+                  "all (`default`: the built-in track)");
   cmd->add_option("--config", f->config, "A config file the search starts from");
   cmd->add_option("--trials", spec->trials, "The budget: trials at most")->capture_default_str();
   cmd->add_option("--hours", f->hours,

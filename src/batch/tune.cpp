@@ -226,18 +226,36 @@ std::shared_ptr<const planners::PlannerCatalog> trial_catalog(const Target& t, c
   return catalog;
 }
 
-// The bench of one point of the search: the planner with parameters `x` on `seeds`, into
-// `out` (a built-in policy's config with the values is written beside it, as `config_file`).
+using MapChoice = std::optional<fs::path>;
+
+// The maps a trial drives: those named, or the built-in track.
+std::vector<MapChoice> maps_of(const TuneSpec& spec) {
+  return spec.maps.empty() ? std::vector<MapChoice>{std::nullopt} : spec.maps;
+}
+
+std::string map_label(const MapChoice& map) {
+  return map ? map->string() : std::string("the built-in track");
+}
+
+// Where the bench of map `k` of `n` goes under a trial's (or a validation's) folder: the
+// folder itself for one map, map-1/, map-2/, ... for several.
+fs::path map_folder(const fs::path& dir, std::size_t k, std::size_t n) {
+  return n == 1 ? dir : dir / ("map-" + std::to_string(k + 1));
+}
+
+// The bench of one point of the search: the planner with parameters `x` on `seeds` and `map`,
+// into `out` (a built-in policy's config with the values is written beside it, as
+// `config_file`).
 BenchSpec bench_of(const TuneSpec& spec, const Target& t, const std::vector<double>& x,
-                   const std::vector<std::uint64_t>& seeds, const fs::path& out,
-                   const fs::path& config_file) {
+                   const std::vector<std::uint64_t>& seeds, const MapChoice& map,
+                   const fs::path& out, const fs::path& config_file) {
   fs::create_directories(out);
   BenchSpec b;
   b.policies = {spec.policy};
   b.traffic = spec.traffic;
   b.seeds = seeds;
   b.minutes = spec.minutes;
-  b.map = spec.map;
+  b.map = map;
   b.jobs = spec.jobs;
   b.out = out;
   b.planners = trial_catalog(t, spec, x);
@@ -343,17 +361,24 @@ json manifest_of(const TuneSpec& spec, const Target& t) {
   for (const auto& c : spec.constraints) {
     constraints.push_back(c.figure + (c.at_most ? "<=" : ">=") + number_text(c.bound));
   }
-  return {{"policy", spec.policy},
-          {"planner", t.entry->describe()},
-          {"params", params},
-          {"objective", spec.objective},
-          {"constraints", constraints},
-          {"traffic", spec.traffic},
-          {"seeds", spec.seeds},
-          {"minutes", spec.minutes},
-          {"map", spec.map ? spec.map->string() : ""},
-          {"start_config", t.base_config},
-          {"algorithm", spec.algorithm}};
+  json m = {{"policy", spec.policy},
+            {"planner", t.entry->describe()},
+            {"params", params},
+            {"objective", spec.objective},
+            {"constraints", constraints},
+            {"traffic", spec.traffic},
+            {"seeds", spec.seeds},
+            {"minutes", spec.minutes},
+            {"map", spec.maps.size() == 1 && spec.maps[0] ? spec.maps[0]->string() : ""},
+            {"start_config", t.base_config},
+            {"algorithm", spec.algorithm}};
+  if (spec.maps.size() > 1) {
+    // Several maps (a search of one map keeps the manifest it always had).
+    m.erase("map");
+    m["maps"] = json::array();
+    for (const MapChoice& map : spec.maps) m["maps"].push_back(map ? map->string() : "");
+  }
+  return m;
 }
 
 std::vector<TuneTrial> read_trials(const fs::path& file, const TuneSpec& spec) {
@@ -464,24 +489,32 @@ class Search {
     const fs::path dir = spec_.out / kTuneTrialsFolder / trial_folder_name(t.number);
     std::error_code ignored;
     fs::remove_all(dir, ignored);  // a trial cut off by Ctrl-C starts again
-    const BenchSpec b = bench_of(spec_, target_, x, spec_.seeds, dir, dir / "config.json");
     const auto started = std::chrono::steady_clock::now();
-    const BenchOutcome o = run_bench(b, stop_, [&](const BenchProgress& p) {
-      if (!progress_) return;
-      TuneProgress tp;
-      tp.trial = t.number;
-      tp.trials = spec_.trials;
-      tp.runs_done = p.done;
-      tp.runs_total = p.total;
-      if (const auto bi = best()) tp.best = trials[static_cast<std::size_t>(*bi - 1)].objective;
-      tp.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
-      progress_(tp);
-    });
-    if (o.interrupted) {
-      interrupted = true;
-      return nullptr;
+    const std::vector<MapChoice> maps = maps_of(spec_);
+    std::vector<json> rows;
+    for (std::size_t k = 0; k < maps.size(); ++k) {
+      const fs::path out = map_folder(dir, k, maps.size());
+      const BenchSpec b =
+          bench_of(spec_, target_, x, spec_.seeds, maps[k], out, dir / "config.json");
+      const BenchOutcome o = run_bench(b, stop_, [&](const BenchProgress& p) {
+        if (!progress_) return;
+        TuneProgress tp;
+        tp.trial = t.number;
+        tp.trials = spec_.trials;
+        tp.runs_done = k * p.total + p.done;
+        tp.runs_total = maps.size() * p.total;
+        if (const auto bi = best()) tp.best = trials[static_cast<std::size_t>(*bi - 1)].objective;
+        tp.wall_s =
+            std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+        progress_(tp);
+      });
+      if (o.interrupted) {
+        interrupted = true;
+        return nullptr;
+      }
+      for (json& r : load_bench_runs(out)) rows.push_back(std::move(r));
     }
-    t.figures = figures_of(load_bench_runs(dir), (dir / kBenchRunsFile).string());
+    t.figures = figures_of(rows, (dir / kBenchRunsFile).string());
     judge(t, spec_);
     append_line(spec_.out / kTuneTrialsFile, trial_json(t, spec_).dump());
     trials.push_back(std::move(t));
@@ -587,14 +620,13 @@ std::string optimise(Search& search, const TuneSpec& spec, const std::vector<dou
 
 // ---- the validation and the reports ---------------------------------------------------------
 
-json run_validation(const TuneSpec& spec, const Target& target, const std::vector<double>& start,
-                    const std::vector<double>& best, const std::atomic<bool>* stop,
-                    bool& interrupted) {
-  const fs::path dir = spec.out / kTuneValidationFolder;
-  std::error_code ignored;
-  fs::remove_all(dir, ignored);
+// The validation of one map: the start and the best benched on the held-out seeds into
+// `dir`/start and `dir`/best, compared (null when interrupted).
+json validate_on(const TuneSpec& spec, const Target& target, const std::vector<double>& start,
+                 const std::vector<double>& best, const MapChoice& map, const fs::path& dir,
+                 const std::atomic<bool>* stop, bool& interrupted) {
   for (const auto& [name, x] : {std::pair{"start", start}, std::pair{"best", best}}) {
-    const BenchSpec b = bench_of(spec, target, x, spec.validation_seeds, dir / name,
+    const BenchSpec b = bench_of(spec, target, x, spec.validation_seeds, map, dir / name,
                                  dir / (std::string(name) + "-config.json"));
     const BenchOutcome o = run_bench(b, stop, nullptr);
     if (o.interrupted) {
@@ -607,6 +639,28 @@ json run_validation(const TuneSpec& spec, const Target& target, const std::vecto
 
 // Whether the training gain holds on the held-out seeds, from the validation's verdict on the
 // objective (a metric of the evaluation; a count is judged by its rate per 100 miles).
+std::string verdict_of(const TuneSpec& spec, const json& validation);
+
+// The validation on every map, in validation/ (validation/map-K/ for several maps).
+std::vector<TuneValidation> run_validation(const TuneSpec& spec, const Target& target,
+                                           const std::vector<double>& start,
+                                           const std::vector<double>& best,
+                                           const std::atomic<bool>* stop, bool& interrupted) {
+  const fs::path dir = spec.out / kTuneValidationFolder;
+  std::error_code ignored;
+  fs::remove_all(dir, ignored);
+  const std::vector<MapChoice> maps = maps_of(spec);
+  std::vector<TuneValidation> out;
+  for (std::size_t k = 0; k < maps.size(); ++k) {
+    json c = validate_on(spec, target, start, best, maps[k], map_folder(dir, k, maps.size()), stop,
+                         interrupted);
+    if (interrupted) return {};
+    std::string verdict = verdict_of(spec, c);
+    out.push_back({map_label(maps[k]), std::move(c), std::move(verdict)});
+  }
+  return out;
+}
+
 std::string verdict_of(const TuneSpec& spec, const json& validation) {
   std::string metric = spec.objective;
   if (!eval::parse_metric(metric)) metric += "_per_100mi";
@@ -648,8 +702,10 @@ std::string summary_of(const TuneSpec& spec, const TuneOutcome& o) {
   }
   s += "; constraints: " + (cs.empty() ? std::string("none") : cs) + ".\n";
   s += "Training: " + std::to_string(spec.seeds.size()) + " seeds x " + number_text(spec.minutes) +
-       " min per traffic profile; " + std::to_string(o.trials.size()) + " trials (" +
-       spec.algorithm + "); ended by " + o.stop_reason + ".\n\n";
+       " min per traffic profile" +
+       (spec.maps.size() > 1 ? " on each of " + std::to_string(spec.maps.size()) + " maps" : "") +
+       "; " + std::to_string(o.trials.size()) + " trials (" + spec.algorithm + "); ended by " +
+       o.stop_reason + ".\n\n";
   s += "| trial |";
   for (const auto& p : spec.params) s += " " + p.name + " |";
   s += " " + spec.objective + " | feasible |\n|---:|";
@@ -666,10 +722,12 @@ std::string summary_of(const TuneSpec& spec, const TuneOutcome& o) {
     row(o.trials[static_cast<std::size_t>(*o.best - 1)], std::to_string(*o.best) + " (best)");
   }
   if (!o.best) s += "\nNo trial met the constraints.\n";
-  if (!o.validation.is_null()) {
-    s += "\n## Validation on held-out seeds\n\n" + o.validation_verdict + "\n\n```\n" +
-         eval::compare_text(o.validation) + "```\n";
-  } else if (o.best && spec.validation_seeds.empty()) {
+  if (!o.validations.empty()) s += "\n## Validation on held-out seeds\n";
+  for (const TuneValidation& v : o.validations) {
+    if (o.validations.size() > 1) s += "\n### On " + v.map + "\n";
+    s += "\n" + v.verdict + "\n\n```\n" + eval::compare_text(v.comparison) + "```\n";
+  }
+  if (o.validations.empty() && o.best && spec.validation_seeds.empty()) {
     s += "\nNo validation (no --validate-seeds).\n";
   }
   if (o.interrupted) s += "\nInterrupted: the trials above are those that finished.\n";
@@ -809,16 +867,18 @@ void check_tune_spec(const TuneSpec& spec) {
       }
     }
   }
-  BenchSpec b;
-  b.policies = {spec.policy};
-  b.traffic = spec.traffic;
-  b.seeds = spec.seeds;
-  b.minutes = spec.minutes;
-  b.map = spec.map;
-  b.config = spec.config;
-  b.planners = spec.planners;
-  b.jobs = spec.jobs;
-  check_bench_spec(b);
+  for (const MapChoice& map : maps_of(spec)) {
+    BenchSpec b;
+    b.policies = {spec.policy};
+    b.traffic = spec.traffic;
+    b.seeds = spec.seeds;
+    b.minutes = spec.minutes;
+    b.map = map;
+    b.config = spec.config;
+    b.planners = spec.planners;
+    b.jobs = spec.jobs;
+    check_bench_spec(b);
+  }
 }
 
 TuneOutcome run_tune(const TuneSpec& spec, const std::atomic<bool>* stop,
@@ -835,7 +895,7 @@ TuneOutcome run_tune(const TuneSpec& spec, const std::atomic<bool>* stop,
     if (before != manifest) {
       throw UsageError("--resume: " + manifest_file.string() +
                        " is another search (its policy, parameters, objective, constraints, "
-                       "seeds, map or starting config differ); start a new --out");
+                       "seeds, maps or starting config differ); start a new --out");
     }
     search.trials = read_trials(trials_file, spec);
     // A line cut off by a kill is dropped: the file is written again from the trials.
@@ -887,9 +947,8 @@ TuneOutcome run_tune(const TuneSpec& spec, const std::atomic<bool>* stop,
     base::write_file_atomic(spec.out / kTuneBestFile, o.best_config.dump(2) + "\n");
     if (!o.interrupted && !spec.validation_seeds.empty()) {
       bool interrupted = false;
-      o.validation = run_validation(spec, target, start, x, stop, interrupted);
+      o.validations = run_validation(spec, target, start, x, stop, interrupted);
       o.interrupted = interrupted;
-      if (!o.validation.is_null()) o.validation_verdict = verdict_of(spec, o.validation);
     }
   }
   o.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();

@@ -120,11 +120,15 @@ std::string tune_page(const TuneSpec& spec, const TuneOutcome& o) {
   s += "<h1>overtake tune: " + html(spec.policy) + "</h1>\n<p>" + std::to_string(o.trials.size()) +
        " trials of " + std::to_string(spec.trials) + " (" + html(spec.algorithm) +
        "), each a bench of " + std::to_string(spec.seeds.size()) + " training seeds × " +
-       fixed_text(spec.minutes, 1) + " min; ended by " + html(o.stop_reason) + ".</p>\n";
+       fixed_text(spec.minutes, 1) + " min" +
+       (spec.maps.size() > 1 ? " on each of " + std::to_string(spec.maps.size()) + " maps" : "") +
+       "; ended by " + html(o.stop_reason) + ".</p>\n";
   s += chart(spec, o);
-  if (!o.validation.is_null()) {
-    s += "<h2>Validation on held-out seeds</h2>\n<p><b>" + html(o.validation_verdict) +
-         "</b></p>\n<pre>" + html(eval::compare_text(o.validation)) + "</pre>\n";
+  if (!o.validations.empty()) s += "<h2>Validation on held-out seeds</h2>\n";
+  for (const TuneValidation& v : o.validations) {
+    if (o.validations.size() > 1) s += "<h3>On " + html(v.map) + "</h3>\n";
+    s += "<p><b>" + html(v.verdict) + "</b></p>\n<pre>" + html(eval::compare_text(v.comparison)) +
+         "</pre>\n";
   }
   s += "<h2>Trials</h2>\n<table><tr><th>trial</th>";
   for (const auto& p : spec.params) s += "<th>" + html(p.name) + "</th>";

@@ -77,17 +77,51 @@ TEST(Tune, FindsBetterParametersThanItsStartAndValidatesThemOnHeldOutSeeds) {
   const run::Config tuned = run::apply_config_json(run::default_config(), best_file, "best.json");
   EXPECT_EQ(tuned.planner.reference.behaviour.cruise_speed_mps, best.params.at("cruise_speed_mps"));
   // The validation: the best against the start on the held-out seeds, paired, judged.
-  ASSERT_FALSE(o.validation.is_null());
-  ASSERT_EQ(o.validation["comparisons"].size(), 1U);
-  EXPECT_EQ(o.validation["comparisons"][0]["seeds"], 8);
-  const json& speed = o.validation["comparisons"][0]["figures"]["mean_speed_mph"];
+  ASSERT_EQ(o.validations.size(), 1U);
+  const json& validation = o.validations[0].comparison;
+  ASSERT_EQ(validation["comparisons"].size(), 1U);
+  EXPECT_EQ(validation["comparisons"][0]["seeds"], 8);
+  const json& speed = validation["comparisons"][0]["figures"]["mean_speed_mph"];
   EXPECT_GT(speed["difference"].get<double>(), 0.0);
   EXPECT_EQ(speed["verdict"], "better");
   EXPECT_THAT(o.summary_markdown, HasSubstr("Validation on held-out seeds"));
-  EXPECT_THAT(o.validation_verdict, HasSubstr("holds on the held-out seeds"));
+  EXPECT_THAT(o.validations[0].verdict, HasSubstr("holds on the held-out seeds"));
+  EXPECT_EQ(o.validations[0].map, "the built-in track");
   const std::string page = read_file(spec.out / batch::kTunePageFile);
   EXPECT_THAT(page, HasSubstr("<svg"));
   EXPECT_THAT(page, HasSubstr("Validation on held-out seeds"));
+}
+
+TEST(Tune, SearchesOverSeveralMapsAndValidatesOnEach) {
+  const TempDir dir("overtake-tune");
+  TuneSpec spec = reference_spec(dir.path() / "out");
+  const fs::path track = fs::path(OVERTAKE_SOURCE_DIR) / "data" / "tracks" / "sparse.csv";
+  spec.maps = {std::nullopt, track};
+  spec.minutes = 0.5;
+  spec.trials = 3;
+  spec.validation_seeds = {11, 12, 13, 14, 15, 16, 17, 18};
+  const TuneOutcome o = run_tune(spec, nullptr, nullptr);
+  ASSERT_EQ(o.trials.size(), 3U);
+  // Each trial drives every seed on each map, and its figures are over all of those runs.
+  for (const auto& t : o.trials) EXPECT_EQ(t.figures["runs"], 4.0);
+  const fs::path first = spec.out / batch::kTuneTrialsFolder / "0001";
+  for (const char* m : {"map-1", "map-2"}) {
+    EXPECT_EQ(lines_of(first / m / "runs.jsonl").size(), 2U) << m;
+  }
+  const json on_track = json::parse(lines_of(first / "map-2" / "runs.jsonl").front());
+  EXPECT_EQ(on_track["config"]["map"]["path"], track.string());
+  // The manifest names both maps; the validation is one per map, each paired on its own.
+  const json manifest = json::parse(read_file(spec.out / batch::kTuneManifestFile));
+  EXPECT_EQ(manifest["maps"], json::array({"", track.string()}));
+  ASSERT_EQ(o.validations.size(), 2U);
+  EXPECT_EQ(o.validations[0].map, "the built-in track");
+  EXPECT_EQ(o.validations[1].map, track.string());
+  for (const auto& v : o.validations) {
+    EXPECT_EQ(v.comparison["comparisons"][0]["seeds"], 8);
+    EXPECT_FALSE(v.verdict.empty());
+  }
+  EXPECT_THAT(o.summary_markdown, HasSubstr("### On " + track.string()));
+  EXPECT_THAT(read_file(spec.out / batch::kTunePageFile), HasSubstr("on each of 2 maps"));
 }
 
 TEST(Tune, ResumeGoesOnToTheSameTrialsAsOneSearch) {
@@ -109,7 +143,7 @@ TEST(Tune, ResumeGoesOnToTheSameTrialsAsOneSearch) {
   ASSERT_GE(kept, 2U);
   ASSERT_LE(kept, 3U);
   EXPECT_EQ(lines_of(parts.out / batch::kTuneTrialsFile).size(), kept);
-  EXPECT_TRUE(first.validation.is_null());
+  EXPECT_TRUE(first.validations.empty());
 
   parts.resume = true;
   const TuneOutcome second = run_tune(parts, nullptr, nullptr);

@@ -28,7 +28,8 @@ inline constexpr const char* kTuneTrialsFile = "trials.jsonl";
 inline constexpr const char* kTuneBestFile = "best.json";
 inline constexpr const char* kTuneSummaryFile = "summary.md";
 inline constexpr const char* kTunePageFile = "tune.html";
-/// The benches: trials/NNNN/, validation/start/ and validation/best/.
+/// The benches: trials/NNNN/, validation/start/ and validation/best/ (with several maps, one
+/// folder map-K/ for each inside trials/NNNN/ and validation/).
 inline constexpr const char* kTuneTrialsFolder = "trials";
 inline constexpr const char* kTuneValidationFolder = "validation";
 /// The most trials one search runs (--trials).
@@ -74,7 +75,9 @@ struct TuneSpec {
   std::vector<std::uint64_t> seeds;             ///< training
   std::vector<std::uint64_t> validation_seeds;  ///< held out; empty: no validation
   double minutes = 10.0;
-  std::optional<std::filesystem::path> map;
+  /// The maps each trial drives (every seed on each; nullopt: the built-in track). Empty:
+  /// the built-in track. With several, a trial's figures are over the runs of all of them.
+  std::vector<std::optional<std::filesystem::path>> maps;
   std::optional<std::filesystem::path> config;  ///< the starting config (built-in policies)
   int trials = 40;                              ///< the budget
   std::string algorithm = "sbplx";
@@ -106,19 +109,25 @@ struct TuneProgress {
   double wall_s = 0.0;
 };
 
+/// The validation on one map: the best against the start, paired on the held-out seeds.
+struct TuneValidation {
+  std::string map;            ///< "the built-in track" or the map file
+  nlohmann::json comparison;  ///< compare_bench_folders' result
+  /// In a sentence: whether the best's gain in the objective holds on the held-out seeds
+  /// (its verdict, change and interval), or that it could not be judged.
+  std::string verdict;
+};
+
 /// What a search produced.
 struct TuneOutcome {
   std::vector<TuneTrial> trials;
   std::optional<int> best;  ///< the best feasible trial's number
   bool interrupted = false;
-  std::string stop_reason;    ///< the optimiser's, or "the budget of N trials"
-  nlohmann::json validation;  ///< compare_bench_folders' result (null: none)
-  /// The validation in a sentence: whether the best's gain in the objective holds on the
-  /// held-out seeds (its verdict, change and interval), or that it could not be judged.
-  std::string validation_verdict;
-  std::string summary_markdown;  ///< also written to summary.md
-  nlohmann::json best_config;    ///< also written to best.json
-  std::string best_command;      ///< a program's command with the best parameters
+  std::string stop_reason;                  ///< the optimiser's, or "the budget of N trials"
+  std::vector<TuneValidation> validations;  ///< one per map (empty: none)
+  std::string summary_markdown;             ///< also written to summary.md
+  nlohmann::json best_config;               ///< also written to best.json
+  std::string best_command;                 ///< a program's command with the best parameters
   double wall_s = 0.0;
 };
 
