@@ -137,6 +137,8 @@ void write_report_page(const std::filesystem::path& out, const std::filesystem::
   }
 }
 
+}  // namespace
+
 // A bench as a Slurm array of `tasks`: task I runs shard I with --resume; a shard is finished
 // when it holds every run of its slice and its summary; the shards merge as `bench merge`.
 SlurmArray bench_array(const BenchSpec& spec, int tasks, std::vector<std::string> args,
@@ -194,6 +196,8 @@ SlurmArray bench_array(const BenchSpec& spec, int tasks, std::vector<std::string
   };
   return a;
 }
+
+namespace {
 
 // The flags of `overtake bench` and `overtake bench merge`.
 struct BenchState {

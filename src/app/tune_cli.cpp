@@ -1,7 +1,12 @@
 // The `overtake tune` command line.
 
+#include <algorithm>
+#include <array>
+#include <charconv>
 #include <cstdio>
 #include <iostream>
+#include <set>
+#include <stdexcept>
 
 #include "overtake/app/cli.hpp"
 #include "overtake/app/interrupt.hpp"
@@ -37,6 +42,8 @@ struct TuneFlags {
   std::string config;
   double hours = 0.0;
   planners::PlannerFlags planners;
+  cluster::SlurmOptions slurm;
+  std::set<std::string> planner_options;  ///< the long names of the planner flags
 };
 
 // A terminal gets one line drawn over; anything else (a log) a line as each trial starts.
@@ -50,6 +57,89 @@ void show_progress(const TuneProgress& p, int& shown) {
     shown = p.trial;
   }
   std::fflush(stderr);
+}
+
+std::string joined(const std::vector<std::string>& items) {
+  std::string out;
+  for (const auto& i : items) out += (out.empty() ? "" : ",") + i;
+  return out;
+}
+
+// The flags a bench task runs `b` with: its sweep, its map and config, and its planner as the
+// trial gives it (a program's command with the values in it), with the planner flags given to
+// tune (timeouts, network, ...).
+std::vector<std::string> bench_task_flags(const batch::BenchSpec& b,
+                                          const std::vector<std::string>& planner_flags) {
+  namespace fs = std::filesystem;
+  std::vector<std::string> seeds;
+  for (const std::uint64_t s : b.seeds) seeds.push_back(std::to_string(s));
+  std::array<char, 32> minutes{};
+  const auto written = std::to_chars(minutes.data(), minutes.data() + minutes.size(), b.minutes);
+  std::vector<std::string> args = {"--policies=" + joined(b.policies), "--seeds=" + joined(seeds),
+                                   "--traffic=" + joined(b.traffic),
+                                   "--minutes=" + std::string(minutes.data(), written.ptr)};
+  if (b.map) args.push_back("--map=" + fs::absolute(*b.map).string());
+  if (b.config) args.push_back("--config=" + fs::absolute(*b.config).string());
+  for (const std::string& name : b.planners->added_names()) {
+    const planners::PlannerEntry& e = *b.planners->find(name);
+    args.push_back("--planner-cmd=" + e.program->command);
+    args.push_back("--planner-name=" + e.name);
+  }
+  args.insert(args.end(), planner_flags.begin(), planner_flags.end());
+  return args;
+}
+
+// `tune --slurm TASKS`: each bench of the search as a Slurm array, merged into its folder. A
+// bench already merged (a trial cut off after its merge) is not run again; one whose array
+// was submitted before (a trial cut off by Ctrl-C) is followed again, not submitted again.
+std::function<bool(const batch::BenchSpec&, const std::atomic<bool>*)> slurm_runner(
+    const cluster::SlurmOptions& options, std::vector<std::string> planner_flags) {
+  return [options, planner_flags](const batch::BenchSpec& b, const std::atomic<bool>* stop) {
+    namespace fs = std::filesystem;
+    if (fs::exists(b.out / batch::kBenchRunsFile) &&
+        fs::exists(b.out / batch::kBenchSummaryJsonFile))
+      return false;
+    std::fprintf(stderr, "tune: the bench %s as a Slurm array of %d tasks\n", b.out.c_str(),
+                 options.tasks);
+    batch::BenchSpec spec = b;
+    spec.resume = fs::exists(cluster::slurm_dir(b.out) / "state.json");
+    cluster::SlurmArray array =
+        bench_array(spec, options.tasks, bench_task_flags(b, planner_flags), std::nullopt, true);
+    const int status = cluster::run_slurm_array(array, options, stop);
+    if (status == kExitInterrupted) return true;
+    if (status != kExitOk) {
+      throw std::runtime_error("the bench " + b.out.string() + " did not finish on Slurm (exit " +
+                               std::to_string(status) + "); its tasks' logs are in " +
+                               cluster::slurm_dir(b.out).string() +
+                               ", and --resume takes the search up again");
+    }
+    return false;
+  };
+}
+
+// `tune --slurm`: what the tasks could not do is refused before anything is submitted.
+std::function<bool(const batch::BenchSpec&, const std::atomic<bool>*)> slurm_for(
+    const CLI::App& cmd, const TuneSpec& spec, const TuneFlags& f) {
+  const planners::PlannerEntry& e = spec.planners->require(spec.policy);
+  if (e.kind == planners::PlannerKind::python || e.kind == planners::PlannerKind::plugin) {
+    throw UsageError("--slurm: the parameters of " + e.label() +
+                     " reach it in this process only; run this search here (without --slurm)");
+  }
+  // Each bench (a trial's on one map, a validation's) shares its runs out among the tasks.
+  std::size_t seeds = spec.seeds.size();
+  if (!spec.validation_seeds.empty()) seeds = std::min(seeds, spec.validation_seeds.size());
+  cluster::validate_slurm_options(f.slurm, seeds * spec.traffic.size());
+  cluster::check_programs_for_slurm(*spec.planners, f.planners.network);
+  // The planner flags as given, but the programs' commands and names: each trial has its own.
+  std::set<std::string> leave_out;
+  for (const CLI::Option* o : cmd.get_options()) {
+    if (o->get_lnames().empty()) continue;
+    const std::string& name = o->get_lnames().front();
+    if (f.planner_options.count(name) == 0 || name == "planner-cmd" || name == "planner-name" ||
+        name == "policy-py" || name == "policy-lib")
+      leave_out.insert(name);
+  }
+  return slurm_runner(f.slurm, task_arguments(cmd, leave_out));
 }
 
 TuneSpec spec_of(TuneSpec spec, const TuneFlags& f) {
@@ -163,10 +253,21 @@ Subcommand register_tune(CLI::App& app) {
   cmd->add_option("--out", spec->out, "The output folder")->capture_default_str();
   cmd->add_flag("--resume", spec->resume, "Go on with the search in --out");
   cmd->add_flag("--force", spec->force, "Write into an --out that holds other files");
+  std::set<std::string> before;
+  for (const CLI::Option* o : cmd->get_options()) {
+    if (!o->get_lnames().empty()) before.insert(o->get_lnames().front());
+  }
   add_planner_flags(*cmd, f->planners, planners::PlannerFlagSet::all);
-  return {cmd, [spec, f] {
+  for (const CLI::Option* o : cmd->get_options()) {
+    if (!o->get_lnames().empty() && before.count(o->get_lnames().front()) == 0) {
+      f->planner_options.insert(o->get_lnames().front());
+    }
+  }
+  add_slurm_flags(*cmd, f->slurm, "tune");
+  return {cmd, [spec, f, cmd] {
             batch::check_jobs(spec->jobs);
             TuneSpec s = spec_of(*spec, *f);
+            if (slurm_requested(*cmd)) s.run_bench_elsewhere = slurm_for(*cmd, s, *f);
             if (f->hours > 0.0) s.trials = std::min(s.trials, spec->trials);
             const InterruptScope interrupt;
             int shown = 0;

@@ -268,6 +268,13 @@ BenchSpec bench_of(const TuneSpec& spec, const Target& t, const std::vector<doub
   return b;
 }
 
+// Runs bench `b` here, or where the spec says (Slurm); true when it was interrupted.
+bool run_bench_of(const TuneSpec& spec, const BenchSpec& b, const std::atomic<bool>* stop,
+                  const std::function<void(const BenchProgress&)>& progress) {
+  if (spec.run_bench_elsewhere) return spec.run_bench_elsewhere(b, stop);
+  return run_bench(b, stop, progress).interrupted;
+}
+
 // ---- a trial's figures ------------------------------------------------------------------
 
 json figures_of(const std::vector<json>& rows, const std::string& where) {
@@ -488,7 +495,9 @@ class Search {
     for (std::size_t i = 0; i < x.size(); ++i) t.params[spec_.params[i].name] = x[i];
     const fs::path dir = spec_.out / kTuneTrialsFolder / trial_folder_name(t.number);
     std::error_code ignored;
-    fs::remove_all(dir, ignored);  // a trial cut off by Ctrl-C starts again
+    // A trial cut off by Ctrl-C starts again here; on Slurm its array is taken up again (its
+    // tasks may still run, writing into the folder).
+    if (!spec_.run_bench_elsewhere) fs::remove_all(dir, ignored);
     const auto started = std::chrono::steady_clock::now();
     const std::vector<MapChoice> maps = maps_of(spec_);
     std::vector<json> rows;
@@ -496,7 +505,7 @@ class Search {
       const fs::path out = map_folder(dir, k, maps.size());
       const BenchSpec b =
           bench_of(spec_, target_, x, spec_.seeds, maps[k], out, dir / "config.json");
-      const BenchOutcome o = run_bench(b, stop_, [&](const BenchProgress& p) {
+      const bool cut_off = run_bench_of(spec_, b, stop_, [&](const BenchProgress& p) {
         if (!progress_) return;
         TuneProgress tp;
         tp.trial = t.number;
@@ -508,7 +517,7 @@ class Search {
             std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
         progress_(tp);
       });
-      if (o.interrupted) {
+      if (cut_off) {
         interrupted = true;
         return nullptr;
       }
@@ -628,8 +637,7 @@ json validate_on(const TuneSpec& spec, const Target& target, const std::vector<d
   for (const auto& [name, x] : {std::pair{"start", start}, std::pair{"best", best}}) {
     const BenchSpec b = bench_of(spec, target, x, spec.validation_seeds, map, dir / name,
                                  dir / (std::string(name) + "-config.json"));
-    const BenchOutcome o = run_bench(b, stop, nullptr);
-    if (o.interrupted) {
+    if (run_bench_of(spec, b, stop, nullptr)) {
       interrupted = true;
       return nullptr;
     }
@@ -648,7 +656,7 @@ std::vector<TuneValidation> run_validation(const TuneSpec& spec, const Target& t
                                            const std::atomic<bool>* stop, bool& interrupted) {
   const fs::path dir = spec.out / kTuneValidationFolder;
   std::error_code ignored;
-  fs::remove_all(dir, ignored);
+  if (!spec.run_bench_elsewhere) fs::remove_all(dir, ignored);
   const std::vector<MapChoice> maps = maps_of(spec);
   std::vector<TuneValidation> out;
   for (std::size_t k = 0; k < maps.size(); ++k) {

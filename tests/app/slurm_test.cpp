@@ -334,6 +334,65 @@ TEST_F(SlurmCli, TheTasksShardsMergeIntoWhatALocalBenchWrites) {
   EXPECT_THAT(err(), HasSubstr("already holds bench results"));
 }
 
+TEST_F(SlurmCli, ATuneOnSlurmRunsEachBenchAsAnArrayAndFindsWhatALocalTuneFinds) {
+  // A program's placeholder: each trial's tasks run the program with that trial's value.
+  const std::string course =
+      (fs::path(OVERTAKE_BINARY_DIR) / "tests" / "overtake_course_planner").string();
+  const std::vector<std::string> search = {"tune",
+                                           "--planner-cmd",
+                                           course + " --speed-mps {speed}",
+                                           "--planner-name",
+                                           "course",
+                                           "--param",
+                                           "speed=12:20@14",
+                                           "--seeds",
+                                           "1-2",
+                                           "--minutes",
+                                           "0.5",
+                                           "--trials",
+                                           "3",
+                                           "--validate-seeds",
+                                           "5-6",
+                                           "--constraint",
+                                           "none"};
+  ASSERT_EQ(run(with(search, {"--jobs", "2", "--out", path("local").string()})), 0) << err();
+  ASSERT_EQ(
+      run(with(search, {"--slurm", "2", "--slurm-poll", "0.1", "--out", path("cluster").string()})),
+      0)
+      << err();
+  // Three trials and the validation's two benches, each an array of its own.
+  EXPECT_EQ(sbatch_calls(), 5);
+  EXPECT_THAT(err(), HasSubstr("as a Slurm array of 2 tasks"));
+  EXPECT_EQ(read_file(path("cluster") / "trials.jsonl"), read_file(path("local") / "trials.jsonl"));
+  EXPECT_EQ(read_file(path("cluster") / "best.json"), read_file(path("local") / "best.json"));
+  const std::string trial = (path("cluster") / "trials" / "0002").string();
+  EXPECT_TRUE(fs::exists(fs::path(trial) / "shards" / "shard-2" / "runs.jsonl"));
+  // Resumed when done: nothing is submitted again.
+  ASSERT_EQ(run(with(search, {"--slurm", "2", "--slurm-poll", "0.1", "--resume", "--out",
+                              path("cluster").string()})),
+            0)
+      << err();
+  EXPECT_EQ(sbatch_calls(), 5);
+}
+
+TEST_F(SlurmCli, ATuneOfAPythonPlannerIsNotSentToSlurm) {
+  const std::string py =
+      "kw=" + (fs::path(OVERTAKE_SOURCE_DIR) / "tests/python/planners/keyword_speed.py").string() +
+      ":Planner";
+  EXPECT_EQ(run({"tune", "--policy-py", py, "--param", "speed_mps=8:20", "--seeds", "1-2",
+                 "--slurm", "2", "--out", path("py").string()}),
+            kExitUsage);
+  EXPECT_THAT(err(), HasSubstr("--slurm: the parameters of the Python planner kw"));
+  EXPECT_EQ(sbatch_calls(), 0);
+  EXPECT_FALSE(fs::exists(path("py") / "trials.jsonl"));
+  // More tasks than a bench has runs: refused before any trial.
+  EXPECT_EQ(run({"tune", "--policy", "reference", "--param", "hysteresis=0:0.05", "--seeds", "1-2",
+                 "--slurm", "3", "--out", path("many").string()}),
+            kExitUsage);
+  EXPECT_THAT(err(), HasSubstr("--slurm: 3 tasks for 2 runs"));
+  EXPECT_FALSE(fs::exists(path("many") / "trials.jsonl"));
+}
+
 // hunt.json of a folder, its timing left out and the folder named OUT.
 std::string hunt_report(const fs::path& dir) {
   json j = json::parse(read_file(dir / "hunt.json"));

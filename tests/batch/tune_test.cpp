@@ -51,6 +51,21 @@ TuneSpec reference_spec(const fs::path& out) {
   return s;
 }
 
+// One parameter of a planner from outside, four trials of one seed.
+TuneSpec outside_spec(const planners::PlannerFlags& flags, const std::string& policy,
+                      const std::string& param, const fs::path& out) {
+  TuneSpec s;
+  s.policy = policy;
+  s.planners = planners::catalog_from_flags(flags);
+  s.params = {parse_tune_param(param)};
+  s.seeds = {1};
+  s.minutes = 0.5;
+  s.trials = 4;
+  s.jobs = 1;
+  s.out = out;
+  return s;
+}
+
 std::vector<std::string> lines_of(const fs::path& file) {
   std::ifstream in(file);
   std::vector<std::string> lines;
@@ -161,15 +176,7 @@ TEST(Tune, TunesAProgramsPlaceholder) {
   flags.commands = {(fs::path(OVERTAKE_BINARY_DIR) / "tests" / "overtake_course_planner").string() +
                     " --speed-mps {speed}"};
   flags.names = {"course"};
-  TuneSpec spec;
-  spec.policy = "course";
-  spec.planners = planners::catalog_from_flags(flags);
-  spec.params = {parse_tune_param("speed=8:20@10")};
-  spec.seeds = {1};
-  spec.minutes = 0.5;
-  spec.trials = 4;
-  spec.jobs = 1;
-  spec.out = dir.path() / "out";
+  const TuneSpec spec = outside_spec(flags, "course", "speed=8:20@10", dir.path() / "out");
   const TuneOutcome o = run_tune(spec, nullptr, nullptr);
   ASSERT_TRUE(o.best.has_value());
   EXPECT_GT(o.trials[static_cast<std::size_t>(*o.best - 1)].params.at("speed"), 10.0);
@@ -182,16 +189,9 @@ TEST(Tune, TunesAPluginsSetupParameter) {
   const TempDir dir("overtake-tune");
   planners::PlannerFlags flags;
   flags.libs = {OVERTAKE_KEEP_LANE_PLUGIN};
-  TuneSpec spec;
-  spec.policy = "keep_lane";
-  spec.planners = planners::catalog_from_flags(flags);
-  spec.params = {parse_tune_param("cruise_mps=10:21.9@12")};  // given in its config_json
+  // Given in its config_json.
+  TuneSpec spec = outside_spec(flags, "keep_lane", "cruise_mps=10:21.9@12", dir.path() / "out");
   spec.constraints = {};
-  spec.seeds = {1};
-  spec.minutes = 0.5;
-  spec.trials = 4;
-  spec.jobs = 1;
-  spec.out = dir.path() / "out";
   const TuneOutcome o = run_tune(spec, nullptr, nullptr);
   ASSERT_TRUE(o.best.has_value());
   const auto& best = o.trials[static_cast<std::size_t>(*o.best - 1)];

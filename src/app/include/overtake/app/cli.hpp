@@ -12,6 +12,7 @@
 #include <string_view>
 #include <vector>
 
+#include "overtake/batch/bench.hpp"
 #include "overtake/cluster/slurm.hpp"
 #include "overtake/planners/catalog.hpp"
 #include "overtake/run/drive.hpp"
@@ -120,6 +121,14 @@ void add_slurm_flags(CLI::App& cmd, cluster::SlurmOptions& options, const std::s
 /// without the --slurm flags and those whose long name is in `leave_out`.
 [[nodiscard]] std::vector<std::string> task_arguments(const CLI::App& cmd,
                                                       const std::set<std::string>& leave_out);
+
+/// A bench as a Slurm array of `tasks` (`bench --slurm`, and each bench of `tune --slurm`):
+/// task I runs shard I of `spec` with `args` (the bench's flags, without --out, --jobs,
+/// --shard); the shards merge into spec.out, and its report page into `html` when given.
+[[nodiscard]] cluster::SlurmArray bench_array(const batch::BenchSpec& spec, int tasks,
+                                              std::vector<std::string> args,
+                                              std::optional<std::filesystem::path> html,
+                                              bool quiet);
 
 /// The --policy flag's help: every built-in policy with its summary.
 [[nodiscard]] std::string policy_help();

@@ -18,6 +18,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "overtake/batch/bench.hpp"
 #include "overtake/planners/catalog.hpp"
 
 namespace overtake::batch {
@@ -86,6 +87,10 @@ struct TuneSpec {
   bool resume = false;
   bool force = false;
   std::shared_ptr<const planners::PlannerCatalog> planners;
+  /// Runs a bench (a trial's on one map, or a validation's) elsewhere, and says whether it was
+  /// interrupted: `overtake tune --slurm` runs each as a Slurm array and merges it into the
+  /// bench's folder. Empty: every bench runs here, on `jobs` threads.
+  std::function<bool(const BenchSpec& bench, const std::atomic<bool>* stop)> run_bench_elsewhere;
 };
 
 /// One trial: the parameters, the figures, and how it scores.
