@@ -120,6 +120,11 @@ std::function<bool(const batch::BenchSpec&, const std::atomic<bool>*)> slurm_run
 // `tune --slurm`: what the tasks could not do is refused before anything is submitted.
 std::function<bool(const batch::BenchSpec&, const std::atomic<bool>*)> slurm_for(
     const CLI::App& cmd, const TuneSpec& spec, const TuneFlags& f) {
+  if (f.slurm.submit_only) {
+    throw UsageError(
+        "--slurm-submit-only: a search reads each trial's bench before it asks for the next, "
+        "so it follows every array; leave the flag out");
+  }
   const planners::PlannerEntry& e = spec.planners->require(spec.policy);
   if (e.kind == planners::PlannerKind::python || e.kind == planners::PlannerKind::plugin) {
     throw UsageError("--slurm: the parameters of " + e.label() +
@@ -264,6 +269,13 @@ Subcommand register_tune(CLI::App& app) {
     }
   }
   add_slurm_flags(*cmd, f->slurm, "tune");
+  cmd->get_option("--slurm")->description(
+      "Run each bench of the search (a trial's on each map, the validation's) as a Slurm job\n"
+      "array of this many tasks (docs/cluster.md): its batch script in the bench's folder\n"
+      "(trials/NNNN/slurm/), submitted with sbatch, followed (squeue), failed tasks submitted\n"
+      "again, the shards merged there before the search reads them (the same trials as\n"
+      "here). Built-in policies and --planner-cmd programs. Ctrl-C stops following only;\n"
+      "--resume follows again");
   return {cmd, [spec, f, cmd] {
             batch::check_jobs(spec->jobs);
             TuneSpec s = spec_of(*spec, *f);

@@ -375,7 +375,7 @@ TEST_F(SlurmCli, ATuneOnSlurmRunsEachBenchAsAnArrayAndFindsWhatALocalTuneFinds) 
   EXPECT_EQ(sbatch_calls(), 5);
 }
 
-TEST_F(SlurmCli, ATuneOfAPythonPlannerIsNotSentToSlurm) {
+TEST_F(SlurmCli, WhatATuneOnSlurmCannotDoIsRefusedBeforeAnyTrial) {
   const std::string py =
       "kw=" + (fs::path(OVERTAKE_SOURCE_DIR) / "tests/python/planners/keyword_speed.py").string() +
       ":Planner";
@@ -391,6 +391,11 @@ TEST_F(SlurmCli, ATuneOfAPythonPlannerIsNotSentToSlurm) {
             kExitUsage);
   EXPECT_THAT(err(), HasSubstr("--slurm: 3 tasks for 2 runs"));
   EXPECT_FALSE(fs::exists(path("many") / "trials.jsonl"));
+  EXPECT_EQ(run({"tune", "--policy", "reference", "--param", "hysteresis=0:0.05", "--seeds", "1-2",
+                 "--slurm", "2", "--slurm-submit-only", "--out", path("only").string()}),
+            kExitUsage);
+  EXPECT_THAT(err(), HasSubstr("--slurm-submit-only: a search reads each trial's bench"));
+  EXPECT_EQ(sbatch_calls(), 0);
 }
 
 // hunt.json of a folder, its timing left out and the folder named OUT.
