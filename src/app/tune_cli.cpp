@@ -1,8 +1,6 @@
 // The `overtake tune` command line.
 
 #include <algorithm>
-#include <array>
-#include <charconv>
 #include <cstdio>
 #include <iostream>
 #include <set>
@@ -59,12 +57,6 @@ void show_progress(const TuneProgress& p, int& shown) {
   std::fflush(stderr);
 }
 
-std::string joined(const std::vector<std::string>& items) {
-  std::string out;
-  for (const auto& i : items) out += (out.empty() ? "" : ",") + i;
-  return out;
-}
-
 // The flags a bench task runs `b` with: its sweep, its map and config, and its planner as the
 // trial gives it (a program's command with the values in it), with the planner flags given to
 // tune (timeouts, network, ...).
@@ -73,11 +65,10 @@ std::vector<std::string> bench_task_flags(const batch::BenchSpec& b,
   namespace fs = std::filesystem;
   std::vector<std::string> seeds;
   for (const std::uint64_t s : b.seeds) seeds.push_back(std::to_string(s));
-  std::array<char, 32> minutes{};
-  const auto written = std::to_chars(minutes.data(), minutes.data() + minutes.size(), b.minutes);
-  std::vector<std::string> args = {"--policies=" + joined(b.policies), "--seeds=" + joined(seeds),
-                                   "--traffic=" + joined(b.traffic),
-                                   "--minutes=" + std::string(minutes.data(), written.ptr)};
+  std::vector<std::string> args = {"--policies=" + base::join_list(b.policies, ","),
+                                   "--seeds=" + base::join_list(seeds, ","),
+                                   "--traffic=" + base::join_list(b.traffic, ","),
+                                   "--minutes=" + base::shortest_text(b.minutes)};
   if (b.map) args.push_back("--map=" + fs::absolute(*b.map).string());
   if (b.config) args.push_back("--config=" + fs::absolute(*b.config).string());
   for (const std::string& name : b.planners->added_names()) {

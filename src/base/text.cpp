@@ -1,7 +1,9 @@
 #include "overtake/base/text.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cctype>
+#include <charconv>
 #include <ios>
 #include <sstream>
 
@@ -31,6 +33,21 @@ std::string shell_quote(std::string_view text) {
       out += c;
   }
   return out + "'";
+}
+
+std::string join_list(const std::vector<std::string>& items, std::string_view separator) {
+  std::string out;
+  for (std::size_t i = 0; i < items.size(); ++i) {
+    if (i > 0) out += separator;
+    out += items[i];
+  }
+  return out;
+}
+
+std::string shortest_text(double value) {
+  std::array<char, 32> buf{};
+  const auto r = std::to_chars(buf.data(), buf.data() + buf.size(), value);
+  return {buf.data(), r.ptr};
 }
 
 std::vector<std::string> split_list(const std::string& text) {

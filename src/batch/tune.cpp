@@ -40,13 +40,6 @@ std::optional<double> parse_number(std::string_view text) {
   return v;
 }
 
-// The shortest text that reads back as the same double (what a placeholder is replaced by).
-std::string number_text(double v) {
-  std::array<char, 32> buf{};
-  const auto r = std::to_chars(buf.data(), buf.data() + buf.size(), v);
-  return {buf.data(), r.ptr};
-}
-
 bool valid_param_name(std::string_view name) {
   if (name.empty()) return false;
   return std::all_of(name.begin(), name.end(), [](char c) {
@@ -62,9 +55,7 @@ bool identifier(std::string_view name) {
 }
 
 std::string join(const std::vector<std::string>& names) {
-  std::string out;
-  for (const auto& n : names) out += (out.empty() ? "" : ", ") + n;
-  return out;
+  return base::join_list(names, ", ");
 }
 
 // The counts a trial reports besides overtake::eval's metrics.
@@ -189,11 +180,11 @@ std::string program_command(const Target& t, const std::vector<double>& x) {
     if (p.kind == Placement::Kind::placeholder) {
       std::size_t at = 0;
       while ((at = command.find(p.key, at)) != std::string::npos) {
-        command.replace(at, p.key.size(), number_text(x[i]));
+        command.replace(at, p.key.size(), base::shortest_text(x[i]));
         at += 1;
       }
     } else if (p.kind == Placement::Kind::environment) {
-      env += p.key + "=" + number_text(x[i]) + " ";
+      env += p.key + "=" + base::shortest_text(x[i]) + " ";
     }
   }
   return env.empty() ? command : "export " + env + "&& " + command;
@@ -321,8 +312,8 @@ void judge(TuneTrial& trial, const TuneSpec& spec) {
     const double value = v.get<double>();
     if (c.at_most ? value > c.bound : value < c.bound) {
       trial.feasible = false;
-      trial.violations.push_back(c.figure + " = " + number_text(value) +
-                                 (c.at_most ? " > " : " < ") + number_text(c.bound));
+      trial.violations.push_back(c.figure + " = " + base::shortest_text(value) +
+                                 (c.at_most ? " > " : " < ") + base::shortest_text(c.bound));
     }
   }
 }
@@ -366,7 +357,7 @@ json manifest_of(const TuneSpec& spec, const Target& t) {
   }
   json constraints = json::array();
   for (const auto& c : spec.constraints) {
-    constraints.push_back(c.figure + (c.at_most ? "<=" : ">=") + number_text(c.bound));
+    constraints.push_back(c.figure + (c.at_most ? "<=" : ">=") + base::shortest_text(c.bound));
   }
   json m = {{"policy", spec.policy},
             {"planner", t.entry->describe()},
@@ -705,12 +696,12 @@ std::string summary_of(const TuneSpec& spec, const TuneOutcome& o) {
       (tune_figure_higher_is_better(spec.objective) ? " (higher is better)" : " (lower is better)");
   std::string cs;
   for (const auto& c : spec.constraints) {
-    cs +=
-        (cs.empty() ? "" : ", ") + c.figure + (c.at_most ? " <= " : " >= ") + number_text(c.bound);
+    cs += (cs.empty() ? "" : ", ") + c.figure + (c.at_most ? " <= " : " >= ") +
+          base::shortest_text(c.bound);
   }
   s += "; constraints: " + (cs.empty() ? std::string("none") : cs) + ".\n";
-  s += "Training: " + std::to_string(spec.seeds.size()) + " seeds x " + number_text(spec.minutes) +
-       " min per traffic profile" +
+  s += "Training: " + std::to_string(spec.seeds.size()) + " seeds x " +
+       base::shortest_text(spec.minutes) + " min per traffic profile" +
        (spec.maps.size() > 1 ? " on each of " + std::to_string(spec.maps.size()) + " maps" : "") +
        "; " + std::to_string(o.trials.size()) + " trials (" + spec.algorithm + "); ended by " +
        o.stop_reason + ".\n\n";
@@ -721,7 +712,7 @@ std::string summary_of(const TuneSpec& spec, const TuneOutcome& o) {
   s += "---:|---|\n";
   const auto row = [&](const TuneTrial& t, const std::string& label) {
     s += "| " + label + " |";
-    for (const auto& p : spec.params) s += " " + number_text(t.params.at(p.name)) + " |";
+    for (const auto& p : spec.params) s += " " + base::shortest_text(t.params.at(p.name)) + " |";
     s += " " + (std::isfinite(t.objective) ? fixed_text(t.objective, 3) : std::string("-")) +
          " | " + (t.feasible ? std::string("yes") : "no: " + t.violations.front()) + " |\n";
   };
@@ -845,9 +836,10 @@ void check_tune_spec(const TuneSpec& spec) {
   for (std::size_t i = 0; i < start.size(); ++i) {
     const TuneParam& p = spec.params[i];
     if (start[i] < p.low || start[i] > p.high) {
-      throw UsageError("--param: " + p.name + " starts at " + number_text(start[i]) +
-                       " (its value in the config), outside its range " + number_text(p.low) + ":" +
-                       number_text(p.high) + "; widen the range or give @START");
+      throw UsageError("--param: " + p.name + " starts at " + base::shortest_text(start[i]) +
+                       " (its value in the config), outside its range " +
+                       base::shortest_text(p.low) + ":" + base::shortest_text(p.high) +
+                       "; widen the range or give @START");
     }
   }
   if (t.entry->kind == planners::PlannerKind::python ||
@@ -869,7 +861,7 @@ void check_tune_spec(const TuneSpec& spec) {
         try {
           (void)run::apply_config_json(run::default_config(), trial_config(t, x), "the trial");
         } catch (const run::ConfigError& e) {
-          throw UsageError("--param: " + spec.params[i].name + "=" + number_text(v) +
+          throw UsageError("--param: " + spec.params[i].name + "=" + base::shortest_text(v) +
                            " is not a value the planner takes: " + e.what());
         }
       }

@@ -26,6 +26,14 @@ template <class Json>
 /// are dropped.
 [[nodiscard]] std::vector<std::string> split_list(const std::string& text);
 
+/// `items` joined with `separator` ("a, b", or "a,b" for a flag that split_list reads back).
+[[nodiscard]] std::string join_list(const std::vector<std::string>& items,
+                                    std::string_view separator);
+
+/// The shortest text that reads back as the same double (a value put into a flag, a
+/// command or a message).
+[[nodiscard]] std::string shortest_text(double value);
+
 /// Throws UsageError naming `flag` and the name when `names` holds one twice: a list flag
 /// (--policies, --traffic, --maps) names each thing once, or its runs would be driven, and
 /// their failures counted, twice.
