@@ -55,6 +55,14 @@ void validate_reference(const PlannerParams& all, std::vector<std::string>& out)
   c.positive("behaviour.rear_threat_span_mps", b.rear_threat_span_mps);
   c.positive("behaviour.rear_threat_range_m", b.rear_threat_range_m);
   c.positive("behaviour.passing_speed_mps", b.passing_speed_mps);
+  c.non_negative("behaviour.gap_seek_gain", b.gap_seek_gain);
+  c.non_negative("behaviour.gap_seek_pace_mps", b.gap_seek_pace_mps);
+  c.non_negative("behaviour.gap_seek_behind_m", b.gap_seek_behind_m);
+  c.non_negative("behaviour.gap_seek_ahead_m", b.gap_seek_ahead_m);
+  c.positive("behaviour.gap_seek_drop_mps", b.gap_seek_drop_mps);
+  c.non_negative("behaviour.gap_seek_min_speed_mps", b.gap_seek_min_speed_mps);
+  c.non_negative("behaviour.gap_seek_rear_gap_m", b.gap_seek_rear_gap_m);
+  c.non_negative("behaviour.gap_seek_front_factor", b.gap_seek_front_factor);
   const auto& t = p.trajectory;
   c.in_range("trajectory.keep_points", t.keep_points, 0, 50);
   c.require(t.path_points >= t.keep_points + 10 && t.path_points <= 1000, "trajectory.path_points",

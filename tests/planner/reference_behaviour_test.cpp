@@ -54,8 +54,10 @@ TEST(SafetyGaps, RssGapGrowsWithTheSpeedDifference) {
   EXPECT_GT(rss_front_gap(22.0, 20.0, p), rss_front_gap(20.0, 20.0, p));
   EXPECT_EQ(rss_front_gap(5.0, 30.0, p), p.min_gap_m);
   // Equal speeds: the response distance plus the cost of ramping the brakes up to less than
-  // the leader's braking: more than one second of headway at highway speed.
-  EXPECT_GT(same, 20.0);
+  // the leader's braking: more than the response distance, and with the defaults 0.7 s of
+  // headway at highway speed.
+  EXPECT_GT(same, 20.0 * p.response_time_s + 5.0);
+  EXPECT_GT(same, 0.7 * 20.0);
 }
 
 TEST(SafetyGaps, AFollowerClosingFastHasNoRoomEvenFromFarBehind) {

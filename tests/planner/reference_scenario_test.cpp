@@ -1,7 +1,8 @@
 // Scripted scenarios (tests/scenarios/*.json) driven by the reference planner on the default
 // track: a cut-in 20 m ahead, all lanes blocked, hard braking ahead, a car speeding up in the
-// target lane during a lane change, stop-and-go traffic, and a lane change across the lap
-// wrap. Each with several latency draws: no incident, strict figures under the limits.
+// target lane during a lane change, stop-and-go traffic, a lane change across the lap wrap,
+// and boxed in beside a pacing pair. Each with several latency draws: no incident, strict
+// figures under the limits.
 
 #include <gtest/gtest.h>
 
@@ -26,9 +27,9 @@ struct ScenarioRun {
   sim::Scenario scenario;
 };
 
-ScenarioRun run_scenario(const std::string& file, std::uint64_t seed) {
+ScenarioRun run_scenario(const std::string& file, std::uint64_t seed,
+                         const run::Config& config = run::default_config()) {
   static const auto track = run::load_track(std::nullopt);
-  const run::Config config = run::default_config();
   ScenarioRun out;
   out.scenario = run::load_scenario(
       std::filesystem::path(OVERTAKE_SOURCE_DIR) / "tests/scenarios" / file, config.road);
@@ -62,7 +63,8 @@ TEST_P(Scenarios, NoIncidentsAndWithinTheStrictLimits) {
 INSTANTIATE_TEST_SUITE_P(Reference, Scenarios,
                          ::testing::Values("cut_in_20m.json", "all_lanes_blocked.json",
                                            "hard_brake_ahead.json", "fast_car_in_target_lane.json",
-                                           "stop_and_go.json", "lap_wrap_lane_change.json"),
+                                           "stop_and_go.json", "lap_wrap_lane_change.json",
+                                           "boxed_in.json"),
                          [](const auto& param_info) {
                            std::string name =
                                param_info.param.substr(0, param_info.param.find('.'));
@@ -85,6 +87,30 @@ TEST(ScenarioSpecifics, StopAndGoComesToAStandstillAndGoesOn) {
   const ScenarioRun r = run_scenario("stop_and_go.json", 1);
   EXPECT_GT(r.report.distance_m, 300.0);
   EXPECT_EQ(r.report.lane_changes, 0);
+}
+
+// Boxed in: held up in the right lane at 37 mph, a pair in the middle lane pacing it, the
+// left lane free; the gap between the pair is shorter than the RSS gap. With the defaults the
+// ego is in the left lane within 30 s. With the trajectory layer's soft costs of before
+// (150 for being inside the RSS gap ahead or leaving a follower too little room, where the
+// defaults have 80) it declines that gap; gap seeking then still gets it out, by dropping
+// back behind the pair, and without gap seeking it waits beside them the whole minute.
+TEST(ScenarioSpecifics, BoxedInItGetsOutToTheFreeLane) {
+  const ScenarioRun r = run_scenario("boxed_in.json", 1);
+  EXPECT_GE(r.report.lane_changes, 2);
+  EXPECT_GT(r.report.mean_speed_mps, core::mph_to_mps(42.0));
+
+  run::Config strict = run::default_config();
+  strict.planner.reference.trajectory.proximity_weight = 150.0;
+  strict.planner.reference.trajectory.rear_weight = 150.0;
+  const ScenarioRun seeking = run_scenario("boxed_in.json", 1, strict);
+  EXPECT_GE(seeking.report.lane_changes, 2);
+  EXPECT_GT(seeking.report.mean_speed_mps, core::mph_to_mps(42.0));
+
+  strict.planner.reference.behaviour.gap_seek_gain = 0.0;
+  const ScenarioRun stuck = run_scenario("boxed_in.json", 1, strict);
+  EXPECT_EQ(stuck.report.lane_changes, 0);
+  EXPECT_LT(stuck.report.mean_speed_mps, core::mph_to_mps(38.0));
 }
 
 }  // namespace

@@ -111,6 +111,66 @@ double wanted_speed(const std::vector<CarPrediction>& cars, const EgoSnapshot& e
   return speed;
 }
 
+/// True when the ego can move into the next lane `step` now with the full RSS gap to the car
+/// ahead there (`front_factor` of it) and room for the car behind there: a change the
+/// trajectory layer takes without cost to spare.
+bool comfortable_entry(const LaneView& v, const EgoSnapshot& ego, double car_length_m,
+                       const ReferenceBehaviourParams& p) {
+  if (v.alongside) return false;
+  if (v.leader >= 0 && v.leader_gap_m < p.gap_seek_front_factor *
+                                            rss_front_gap(ego.speed_mps, v.leader_speed_mps, p))
+    return false;
+  return v.follower < 0 || rear_room(v.follower_gap_m + car_length_m,
+                                     v.follower_speed_mps - ego.speed_mps, car_length_m, p) >= 0.0;
+}
+
+/// Gap seeking: when a lane clearly cheaper than the ego's lies across (or is) a next lane
+/// that cars pacing the ego block, the speed that lets the ego drop back behind the last of
+/// them while itself held up in its lane (infinity: no need). Blocked means no comfortable
+/// entry (comfortable_entry): a gap the behaviour would take but that is shorter than the
+/// RSS gap is one the trajectory layer declines, and the ego would wait beside it for ever.
+double gap_seek_speed(const std::vector<CarPrediction>& cars, const std::vector<LaneView>& lanes,
+                      const EgoSnapshot& ego, int cur, double car_length_m,
+                      const ReferenceBehaviourParams& p) {
+  constexpr double kNone = std::numeric_limits<double>::infinity();
+  if (!(p.gap_seek_gain > 0.0)) return kNone;
+  const auto lane = [&](int l) -> const LaneView& { return lanes[static_cast<std::size_t>(l)]; };
+  int best = -1;
+  double best_cost = lane(cur).cost - p.gap_seek_gain;
+  for (int l = 0; l < static_cast<int>(lanes.size()); ++l) {
+    if (l != cur && lane(l).cost < best_cost) {
+      best = l;
+      best_cost = lane(l).cost;
+    }
+  }
+  if (best < 0) return kNone;
+  const int step = cur + (best > cur ? 1 : -1);
+  if (comfortable_entry(lane(step), ego, car_length_m, p)) return kNone;
+  if (lane(cur).follower >= 0 && lane(cur).follower_gap_m < p.gap_seek_rear_gap_m) return kNone;
+  // Only when held up in the ego's lane too (else it passes them): a leader within passing
+  // range. (Not one at the ego's speed: dropping back, the ego is slower than it.)
+  const LaneView& own = lane(cur);
+  if (own.leader < 0 || own.leader_gap_m > kPassingRangeM) return kNone;
+  double last_gap = kNone;
+  double last_speed = kNone;
+  for (const CarPrediction& c : cars) {
+    // Cars faster than the ego by more than the pace clear the way by themselves.
+    if (!c.occupies(step) ||
+        c.speed_mps > std::max(ego.speed_mps, own.leader_speed_mps) + p.gap_seek_pace_mps)
+      continue;
+    const double centre_gap = (c.s_m - ego.s_m) * ego.m_per_unit_s;
+    if (centre_gap < -(car_length_m + p.gap_seek_behind_m) ||
+        centre_gap > car_length_m + p.gap_seek_ahead_m)
+      continue;
+    if (centre_gap < last_gap) {
+      last_gap = centre_gap;
+      last_speed = c.speed_mps;
+    }
+  }
+  if (last_gap == kNone) return kNone;
+  return std::max(p.gap_seek_min_speed_mps, last_speed - p.gap_seek_drop_mps);
+}
+
 }  // namespace
 
 BehaviourDecision decide(const std::vector<CarPrediction>& cars, const EgoSnapshot& ego,
@@ -165,6 +225,11 @@ BehaviourDecision decide(const std::vector<CarPrediction>& cars, const EgoSnapsh
   out.target_lane = state.target_lane;
   out.goal_lane = state.goal_lane;
   out.speed_mps = wanted_speed(cars, ego, core::lane_of(ego.d_m, road), car_length_m, p);
+  // Boxed in: drop back behind the cars that pace the ego in the next lane.
+  if (settled && state.target_lane == cur) {
+    out.speed_mps =
+        std::min(out.speed_mps, gap_seek_speed(cars, out.lanes, ego, cur, car_length_m, p));
+  }
   return out;
 }
 

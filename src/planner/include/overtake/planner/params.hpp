@@ -114,12 +114,14 @@ struct ReferenceBehaviourParams {
   double response_time_s = 0.2;      ///< rho: the ego's response time
   double ego_brake_mps2 = 6.0;       ///< braking the ego commits to (<= the fallback's)
   double ego_brake_jerk_mps3 = 7.0;  ///< ... reached at this jerk
-  double lead_brake_mps2 = 8.0;      ///< worst braking of the car ahead
-  double min_gap_m = 4.0;            ///< bumper to bumper, at any speed
+  /// Braking of the car ahead, to a standstill, that the gap allows for. (The faithful traffic
+  /// brakes harder, but for a few mph at a time; this value is measured: docs/figures.md.)
+  double lead_brake_mps2 = 6.5;
+  double min_gap_m = 4.0;  ///< bumper to bumper, at any speed
   /// Cars behind react to the ego only this close, centre to centre (the faithful world's
   /// 10 m; later reactions are always safe)...
   double follower_reaction_gap_m = 10.0;
-  double follower_brake_mps2 = 7.0;  ///< ... and then brake at least this hard
+  double follower_brake_mps2 = 7.5;  ///< ... and then brake at least this hard (the traffic: 8)
   double follower_response_s = 0.1;  ///< ... after this delay
   double follower_margin_m = 1.2;    ///< bumper to bumper left when a follower has stopped closing
   /// A lane change needs this share of the RSS gap ahead in the target lane.
@@ -136,6 +138,17 @@ struct ReferenceBehaviourParams {
   double rear_threat_span_mps = 5.0;   ///< ... and a full one this much faster
   double rear_threat_range_m = 80.0;   ///< ... within this distance
   double passing_speed_mps = 9.0;      ///< closing speed on a slower car in the next lane
+  /// Gap seeking: a lane at least this much cheaper than the ego's (0: never), cut off by cars
+  /// pacing the ego in the next lane, ...
+  double gap_seek_gain = 0.12;
+  double gap_seek_pace_mps = 1.5;   ///< ... (at the ego's speed within this) ...
+  double gap_seek_behind_m = 15.0;  ///< ... from this far behind (bumper to bumper) ...
+  double gap_seek_ahead_m = 15.0;   ///< ... to this far ahead: the ego drops back behind them ...
+  double gap_seek_drop_mps = 2.5;   ///< ... this much slower than the last of them ...
+  double gap_seek_min_speed_mps = 12.0;  ///< ... but no slower than this ...
+  double gap_seek_rear_gap_m = 20.0;     ///< ... when no car behind in its lane is nearer than this
+  /// ... until the last of them is this share of the RSS gap ahead of the ego.
+  double gap_seek_front_factor = 1.0;
   friend bool operator==(const ReferenceBehaviourParams&,
                          const ReferenceBehaviourParams&) = default;
 };
@@ -178,15 +191,15 @@ struct ReferenceTrajectoryParams {
   /// from behind may not see the ego at all).
   double ahead_collision_slack_s = 1.0;
   // cost weights
-  double progress_weight = 1.0;     ///< per metre short of cruising at the wanted speed
-  double lon_jerk_weight = 0.05;    ///< per unit of the squared jerk of s(t) integrated (s units)
-  double lat_jerk_weight = 0.2;     ///< per (m/s^3)^2 s of d(t)
-  double lat_time_weight = 0.5;     ///< per second of lateral manoeuvre
-  double lane_weight = 20.0;        ///< for ending away from the behaviour's lane
-  double proximity_weight = 150.0;  ///< for being inside the RSS gap ahead
+  double progress_weight = 1.0;    ///< per metre short of cruising at the wanted speed
+  double lon_jerk_weight = 0.05;   ///< per unit of the squared jerk of s(t) integrated (s units)
+  double lat_jerk_weight = 0.2;    ///< per (m/s^3)^2 s of d(t)
+  double lat_time_weight = 0.5;    ///< per second of lateral manoeuvre
+  double lane_weight = 20.0;       ///< for ending away from the behaviour's lane
+  double proximity_weight = 80.0;  ///< for being inside the RSS gap ahead
   /// During a lane change the cars ahead in the lane being left count for this long.
   double change_early_window_s = 2.0;
-  double rear_weight = 150.0;     ///< for leaving a closing car behind too little room
+  double rear_weight = 80.0;      ///< for leaving a closing car behind too little room
   int max_kinematic_checks = 40;  ///< candidates checked in Cartesian per cycle
   friend bool operator==(const ReferenceTrajectoryParams&,
                          const ReferenceTrajectoryParams&) = default;
@@ -328,6 +341,14 @@ void describe(V& v, ReferenceBehaviourParams& p) {
   v("rear_threat_span_mps", p.rear_threat_span_mps);
   v("rear_threat_range_m", p.rear_threat_range_m);
   v("passing_speed_mps", p.passing_speed_mps);
+  v("gap_seek_gain", p.gap_seek_gain);
+  v("gap_seek_pace_mps", p.gap_seek_pace_mps);
+  v("gap_seek_behind_m", p.gap_seek_behind_m);
+  v("gap_seek_ahead_m", p.gap_seek_ahead_m);
+  v("gap_seek_drop_mps", p.gap_seek_drop_mps);
+  v("gap_seek_min_speed_mps", p.gap_seek_min_speed_mps);
+  v("gap_seek_rear_gap_m", p.gap_seek_rear_gap_m);
+  v("gap_seek_front_factor", p.gap_seek_front_factor);
 }
 
 template <class V>

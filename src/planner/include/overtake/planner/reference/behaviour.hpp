@@ -4,7 +4,8 @@
 // behind, the lanes to cross; a far lane is reached through the middle one), safety gaps
 // ahead (RSS longitudinal distance, Shalev-Shwartz et al. 2017, with the ego's braking
 // limited in jerk) and behind (a follower that reacts late and brakes hard), and hysteresis
-// so that it never weaves between lanes.
+// so that it never weaves between lanes. Held up and boxed in by cars that pace it in the
+// next lane while a clearly cheaper lane lies beyond, it drops back behind them (gap seeking).
 
 #include <algorithm>
 #include <cmath>
@@ -39,7 +40,7 @@ namespace overtake::planner::reference {
 
 /// RSS minimum bumper-to-bumper distance (m) from the ego, behind at `rear_mps`, to a car
 /// ahead at `front_mps`: the ego keeps its speed for the response time, then brakes with
-/// limited jerk; the car ahead brakes as hard as it can. Never less than min_gap_m.
+/// limited jerk; the car ahead brakes at lead_brake_mps2. Never less than min_gap_m.
 [[nodiscard]] double rss_front_gap(double rear_mps, double front_mps,
                                    const ReferenceBehaviourParams& p);
 /// The two halves of rss_front_gap, for many pairs of speeds: how far the car behind goes
@@ -49,7 +50,7 @@ namespace overtake::planner::reference {
   return rear * p.response_time_s +
          jerk_limited_stop_distance(rear, p.ego_brake_mps2, p.ego_brake_jerk_mps3);
 }
-/// ... and how far the car ahead goes braking as hard as it can.
+/// ... and how far the car ahead goes braking at lead_brake_mps2.
 [[nodiscard]] inline double rss_front_reach(double front_mps, const ReferenceBehaviourParams& p) {
   const double front = std::max(0.0, front_mps);
   return front * front / (2.0 * p.lead_brake_mps2);
@@ -122,7 +123,7 @@ struct BehaviourState {
 struct BehaviourDecision {
   int target_lane = 1;
   int goal_lane = 1;
-  double speed_mps = 0.0;  ///< wanted speed (cruise, or less when passing a slow queue)
+  double speed_mps = 0.0;  ///< wanted speed (cruise; less passing a slow queue or gap seeking)
   std::vector<LaneView> lanes;
 };
 

@@ -1,0 +1,100 @@
+#!/usr/bin/env python3
+"""Where the reference planner's time goes in faithful traffic: the share of the time in each
+situation of the lanes around the ego, and its mean speed there.
+
+    PYTHONPATH=build/release/python /usr/bin/python3 bench/where_time_goes.py \
+        [--seeds 1-20] [--minutes 30] [--config FILE] [--map FILE]
+
+A lane is *blocked* when a car slower than 47 mph is within 50 m ahead of the ego in it
+(bumper to bumper), or beside the ego (centres less than a car length apart along the road).
+Every world step after the first 30 s counts; the ego's lane is the one its centre is in. The
+situations: its own lane open; its own blocked and a next lane open; its own and the next
+blocked and the far lane open (from an outer lane); every lane blocked.
+"""
+import argparse
+import math
+
+import overtake
+
+MPS_TO_MPH = 2.2369362920544
+BLOCKING_MPH = 47.0
+AHEAD_M = 50.0
+CAR_LENGTH_M = 4.7
+LANE_WIDTH_M = 4.0
+LANES = 3
+SKIP_S = 30.0
+ROAD_LENGTH_M = 6945.554  # the loop's length in s, the built-in track's and the course map's
+SITUATIONS = ("own lane open", "own lane blocked, the next lane open",
+              "own lane and the next blocked, the far lane open", "every lane blocked")
+
+
+def seeds_of(text):
+    first, _, last = text.partition("-")
+    return range(int(first), int(last or first) + 1)
+
+
+def blocked_lanes(t, road_length_m):
+    blocked = [False] * LANES
+    for _, _, _, vx, vy, s, d in t["sensor_fusion"]:
+        lane = int(d // LANE_WIDTH_M)
+        if not 0 <= lane < LANES:
+            continue
+        gap = (s - t["s"]) % road_length_m
+        if gap > road_length_m / 2:
+            gap -= road_length_m
+        beside = abs(gap) < CAR_LENGTH_M
+        slow_ahead = (0 <= gap - CAR_LENGTH_M <= AHEAD_M and
+                      math.hypot(vx, vy) * MPS_TO_MPH < BLOCKING_MPH)
+        blocked[lane] = blocked[lane] or beside or slow_ahead
+    return blocked
+
+
+def situation(own, blocked):
+    if not blocked[own]:
+        return 0
+    near = [lane for lane in (own - 1, own + 1) if 0 <= lane < LANES]
+    if any(not blocked[lane] for lane in near):
+        return 1
+    if any(not blocked[lane] for lane in range(LANES) if abs(lane - own) == 2):
+        return 2
+    return 3
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--seeds", default="1-20", help="a seed or a range, e.g. 1-20")
+    ap.add_argument("--minutes", type=float, default=30.0)
+    ap.add_argument("--config", help="a config file, as for overtake --config")
+    ap.add_argument("--map", help="a map file (default: the built-in track)")
+    a = ap.parse_args()
+    time_s = [0.0] * len(SITUATIONS)
+    miles = [0.0] * len(SITUATIONS)
+    for seed in seeds_of(a.seeds):
+        world = overtake.World(map=a.map, seed=seed, traffic="faithful", config=a.config,
+                               minutes=a.minutes)
+        policy = overtake.builtin_policy("reference", map=a.map, config=a.config)
+        t = world.reset()
+        last_s = 0.0
+        while True:
+            t, info = world.step(*policy(t))
+            if info["done"]:
+                break
+            dt = info["time_s"] - last_s
+            last_s = info["time_s"]
+            if info["time_s"] <= SKIP_S:
+                continue
+            own = min(LANES - 1, max(0, int(t["d"] // LANE_WIDTH_M)))
+            k = situation(own, blocked_lanes(t, ROAD_LENGTH_M))
+            time_s[k] += dt
+            miles[k] += t["speed"] * dt / 3600.0
+    total = sum(time_s)
+    print("| situation | share of the time | the ego's mean speed |")
+    print("|---|---:|---:|")
+    for k, name in enumerate(SITUATIONS):
+        speed = miles[k] / time_s[k] * 3600.0 if time_s[k] > 0 else float("nan")
+        print(f"| {name} | {100 * time_s[k] / total:.1f}% | {speed:.1f} mph |")
+    print(f"| all | | {sum(miles) / total * 3600.0:.2f} mph |")
+
+
+if __name__ == "__main__":
+    main()
