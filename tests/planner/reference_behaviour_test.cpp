@@ -149,5 +149,51 @@ TEST_F(BehaviourTest, PassingAHeldUpQueueIsSpeedCapped) {
   EXPECT_NEAR(d.speed_mps, 5.0 + params_.passing_speed_mps, 1e-9);
 }
 
+TEST_F(BehaviourTest, ANextLaneIsEnterableWithAShareOfTheRssGapAhead) {
+  // Lane 0's leader between the change's share of the RSS gap and the full gap.
+  const double rss = rss_front_gap(kCruise, 15.0, params_);
+  const std::vector<CarPrediction> cars = {
+      test::lane_car(0, 1000.0 + kLength + 0.75 * rss, 2.0, 15.0)};
+  const BehaviourDecision d = run(cars, ego_in(1));
+  EXPECT_NEAR(d.lanes[0].entry_rss_gap_m, rss, 1e-9);
+  EXPECT_TRUE(d.lanes[0].rear_ok);
+  EXPECT_TRUE(d.lanes[0].enterable);
+  EXPECT_EQ(d.lanes[2].entry_rss_gap_m, 0.0);  // no leader
+  EXPECT_TRUE(d.lanes[2].enterable);
+}
+
+/// The ego in the right lane behind a car at its own speed, a car pacing it just ahead in the
+/// middle lane (too close to enter behind or pass through) and the left lane free.
+class BoxedInTest : public BehaviourTest {
+ protected:
+  static constexpr double kPace = 18.0;
+  [[nodiscard]] static std::vector<CarPrediction> scene(double middle_gap_m) {
+    return {test::lane_car(0, 1000.0 + kLength + 20.0, 10.0, kPace),
+            test::lane_car(1, 1000.0 + kLength + middle_gap_m, 6.0, kPace)};
+  }
+};
+
+TEST_F(BoxedInTest, TheEgoDropsBackBehindTheCarPacingIt) {
+  const BehaviourDecision d = run(scene(3.0), ego_in(2, kPace));
+  EXPECT_EQ(d.goal_lane, 2);  // no change now: the middle lane has no room
+  EXPECT_FALSE(d.lanes[1].passable);
+  EXPECT_NEAR(d.speed_mps, kPace - params_.gap_seek_drop_mps, 1e-9);
+}
+
+TEST_F(BoxedInTest, NoDropWithoutGapSeekingOrWithRoomToEnter) {
+  ReferenceBehaviourParams off = params_;
+  off.gap_seek_gain = 0.0;
+  BehaviourState state;
+  EXPECT_NEAR(decide(scene(3.0), ego_in(2, kPace), state, 0.04, kLength, off, road_).speed_mps,
+              params_.cruise_speed_mps, 1e-9);
+  // Enough room ahead in the middle lane: the ego changes lanes instead.
+  BehaviourState fresh;
+  const double room = rss_front_gap(kPace, kPace, params_) + 1.0;
+  const BehaviourDecision d =
+      decide(scene(room), ego_in(2, kPace), fresh, 0.04, kLength, params_, road_);
+  EXPECT_TRUE(d.lanes[1].enterable);
+  EXPECT_NEAR(d.speed_mps, params_.cruise_speed_mps, 1e-9);
+}
+
 }  // namespace
 }  // namespace overtake::planner::reference

@@ -16,6 +16,12 @@ constexpr double kPassingRangeM = 60.0;
 /// Bumper-to-bumper distance under which a car counts as alongside.
 constexpr double kAlongsideM = 1.5;
 
+/// True when the leader in a next lane is at least `factor` of the RSS gap ahead (and
+/// min_gap_m), or there is none: the room ahead to enter that lane now.
+bool front_ok(const LaneView& v, double factor, const ReferenceBehaviourParams& p) {
+  return v.leader < 0 || v.leader_gap_m >= std::max(p.min_gap_m, factor * v.entry_rss_gap_m);
+}
+
 }  // namespace
 
 double rss_front_gap(double rear_mps, double front_mps, const ReferenceBehaviourParams& p) {
@@ -72,16 +78,13 @@ std::vector<LaneView> assess_lanes(const std::vector<CarPrediction>& cars, const
       v.rear_threat = fast * near;
     }
     if (std::abs(l - cur) == 1) {
-      const double rss = v.leader < 0 ? 0.0 : rss_front_gap(ego.speed_mps, v.leader_speed_mps, p);
-      const auto front_ok = [&](double factor) {
-        return v.leader < 0 || v.leader_gap_m >= std::max(p.min_gap_m, factor * rss);
-      };
-      const bool rear_ok =
+      v.entry_rss_gap_m = v.leader < 0 ? 0.0 : rss_front_gap(ego.speed_mps, v.leader_speed_mps, p);
+      v.rear_ok =
           v.follower < 0 || rear_room(v.follower_gap_m + car_length_m,
                                       v.follower_speed_mps - ego.speed_mps, car_length_m, p) >= 0.0;
-      const bool can = !v.alongside && rear_ok && ego.speed_mps >= p.min_change_speed_mps;
-      v.enterable = can && front_ok(p.change_front_factor);
-      v.passable = can && front_ok(p.transit_front_factor);
+      const bool can = !v.alongside && v.rear_ok && ego.speed_mps >= p.min_change_speed_mps;
+      v.enterable = can && front_ok(v, p.change_front_factor, p);
+      v.passable = can && front_ok(v, p.transit_front_factor, p);
     }
     v.cost = p.speed_weight * (cruise - v.expected_speed_mps) / cruise +
              p.change_cost * std::abs(l - cur) + p.rear_threat_weight * v.rear_threat;
@@ -111,17 +114,11 @@ double wanted_speed(const std::vector<CarPrediction>& cars, const EgoSnapshot& e
   return speed;
 }
 
-/// True when the ego can move into the next lane `step` now with the full RSS gap to the car
-/// ahead there (`front_factor` of it) and room for the car behind there: a change the
-/// trajectory layer takes without cost to spare.
-bool comfortable_entry(const LaneView& v, const EgoSnapshot& ego, double car_length_m,
-                       const ReferenceBehaviourParams& p) {
-  if (v.alongside) return false;
-  if (v.leader >= 0 && v.leader_gap_m < p.gap_seek_front_factor *
-                                            rss_front_gap(ego.speed_mps, v.leader_speed_mps, p))
-    return false;
-  return v.follower < 0 || rear_room(v.follower_gap_m + car_length_m,
-                                     v.follower_speed_mps - ego.speed_mps, car_length_m, p) >= 0.0;
+/// True when the ego can move into a next lane now with gap_seek_front_factor of the full RSS
+/// gap to the car ahead there and room for the car behind: a change the trajectory layer takes
+/// without cost to spare.
+bool comfortable_entry(const LaneView& v, const ReferenceBehaviourParams& p) {
+  return !v.alongside && v.rear_ok && front_ok(v, p.gap_seek_front_factor, p);
 }
 
 /// Gap seeking: when a lane clearly cheaper than the ego's lies across (or is) a next lane
@@ -145,7 +142,7 @@ double gap_seek_speed(const std::vector<CarPrediction>& cars, const std::vector<
   }
   if (best < 0) return kNone;
   const int step = cur + (best > cur ? 1 : -1);
-  if (comfortable_entry(lane(step), ego, car_length_m, p)) return kNone;
+  if (comfortable_entry(lane(step), p)) return kNone;
   if (lane(cur).follower >= 0 && lane(cur).follower_gap_m < p.gap_seek_rear_gap_m) return kNone;
   // Only when held up in the ego's lane too (else it passes them): a leader within passing
   // range. (Not one at the ego's speed: dropping back, the ego is slower than it.)

@@ -147,7 +147,7 @@ struct ReferenceBehaviourParams {
   double gap_seek_drop_mps = 2.5;   ///< ... this much slower than the last of them ...
   double gap_seek_min_speed_mps = 12.0;  ///< ... but no slower than this ...
   double gap_seek_rear_gap_m = 20.0;     ///< ... when no car behind in its lane is nearer than this
-  /// ... until the last of them is this share of the RSS gap ahead of the ego.
+  /// ... until it can enter that lane with this share of the RSS gap ahead (and room behind).
   double gap_seek_front_factor = 1.0;
   friend bool operator==(const ReferenceBehaviourParams&,
                          const ReferenceBehaviourParams&) = default;

@@ -101,8 +101,12 @@ struct LaneView {
   bool alongside = false;           ///< a car overlaps the ego's length (with a margin)
   double expected_speed_mps = 0.0;  ///< average over the evaluation horizon
   double rear_threat = 0.0;         ///< 0 .. 1: a car closing fast from behind
-  bool enterable = false;           ///< an adjacent lane with room to move into now
-  bool passable = false;            ///< ... or at least to pass through to the lane beyond
+  /// The next lanes only: the RSS gap (m) the ego at its speed needs behind the leader there
+  /// (0: no leader) ...
+  double entry_rss_gap_m = 0.0;
+  bool rear_ok = false;    ///< ... and whether the car behind there has room were it to enter now
+  bool enterable = false;  ///< a next lane with room to move into now
+  bool passable = false;   ///< ... or at least to pass through to the lane beyond
   double cost = 0.0;
 };
 
