@@ -4,6 +4,7 @@
 #include "overtake/batch/tune.hpp"
 
 #include <algorithm>
+#include <array>
 #include <charconv>
 #include <chrono>
 #include <cmath>
@@ -550,6 +551,17 @@ std::vector<double> start_point(const TuneSpec& spec, const Target& t) {
   return x;
 }
 
+// `value` to 10 significant digits: a trial's parameters as a user would type them (0.9, not
+// 0.9000000000000001 from the scaling), in its rows, best.json and a program's command.
+double round_to_digits(double value) {
+  std::array<char, 32> buf{};
+  const auto written =
+      std::to_chars(buf.data(), buf.data() + buf.size(), value, std::chars_format::general, 10);
+  double out = value;
+  std::from_chars(buf.data(), written.ptr, out);
+  return out;
+}
+
 // Runs NLopt on the unit cube (each parameter scaled to [0, 1]) from the start.
 std::string optimise(Search& search, const TuneSpec& spec, const std::vector<double>& start) {
   const std::size_t n = spec.params.size();
@@ -559,7 +571,7 @@ std::string optimise(Search& search, const TuneSpec& spec, const std::vector<dou
       const TuneParam& p = spec.params[i];
       x[i] = i < u.size() && std::abs(u[i] - (start[i] - p.low) / (p.high - p.low)) < 1e-15
                  ? start[i]  // the start exactly, not a number that rounds near it
-                 : std::clamp(p.low + u[i] * (p.high - p.low), p.low, p.high);
+                 : std::clamp(round_to_digits(p.low + u[i] * (p.high - p.low)), p.low, p.high);
     }
     return x;
   };

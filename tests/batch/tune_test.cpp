@@ -4,7 +4,10 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <array>
 #include <atomic>
+#include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <string>
@@ -86,6 +89,15 @@ TEST(Tune, FindsBetterParametersThanItsStartAndValidatesThemOnHeldOutSeeds) {
   EXPECT_DOUBLE_EQ(start.params.at("behaviour.min_gap_m"), 4.0);  // the config's value
   EXPECT_TRUE(best.feasible);
   EXPECT_GT(best.objective, start.objective + 1.0);  // mph, on the training seeds
+  // Every trial's numbers as a user would type them: 10 significant digits at most (no
+  // 0.9000000000000001 from scaling the unit cube back to the ranges).
+  for (const auto& trial : o.trials) {
+    for (const auto& [name, value] : trial.params) {
+      std::array<char, 32> ten{};
+      std::snprintf(ten.data(), ten.size(), "%.10g", value);
+      EXPECT_EQ(std::strtod(ten.data(), nullptr), value) << name << " in trial " << trial.number;
+    }
+  }
   // Every trial is a row; the best is a config file the planner takes.
   EXPECT_EQ(lines_of(spec.out / batch::kTuneTrialsFile).size(), 8U);
   const json best_file = json::parse(read_file(spec.out / batch::kTuneBestFile));
