@@ -23,6 +23,12 @@ void add_planner_flags(CLI::App& cmd, PlannerFlags& f, PlannerFlagSet which) {
                    "named after the module unless NAME=")
         ->allow_extra_args(false)
         ->take_all();
+    cmd.add_option("--planner-params", f.params,
+                   "NAME=JSON: parameters of a --policy-py or --policy-lib planner, a JSON object\n"
+                   "of numbers by name ('mine={\"speed_mps\":20.5}'): a Python planner's keyword\n"
+                   "arguments, a plugin's setup config_json")
+        ->allow_extra_args(false)
+        ->take_all();
   }
   const auto reply_timeout = [&] {
     cmd.add_option("--planner-reply-timeout", f.reply_timeout_s,

@@ -6,6 +6,8 @@
 #include <set>
 #include <stdexcept>
 
+#include <nlohmann/json.hpp>
+
 #include "overtake/app/cli.hpp"
 #include "overtake/app/interrupt.hpp"
 #include "overtake/base/errors.hpp"
@@ -73,8 +75,24 @@ std::vector<std::string> bench_task_flags(const batch::BenchSpec& b,
   if (b.config) args.push_back("--config=" + fs::absolute(*b.config).string());
   for (const std::string& name : b.planners->added_names()) {
     const planners::PlannerEntry& e = *b.planners->find(name);
-    args.push_back("--planner-cmd=" + e.program->command);
-    args.push_back("--planner-name=" + e.name);
+    switch (e.kind) {
+      case planners::PlannerKind::program:
+        args.push_back("--planner-cmd=" + e.program->command);
+        args.push_back("--planner-name=" + e.name);
+        break;
+      case planners::PlannerKind::python:
+      case planners::PlannerKind::plugin:
+        // The task's working directory is this one (sbatch --chdir): the source as given.
+        args.push_back(
+            (e.kind == planners::PlannerKind::python ? "--policy-py=" : "--policy-lib=") + e.name +
+            "=" + e.source);
+        if (!e.params.empty()) {
+          args.push_back("--planner-params=" + e.name + "=" + nlohmann::json(e.params).dump());
+        }
+        break;
+      case planners::PlannerKind::builtin:
+        break;
+    }
   }
   args.insert(args.end(), planner_flags.begin(), planner_flags.end());
   return args;
@@ -116,11 +134,6 @@ std::function<bool(const batch::BenchSpec&, const std::atomic<bool>*)> slurm_for
         "--slurm-submit-only: a search reads each trial's bench before it asks for the next, "
         "so it follows every array; leave the flag out");
   }
-  const planners::PlannerEntry& e = spec.planners->require(spec.policy);
-  if (e.kind == planners::PlannerKind::python || e.kind == planners::PlannerKind::plugin) {
-    throw UsageError("--slurm: the parameters of " + e.label() +
-                     " reach it in this process only; run this search here (without --slurm)");
-  }
   // Each bench (a trial's on one map, a validation's) shares its runs out among the tasks.
   std::size_t seeds = spec.seeds.size();
   if (!spec.validation_seeds.empty()) seeds = std::min(seeds, spec.validation_seeds.size());
@@ -132,7 +145,7 @@ std::function<bool(const batch::BenchSpec&, const std::atomic<bool>*)> slurm_for
     if (o->get_lnames().empty()) continue;
     const std::string& name = o->get_lnames().front();
     if (f.planner_options.count(name) == 0 || name == "planner-cmd" || name == "planner-name" ||
-        name == "policy-py" || name == "policy-lib")
+        name == "policy-py" || name == "policy-lib" || name == "planner-params")
       leave_out.insert(name);
   }
   return slurm_runner(f.slurm, task_arguments(cmd, leave_out));

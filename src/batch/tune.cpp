@@ -211,9 +211,8 @@ std::shared_ptr<const planners::PlannerCatalog> trial_catalog(const Target& t, c
   } else {
     std::map<std::string, double> keywords;
     for (std::size_t i = 0; i < x.size(); ++i) keywords[t.places[i].key] = x[i];
-    e.make = e.with_keywords(keywords);
     const char* flag = e.kind == PlannerKind::plugin ? "--policy-lib" : "--policy-py";
-    catalog->add(std::move(e), flag);
+    catalog->add(e.with_params(keywords), flag);
   }
   return catalog;
 }
@@ -859,7 +858,7 @@ void check_tune_spec(const TuneSpec& spec) {
     std::map<std::string, double> keywords;
     for (std::size_t i = 0; i < start.size(); ++i) keywords[spec.params[i].name] = start[i];
     try {
-      (void)t.entry->with_keywords(keywords);
+      (void)t.entry->with_params(keywords);
     } catch (const std::exception& e) {
       throw UsageError(std::string("--param: ") + e.what());
     }

@@ -4,7 +4,9 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cmath>
 #include <cstddef>
+#include <stdexcept>
 
 #include <nlohmann/json.hpp>
 
@@ -167,6 +169,7 @@ std::string planner_command_line(const PlannerCall& c) {
 std::string PlannerEntry::describe() const {
   nlohmann::json j{{"kind", to_string(kind)}};
   if (kind != PlannerKind::builtin) j["source"] = source;
+  if (!params.empty()) j["params"] = params;
   if (program) {
     j["cwd"] = program->cwd.string();
     j["port"] = program->port;
@@ -174,6 +177,14 @@ std::string PlannerEntry::describe() const {
     j["network"] = program_isolated(*this) ? "isolated" : "host";
   }
   return json_text(j);
+}
+
+PlannerEntry PlannerEntry::with_params(const std::map<std::string, double>& values) const {
+  if (!with_keywords) throw std::logic_error(label() + " takes no parameters");
+  PlannerEntry e = *this;
+  for (const auto& [key, value] : values) e.params[key] = value;
+  e.make = with_keywords(e.params);
+  return e;
 }
 
 std::string PlannerEntry::label() const {
@@ -198,6 +209,51 @@ std::string chosen_policy(const PlannerCatalog& catalog, const std::string& poli
   for (const auto& n : added) names += (names.empty() ? "" : ", ") + n;
   throw UsageError("several planners were given (" + names + "): choose one with --policy");
 }
+
+namespace {
+
+// --planner-params: each NAME=JSON as numbers by name, by planner name.
+std::map<std::string, std::map<std::string, double>> parse_planner_params(
+    const std::vector<std::string>& texts) {
+  std::map<std::string, std::map<std::string, double>> out;
+  for (const std::string& text : texts) {
+    const auto bad = [&](const std::string& why) {
+      return UsageError("--planner-params: '" + text + "': " + why +
+                        R"( (expected NAME={"key":number,...}))");
+    };
+    const std::size_t eq = text.find('=');
+    if (eq == std::string::npos) throw bad("no '=' after the planner's name");
+    const std::string name = text.substr(0, eq);
+    if (!valid_name(name)) throw bad("'" + name + "' is not a planner name");
+    if (out.count(name) != 0) throw bad("the planner " + name + " was given parameters before");
+    const nlohmann::json j = nlohmann::json::parse(text.substr(eq + 1), nullptr, false);
+    if (j.is_discarded() || !j.is_object()) throw bad("not a JSON object of numbers");
+    std::map<std::string, double>& values = out[name];
+    for (const auto& [key, value] : j.items()) {
+      if (!value.is_number() || !std::isfinite(value.get<double>())) {
+        throw bad("the value of '" + key + "' is not a finite number");
+      }
+      values[key] = value.get<double>();
+    }
+  }
+  return out;
+}
+
+// `e` with the parameters --planner-params gave it, if any (taken out of `params`).
+PlannerEntry with_given_params(PlannerEntry e,
+                               std::map<std::string, std::map<std::string, double>>& params) {
+  const auto it = params.find(e.name);
+  if (it == params.end()) return e;
+  try {
+    e = e.with_params(it->second);
+  } catch (const std::exception& error) {
+    throw UsageError("--planner-params: " + e.label() + ": " + error.what());
+  }
+  params.erase(it);
+  return e;
+}
+
+}  // namespace
 
 std::pair<std::string, std::string> split_named(const std::string& text) {
   const std::size_t eq = text.find('=');
@@ -276,6 +332,7 @@ bool PlannerCatalog::has_programs() const {
 
 std::shared_ptr<const PlannerCatalog> catalog_from_flags(const PlannerFlags& f) {
   auto catalog = std::make_shared<PlannerCatalog>();
+  auto params = parse_planner_params(f.params);
   for (const auto& text : f.libs) {
     auto [name, path] = split_named(text);
     if (path.empty()) throw UsageError("--policy-lib: no library path in '" + text + "'");
@@ -297,7 +354,7 @@ std::shared_ptr<const PlannerCatalog> catalog_from_flags(const PlannerFlags& f) 
           for (const auto& [key, value] : values) j[key] = value;
           return with_config(j.dump());
         };
-    catalog->add(std::move(e), "--policy-lib");
+    catalog->add(with_given_params(std::move(e), params), "--policy-lib");
   }
   for (const auto& text : f.python) {
     auto [name, spec] = split_named(text);
@@ -315,7 +372,12 @@ std::shared_ptr<const PlannerCatalog> catalog_from_flags(const PlannerFlags& f) 
     e.reply_timeout_s = f.reply_timeout_s;
     e.make = std::move(loaded.make);
     e.with_keywords = std::move(loaded.with_keywords);
-    catalog->add(std::move(e), "--policy-py");
+    catalog->add(with_given_params(std::move(e), params), "--policy-py");
+  }
+  if (!params.empty()) {
+    throw UsageError("--planner-params: '" + params.begin()->first +
+                     "' names no --policy-py or --policy-lib planner (a planner program takes its "
+                     "parameters in its command, a built-in policy by --config)");
   }
   if (!f.names.empty() && f.names.size() != f.commands.size()) {
     throw UsageError("--planner-name: " + std::to_string(f.names.size()) + " names for " +

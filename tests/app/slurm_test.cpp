@@ -9,6 +9,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <set>
 #include <thread>
 
 #include "bench_support.hpp"
@@ -296,6 +297,24 @@ class SlurmCli : public ::testing::Test {
     a.insert(a.end(), more.begin(), more.end());
     return a;
   }
+  /// A tune of the planner and parameter `planner` names: 3 trials of seeds 1-2 x 0.5 min.
+  static std::vector<std::string> small_tune(const std::vector<std::string>& planner) {
+    return with(with({"tune"}, planner),
+                {"--seeds", "1-2", "--minutes", "0.5", "--trials", "3", "--constraint", "none"});
+  }
+  /// Runs the tune `search` here (--jobs 2, into local/) and then on Slurm (2 tasks, into
+  /// cluster/); true when both finished.
+  bool tune_here_and_on_slurm(const std::vector<std::string>& search) {
+    return run(with(search, {"--jobs", "2", "--out", path("local").string()})) == 0 &&
+           run(with(search, {"--slurm", "2", "--slurm-poll", "0.1", "--out",
+                             path("cluster").string()})) == 0;
+  }
+  /// The search on Slurm found what the search here found: the same trials, the same best.
+  void expect_the_same_search() const {
+    EXPECT_EQ(read_file(path("cluster") / "trials.jsonl"),
+              read_file(path("local") / "trials.jsonl"));
+    EXPECT_EQ(read_file(path("cluster") / "best.json"), read_file(path("local") / "best.json"));
+  }
 
   test::TempDir dir_{"overtake-slurm-cli"};
 };
@@ -338,33 +357,15 @@ TEST_F(SlurmCli, ATuneOnSlurmRunsEachBenchAsAnArrayAndFindsWhatALocalTuneFinds) 
   // A program's placeholder: each trial's tasks run the program with that trial's value.
   const std::string course =
       (fs::path(OVERTAKE_BINARY_DIR) / "tests" / "overtake_course_planner").string();
-  const std::vector<std::string> search = {"tune",
-                                           "--planner-cmd",
-                                           course + " --speed-mps {speed}",
-                                           "--planner-name",
-                                           "course",
-                                           "--param",
-                                           "speed=12:20@14",
-                                           "--seeds",
-                                           "1-2",
-                                           "--minutes",
-                                           "0.5",
-                                           "--trials",
-                                           "3",
-                                           "--validate-seeds",
-                                           "5-6",
-                                           "--constraint",
-                                           "none"};
-  ASSERT_EQ(run(with(search, {"--jobs", "2", "--out", path("local").string()})), 0) << err();
-  ASSERT_EQ(
-      run(with(search, {"--slurm", "2", "--slurm-poll", "0.1", "--out", path("cluster").string()})),
-      0)
-      << err();
+  const std::vector<std::string> search =
+      with(small_tune({"--planner-cmd", course + " --speed-mps {speed}", "--planner-name", "course",
+                       "--param", "speed=12:20@14"}),
+           {"--validate-seeds", "5-6"});
+  ASSERT_TRUE(tune_here_and_on_slurm(search)) << err();
   // Three trials and the validation's two benches, each an array of its own.
   EXPECT_EQ(sbatch_calls(), 5);
   EXPECT_THAT(err(), HasSubstr("as a Slurm array of 2 tasks"));
-  EXPECT_EQ(read_file(path("cluster") / "trials.jsonl"), read_file(path("local") / "trials.jsonl"));
-  EXPECT_EQ(read_file(path("cluster") / "best.json"), read_file(path("local") / "best.json"));
+  expect_the_same_search();
   const std::string trial = (path("cluster") / "trials" / "0002").string();
   EXPECT_TRUE(fs::exists(fs::path(trial) / "shards" / "shard-2" / "runs.jsonl"));
   // Resumed when done: nothing is submitted again.
@@ -375,16 +376,24 @@ TEST_F(SlurmCli, ATuneOnSlurmRunsEachBenchAsAnArrayAndFindsWhatALocalTuneFinds) 
   EXPECT_EQ(sbatch_calls(), 5);
 }
 
+TEST_F(SlurmCli, ATuneOnSlurmOfAPluginsParameterFindsWhatALocalTuneFinds) {
+  // A plugin's parameter (as a Python planner's keyword) reaches each task as --planner-params.
+  // (A plugin: every build has one; the sanitizer build has no Python.)
+  const std::vector<std::string> search =
+      small_tune({"--policy-lib", std::string("lane=") + OVERTAKE_KEEP_LANE_PLUGIN, "--param",
+                  "cruise_mps=10:21@12"});
+  ASSERT_TRUE(tune_here_and_on_slurm(search)) << err();
+  EXPECT_EQ(sbatch_calls(), 3);
+  expect_the_same_search();
+  // The trials differ: the parameter reached the tasks.
+  std::set<std::string> speeds;
+  std::ifstream trials(path("cluster") / "trials.jsonl");
+  for (std::string line; std::getline(trials, line);)
+    speeds.insert(json::parse(line)["figures"]["mean_speed_mph"].dump());
+  EXPECT_EQ(speeds.size(), 3U);
+}
+
 TEST_F(SlurmCli, WhatATuneOnSlurmCannotDoIsRefusedBeforeAnyTrial) {
-  // A plugin's parameters (as a Python planner's) reach it only in this process. (A plugin:
-  // every build has one; the sanitizer build has no Python.)
-  EXPECT_EQ(
-      run({"tune", "--policy-lib", std::string("lane=") + OVERTAKE_KEEP_LANE_PLUGIN, "--param",
-           "cruise_mps=10:21", "--seeds", "1-2", "--slurm", "2", "--out", path("lib").string()}),
-      kExitUsage);
-  EXPECT_THAT(err(), HasSubstr("--slurm: the parameters of the plugin lane"));
-  EXPECT_EQ(sbatch_calls(), 0);
-  EXPECT_FALSE(fs::exists(path("lib") / "trials.jsonl"));
   // More tasks than a bench has runs: refused before any trial.
   EXPECT_EQ(run({"tune", "--policy", "reference", "--param", "hysteresis=0:0.05", "--seeds", "1-2",
                  "--slurm", "3", "--out", path("many").string()}),

@@ -15,6 +15,8 @@
 #include <map>
 #include <sstream>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include <dlfcn.h>
 #include <unistd.h>
@@ -397,6 +399,45 @@ TEST_F(PluginCli, DriveRunsThePlugin) {
   EXPECT_EQ(j["config"]["policy"], "keep_lane");
   EXPECT_EQ(j["incident_counts"]["collision"], 0);
   EXPECT_TRUE(j["plan_status"].is_null()) << j["plan_status"];  // the ABI carries points only
+}
+
+TEST_F(PluginCli, PlannerParamsReachThePluginAndTheRunsRecord) {
+  const fs::path report = dir_ / "report.json";
+  const auto [status, out, err] =
+      run({"drive", "--policy-lib", std::string("lane=") + OVERTAKE_KEEP_LANE_PLUGIN,
+           "--planner-params", R"(lane={"cruise_mps":12})", "--minutes", "1", "--seed", "1",
+           "--quiet", "--json", report.string()});
+  ASSERT_EQ(status, 0) << err;
+  const json j = json::parse(read(report));
+  EXPECT_EQ(j["config"]["planner"]["params"], json::parse(R"({"cruise_mps":12.0})"));
+  // 12 m/s is 26.8 mph: the plugin's own cruise (49 mph) would be far faster.
+  EXPECT_LT(j["mean_speed_mph"].get<double>(), 26.9);
+  EXPECT_GT(j["mean_speed_mph"].get<double>(), 15.0);
+}
+
+TEST_F(PluginCli, BadPlannerParamsAreRefusedBeforeAnyRunNamingWhatIsWrong) {
+  const std::string lib = std::string("lane=") + OVERTAKE_KEEP_LANE_PLUGIN;
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {R"(other={"cruise_mps":12})", "'other' names no --policy-py or --policy-lib planner"},
+      {"lane", "no '=' after the planner's name"},
+      {"lane=[12]", "not a JSON object"},
+      {R"(lane={"cruise_mps":"fast"})", "the value of 'cruise_mps' is not a finite number"},
+      {R"(lane={"cruise_mps":1e999})", "not a JSON object"}};
+  for (const auto& [given, why] : cases) {
+    const fs::path report = dir_ / "report.json";
+    const auto [status, out, err] = run({"drive", "--policy-lib", lib, "--planner-params", given,
+                                         "--minutes", "0.5", "--json", report.string()});
+    EXPECT_EQ(status, 2) << given;
+    EXPECT_THAT(err, AllOf(HasSubstr("--planner-params"), HasSubstr(why))) << given;
+    EXPECT_FALSE(fs::exists(report)) << given;
+  }
+  // A planner program takes its parameters in its command.
+  const auto [status, out, err] =
+      run({"bench", "--planner-cmd", "sleep 1", "--planner-name", "p", "--planner-params",
+           R"(p={"x":1})", "--seeds", "1", "--out", (dir_ / "bench").string()});
+  EXPECT_EQ(status, 2);
+  EXPECT_THAT(err, HasSubstr("a planner program takes its parameters in its command"));
+  EXPECT_FALSE(fs::exists(dir_ / "bench" / "runs.jsonl"));
 }
 
 TEST_F(PluginCli, DriveWithAFailingPluginEndsCleanlyWithTheReason) {

@@ -142,3 +142,27 @@ def test_a_planner_that_never_answers_is_interrupted(run_binary):
     assert report["end"] == "planner_failed"
     assert ("did not answer in time and was interrupted (TimeoutError at interruptible.py, line"
             in report["ended_early"])
+
+
+def test_planner_params_give_a_python_planner_its_keywords(run_binary, tmp_path):
+    planner = f"kw={PLANNERS / 'keyword_speed.py'}:Planner"
+    code, slow, err = run_binary("drive", "--policy-py", planner, "--planner-params",
+                                 'kw={"speed_mps":8}', "--seed", "1", "--minutes", "1",
+                                 cwd=tmp_path, env=ENV)
+    assert code == 0, err
+    assert slow["config"]["planner"]["params"] == {"speed_mps": 8.0}
+    code, default, err = run_binary("drive", "--policy-py", planner, "--seed", "1", "--minutes",
+                                    "1", cwd=tmp_path, env=ENV)
+    assert code == 0, err
+    assert "params" not in default["config"]["planner"]
+    # 8 m/s is 17.9 mph; the planner's own default (15 m/s) is far faster.
+    assert slow["mean_speed_mph"] < 18.0 < default["mean_speed_mph"] - 5.0
+
+
+def test_a_keyword_the_python_planner_cannot_take_is_refused_before_any_run(run_binary,
+                                                                            tmp_path):
+    code, _, err = run_binary("drive", "--policy-py", f"kw={PLANNERS / 'keyword_speed.py'}:Planner",
+                              "--planner-params", 'kw={"sped_mps":8}', "--minutes", "0.5",
+                              cwd=tmp_path, env=ENV)
+    assert code == 2
+    assert "--planner-params" in err and "sped_mps" in err

@@ -53,6 +53,8 @@ struct PlannerEntry {
   /// arguments (throws when the callable cannot take them), a plugin's setup config_json.
   /// Empty for the others.
   std::function<planner::PolicyFactory(const std::map<std::string, double>&)> with_keywords;
+  /// The parameters `make` was given (`--planner-params`, a tune's trial); empty: none.
+  std::map<std::string, double> params;
   std::optional<ProgramSpec> program;
   /// A plugin's or Python planner's longest plan() call: past it the call is interrupted (a
   /// Python planner) or overtake ends (a plugin: code in this process cannot be stopped).
@@ -61,6 +63,10 @@ struct PlannerEntry {
   [[nodiscard]] std::string describe() const;
   /// How messages name it: "the plugin NAME (SOURCE)", "the Python planner NAME (SOURCE)".
   [[nodiscard]] std::string label() const;
+  /// This planner with `values` added to its parameters (replacing those of the same name):
+  /// `make` from with_keywords. Throws what with_keywords throws (a keyword a Python callable
+  /// cannot take); std::logic_error for a planner without with_keywords.
+  [[nodiscard]] PlannerEntry with_params(const std::map<std::string, double>& values) const;
   /// Whether its plan() calls are watched (a planner from outside in this process).
   [[nodiscard]] bool watched() const {
     return kind == PlannerKind::plugin || kind == PlannerKind::python;
@@ -99,6 +105,9 @@ class PlannerCatalog {
 struct PlannerFlags {
   std::vector<std::string> libs;
   std::vector<std::string> python;
+  /// --planner-params: `NAME=JSON`, the parameters of a --policy-py or --policy-lib planner (a
+  /// JSON object of numbers by name: its keyword arguments, its setup config_json).
+  std::vector<std::string> params;
   std::vector<std::string> commands;
   std::vector<std::string> names;  ///< --planner-name: none, or one per command
   std::string cwd;
