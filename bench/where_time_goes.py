@@ -10,6 +10,12 @@ A lane is *blocked* when a car slower than 47 mph is within 50 m ahead of the eg
 Every world step after the first 30 s counts; the ego's lane is the one its centre is in. The
 situations: its own lane open; its own blocked and a next lane open; its own and the next
 blocked and the far lane open (from an outer lane); every lane blocked.
+
+With --open-detail, the time with its own lane open is split further: changing lanes (the
+ego's centre more than 0.5 m from its lane's centre); following (a car in its lane within 80 m
+ahead, bumper to bumper, slower than the cruise speed); speeding up (faster than a step before
+and more than 0.5 mph below cruise); the rest. The loss of each is its share of that time times
+how far its mean speed is below cruise.
 """
 import argparse
 import math
@@ -26,6 +32,10 @@ SKIP_S = 30.0
 ROAD_LENGTH_M = 6945.554  # the loop's length in s, the built-in track's and the course map's
 SITUATIONS = ("own lane open", "own lane blocked, the next lane open",
               "own lane and the next blocked, the far lane open", "every lane blocked")
+CRUISE_MPH = 49.7
+FOLLOW_M = 80.0
+OPEN_DETAILS = ("changing lanes", "following a car slower than cruise", "speeding up",
+                "the rest")
 
 
 def seeds_of(text):
@@ -60,40 +70,77 @@ def situation(own, blocked):
     return 3
 
 
+def open_detail(t, own, previous_mph):
+    """Which part of the time with its own lane open this step is (an index of OPEN_DETAILS)."""
+    if abs(t["d"] - (own + 0.5) * LANE_WIDTH_M) > 0.5:
+        return 0
+    for _, _, _, vx, vy, s, d in t["sensor_fusion"]:
+        if int(d // LANE_WIDTH_M) != own:
+            continue
+        gap = (s - t["s"]) % ROAD_LENGTH_M - CAR_LENGTH_M
+        if 0 <= gap < FOLLOW_M and math.hypot(vx, vy) * MPS_TO_MPH < CRUISE_MPH - 0.3:
+            return 1
+    if previous_mph < t["speed"] < CRUISE_MPH - 0.5:
+        return 2
+    return 3
+
+
+def print_table(header, names, time_s, miles, loss):
+    total = sum(time_s)
+    print(header)
+    print("|---|---:|---:|" + ("---:|" if loss else ""))
+    for k, name in enumerate(names):
+        speed = miles[k] / time_s[k] * 3600.0 if time_s[k] > 0 else float("nan")
+        row = f"| {name} | {100 * time_s[k] / total:.1f}% | {speed:.1f} mph |"
+        if loss:
+            row += f" {time_s[k] / total * (CRUISE_MPH - speed):.2f} mph |"
+        print(row)
+    print(f"| all | | {sum(miles) / total * 3600.0:.2f} mph |" + (" |" if loss else ""))
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--seeds", default="1-20", help="a seed or a range, e.g. 1-20")
     ap.add_argument("--minutes", type=float, default=30.0)
     ap.add_argument("--config", help="a config file, as for overtake --config")
     ap.add_argument("--map", help="a map file (default: the built-in track)")
+    ap.add_argument("--open-detail", action="store_true",
+                    help="split the time with the own lane open further")
     a = ap.parse_args()
     time_s = [0.0] * len(SITUATIONS)
     miles = [0.0] * len(SITUATIONS)
+    open_time_s = [0.0] * len(OPEN_DETAILS)
+    open_miles = [0.0] * len(OPEN_DETAILS)
     for seed in seeds_of(a.seeds):
         world = overtake.World(map=a.map, seed=seed, traffic="faithful", config=a.config,
                                minutes=a.minutes)
         policy = overtake.builtin_policy("reference", map=a.map, config=a.config)
         t = world.reset()
         last_s = 0.0
+        previous_mph = 0.0
         while True:
             t, info = world.step(*policy(t))
             if info["done"]:
                 break
             dt = info["time_s"] - last_s
             last_s = info["time_s"]
+            step_previous_mph, previous_mph = previous_mph, t["speed"]
             if info["time_s"] <= SKIP_S:
                 continue
             own = min(LANES - 1, max(0, int(t["d"] // LANE_WIDTH_M)))
             k = situation(own, blocked_lanes(t, ROAD_LENGTH_M))
             time_s[k] += dt
             miles[k] += t["speed"] * dt / 3600.0
-    total = sum(time_s)
-    print("| situation | share of the time | the ego's mean speed |")
-    print("|---|---:|---:|")
-    for k, name in enumerate(SITUATIONS):
-        speed = miles[k] / time_s[k] * 3600.0 if time_s[k] > 0 else float("nan")
-        print(f"| {name} | {100 * time_s[k] / total:.1f}% | {speed:.1f} mph |")
-    print(f"| all | | {sum(miles) / total * 3600.0:.2f} mph |")
+            if k == 0 and a.open_detail:
+                j = open_detail(t, own, step_previous_mph)
+                open_time_s[j] += dt
+                open_miles[j] += t["speed"] * dt / 3600.0
+    print_table("| situation | share of the time | the ego's mean speed |", SITUATIONS, time_s,
+                miles, False)
+    if a.open_detail:
+        print()
+        print_table("| own lane open | share of that time | the ego's mean speed | loss |",
+                    OPEN_DETAILS, open_time_s, open_miles, True)
 
 
 if __name__ == "__main__":

@@ -255,7 +255,10 @@ Subcommand register_tune(CLI::App& app) {
   cmd->add_option("--hours", f->hours,
                   "The budget as simulated hours (training runs), when fewer trials than --trials")
       ->check(CLI::Range(0.0, 1e7));
-  cmd->add_option("--algorithm", spec->algorithm, "sbplx, neldermead, bobyqa or cobyla")
+  cmd->add_option("--algorithm", spec->algorithm,
+                  "NLopt's: sbplx, neldermead, bobyqa, cobyla (local, from the start) or\n"
+                  "direct (DIRECT-L), crs2 (controlled random search, seeded): global, over\n"
+                  "the whole box")
       ->capture_default_str();
   cmd->add_option("--jobs", spec->jobs, "Runs of a trial at once")
       ->default_val(batch::default_jobs());

@@ -532,7 +532,10 @@ nlopt::algorithm algorithm_of(const std::string& name) {
   if (name == "neldermead") return nlopt::LN_NELDERMEAD;
   if (name == "bobyqa") return nlopt::LN_BOBYQA;
   if (name == "cobyla") return nlopt::LN_COBYLA;
-  throw UsageError("--algorithm: unknown '" + name + "' (sbplx, neldermead, bobyqa, cobyla)");
+  if (name == "direct") return nlopt::GN_DIRECT_L;
+  if (name == "crs2") return nlopt::GN_CRS2_LM;
+  throw UsageError("--algorithm: unknown '" + name + "' (" +
+                   base::join_list(tune_algorithm_names(), ", ") + ")");
 }
 
 std::vector<double> start_point(const TuneSpec& spec, const Target& t) {
@@ -561,6 +564,9 @@ double round_to_digits(double value) {
   return out;
 }
 
+// The seed of NLopt's random numbers (crs2's population).
+constexpr unsigned long kCrs2Seed = 20261128;
+
 // Runs NLopt on the unit cube (each parameter scaled to [0, 1]) from the start.
 std::string optimise(Search& search, const TuneSpec& spec, const std::vector<double>& start) {
   const std::size_t n = spec.params.size();
@@ -585,6 +591,8 @@ std::string optimise(Search& search, const TuneSpec& spec, const std::vector<dou
   opt.set_initial_step(0.25);
   opt.set_xtol_abs(1e-3);
   opt.set_maxeval(std::max(spec.trials * 20, 100));  // asks for trials already run are free
+  // CRS2's random points from a fixed seed: the same search on every run (and on --resume).
+  nlopt::srand(kCrs2Seed);
   // NLopt turns an exception in the objective into its own failure: a trial's error is kept
   // here and thrown again once the optimiser has returned.
   struct Data {
@@ -811,7 +819,8 @@ bool tune_figure_higher_is_better(const std::string& name) {
 }
 
 const std::vector<std::string>& tune_algorithm_names() {
-  static const std::vector<std::string> names = {"sbplx", "neldermead", "bobyqa", "cobyla"};
+  static const std::vector<std::string> names = {"sbplx",  "neldermead", "bobyqa",
+                                                 "cobyla", "direct",     "crs2"};
   return names;
 }
 

@@ -431,6 +431,13 @@ TEST_F(PluginCli, BadPlannerParamsAreRefusedBeforeAnyRunNamingWhatIsWrong) {
     EXPECT_THAT(err, AllOf(HasSubstr("--planner-params"), HasSubstr(why))) << given;
     EXPECT_FALSE(fs::exists(report)) << given;
   }
+  {
+    const auto [status, out, err] =
+        run({"drive", "--policy-lib", lib, "--planner-params", R"(lane={"cruise_mps":12})",
+             "--planner-params", R"(lane={"cruise_mps":13})", "--minutes", "0.5"});
+    EXPECT_EQ(status, 2);
+    EXPECT_THAT(err, HasSubstr("the planner lane was given parameters before"));
+  }
   // A planner program takes its parameters in its command.
   const auto [status, out, err] =
       run({"bench", "--planner-cmd", "sleep 1", "--planner-name", "p", "--planner-params",
