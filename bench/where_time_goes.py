@@ -16,6 +16,11 @@ ego's centre more than 0.5 m from its lane's centre); following (a car in its la
 ahead, bumper to bumper, slower than the cruise speed); speeding up (faster than a step before
 and more than 0.5 mph below cruise); the rest. The loss of each is its share of that time times
 how far its mean speed is below cruise.
+
+With --far-detail, the time with only the far lane open (the ego in an outer lane) is split by
+what holds it in the middle lane: changing lanes; a car beside it there (centres less than a
+car length and 1.5 m apart); the nearest car ahead there within 10 m, 10-20 m or farther
+(bumper to bumper); a car behind there within 10 m.
 """
 import argparse
 import math
@@ -36,6 +41,9 @@ CRUISE_MPH = 49.7
 FOLLOW_M = 80.0
 OPEN_DETAILS = ("changing lanes", "following a car slower than cruise", "speeding up",
                 "the rest")
+FAR_DETAILS = ("changing lanes", "a car beside in the middle lane",
+               "a car ahead there within 10 m", "a car ahead there 10-20 m",
+               "a car behind there within 10 m", "the nearest ahead there farther")
 
 
 def seeds_of(text):
@@ -85,6 +93,30 @@ def open_detail(t, own, previous_mph):
     return 3
 
 
+def far_detail(t, own):
+    """What holds the ego in the middle lane this step (an index of FAR_DETAILS)."""
+    if abs(t["d"] - (own + 0.5) * LANE_WIDTH_M) > 0.5:
+        return 0
+    ahead = behind = math.inf
+    for _, _, _, _, _, s, d in t["sensor_fusion"]:
+        if int(d // LANE_WIDTH_M) != 1:
+            continue
+        gap = (s - t["s"]) % ROAD_LENGTH_M
+        if gap > ROAD_LENGTH_M / 2:
+            gap -= ROAD_LENGTH_M
+        if abs(gap) < CAR_LENGTH_M + 1.5:
+            return 1
+        if gap > 0:
+            ahead = min(ahead, gap - CAR_LENGTH_M)
+        else:
+            behind = min(behind, -gap - CAR_LENGTH_M)
+    if ahead < 10.0:
+        return 2
+    if ahead < 20.0:
+        return 3
+    return 4 if behind < 10.0 else 5
+
+
 def print_table(header, names, time_s, miles, loss):
     total = sum(time_s)
     print(header)
@@ -106,11 +138,15 @@ def main():
     ap.add_argument("--map", help="a map file (default: the built-in track)")
     ap.add_argument("--open-detail", action="store_true",
                     help="split the time with the own lane open further")
+    ap.add_argument("--far-detail", action="store_true",
+                    help="split the time with only the far lane open by what holds the ego")
     a = ap.parse_args()
     time_s = [0.0] * len(SITUATIONS)
     miles = [0.0] * len(SITUATIONS)
     open_time_s = [0.0] * len(OPEN_DETAILS)
     open_miles = [0.0] * len(OPEN_DETAILS)
+    far_time_s = [0.0] * len(FAR_DETAILS)
+    far_miles = [0.0] * len(FAR_DETAILS)
     for seed in seeds_of(a.seeds):
         world = overtake.World(map=a.map, seed=seed, traffic="faithful", config=a.config,
                                minutes=a.minutes)
@@ -135,12 +171,20 @@ def main():
                 j = open_detail(t, own, step_previous_mph)
                 open_time_s[j] += dt
                 open_miles[j] += t["speed"] * dt / 3600.0
+            if k == 2 and a.far_detail:
+                j = far_detail(t, own)
+                far_time_s[j] += dt
+                far_miles[j] += t["speed"] * dt / 3600.0
     print_table("| situation | share of the time | the ego's mean speed |", SITUATIONS, time_s,
                 miles, False)
     if a.open_detail:
         print()
         print_table("| own lane open | share of that time | the ego's mean speed | loss |",
                     OPEN_DETAILS, open_time_s, open_miles, True)
+    if a.far_detail:
+        print()
+        print_table("| only the far lane open | share of that time | the ego's mean speed |",
+                    FAR_DETAILS, far_time_s, far_miles, False)
 
 
 if __name__ == "__main__":

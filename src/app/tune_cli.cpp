@@ -83,9 +83,7 @@ std::vector<std::string> bench_task_flags(const batch::BenchSpec& b,
       case planners::PlannerKind::python:
       case planners::PlannerKind::plugin:
         // The task's working directory is this one (sbatch --chdir): the source as given.
-        args.push_back(
-            (e.kind == planners::PlannerKind::python ? "--policy-py=" : "--policy-lib=") + e.name +
-            "=" + e.source);
+        args.push_back(std::string(planners::flag_of(e.kind)) + "=" + e.name + "=" + e.source);
         if (!e.params.empty()) {
           args.push_back("--planner-params=" + e.name + "=" + nlohmann::json(e.params).dump());
         }

@@ -207,12 +207,11 @@ std::shared_ptr<const planners::PlannerCatalog> trial_catalog(const Target& t, c
   if (e.kind == PlannerKind::program) {
     e.program->command = program_command(t, x);
     e.source = e.program->command;
-    catalog->add(std::move(e), "--planner-cmd");
+    catalog->add(std::move(e), planners::flag_of(PlannerKind::program));
   } else {
     std::map<std::string, double> keywords;
     for (std::size_t i = 0; i < x.size(); ++i) keywords[t.places[i].key] = x[i];
-    const char* flag = e.kind == PlannerKind::plugin ? "--policy-lib" : "--policy-py";
-    catalog->add(e.with_params(keywords), flag);
+    catalog->add(e.with_params(keywords), planners::flag_of(e.kind));
   }
   return catalog;
 }

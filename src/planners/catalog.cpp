@@ -112,6 +112,20 @@ std::string_view to_string(PlannerKind kind) {
   return "builtin";
 }
 
+std::string_view flag_of(PlannerKind kind) {
+  switch (kind) {
+    case PlannerKind::builtin:
+      return "";
+    case PlannerKind::plugin:
+      return "--policy-lib";
+    case PlannerKind::python:
+      return "--policy-py";
+    case PlannerKind::program:
+      return "--planner-cmd";
+  }
+  return "";
+}
+
 PlannerCall call_of(const PlannerEntry& entry) {
   PlannerCall c;
   c.kind = entry.kind;
@@ -354,7 +368,7 @@ std::shared_ptr<const PlannerCatalog> catalog_from_flags(const PlannerFlags& f) 
           for (const auto& [key, value] : values) j[key] = value;
           return with_config(j.dump());
         };
-    catalog->add(with_given_params(std::move(e), params), "--policy-lib");
+    catalog->add(with_given_params(std::move(e), params), flag_of(PlannerKind::plugin));
   }
   for (const auto& text : f.python) {
     auto [name, spec] = split_named(text);
@@ -372,7 +386,7 @@ std::shared_ptr<const PlannerCatalog> catalog_from_flags(const PlannerFlags& f) 
     e.reply_timeout_s = f.reply_timeout_s;
     e.make = std::move(loaded.make);
     e.with_keywords = std::move(loaded.with_keywords);
-    catalog->add(with_given_params(std::move(e), params), "--policy-py");
+    catalog->add(with_given_params(std::move(e), params), flag_of(PlannerKind::python));
   }
   if (!params.empty()) {
     throw UsageError("--planner-params: '" + params.begin()->first +
@@ -410,7 +424,7 @@ std::shared_ptr<const PlannerCatalog> catalog_from_flags(const PlannerFlags& f) 
     p.log_max_mb = f.log_max_mb;
     p.network = parse_planner_network(f.network).value_or(PlannerNetwork::automatic);
     e.program = p;
-    catalog->add(std::move(e), "--planner-cmd");
+    catalog->add(std::move(e), flag_of(PlannerKind::program));
   }
   return catalog;
 }

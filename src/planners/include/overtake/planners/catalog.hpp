@@ -30,6 +30,9 @@ enum class PlannerKind {
 };
 
 [[nodiscard]] std::string_view to_string(PlannerKind kind);
+/// The flag that brings a planner of this kind: --policy-lib, --policy-py or --planner-cmd
+/// (empty for a built-in policy).
+[[nodiscard]] std::string_view flag_of(PlannerKind kind);
 
 /// A planner program started for each run (`--planner-cmd`).
 struct ProgramSpec {
