@@ -315,6 +315,19 @@ class SlurmCli : public ::testing::Test {
               read_file(path("local") / "trials.jsonl"));
     EXPECT_EQ(read_file(path("cluster") / "best.json"), read_file(path("local") / "best.json"));
   }
+  /// A small tune on Slurm of an in-process planner's parameter (`planner`: its flags and
+  /// --param) finds what the same search here finds, its trials drive differently (the value
+  /// reached each task, as --planner-params), and each trial is one array.
+  void expect_a_tune_on_slurm_of(const std::vector<std::string>& planner) {
+    ASSERT_TRUE(tune_here_and_on_slurm(small_tune(planner))) << err();
+    EXPECT_EQ(sbatch_calls(), 3);
+    expect_the_same_search();
+    std::set<std::string> speeds;
+    std::ifstream trials(path("cluster") / "trials.jsonl");
+    for (std::string line; std::getline(trials, line);)
+      speeds.insert(json::parse(line)["figures"]["mean_speed_mph"].dump());
+    EXPECT_EQ(speeds.size(), 3U);
+  }
 
   test::TempDir dir_{"overtake-slurm-cli"};
 };
@@ -377,20 +390,18 @@ TEST_F(SlurmCli, ATuneOnSlurmRunsEachBenchAsAnArrayAndFindsWhatALocalTuneFinds) 
 }
 
 TEST_F(SlurmCli, ATuneOnSlurmOfAPluginsParameterFindsWhatALocalTuneFinds) {
-  // A plugin's parameter (as a Python planner's keyword) reaches each task as --planner-params.
-  // (A plugin: every build has one; the sanitizer build has no Python.)
-  const std::vector<std::string> search =
-      small_tune({"--policy-lib", std::string("lane=") + OVERTAKE_KEEP_LANE_PLUGIN, "--param",
-                  "cruise_mps=10:21@12"});
-  ASSERT_TRUE(tune_here_and_on_slurm(search)) << err();
-  EXPECT_EQ(sbatch_calls(), 3);
-  expect_the_same_search();
-  // The trials differ: the parameter reached the tasks.
-  std::set<std::string> speeds;
-  std::ifstream trials(path("cluster") / "trials.jsonl");
-  for (std::string line; std::getline(trials, line);)
-    speeds.insert(json::parse(line)["figures"]["mean_speed_mph"].dump());
-  EXPECT_EQ(speeds.size(), 3U);
+  // A plugin's setup parameter reaches each task as --planner-params.
+  expect_a_tune_on_slurm_of({"--policy-lib", std::string("lane=") + OVERTAKE_KEEP_LANE_PLUGIN,
+                             "--param", "cruise_mps=10:21@12"});
+}
+
+TEST_F(SlurmCli, ATuneOnSlurmOfAPythonPlannersKeywordFindsWhatALocalTuneFinds) {
+  // A Python planner's keyword argument, the same way (the sanitizer build has no Python).
+  if (!OVERTAKE_PYTHON_PLANNERS) GTEST_SKIP() << "this build runs no Python planners";
+  const fs::path planner =
+      fs::path(OVERTAKE_SOURCE_DIR) / "tests" / "python" / "planners" / "keyword_speed.py";
+  expect_a_tune_on_slurm_of(
+      {"--policy-py", "kw=" + planner.string() + ":Planner", "--param", "speed_mps=8:20@10"});
 }
 
 TEST_F(SlurmCli, WhatATuneOnSlurmCannotDoIsRefusedBeforeAnyTrial) {
