@@ -3,6 +3,7 @@
 #include "overtake/base/io.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cctype>
 #include <cmath>
 #include <cstddef>
@@ -98,32 +99,33 @@ std::string name_of_command(const std::string& command) {
 
 }  // namespace
 
+namespace {
+
+/// Each kind of planner: its name in records and the flag that brings it.
+struct KindText {
+  PlannerKind kind;
+  std::string_view name;
+  std::string_view flag;
+};
+constexpr std::array<KindText, 4> kKindTexts{{{PlannerKind::builtin, "builtin", ""},
+                                              {PlannerKind::plugin, "plugin", "--policy-lib"},
+                                              {PlannerKind::python, "python", "--policy-py"},
+                                              {PlannerKind::program, "program", "--planner-cmd"}}};
+
+const KindText& text_of(PlannerKind kind) {
+  for (const KindText& t : kKindTexts)
+    if (t.kind == kind) return t;
+  return kKindTexts.front();
+}
+
+}  // namespace
+
 std::string_view to_string(PlannerKind kind) {
-  switch (kind) {
-    case PlannerKind::builtin:
-      return "builtin";
-    case PlannerKind::plugin:
-      return "plugin";
-    case PlannerKind::python:
-      return "python";
-    case PlannerKind::program:
-      return "program";
-  }
-  return "builtin";
+  return text_of(kind).name;
 }
 
 std::string_view flag_of(PlannerKind kind) {
-  switch (kind) {
-    case PlannerKind::builtin:
-      return "";
-    case PlannerKind::plugin:
-      return "--policy-lib";
-    case PlannerKind::python:
-      return "--policy-py";
-    case PlannerKind::program:
-      return "--planner-cmd";
-  }
-  return "";
+  return text_of(kind).flag;
 }
 
 PlannerCall call_of(const PlannerEntry& entry) {
