@@ -77,7 +77,7 @@ std::vector<std::string> bench_task_flags(const batch::BenchSpec& b,
     const planners::PlannerEntry& e = *b.planners->find(name);
     switch (e.kind) {
       case planners::PlannerKind::program:
-        args.push_back("--planner-cmd=" + e.program->command);
+        args.push_back(std::string(planners::flag_of(e.kind)) + "=" + e.program->command);
         args.push_back("--planner-name=" + e.name);
         break;
       case planners::PlannerKind::python:

@@ -97,10 +97,6 @@ std::string name_of_command(const std::string& command) {
   return out;
 }
 
-}  // namespace
-
-namespace {
-
 /// Each kind of planner: its name in records and the flag that brings it.
 struct KindText {
   PlannerKind kind;
