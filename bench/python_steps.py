@@ -14,7 +14,11 @@ import math
 import pathlib
 import time
 
-import overtake
+try:
+    import overtake
+except ImportError:
+    raise SystemExit(f"{__file__}: no overtake module: build it (make build) and set "
+                     "PYTHONPATH=build/release/python")
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 

@@ -25,7 +25,11 @@ car length and 1.5 m apart); the nearest car ahead there within 10 m, 10-20 m or
 import argparse
 import math
 
-import overtake
+try:
+    import overtake
+except ImportError:
+    raise SystemExit(f"{__file__}: no overtake module: build it (make build) and set "
+                     "PYTHONPATH=build/release/python")
 
 MPS_TO_MPH = 2.2369362920544
 BLOCKING_MPH = 47.0
