@@ -104,4 +104,37 @@ BENCHMARK(BM_CheckpointRestore)
     ->Args({1, 1})
     ->Unit(benchmark::kMicrosecond);
 
+// A branch of `overtake risk` (batch/risk_world.cpp): the run's state and the planner's,
+// held as taken (not encoded), restored into the same world and planner with every random
+// generator reseeded, then one planner cycle driven from it; and the save that precedes a
+// branch.
+void BM_RiskBranch(benchmark::State& state) {
+  Drive d(profile_of(state));
+  const std::string run_state = d.run->save();
+  const std::string policy_state = planner::save_policy_state(*d.policy);
+  std::uint64_t seed = 1;
+  for (auto _ : state) {
+    (void)planner::restore_policy_state(*d.policy, policy_state);
+    sim::RunOptions opts;
+    opts.restore = run_state;
+    opts.reseed = ++seed;
+    sim::Stepper run(*d.world, opts);
+    benchmark::DoNotOptimize(run.end_step());
+  }
+  state.SetLabel(state.range(0) == 0 ? "faithful" : "calm");
+}
+BENCHMARK(BM_RiskBranch)->Arg(0)->Arg(1)->Unit(benchmark::kMicrosecond);
+
+void BM_RiskSave(benchmark::State& state) {
+  Drive d(profile_of(state));
+  for (auto _ : state) {
+    std::string run_state = d.run->save();
+    std::string policy_state = planner::save_policy_state(*d.policy);
+    benchmark::DoNotOptimize(run_state.data());
+    benchmark::DoNotOptimize(policy_state.data());
+  }
+  state.SetLabel(state.range(0) == 0 ? "faithful" : "calm");
+}
+BENCHMARK(BM_RiskSave)->Arg(0)->Arg(1)->Unit(benchmark::kMicrosecond);
+
 }  // namespace

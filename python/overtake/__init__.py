@@ -8,6 +8,7 @@
 - ``builtin_policy``: a built-in policy as a Python callable (telemetry dict in, path out).
 - ``compare``: two ``overtake bench`` output folders compared run for run (``overtake
   compare``); ``bench_summary``: a bench folder's figures with their intervals.
+- ``risk``: the rate of a rare event per 100 miles for a built-in policy (``overtake risk``).
 
 The telemetry is a dict with the original simulator's fields and units: x, y, s, d (m), yaw
 (degrees), speed (mph), previous_path_x/_y, end_path_s/_d, sensor_fusion (rows [id, x, y,
@@ -22,9 +23,10 @@ from ._overtake import World as _World
 from ._overtake import bench_summary as _bench_summary
 from ._overtake import compare as _compare
 from ._overtake import drive as _drive
+from ._overtake import risk as _risk
 
 __all__ = ["World", "Env", "drive", "builtin_policy", "policies", "BuiltinPolicy", "compare",
-           "bench_summary", "STEP_S"]
+           "bench_summary", "risk", "STEP_S"]
 
 STEP_S = 0.02
 """The simulator's step time, seconds."""
@@ -101,6 +103,22 @@ def compare(before, after, pairs=None, figures=None):
     if figures is not None and not isinstance(figures, str):
         figures = ",".join(figures)
     return _compare(os.fspath(before), os.fspath(after), list(pairs or []), figures)
+
+
+def risk(policy="reference", event="at-fault", map=None, traffic="faithful", minutes=10.0,
+         first_seed=1, rel_error=0.25, budget_hours=20.0, max_runs=100000, config=None,
+         params=None, jobs=0, out="risk-out", resume=False):
+    """Estimates how often `event` ("at-fault", "contact", "near-miss" or a rubric incident
+    type) happens to a built-in policy, per 100 miles, as ``overtake risk`` does, and returns
+    its risk.json as a dict: "rate_per_100mi", "ci95_per_100mi" [low, high],
+    "upper_bound_only" (no event: the interval is [0, bound]), "simulated_hours",
+    "plain_mc_hours", "gain", "runs", "events" and the levels' figures. The runs are kept in
+    `out` (``resume=True`` goes on with them). jobs=0: every core. Bad arguments raise
+    ValueError; Ctrl-C stops it (the finished runs kept) and raises KeyboardInterrupt.
+    """
+    return _risk(policy, event, _path(map), traffic, float(minutes), int(first_seed),
+                 float(rel_error), float(budget_hours), int(max_runs), _path(config),
+                 _path(params), int(jobs), os.fspath(out), bool(resume))
 
 
 def bench_summary(folder):

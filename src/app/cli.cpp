@@ -412,7 +412,8 @@ const CLI::App* find_command(const CLI::App& app, std::string_view name) {
 std::vector<Subcommand> register_commands(CLI::App& app) {
   return {register_drive(app),     register_track(app), register_config(app), register_bench(app),
           register_compare(app),   register_serve(app), register_sim(app),    register_view(app),
-          register_calibrate(app), register_cut(app),   register_hunt(app),   register_tune(app)};
+          register_calibrate(app), register_cut(app),   register_hunt(app),   register_tune(app),
+          register_risk(app)};
 }
 
 std::string command_overview(const CLI::App& app) {

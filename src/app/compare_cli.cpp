@@ -11,6 +11,7 @@
 #include "overtake/base/io.hpp"
 #include "overtake/base/text.hpp"
 #include "overtake/batch/bench.hpp"
+#include "overtake/batch/risk.hpp"
 #include "overtake/run/config.hpp"
 #include "overtake/run/drive.hpp"
 
@@ -47,7 +48,9 @@ Subcommand register_compare(CLI::App& app) {
       "comparison has too few seeds for a verdict (the reason is printed). Also 1 when a folder\n"
       "cannot be read, holds a row the bench cannot vouch for (a line that is not a run, a run\n"
       "written twice, a row of another sweep, map, length or build: named with its file and\n"
-      "line) or its runs cannot be paired; 2 for bad flags.");
+      "line) or its runs cannot be paired; 2 for bad flags.\n"
+      "Two `overtake risk` folders compare as the ratio of their rates with its 95% interval\n"
+      "(MOVER) and a verdict (higher, lower, no difference); --fail-if-worse: 1 when higher.");
   cmd->add_option("before", st->before, "The first bench's --out folder (the base)")->required();
   cmd->add_option("after", st->after, "The second bench's --out folder (the candidate)")
       ->required();
@@ -82,6 +85,21 @@ Subcommand register_compare(CLI::App& app) {
                                    ", a file of a bench being compared; write it elsewhere");
                 }
               }
+            }
+            // Two risk estimates compare as a ratio of rates.
+            const bool risk_a = batch::holds_risk(st->before),
+                       risk_b = batch::holds_risk(st->after);
+            if (risk_a != risk_b) {
+              throw UsageError(
+                  "one folder holds a risk estimate (risk.json) and the other not: "
+                  "compare two benches, or two risk estimates");
+            }
+            if (risk_a) {
+              const nlohmann::json result = batch::compare_risk_folders(st->before, st->after);
+              if (!st->json.empty()) write_file_atomic(st->json, json_text(result, 2) + "\n");
+              if (!st->quiet) std::cout << batch::compare_risk_text(result);
+              if (st->fail_if_worse && result["verdict"] == "higher") return kExitFailure;
+              return kExitOk;
             }
             const nlohmann::json result = compare_bench_folders(st->before, st->after, o);
             if (!st->json.empty()) write_file_atomic(st->json, json_text(result, 2) + "\n");

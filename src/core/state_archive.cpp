@@ -175,7 +175,12 @@ void StateArchive::io(FrenetPoint& v, std::string_view what) {
 void StateArchive::io(Rng& v, std::string_view what) {
   std::array<std::uint64_t, 4> s = v.state();
   for (std::uint64_t& w : s) io(w, what);
-  if (loading_) v.set_state(s);
+  if (!loading_) return;
+  if (reseeding_) {
+    v = Rng(derive_seed(reseed_, generators_++));
+  } else {
+    v.set_state(s);
+  }
 }
 
 void StateArchive::io(std::string& v, std::size_t max_bytes, std::string_view what) {

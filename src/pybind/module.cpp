@@ -15,6 +15,8 @@
 
 #include "overtake/base/errors.hpp"
 #include "overtake/batch/bench.hpp"
+#include "overtake/batch/pool.hpp"
+#include "overtake/batch/risk.hpp"
 #include "overtake/core/map.hpp"
 #include "overtake/eval/summary.hpp"
 #include "overtake/planner/policy.hpp"
@@ -438,6 +440,56 @@ PYBIND11_MODULE(_overtake, m) {
                            {"notes", notes}});
       },
       py::arg("folder"));
+
+  // `overtake risk` (a built-in policy's name): the estimate's risk.json as a dict. Ctrl-C
+  // stops it between cycles, keeping the finished runs in `out`, and raises KeyboardInterrupt.
+  m.def(
+      "risk",
+      [](const std::string& policy, const std::string& event, const std::optional<std::string>& map,
+         const std::string& traffic, double minutes, std::uint64_t first_seed, double rel_error,
+         double budget_hours, std::size_t max_runs, const std::optional<std::string>& config,
+         const std::optional<std::string>& params, int jobs, const std::string& out, bool resume) {
+        batch::RiskSpec spec;
+        try {
+          spec.policy = policy;
+          spec.event = batch::parse_risk_event(event);
+          if (map && *map != "default") spec.map = *map;
+          spec.traffic = traffic;
+          spec.minutes = minutes;
+          spec.first_seed = first_seed;
+          spec.rel_error = rel_error;
+          spec.budget_hours = budget_hours;
+          spec.max_runs = max_runs;
+          if (config) spec.config = *config;
+          if (params) spec.params = *params;
+          spec.jobs = jobs > 0 ? jobs : batch::default_jobs();
+          spec.out = out;
+          spec.resume = resume;
+          batch::check_risk_spec(spec);
+        } catch (const base::UsageError& e) {
+          throw py::value_error(e.what());
+        }
+        std::atomic<bool> stop{false};
+        bool interrupted = false;
+        batch::RiskOutcome o;
+        {
+          py::gil_scoped_release nogil;
+          o = batch::run_risk(spec, &stop, [&](const batch::RiskProgress&) {
+            py::gil_scoped_acquire gil;
+            if (PyErr_CheckSignals() != 0) {
+              stop = true;
+              interrupted = true;
+            }
+          });
+        }
+        if (interrupted) throw py::error_already_set();
+        return to_python(batch::risk_json(spec, o));
+      },
+      py::arg("policy") = "reference", py::arg("event") = "at-fault", py::arg("map") = py::none(),
+      py::arg("traffic") = "faithful", py::arg("minutes") = 10.0, py::arg("first_seed") = 1,
+      py::arg("rel_error") = 0.25, py::arg("budget_hours") = 20.0, py::arg("max_runs") = 100000,
+      py::arg("config") = py::none(), py::arg("params") = py::none(), py::arg("jobs") = 0,
+      py::arg("out") = "risk-out", py::arg("resume") = false);
 
   m.def("policies", [] {
     py::dict d;

@@ -70,6 +70,7 @@ Stepper::Stepper(World& world, const RunOptions& options)
       next_checkpoint_s_(world.time_s()) {
   if (!options.restore.empty()) {
     core::StateArchive ar(options.restore, "checkpoint");
+    if (options.reseed) ar.reseed_generators(*options.reseed);
     world_.archive(ar);
     if (options.replayed_traffic) world_.replay_traffic(*options.replayed_traffic);
     if (options.restore_scope == RunOptions::RestoreScope::whole_run) {

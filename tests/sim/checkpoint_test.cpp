@@ -373,3 +373,56 @@ TEST(RecordedTraffic, GoesThroughExactlyAndIsCheckedAgainstTheRoad) {
 
 }  // namespace
 }  // namespace overtake::sim
+
+namespace overtake::sim {
+namespace {
+
+// The traffic's bodies after `steps` more steps of a run restored from `state` (reseeded
+// when asked): where every car is.
+std::vector<core::Vec2> cars_after(const Fixture& f, const std::string& state,
+                                   std::optional<std::uint64_t> reseed, int steps,
+                                   std::vector<core::Vec2>* at_start = nullptr) {
+  World world(f.map, f.line, WorldParams{}, TrafficProfile::faithful, 3);
+  RunOptions o;
+  o.steps_per_call = 1;
+  o.restore = state;
+  o.reseed = reseed;
+  Stepper run(world, o);
+  const auto bodies = [&world] {
+    std::vector<core::Vec2> out;
+    for (const TrafficCar& c : world.traffic().cars()) out.push_back(c.position);
+    return out;
+  };
+  if (at_start) *at_start = bodies();
+  for (int k = 0; k < steps; ++k) run.step();
+  return bodies();
+}
+
+bool same(const std::vector<core::Vec2>& a, const std::vector<core::Vec2>& b) {
+  if (a.size() != b.size()) return false;
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    if (a[i].x != b[i].x || a[i].y != b[i].y) return false;
+  }
+  return true;
+}
+
+TEST(CheckpointReseed, ABranchIsTheSameWorldWithNewDrawsAndTheSameSeedGivesTheSameBranch) {
+  const Fixture f;
+  const Checkpoint c = checkpoint_after(f, TrafficProfile::faithful, 1500);
+  const int later = 3000;  // a minute: spawns and the wander's lattice draw again in it
+  std::vector<core::Vec2> start_plain, start_branch;
+  const auto plain = cars_after(f, c.run, std::nullopt, later, &start_plain);
+  // Without a reseed the run goes on as it would have: twice the same.
+  EXPECT_TRUE(same(plain, cars_after(f, c.run, std::nullopt, later)));
+  // A branch starts from the same bodies ...
+  const auto branch = cars_after(f, c.run, 11, later, &start_branch);
+  EXPECT_TRUE(same(start_plain, start_branch));
+  // ... draws anew from there (another world a minute on) ...
+  EXPECT_FALSE(same(plain, branch));
+  EXPECT_FALSE(same(branch, cars_after(f, c.run, 12, later)));
+  // ... and is the same branch for the same seed.
+  EXPECT_TRUE(same(branch, cars_after(f, c.run, 11, later)));
+}
+
+}  // namespace
+}  // namespace overtake::sim

@@ -70,6 +70,7 @@ Subcommand register_sim(CLI::App& app);
 Subcommand register_view(CLI::App& app);
 Subcommand register_calibrate(CLI::App& app);
 Subcommand register_tune(CLI::App& app);
+Subcommand register_risk(CLI::App& app);
 
 /// A seed: a whole number from 0 to 2^64 - 1, written out; anything else (-1, 2^64, 1e3) is
 /// refused with the range, never wrapped or saturated.

@@ -40,6 +40,14 @@ class StateArchive {
   StateArchive(std::string_view bytes, std::string name);
 
   [[nodiscard]] bool loading() const { return loading_; }
+  /// Reading: every random generator read from now on is given a fresh state instead of the
+  /// stored one, the n-th from derive_seed(seed, n) (a branch of a run: the world as it was,
+  /// its future random draws new; docs/evaluation.md, "Rare events"). Writing: no effect.
+  void reseed_generators(std::uint64_t seed) {
+    reseed_ = seed;
+    reseeding_ = true;
+    generators_ = 0;
+  }
 
   /// A named part: writing puts its tag; reading checks that the tag is there, so that a
   /// state written by another part's code is caught where it starts.
@@ -141,6 +149,9 @@ class StateArchive {
   [[nodiscard]] std::uint64_t get(std::size_t n, std::string_view what);
 
   bool loading_ = false;
+  bool reseeding_ = false;
+  std::uint64_t reseed_ = 0;
+  std::uint64_t generators_ = 0;  // generators read since reseed_generators
   std::string out_;
   std::string_view in_;
   std::size_t pos_ = 0;

@@ -120,6 +120,11 @@ struct RunOptions {
     whole_run,
     world
   } restore_scope = RestoreScope::whole_run;
+  /// When set (with `restore`): every random generator of the restored state (traffic's
+  /// placement and wander streams, the latency draw) starts afresh from this seed, the values
+  /// already drawn kept (a branch of the run: the same world, new random draws from the same
+  /// distributions; docs/evaluation.md, "Rare events").
+  std::optional<std::uint64_t> reseed;
   /// When set (with `restore`): once the world is restored, its cars follow these recorded
   /// bodies (a cut scenario's replayed traffic; not owned).
   const RecordedTraffic* replayed_traffic = nullptr;

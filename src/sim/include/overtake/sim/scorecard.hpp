@@ -144,6 +144,8 @@ class Scorecard {
 
   [[nodiscard]] const Referee& referee() const { return referee_; }
   [[nodiscard]] const SafetyMonitor& safety() const { return safety_; }
+  /// The contacts so far, in the order they began (each classified at its first step).
+  [[nodiscard]] const std::vector<Contact>& contacts() const { return contacts_; }
   /// The world's state and the running figures, as a frame for those who watch (`out` is
   /// reused, so that a long run does not allocate per step).
   void fill_frame(const World& world, Frame& out) const;

@@ -1,0 +1,153 @@
+#pragma once
+// `overtake risk`: the rate of a rare event (an at-fault contact, any contact, a near miss, a
+// rubric incident) per 100 miles for one planner, by multilevel splitting of plain runs
+// (eval/splitting.hpp) from world checkpoints: a run whose ego comes near a car is copied
+// there, each copy going on with fresh random draws from the world's own distributions, and
+// the events of copies count by their weights. docs/evaluation.md, "Rare events", states the
+// estimator, its variance, its assumptions and what its calibration measured.
+//
+// The runs are those of a bench (one seed a run, the same map, traffic and length), so the
+// rate means what the bench's rate means. Run r's seed is first_seed + r; its copies' draws
+// come from a seed derived from it, so the estimate does not depend on --jobs.
+
+#include <atomic>
+#include <cstdint>
+#include <filesystem>
+#include <functional>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "overtake/eval/splitting.hpp"
+#include "overtake/planners/catalog.hpp"
+#include "overtake/sim/proximity.hpp"
+#include "overtake/sim/referee.hpp"
+
+namespace overtake::batch {
+
+/// What is counted.
+enum class RiskEventKind : std::uint8_t { at_fault, contact, near_miss, incident };
+struct RiskEvent {
+  RiskEventKind kind = RiskEventKind::at_fault;
+  sim::IncidentType incident = sim::IncidentType::collision;  ///< for kind incident
+  /// "at-fault", "contact", "near-miss" or the rubric's name of the incident type.
+  [[nodiscard]] std::string name() const;
+  friend bool operator==(const RiskEvent&, const RiskEvent&) = default;
+};
+/// The --event names; UsageError naming the choices for any other.
+[[nodiscard]] RiskEvent parse_risk_event(const std::string& name);
+
+/// Risk's own parameters (config/risk.json; a file given by --params overrides its keys).
+struct RiskParams {
+  /// The importance score is the ego's predicted margin to the nearest car (metres,
+  /// sim/proximity.hpp), negated: a copy is made each time it falls below one of these.
+  sim::ProximityParams score;
+  std::vector<double> margins_m = {4.0, 2.0, 0.25, 0.0};  ///< decreasing
+  /// Paths that go on from each up-crossing (1: none). The shipped ones split nothing: on the
+  /// simulator, copies made where this score sees danger (1-2 s before a contact) repeat
+  /// their path's fate, and splitting measured a gain below 1 (docs/evaluation.md, "Rare
+  /// events"); the levels are still counted, as the score's measurement.
+  std::vector<int> splits = {1, 1, 1, 1};
+  /// A base run making more paths than this is an error (eval::SplitLimits).
+  std::size_t max_paths = 20000;
+  /// The stopping rules are looked at after every this many base runs (in run order, so
+  /// that --jobs does not change where an estimate stops).
+  int batch_runs = 16;
+  /// --rel-error stops no estimate with fewer base runs holding an event than this: an
+  /// interval from fewer is too rough to stop on.
+  int min_runs_with_events = 10;
+  friend bool operator==(const RiskParams&, const RiskParams&) = default;
+  /// The splitting levels on the score (-margin): increasing thresholds.
+  [[nodiscard]] eval::SplitLevels levels() const;
+  /// Throws ConfigError naming the key.
+  void validate() const;
+};
+
+/// The risk parameters of config/risk.json, with `path`'s keys over them (ConfigError naming
+/// the file and key).
+[[nodiscard]] RiskParams load_risk_params(const std::optional<std::filesystem::path>& path);
+[[nodiscard]] nlohmann::json risk_params_json(const RiskParams& params);
+
+struct RiskSpec {
+  std::string policy = "reference";
+  std::shared_ptr<const planners::PlannerCatalog> planners;  ///< null: built-in policies only
+  std::optional<std::filesystem::path> map;                  ///< nullopt: the built-in track
+  std::string traffic = "faithful";
+  std::uint64_t first_seed = 1;
+  double minutes = 10.0;  ///< per base run
+  RiskEvent event;
+  /// Stop once the interval's half width is within this share of the estimate (0: never).
+  double rel_error = 0.25;
+  double budget_hours = 20.0;  ///< ... or once this many simulated hours are spent
+  std::size_t max_runs = 100000;
+  std::optional<std::filesystem::path> config;
+  std::optional<std::filesystem::path> params;
+  int jobs = 1;
+  std::filesystem::path out = "risk-out";
+  bool resume = false;  ///< take up the runs of --out (refused when they are of another estimate)
+};
+
+/// One base run and its copies.
+struct RiskRun {
+  std::size_t index = 0;
+  std::uint64_t seed = 0;
+  eval::SplitTally tally;  ///< exposure in metres, cost in simulated seconds
+  double wall_s = 0.0;
+};
+
+/// Where an estimate stands.
+struct RiskProgress {
+  std::size_t runs = 0;
+  double simulated_h = 0.0;
+  double budget_h = 0.0;
+  double weighted_events = 0.0;
+  double rate_per_100mi = 0.0;
+  double rel_half_width = 0.0;  ///< 0 with no event
+  double wall_s = 0.0;
+};
+
+/// What an estimate found.
+struct RiskOutcome {
+  std::vector<RiskRun> runs;     ///< in run order
+  eval::SplitEstimate estimate;  ///< per metre
+  double miles = 0.0;            ///< of the base runs
+  double simulated_h = 0.0;      ///< everything: base runs and copies
+  double base_h = 0.0;
+  double plain_mc_h = 0.0;  ///< what plain runs would need for the same variance
+  double gain = 0.0;
+  std::string stopped_by;  ///< "rel-error", "budget", "max-runs", "interrupted"
+  bool interrupted = false;
+  double wall_s = 0.0;
+  std::size_t resumed_runs = 0;
+  RiskParams params;  ///< the levels it used
+};
+
+/// Refuses what cannot be estimated (UsageError naming the flag): bad numbers, a planner
+/// kind splitting cannot branch, an --out that holds another estimate.
+void check_risk_spec(const RiskSpec& spec);
+
+/// Runs the estimate; `stop` (may be null) ends it keeping the finished runs (runs.jsonl in
+/// --out, written as each finishes). Throws std::runtime_error naming the run and seed when
+/// a run fails (its planner failed: that is the planner's failure, not the event).
+[[nodiscard]] RiskOutcome run_risk(const RiskSpec& spec, const std::atomic<bool>* stop,
+                                   const std::function<void(const RiskProgress&)>& progress);
+
+/// The outcome's figures as risk.json holds them.
+[[nodiscard]] nlohmann::json risk_json(const RiskSpec& spec, const RiskOutcome& outcome);
+/// The summary (summary.md, and what the command prints).
+[[nodiscard]] std::string risk_markdown(const RiskSpec& spec, const RiskOutcome& outcome);
+
+/// True when `dir` holds a risk estimate (risk.json).
+[[nodiscard]] bool holds_risk(const std::filesystem::path& dir);
+/// Two risk estimates compared (`overtake compare A B` of two risk --out folders): the ratio of
+/// the candidate's rate to the base's with its interval and verdict (eval::rate_ratio), and
+/// notes where their map, traffic or run length differ. Throws std::runtime_error naming the
+/// file when one cannot be read, and when the two count different events.
+[[nodiscard]] nlohmann::json compare_risk_folders(const std::filesystem::path& base,
+                                                  const std::filesystem::path& candidate);
+[[nodiscard]] std::string compare_risk_text(const nlohmann::json& comparison);
+
+}  // namespace overtake::batch

@@ -1,0 +1,48 @@
+#pragma once
+// What the files of `overtake risk` share (batch/risk*.cpp): the loaded inputs of a run and
+// the simulator as a splitting system.
+
+#include <atomic>
+#include <cstdint>
+#include <memory>
+#include <optional>
+
+#include "overtake/batch/risk.hpp"
+#include "overtake/eval/splitting.hpp"
+#include "overtake/planners/catalog.hpp"
+#include "overtake/run/config.hpp"
+#include "overtake/run/drive.hpp"
+#include "overtake/sim/traffic.hpp"
+
+namespace overtake::batch::risk_detail {
+
+/// Everything a base run needs, loaded once.
+struct RunInputs {
+  std::shared_ptr<const run::Track> track;
+  run::Config config;
+  const planners::PlannerEntry* entry = nullptr;
+  sim::TrafficProfile profile{};
+  double minutes = 10.0;
+  RiskEvent event;
+  const RiskParams* params = nullptr;
+};
+
+/// Thrown by a path's step once the stop flag is set: the base run is dropped.
+struct Interrupted {};
+
+/// A base run of the world with seed `seed` and the entry's in-process policy.
+[[nodiscard]] std::unique_ptr<eval::SplitSystem> make_world_branches(const RunInputs& in,
+                                                                     std::uint64_t seed,
+                                                                     const std::atomic<bool>* stop);
+
+/// A plain run of a planner from outside (a program, a plugin, Python) as the drive runs it,
+/// its events counted from the report; nullopt when it was stopped. Throws
+/// std::runtime_error naming the seed when its planner failed (the planner's failure, not the
+/// event).
+[[nodiscard]] std::optional<eval::SplitTally> plain_run(const RunInputs& in, const RiskSpec& spec,
+                                                        std::size_t index, std::uint64_t seed,
+                                                        const std::atomic<bool>* stop);
+
+[[nodiscard]] double miles_of(double metres);
+
+}  // namespace overtake::batch::risk_detail
