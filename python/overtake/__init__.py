@@ -107,18 +107,20 @@ def compare(before, after, pairs=None, figures=None):
 
 def risk(policy="reference", event="at-fault", map=None, traffic="faithful", minutes=10.0,
          first_seed=1, rel_error=0.25, budget_hours=20.0, max_runs=100000, config=None,
-         params=None, jobs=0, out="risk-out", resume=False):
+         params=None, jobs=0, out="risk-out", resume=False, scenarios=5):
     """Estimates how often `event` ("at-fault", "contact", "near-miss" or a rubric incident
     type) happens to a built-in policy, per 100 miles, as ``overtake risk`` does, and returns
     its risk.json as a dict: "rate_per_100mi", "ci95_per_100mi" [low, high],
     "upper_bound_only" (no event: the interval is [0, bound]), "simulated_hours",
     "plain_mc_hours", "gain", "runs", "events" and the levels' figures. The runs are kept in
-    `out` (``resume=True`` goes on with them). jobs=0: every core. Bad arguments raise
-    ValueError; Ctrl-C stops it (the finished runs kept) and raises KeyboardInterrupt.
+    `out` (``resume=True`` goes on with them); the first `scenarios` events of the base runs
+    are cut into scenarios in out/events ("scenarios" says how). jobs=0: every core. Bad
+    arguments raise ValueError; Ctrl-C stops it (the finished runs kept) and raises
+    KeyboardInterrupt.
     """
     return _risk(policy, event, _path(map), traffic, float(minutes), int(first_seed),
                  float(rel_error), float(budget_hours), int(max_runs), _path(config),
-                 _path(params), int(jobs), os.fspath(out), bool(resume))
+                 _path(params), int(jobs), os.fspath(out), bool(resume), int(scenarios))
 
 
 def bench_summary(folder):

@@ -16,6 +16,7 @@
 #include "overtake/batch/bench.hpp"
 #include "overtake/batch/bench_page.hpp"
 #include "overtake/batch/pool.hpp"
+#include "overtake/batch/risk.hpp"
 #include "overtake/batch/suite_run.hpp"
 #include "overtake/cluster/slurm.hpp"
 #include "overtake/core/units.hpp"
@@ -128,9 +129,9 @@ void check_pages() {
 
 // Writes the bench report page of `out` (and its replays' pages) to `html`.
 void write_report_page(const std::filesystem::path& out, const std::filesystem::path& html,
-                       bool quiet) {
-  const auto pages =
-      write_bench_report(out, html, embedded_page(kReportPageName), embedded_page(kViewerPageName));
+                       bool quiet, const std::vector<std::filesystem::path>& risk = {}) {
+  const auto pages = write_bench_report(out, html, embedded_page(kReportPageName),
+                                        embedded_page(kViewerPageName), risk);
   if (!quiet) {
     std::cout << "report: " << html.string() << " (" << pages.size() << " replay page"
               << (pages.size() == 1 ? "" : "s") << " linked)\n";
@@ -142,7 +143,8 @@ void write_report_page(const std::filesystem::path& out, const std::filesystem::
 // A bench as a Slurm array of `tasks`: task I runs shard I with --resume; a shard is finished
 // when it holds every run of its slice and its summary; the shards merge as `bench merge`.
 SlurmArray bench_array(const BenchSpec& spec, int tasks, std::vector<std::string> args,
-                       std::optional<std::filesystem::path> html, bool quiet) {
+                       std::optional<std::filesystem::path> html, bool quiet,
+                       std::vector<std::filesystem::path> risk) {
   namespace fs = std::filesystem;
   SlurmArray a = slurm_array_here("bench", spec.out);
   if (fs::exists(a.out / kBenchRunsFile) || fs::exists(a.out / kBenchManifestFile)) {
@@ -181,8 +183,8 @@ SlurmArray bench_array(const BenchSpec& spec, int tasks, std::vector<std::string
     return std::to_string(have) + "/" + std::to_string(runs) + " runs";
   };
   const fs::path out = a.out;
-  a.merge = [out, html, quiet](const std::vector<fs::path>& shards, double wall_s,
-                               int resubmitted) {
+  a.merge = [out, html, quiet, risk = std::move(risk)](const std::vector<fs::path>& shards,
+                                                       double wall_s, int resubmitted) {
     const BenchOutcome o = merge_bench(shards, out);
     if (!quiet) {
       std::cout << o.summary_markdown << "\n";
@@ -191,7 +193,7 @@ SlurmArray bench_array(const BenchSpec& spec, int tasks, std::vector<std::string
       std::cout << "written: " << out.string() << "/" << bench_files_text() << "\n";
       for (const auto& r : o.replays) std::cout << "replay: " << r.string() << "\n";
     }
-    if (html) write_report_page(out, *html, quiet);
+    if (html) write_report_page(out, *html, quiet, risk);
     return kExitOk;
   };
   return a;
@@ -212,10 +214,25 @@ struct BenchState {
   std::vector<std::string> merge_dirs;
   std::string merge_out, merge_html;
   std::string scenarios;
-  std::vector<CLI::Option*> sweep_opts;  // flags a scenario suite does not take
+  std::vector<std::filesystem::path> risk;  // risk folders drawn on the page's chart
+  std::vector<CLI::Option*> sweep_opts;     // flags a scenario suite does not take
   CLI::Option* out_opt = nullptr;
   SlurmOptions slurm;
 };
+
+// --risk: each folder an at-fault estimate the page can draw, and a page to draw it on; checked
+// before any run, so that none is run in vain.
+void check_risk_dirs(const BenchState& st) {
+  if (st.risk.empty()) return;
+  if (st.html.empty()) throw UsageError("--risk draws on the report page: give --html FILE too");
+  for (const auto& dir : st.risk) {
+    try {
+      (void)batch::risk_chart_point(dir);
+    } catch (const std::runtime_error& e) {
+      throw UsageError("--risk " + dir.string() + ": " + e.what());
+    }
+  }
+}
 
 // The policies to run: --policies (its default only when no flag brought a planner), and
 // every planner brought by a flag.
@@ -323,15 +340,16 @@ BenchSpec bench_spec_of(const BenchState& st) {
 int run_on_slurm(const BenchState& st, const CLI::App& cmd, const BenchSpec& spec) {
   check_bench_spec(spec);
   check_programs_for_slurm(*spec.planners, st.planners.network);
+  check_risk_dirs(st);
   std::optional<std::filesystem::path> html;
   if (!st.html.empty()) {
     check_pages();
     html = st.html;
   }
-  const SlurmArray array =
-      bench_array(spec, st.slurm.tasks,
-                  task_arguments(cmd, {"out", "jobs", "resume", "quiet", "html", "shard", "force"}),
-                  html, st.quiet);
+  const SlurmArray array = bench_array(
+      spec, st.slurm.tasks,
+      task_arguments(cmd, {"out", "jobs", "resume", "quiet", "html", "shard", "force", "risk"}),
+      html, st.quiet, st.risk);
   const InterruptScope interrupt;
   return run_slurm_array(array, st.slurm, &InterruptScope::flag());
 }
@@ -369,6 +387,7 @@ int run_sweep(const BenchState& st, const BenchSpec& spec) {
     }
   }
   if (!st.html.empty()) check_pages();
+  check_risk_dirs(st);
   const BenchOutcome o = run_bench_here(st, spec);
   if (o.interrupted) {
     std::cerr << "bench: interrupted; " << o.runs_done << " finished runs kept in "
@@ -386,7 +405,7 @@ int run_sweep(const BenchState& st, const BenchSpec& spec) {
     std::cout << "written: " << spec.out.string() << "/" << bench_files_text() << "\n";
     for (const auto& r : o.replays) std::cout << "replay: " << r.string() << "\n";
   }
-  if (!st.html.empty()) write_report_page(spec.out, st.html, st.quiet);
+  if (!st.html.empty()) write_report_page(spec.out, st.html, st.quiet, st.risk);
   return kExitOk;
 }
 
@@ -444,6 +463,12 @@ void add_output_flags(CLI::App& cmd, BenchState& st) {
                  "Also write the bench report page (summary table and charts per policy, each run\n"
                  "linked to its replay when recorded) to this file, and each recorded replay's\n"
                  "self-contained page beside it (replays/*.html)");
+  cmd.add_option("--risk", st.risk,
+                 "An `overtake risk` folder of an at-fault estimate (repeatable): drawn on the\n"
+                 "report page's speed-against-safety chart beside the bench's rows, a hollow\n"
+                 "mark at its rate and interval and its base runs' mean speed, the rate axis\n"
+                 "then on a log scale (with --html)")
+      ->check(CLI::ExistingDirectory);
   cmd.add_flag("--quiet,-q", st.quiet, "No progress bar or summary");
 }
 

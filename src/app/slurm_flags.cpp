@@ -21,7 +21,8 @@ const std::vector<std::string> kSlurmFlags = {"slurm-partition",  "slurm-time", 
 
 }  // namespace
 
-void add_slurm_flags(CLI::App& cmd, SlurmOptions& o, const std::string& what) {
+void add_slurm_flags(CLI::App& cmd, SlurmOptions& o, const std::string& what,
+                     const std::string& merge) {
   cmd.add_option(
       "--slurm", o.tasks,
       "Run the " + what +
@@ -48,7 +49,7 @@ void add_slurm_flags(CLI::App& cmd, SlurmOptions& o, const std::string& what) {
   cmd.add_flag("--slurm-submit-only", o.submit_only,
                "Submit and return (a login node that may not keep a process): follow later\n"
                "with --resume instead, or run `" +
-                   what + " merge` once every task is done");
+                   (merge.empty() ? what + " merge" : merge) + "` once every task is done");
 }
 
 bool slurm_requested(const CLI::App& cmd) {

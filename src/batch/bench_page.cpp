@@ -6,6 +6,7 @@
 
 #include "overtake/base/io.hpp"
 #include "overtake/batch/bench.hpp"
+#include "overtake/batch/risk.hpp"
 #include "overtake/eval/summary.hpp"
 #include "overtake/run/config.hpp"
 #include "overtake/run/pages.hpp"
@@ -37,7 +38,8 @@ std::string bench_replay_name(const std::string& policy, const std::string& traf
   return policy + "-" + traffic + "-seed" + std::to_string(seed) + ".otr";
 }
 
-json bench_report_object(const fs::path& bench_out, const fs::path& html_dir) {
+json bench_report_object(const fs::path& bench_out, const fs::path& html_dir,
+                         const std::vector<fs::path>& risk_dirs) {
   json out;
   out = read_json_file(bench_out / kBenchManifestFile);
   const std::vector<json> runs = load_bench_runs(bench_out);
@@ -59,12 +61,16 @@ json bench_report_object(const fs::path& bench_out, const fs::path& html_dir) {
   out["summary"] = std::move(summary.rows);
   out["verdicts"] = eval::verdict_method(eval::family_size(summary.pairs));
   out["pairs"] = std::move(summary.pairs);
+  json risk = json::array();
+  for (const fs::path& dir : risk_dirs) risk.push_back(risk_chart_point(dir));
+  out["risk"] = std::move(risk);
   return out;
 }
 
 std::vector<fs::path> write_bench_report(const fs::path& bench_out, const fs::path& html,
                                          std::string_view report_template,
-                                         std::string_view viewer_template) {
+                                         std::string_view viewer_template,
+                                         const std::vector<fs::path>& risk_dirs) {
   std::vector<fs::path> pages;
   const fs::path replays = bench_out / kReplaysFolder;
   std::error_code ec;
@@ -92,7 +98,7 @@ std::vector<fs::path> write_bench_report(const fs::path& bench_out, const fs::pa
   }
   fs::path dir = html.parent_path();
   if (dir.empty()) dir = ".";
-  const json object = bench_report_object(bench_out, dir);
+  const json object = bench_report_object(bench_out, dir, risk_dirs);
   write_file_atomic(html, view::report_page(report_template, json_text(object)));
   return pages;
 }

@@ -149,8 +149,9 @@ Combo combo_of(const HuntSpec& spec, std::size_t k) {
   const std::size_t per_seed = spec.maps.size() * spec.traffic.size();
   const std::size_t within = k % per_seed;
   const std::size_t m = within / spec.traffic.size();
-  return {spec.first_seed + k / per_seed, m, spec.maps[m],
-          spec.traffic[within % spec.traffic.size()]};
+  const std::uint64_t seed =
+      spec.seeds.empty() ? spec.first_seed + k / per_seed : spec.seeds.at(k / per_seed);
+  return {seed, m, spec.maps[m], spec.traffic[within % spec.traffic.size()]};
 }
 
 /// Each map's part of the names of its runs' files: its name as a slug, and where two maps'
@@ -203,6 +204,7 @@ struct RunResult {
 }  // namespace
 
 std::size_t hunt_max_runs(const HuntSpec& spec) {
+  if (!spec.seeds.empty()) return spec.seeds.size() * spec.maps.size() * spec.traffic.size();
   const double runs = std::floor(spec.budget_hours * 60.0 / spec.minutes + 1e-9);
   // Saturated before the conversion: a budget check_spec refuses gives no wrapped count.
   if (!(runs < static_cast<double>(kMaxHuntRuns))) return kMaxHuntRuns;
@@ -262,7 +264,8 @@ void check_spec(const HuntSpec& spec) {
   }
   const std::size_t per_seed = spec.maps.size() * spec.traffic.size();
   const std::uint64_t last_offset = (runs - 1) / per_seed;
-  if (spec.first_seed > std::numeric_limits<std::uint64_t>::max() - last_offset) {
+  if (spec.seeds.empty() &&
+      spec.first_seed > std::numeric_limits<std::uint64_t>::max() - last_offset) {
     throw UsageError("--first-seed: the hunt's seeds go from " + std::to_string(spec.first_seed) +
                      " up " + std::to_string(last_offset) + " more, past the last seed (" +
                      std::to_string(std::numeric_limits<std::uint64_t>::max()) + ")");
@@ -282,20 +285,24 @@ json hunt_sweep(const HuntSpec& spec, const Config& config) {
   json planner = nullptr;
   const PlannerEntry* e = spec.planners ? spec.planners->find(spec.policy) : nullptr;
   if (e && e->kind != PlannerKind::builtin) planner = json::parse(e->describe());
-  return {{"policy", spec.policy},
-          {"planner", planner},
-          {"minutes", spec.minutes},
-          {"failures", spec.failures},
-          {"budget_hours", spec.budget_hours},
-          {"find", static_cast<int>(spec.target)},
-          {"traffic", spec.traffic},
-          {"maps", maps},
-          {"first_seed", spec.first_seed},
-          {"before_s", spec.before_s},
-          {"warm_up", spec.warm_up_all ? json("all") : json(spec.warm_up_s)},
-          {"after_s", spec.after_s},
-          {"params_hash", config_hash(config)},
-          {"shards", spec.shard_count}};
+  return {
+      {"policy", spec.policy},
+      {"planner", planner},
+      {"minutes", spec.minutes},
+      {"failures", spec.failures},
+      {"budget_hours", spec.budget_hours},
+      {"find", static_cast<int>(spec.target)},
+      {"traffic", spec.traffic},
+      {"maps", maps},
+      {"first_seed", spec.first_seed},
+      {"seeds", spec.seeds},
+      {"incident_type",
+       spec.incident_type ? json(std::string(sim::to_string(*spec.incident_type))) : json(nullptr)},
+      {"before_s", spec.before_s},
+      {"warm_up", spec.warm_up_all ? json("all") : json(spec.warm_up_s)},
+      {"after_s", spec.after_s},
+      {"params_hash", config_hash(config)},
+      {"shards", spec.shard_count}};
 }
 
 }  // namespace
@@ -503,6 +510,7 @@ std::vector<sim::Incident> failures_in(const HuntSpec& spec, const sim::RunRepor
       repeat = it != last_seen.end() && i.t_s - it->second <= kRepeatS;
       last_seen[static_cast<int>(i.type)] = i.t_s;
     }
+    if (spec.incident_type && i.type != *spec.incident_type) continue;
     if (!repeat && found.size() < room) found.push_back(i);
   }
   return found;

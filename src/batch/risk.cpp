@@ -8,6 +8,8 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <map>
+#include <memory>
 #include <set>
 #include <sstream>
 #include <stdexcept>
@@ -211,7 +213,11 @@ void check_risk_spec(const RiskSpec& spec) {
   if (!(spec.budget_hours > 0.0 && spec.budget_hours <= 1e6))
     throw UsageError("--budget-hours must be more than 0 and at most 1000000");
   if (spec.max_runs < 1) throw UsageError("--max-runs must be at least 1");
+  if (spec.scenarios < 0 || spec.scenarios > 10000)
+    throw UsageError("--scenarios must be from 0 (none) to 10000 (got " +
+                     std::to_string(spec.scenarios) + ")");
   check_jobs(spec.jobs);
+  check_shard(spec.shard);
   if (!sim::parse_traffic_profile(spec.traffic))
     throw UsageError("--traffic: '" + spec.traffic + "' is not a traffic profile");
   const planners::PlannerCatalog builtins;
@@ -249,6 +255,13 @@ json identity_of(const RiskSpec& spec, const RunInputs& in, const RiskParams& pa
           {"config_hash", run::config_hash(in.config)},
           {"params", risk_params_json(params)},
           {"revision", std::string(base::build_revision())}};
+}
+
+// The identity of a shard's runs: the estimate's, and which slice.
+json shard_identity(const RiskSpec& spec, const RunInputs& in, const RiskParams& params) {
+  json j = identity_of(spec, in, params);
+  if (spec.shard.count > 1) j["shard"] = spec.shard.text();
+  return j;
 }
 
 json run_to_json(const RiskRun& r) {
@@ -293,6 +306,24 @@ RiskRun run_from_json(const json& j) {
   return r;
 }
 
+// The runs of a runs.jsonl. A last line cut short by a crash is dropped (its run is done
+// again); any other that cannot be read is a UsageError naming the file and line.
+std::vector<RiskRun> read_runs_file(const std::filesystem::path& file, const std::string& flag) {
+  std::ifstream in(file);
+  std::vector<std::string> lines;
+  for (std::string line; std::getline(in, line);) lines.push_back(line);
+  std::vector<RiskRun> runs;
+  for (std::size_t n = 0; n < lines.size(); ++n) {
+    try {
+      runs.push_back(run_from_json(json::parse(lines[n])));
+    } catch (const std::exception& e) {
+      if (n + 1 == lines.size()) break;
+      throw UsageError(flag + file.string() + " line " + std::to_string(n + 1) + ": " + e.what());
+    }
+  }
+  return runs;
+}
+
 // The runs kept in --out (resume), checked against this estimate's identity.
 std::vector<RiskRun> read_kept_runs(const RiskSpec& spec, const json& identity) {
   const auto spec_file = spec.out / kSpecFile;
@@ -313,6 +344,11 @@ std::vector<RiskRun> read_kept_runs(const RiskSpec& spec, const json& identity) 
   } catch (const std::exception& e) {
     throw UsageError(std::string("--resume: ") + e.what());
   }
+  if (kept.contains("shard") && !identity.contains("shard")) {
+    throw UsageError("--resume: " + spec.out.string() + " holds shard " +
+                     kept["shard"].get<std::string>() +
+                     " of an estimate; give --shard, or merge it with --merge");
+  }
   for (const auto& [key, v] : identity.items()) {
     if (!kept.contains(key) || kept[key] != v) {
       throw UsageError("--resume: the estimate in " + spec.out.string() + " is of another " + key +
@@ -320,24 +356,12 @@ std::vector<RiskRun> read_kept_runs(const RiskSpec& spec, const json& identity) 
                        v.dump() + "); choose another --out");
     }
   }
-  std::vector<RiskRun> runs;
-  std::ifstream in(runs_file);
-  std::string line;
-  std::size_t n = 0;
-  std::vector<std::string> lines;
-  while (std::getline(in, line)) lines.push_back(line);
-  for (const std::string& l : lines) {
-    ++n;
-    try {
-      RiskRun r = run_from_json(json::parse(l));
-      if (r.index != runs.size()) throw std::runtime_error("runs out of order");
-      runs.push_back(std::move(r));
-    } catch (const std::exception& e) {
-      // A last line cut short by a crash is dropped (its run is done again); any other is an
-      // error.
-      if (n == lines.size()) break;
-      throw UsageError("--resume: " + runs_file.string() + " line " + std::to_string(n) + ": " +
-                       e.what());
+  std::vector<RiskRun> runs = read_runs_file(runs_file, "--resume: ");
+  for (std::size_t j = 0; j < runs.size(); ++j) {
+    if (runs[j].index != spec.shard.item(j)) {
+      throw UsageError("--resume: " + runs_file.string() + " line " + std::to_string(j + 1) +
+                       ": run " + std::to_string(runs[j].index) + " where run " +
+                       std::to_string(spec.shard.item(j)) + " was next");
     }
   }
   return runs;
@@ -415,16 +439,112 @@ RunInputs load_inputs(const RiskSpec& spec, const RiskParams& params,
   return in;
 }
 
+// Base run `index` and its copies; nullopt when it was stopped.
+std::optional<RiskRun> one_run(const RiskSpec& spec, const RunInputs& in,
+                               const eval::SplitLevels& levels, std::size_t index,
+                               const std::atomic<bool>* halt) {
+  RiskRun r;
+  r.index = index;
+  r.seed = spec.first_seed + index;
+  const auto w0 = std::chrono::steady_clock::now();
+  try {
+    if (in.entry->kind != planners::PlannerKind::builtin) {
+      const auto t = risk_detail::plain_run(in, spec, r.index, r.seed, halt);
+      if (!t) return std::nullopt;
+      r.tally = *t;
+      r.tally.crossings.assign(levels.thresholds.size(), 0.0);
+    } else {
+      const auto sys = risk_detail::make_world_branches(in, r.seed, halt);
+      r.tally = eval::run_split(
+          *sys, levels,
+          {.max_paths = in.params->max_paths, .seed = core::derive_seed(r.seed, 0x7269736bULL)});
+    }
+  } catch (const risk_detail::Interrupted&) {
+    return std::nullopt;
+  } catch (const eval::SplitExplosion& e) {
+    throw std::runtime_error("run " + std::to_string(r.index) + " (seed " + std::to_string(r.seed) +
+                             "): " + e.what());
+  } catch (const std::exception& e) {
+    throw std::runtime_error("run " + std::to_string(r.index) + ": " + e.what());
+  }
+  r.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - w0).count();
+  return r;
+}
+
+// The runs of the next batch: to the end of the current block of batch_runs; for a shard, its
+// next batch_runs runs among the planned ones. Empty when a shard has run them all.
+std::vector<std::size_t> next_batch(const RiskSpec& spec, const RiskParams& params,
+                                    std::size_t done) {
+  const auto block = static_cast<std::size_t>(params.batch_runs);
+  std::vector<std::size_t> batch;
+  if (spec.shard.count > 1) {
+    const std::size_t planned = risk_runs_planned(spec);
+    for (std::size_t j = done; batch.size() < block && spec.shard.item(j) < planned; ++j) {
+      batch.push_back(spec.shard.item(j));
+    }
+    return batch;
+  }
+  const std::size_t end = std::min(spec.max_runs, (done / block + 1) * block);
+  for (std::size_t k = done; k < end; ++k) batch.push_back(k);
+  return batch;
+}
+
+// The estimate's files: risk-spec.json, runs.jsonl (rewritten whole: a line cut short by a
+// crash is gone), and the stream runs.jsonl is appended to as runs finish.
+std::ofstream open_runs(const RiskSpec& spec, const json& identity, const RiskOutcome& o) {
+  std::error_code ec;
+  std::filesystem::create_directories(spec.out, ec);
+  if (ec) throw std::runtime_error(spec.out.string() + ": cannot create (" + ec.message() + ")");
+  write_text(spec.out / kSpecFile, identity.dump(2) + "\n");
+  std::string text;
+  for (const RiskRun& r : o.runs) text += run_to_json(r).dump() + "\n";
+  write_text(spec.out / kRunsFile, text);
+  std::ofstream runs_out(spec.out / kRunsFile, std::ios::app);
+  if (!runs_out) throw std::runtime_error((spec.out / kRunsFile).string() + ": cannot write");
+  return runs_out;
+}
+
+// risk.json first (a cut that fails or is stopped loses none of the estimate), then the events
+// cut into scenarios (not by a shard: by its merge), then risk.json again and summary.md.
+void write_outcome(const RiskSpec& spec, RiskOutcome& o, const std::atomic<bool>* stop) {
+  write_text(spec.out / "risk.json", risk_json(spec, o).dump(2) + "\n");
+  if (!o.interrupted && spec.shard.count == 1) {
+    risk_detail::cut_events(spec, o, stop);
+    write_text(spec.out / "risk.json", risk_json(spec, o).dump(2) + "\n");
+  }
+  write_text(spec.out / "summary.md", risk_markdown(spec, o));
+}
+
+struct Loaded {
+  RiskParams params;
+  planners::PlannerCatalog builtins;
+  RunInputs in;
+};
+
+std::unique_ptr<Loaded> load_estimate(const RiskSpec& spec) {
+  check_risk_spec(spec);
+  auto l = std::make_unique<Loaded>();
+  l->params = load_risk_params(spec.params);
+  const planners::PlannerCatalog& catalog = spec.planners ? *spec.planners : l->builtins;
+  l->in = load_inputs(spec, l->params, catalog);
+  return l;
+}
+
 }  // namespace
+
+std::size_t risk_runs_planned(const RiskSpec& spec) {
+  const RiskParams params = load_risk_params(spec.params);
+  const auto block = static_cast<double>(params.batch_runs);
+  const double bought = std::ceil(spec.budget_hours * 60.0 / spec.minutes / block) * block;
+  return std::min(spec.max_runs, static_cast<std::size_t>(std::max(bought, block)));
+}
 
 RiskOutcome run_risk(const RiskSpec& spec, const std::atomic<bool>* stop,
                      const std::function<void(const RiskProgress&)>& progress) {
-  check_risk_spec(spec);
-  const RiskParams params = load_risk_params(spec.params);
-  const planners::PlannerCatalog builtins;
-  const planners::PlannerCatalog& catalog = spec.planners ? *spec.planners : builtins;
-  const RunInputs in = load_inputs(spec, params, catalog);
-  const json identity = identity_of(spec, in, params);
+  const auto loaded = load_estimate(spec);
+  const RiskParams& params = loaded->params;
+  const RunInputs& in = loaded->in;
+  const json identity = shard_identity(spec, in, params);
   const auto t0 = std::chrono::steady_clock::now();
   const auto wall = [&t0] {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -434,65 +554,27 @@ RiskOutcome run_risk(const RiskSpec& spec, const std::atomic<bool>* stop,
   o.params = params;
   o.runs = read_kept_runs(spec, identity);
   o.resumed_runs = o.runs.size();
-  std::error_code ec;
-  std::filesystem::create_directories(spec.out, ec);
-  if (ec) throw std::runtime_error(spec.out.string() + ": cannot create (" + ec.message() + ")");
-  write_text(spec.out / kSpecFile, identity.dump(2) + "\n");
-  // Rewritten whole (a line cut short by a crash is gone), then appended to as runs finish.
-  {
-    std::string text;
-    for (const RiskRun& r : o.runs) text += run_to_json(r).dump() + "\n";
-    write_text(spec.out / kRunsFile, text);
-  }
-  std::ofstream runs_out(spec.out / kRunsFile, std::ios::app);
-  if (!runs_out) throw std::runtime_error((spec.out / kRunsFile).string() + ": cannot write");
+  std::ofstream runs_out = open_runs(spec, identity, o);
 
   sum_up(o);
   const eval::SplitLevels levels = params.levels();
   for (;;) {
-    o.stopped_by = stop_rule(spec, params, o);
+    // A shard runs its planned runs whatever the estimate: the stopping rules are the merge's.
+    const std::vector<std::size_t> batch = next_batch(spec, params, o.runs.size());
+    o.stopped_by =
+        spec.shard.count > 1 ? (batch.empty() ? "shard" : "") : stop_rule(spec, params, o);
     if (!o.stopped_by.empty()) break;
     if (stop && stop->load()) {
       o.interrupted = true;
       o.stopped_by = "interrupted";
       break;
     }
-    // The next batch: up to the end of the current block of batch_runs.
-    const std::size_t first = o.runs.size();
-    const auto block = static_cast<std::size_t>(params.batch_runs);
-    const std::size_t end = std::min(spec.max_runs, (first / block + 1) * block);
     bool halted = false;
     const PoolOptions pool{spec.jobs, stop, PoolOrder::by_index, {}};
     const std::function<std::optional<RiskRun>(std::size_t, const std::atomic<bool>*)> work =
-        [&](std::size_t i, const std::atomic<bool>* halt) -> std::optional<RiskRun> {
-      RiskRun r;
-      r.index = first + i;
-      r.seed = spec.first_seed + r.index;
-      const auto w0 = std::chrono::steady_clock::now();
-      try {
-        if (in.entry->kind != planners::PlannerKind::builtin) {
-          const auto t = risk_detail::plain_run(in, spec, r.index, r.seed, halt);
-          if (!t) return std::nullopt;
-          r.tally = *t;
-          r.tally.crossings.assign(levels.thresholds.size(), 0.0);
-          r.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - w0).count();
-          return r;
-        }
-        const auto sys = risk_detail::make_world_branches(in, r.seed, halt);
-        r.tally = eval::run_split(
-            *sys, levels,
-            {.max_paths = params.max_paths, .seed = core::derive_seed(r.seed, 0x7269736bULL)});
-      } catch (const risk_detail::Interrupted&) {
-        return std::nullopt;
-      } catch (const eval::SplitExplosion& e) {
-        throw std::runtime_error("run " + std::to_string(r.index) + " (seed " +
-                                 std::to_string(r.seed) + "): " + e.what());
-      } catch (const std::exception& e) {
-        throw std::runtime_error("run " + std::to_string(r.index) + ": " + e.what());
-      }
-      r.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - w0).count();
-      return r;
-    };
+        [&](std::size_t i, const std::atomic<bool>* halt) {
+          return one_run(spec, in, levels, batch[i], halt);
+        };
     const std::function<bool(std::size_t, std::optional<RiskRun> &&)> deliver =
         [&](std::size_t, std::optional<RiskRun>&& r) {
           if (!r || halted) {
@@ -505,7 +587,7 @@ RiskOutcome run_risk(const RiskSpec& spec, const std::atomic<bool>* stop,
           if (progress) progress(progress_of(spec, o, wall()));
           return true;
         };
-    (void)run_pool<std::optional<RiskRun>>(end - first, pool, work, deliver);
+    (void)run_pool<std::optional<RiskRun>>(batch.size(), pool, work, deliver);
     if (halted || (stop && stop->load())) {
       o.interrupted = true;
       o.stopped_by = "interrupted";
@@ -513,271 +595,107 @@ RiskOutcome run_risk(const RiskSpec& spec, const std::atomic<bool>* stop,
     }
   }
   o.wall_s = wall();
-  write_text(spec.out / "risk.json", risk_json(spec, o).dump(2) + "\n");
-  write_text(spec.out / "summary.md", risk_markdown(spec, o));
+  write_outcome(spec, o, stop);
   return o;
 }
 
-// ---------------------------------------------------------------------------------------
-// Reports
-
 namespace {
 
-std::string risk_json_method(const RiskOutcome& o) {
-  const bool splits =
-      std::any_of(o.params.splits.begin(), o.params.splits.end(), [](int r) { return r > 1; });
-  return splits ? "multilevel splitting on the margin to the nearest car"
-                : "plain runs (the levels split nothing)";
+// The runs of the shard in `dir`, checked to be of the estimate `identity` names; its shard in
+// `shard`.
+std::vector<RiskRun> read_shard(const std::filesystem::path& dir, const json& identity,
+                                Shard& shard) {
+  const std::string name = "--merge: " + dir.string();
+  json kept;
+  try {
+    kept = run::read_json_file(dir / kSpecFile);
+  } catch (const std::exception& e) {
+    throw UsageError(name + " is not a shard of an estimate (" + e.what() + ")");
+  }
+  for (const auto& [key, v] : identity.items()) {
+    if (!kept.contains(key) || kept[key] != v) {
+      throw UsageError(name + " is a shard of another " + key + " (" +
+                       (kept.contains(key) ? kept[key].dump() : "none") + ", here " + v.dump() +
+                       ")");
+    }
+  }
+  shard = Shard{};
+  if (kept.contains("shard")) {
+    try {
+      shard = parse_shard(kept["shard"].get<std::string>());
+    } catch (const std::exception& e) {
+      throw UsageError(name + ": " + kSpecFile + ": " + e.what());
+    }
+  }
+  std::vector<RiskRun> runs = read_runs_file(dir / kRunsFile, "--merge: ");
+  for (const RiskRun& r : runs) {
+    if (!shard.holds(r.index) || r.seed != identity["first_seed"].get<std::uint64_t>() + r.index) {
+      throw UsageError(name + ": run " + std::to_string(r.index) + " (seed " +
+                       std::to_string(r.seed) + ") is not one of shard " + shard.text() + "'s");
+    }
+  }
+  return runs;
 }
 
 }  // namespace
 
-json risk_json(const RiskSpec& spec, const RiskOutcome& o) {
-  const std::vector<double>& levels_m = o.params.margins_m;
-  const double per = 1609.344 * kPer100Mi;  // per metre -> per 100 mi
-  const eval::SplitEstimate& e = o.estimate;
-  std::vector<double> crossings;
-  std::size_t paths = 0;
-  int base_events = 0;
-  std::vector<double> y;
-  for (const RiskRun& r : o.runs) {
-    if (crossings.size() < r.tally.crossings.size()) crossings.resize(r.tally.crossings.size());
-    for (std::size_t j = 0; j < r.tally.crossings.size(); ++j) crossings[j] += r.tally.crossings[j];
-    paths += r.tally.paths;
-    base_events += r.tally.base_events;
+RiskOutcome merge_risk(const RiskSpec& spec, const std::vector<std::filesystem::path>& shards,
+                       const std::atomic<bool>* stop) {
+  if (shards.empty()) throw UsageError("--merge: give the shards' folders");
+  if (spec.shard.count > 1) throw UsageError("--merge writes the whole estimate: no --shard");
+  const auto loaded = load_estimate(spec);
+  const RiskParams& params = loaded->params;
+  const json identity = identity_of(spec, loaded->in, params);
+  if (std::filesystem::exists(spec.out / kSpecFile) ||
+      std::filesystem::exists(spec.out / kRunsFile)) {
+    throw UsageError("--out: " + spec.out.string() +
+                     " already holds an estimate; the shards merge into a folder of their own");
   }
-  for (double& c : crossings) c = o.miles > 0 ? c / o.miles * kPer100Mi : 0.0;
-  // The score's measurement: the share of the (weighted) events that came while the path's
-  // score was at or above each level (the cycle before the event began).
-  std::vector<double> recall(crossings.size(), 0.0);
-  double all = 0.0;
-  for (const RiskRun& r : o.runs) {
-    for (const eval::SplitEvent& ev : r.tally.events) {
-      all += ev.weight;
-      for (int j = 0; j < ev.level && j < static_cast<int>(recall.size()); ++j) {
-        recall[static_cast<std::size_t>(j)] += ev.weight;
-      }
+  const auto t0 = std::chrono::steady_clock::now();
+  std::map<std::size_t, RiskRun> all;
+  std::set<int> seen;
+  int count = 0;
+  for (const auto& dir : shards) {
+    Shard shard;
+    std::vector<RiskRun> runs = read_shard(dir, identity, shard);
+    if (count != 0 && shard.count != count) {
+      throw UsageError("--merge: " + dir.string() + " is shard " + shard.text() +
+                       ", the others are of " + std::to_string(count));
     }
-  }
-  for (double& x : recall) x = all > 0 ? x / all : 0.0;
-  const double hours = o.base_h > 0 ? o.base_h : 1.0;
-  json events = json::array();
-  for (const RiskRun& r : o.runs) {
-    for (const eval::SplitEvent& ev : r.tally.events) {
-      events.push_back({{"run", r.index},
-                        {"seed", r.seed},
-                        {"t_s", ev.at},
-                        {"branch_t_s", ev.base_cost},
-                        {"path", ev.path},
-                        {"level", ev.level},
-                        {"weight", ev.weight}});
+    count = shard.count;
+    if (!seen.insert(shard.index).second) {
+      throw UsageError("--merge: shard " + shard.text() + " is given twice (" + dir.string() + ")");
     }
+    for (RiskRun& r : runs) all.emplace(r.index, std::move(r));
   }
-  json j = {{"event", spec.event.name()},
-            {"policy", spec.policy},
-            {"config", spec.config ? spec.config->string() : ""},
-            {"map", spec.map ? spec.map->string() : "default"},
-            {"traffic", spec.traffic},
-            {"minutes_per_run", spec.minutes},
-            {"first_seed", spec.first_seed},
-            {"method", risk_json_method(o)},
-            {"wall_s", o.wall_s},
-            {"rate_per_100mi", e.rate * per},
-            {"ci95_per_100mi", {e.ci.lo * per, e.ci.hi * per}},
-            {"upper_bound_only", e.upper_bound_only},
-            {"rate_per_hour", o.base_h > 0 ? e.rate * (o.miles * 1609.344) / hours : 0.0},
-            {"effective_events", e.effective_events},
-            {"runs", o.runs.size()},
-            {"runs_with_events", e.runs_with_events},
-            {"base_events", base_events},
-            {"paths", paths},
-            {"miles", o.miles},
-            {"simulated_hours", o.simulated_h},
-            {"base_hours", o.base_h},
-            {"plain_mc_hours", o.plain_mc_h},
-            {"gain", o.gain},
-            {"stopped_by", o.stopped_by},
-            {"interrupted", o.interrupted},
-            {"resumed_runs", o.resumed_runs},
-            {"rel_error", spec.rel_error},
-            {"budget_hours", spec.budget_hours},
-            {"levels_margin_m", levels_m},
-            {"crossings_per_100mi", crossings},
-            {"events_at_level_share", recall},
-            {"events", events}};
-  return j;
-}
-
-std::string risk_markdown(const RiskSpec& spec, const RiskOutcome& o) {
-  const double per = 1609.344 * kPer100Mi;
-  const eval::SplitEstimate& e = o.estimate;
-  std::ostringstream s;
-  s << "# risk: " << spec.event.name() << " events of " << spec.policy << "\n\n";
-  s << "Map " << (spec.map ? spec.map->string() : "default") << ", " << spec.traffic
-    << " traffic, runs of " << base::fixed_text(spec.minutes, 0) << " min from seed "
-    << spec.first_seed << "; " << risk_json_method(o)
-    << " (docs/evaluation.md, \"Rare events\").\n\n";
-  s << "| figure | value |\n|---|---:|\n";
-  if (e.upper_bound_only) {
-    s << "| rate per 100 mi | 0 events; at most " << base::fixed_text(e.ci.hi * per, 4)
-      << " (95%, one-sided, from the " << base::fixed_text(o.miles, 0)
-      << " miles of the base runs as plain runs) |\n";
-  } else {
-    s << "| rate per 100 mi | " << base::fixed_text(e.rate * per, 4) << " |\n";
-    s << "| 95% interval | " << base::fixed_text(e.ci.lo * per, 4) << " to "
-      << base::fixed_text(e.ci.hi * per, 4) << " |\n";
-    s << "| one event per | " << base::fixed_text(1.0 / (e.rate * 1609.344), 0) << " mi |\n";
-    s << "| effective events | " << base::fixed_text(e.effective_events, 1) << " |\n";
+  // The runs from 0 without a gap, then the stopping rules after each block, as run_risk looks
+  // at them: where they stop, the estimate here stops.
+  std::vector<RiskRun> prefix;
+  for (auto it = all.find(0); it != all.end() && it->first == prefix.size(); ++it) {
+    prefix.push_back(std::move(it->second));
   }
-  s << "| base runs (with events) | " << o.runs.size() << " (" << e.runs_with_events << ") |\n";
-  s << "| base miles | " << base::fixed_text(o.miles, 0) << " |\n";
-  s << "| simulated hours (all paths) | " << base::fixed_text(o.simulated_h, 2) << " |\n";
-  s << "| plain Monte Carlo hours, same variance | " << base::fixed_text(o.plain_mc_h, 2) << " |\n";
-  s << "| gain | " << base::fixed_text(o.gain, 2) << "x |\n";
-  s << "| stopped by | " << o.stopped_by << " |\n";
-  s << "| wall time | " << base::fixed_text(o.wall_s, 1) << " s on " << spec.jobs << " jobs |\n";
-  // The events of the base runs are plain runs' events: each is driven again, recorded and
-  // cut into a scenario by these commands (a copy's event is not: it is a branch's).
-  std::string repro;
-  std::size_t shown = 0, base_events = 0;
-  for (const RiskRun& r : o.runs) {
-    for (const eval::SplitEvent& ev : r.tally.events) {
-      if (ev.path != 0) continue;
-      ++base_events;
-      if (shown++ >= 20) continue;
-      std::string drive = "overtake drive --policy " + spec.policy + " --seed " +
-                          std::to_string(r.seed) + " --minutes " +
-                          base::fixed_text(spec.minutes, 0) + " --traffic " + spec.traffic;
-      if (spec.map) drive += " --map " + spec.map->string();
-      if (spec.config) drive += " --config " + spec.config->string();
-      const std::string replay = "run" + std::to_string(r.seed) + ".otr";
-      repro += "- run " + std::to_string(r.index) + " (seed " + std::to_string(r.seed) + "), t " +
-               base::fixed_text(ev.at, 2) + " s: `" + drive + " --record " + replay +
-               "`, then `overtake cut " + replay + " --at " + base::fixed_text(ev.at, 2) +
-               " -o event" + std::to_string(shown) + ".json" +
-               (spec.config ? " --config " + spec.config->string() : "") + "`\n";
+  RiskOutcome o;
+  o.params = params;
+  const auto block = static_cast<std::size_t>(params.batch_runs);
+  for (std::size_t n = 0;;) {
+    o.runs.assign(prefix.begin(), prefix.begin() + static_cast<std::ptrdiff_t>(n));
+    sum_up(o);
+    o.stopped_by = stop_rule(spec, params, o);
+    if (!o.stopped_by.empty()) break;
+    if (n == prefix.size()) {
+      o.stopped_by = "shards";  // the runs the shards hold end here
+      break;
     }
+    n = std::min({prefix.size(), spec.max_runs, (n / block + 1) * block});
   }
-  if (base_events > 0) {
-    s << "\n## The events of the base runs (" << base_events << ")\n\n"
-      << "Each repeats when its run is driven again; recorded, it is cut into a scenario "
-         "(docs/scenarios.md):\n\n"
-      << repro;
-    if (shown > 20) s << "- ... and " << (shown - 20) << " more (risk.json lists them all)\n";
-  }
-  return s.str();
-}
-
-// ---------------------------------------------------------------------------------------
-// Two estimates compared
-
-bool holds_risk(const std::filesystem::path& dir) {
-  return std::filesystem::is_regular_file(dir / "risk.json");
-}
-
-namespace {
-
-struct RiskFile {
-  json j;
-  eval::RateEstimate rate;
-};
-
-RiskFile read_risk_file(const std::filesystem::path& dir) {
-  const auto file = dir / "risk.json";
-  RiskFile f;
-  f.j = run::read_json_file(file);
-  const auto bad = [&](const std::string& why) {
-    throw std::runtime_error(file.string() + ": " + why);
-  };
-  const auto number = [&](const char* key) {
-    if (!f.j.contains(key) || !f.j[key].is_number()) bad(std::string(key) + " is not a number");
-    const double x = f.j[key].get<double>();
-    if (!std::isfinite(x) || x < 0.0) bad(std::string(key) + " is negative or not finite");
-    return x;
-  };
-  if (!f.j.is_object() || !f.j.contains("event") || !f.j["event"].is_string())
-    bad("not a risk estimate (no event)");
-  f.rate.rate = number("rate_per_100mi");
-  const json& ci = f.j.value("ci95_per_100mi", json());
-  if (!ci.is_array() || ci.size() != 2 || !ci[0].is_number() || !ci[1].is_number())
-    bad("ci95_per_100mi is not [low, high]");
-  f.rate.ci = {ci[0].get<double>(), ci[1].get<double>()};
-  if (!(f.rate.ci.lo >= 0.0 && f.rate.ci.lo <= f.rate.ci.hi && std::isfinite(f.rate.ci.hi)))
-    bad("ci95_per_100mi is not an interval of rates");
-  f.rate.upper_bound_only = f.j.value("upper_bound_only", false);
-  return f;
-}
-
-}  // namespace
-
-json compare_risk_folders(const std::filesystem::path& base,
-                          const std::filesystem::path& candidate) {
-  const RiskFile a = read_risk_file(base);
-  const RiskFile b = read_risk_file(candidate);
-  if (a.j["event"] != b.j["event"]) {
-    throw std::runtime_error("the estimates count different events (" + a.j["event"].dump() +
-                             " in " + base.string() + ", " + b.j["event"].dump() + " in " +
-                             candidate.string() + "): their rates do not compare");
-  }
-  json notes = json::array();
-  for (const char* key : {"map", "traffic", "minutes_per_run"}) {
-    if (a.j.value(key, json()) != b.j.value(key, json())) {
-      notes.push_back(std::string(key) + " differs (" + a.j.value(key, json()).dump() + ", " +
-                      b.j.value(key, json()).dump() + "): the rates are of different roads");
-    }
-  }
-  const eval::RateRatio r = eval::rate_ratio(a.rate, b.rate);
-  const auto side = [](const RiskFile& f, const std::filesystem::path& dir) {
-    std::string who = f.j.value("policy", "");
-    if (!f.j.value("config", "").empty()) who += " with " + f.j.value("config", "");
-    return json{{"folder", dir.string()},
-                {"policy", who},
-                {"rate_per_100mi", f.rate.rate},
-                {"ci95_per_100mi", {f.rate.ci.lo, f.rate.ci.hi}},
-                {"upper_bound_only", f.rate.upper_bound_only}};
-  };
-  json out = {
-      {"event", a.j["event"]},
-      {"base", side(a, base)},
-      {"candidate", side(b, candidate)},
-      {"ratio_defined", r.defined},
-      {"ratio", r.ratio},
-      {"ratio_ci95", {r.ci.lo, std::isfinite(r.ci.hi) ? json(r.ci.hi) : json(nullptr)}},
-      {"verdict", r.verdict},
-      {"method", "MOVER on the log scale from the two 95% intervals (independent estimates)"},
-      {"notes", notes}};
-  return out;
-}
-
-std::string compare_risk_text(const json& c) {
-  std::ostringstream s;
-  const auto rate_text = [](const json& side) {
-    const json& ci = side["ci95_per_100mi"];
-    if (side["upper_bound_only"].get<bool>()) {
-      return "0 (at most " + base::fixed_text(ci[1].get<double>(), 4) + ")";
-    }
-    return base::fixed_text(side["rate_per_100mi"].get<double>(), 4) + " (" +
-           base::fixed_text(ci[0].get<double>(), 4) + " to " +
-           base::fixed_text(ci[1].get<double>(), 4) + ")";
-  };
-  s << "# " << c["event"].get<std::string>() << " events per 100 mi\n\n";
-  s << "| | policy | rate (95% interval) |\n|---|---|---|\n";
-  s << "| base | " << c["base"]["policy"].get<std::string>() << " | " << rate_text(c["base"])
-    << " |\n";
-  s << "| candidate | " << c["candidate"]["policy"].get<std::string>() << " | "
-    << rate_text(c["candidate"]) << " |\n\n";
-  const json& ci = c["ratio_ci95"];
-  const std::string hi = ci[1].is_null() ? "infinity" : base::fixed_text(ci[1].get<double>(), 3);
-  if (c["ratio_defined"].get<bool>()) {
-    s << "candidate / base: " << base::fixed_text(c["ratio"].get<double>(), 3) << " (95% "
-      << base::fixed_text(ci[0].get<double>(), 3) << " to " << hi
-      << "): " << c["verdict"].get<std::string>() << "\n";
-  } else {
-    s << "candidate / base: at least " << base::fixed_text(ci[0].get<double>(), 3)
-      << " (the base saw no event): " << c["verdict"].get<std::string>() << "\n";
-  }
-  for (const json& n : c["notes"]) s << "note: " << n.get<std::string>() << "\n";
-  return s.str();
+  o.merged_note = std::to_string(seen.size()) + " of " + std::to_string(count) + " shards, " +
+                  std::to_string(all.size()) + " runs, " + std::to_string(prefix.size()) +
+                  " of them from run 0 without a gap; the stopping rules kept " +
+                  std::to_string(o.runs.size());
+  { std::ofstream runs_out = open_runs(spec, identity, o); }
+  o.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  write_outcome(spec, o, stop);
+  return o;
 }
 
 }  // namespace overtake::batch

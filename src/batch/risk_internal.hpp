@@ -45,4 +45,12 @@ struct Interrupted {};
 
 [[nodiscard]] double miles_of(double metres);
 
+/// The folder of the cut events, under --out.
+inline constexpr const char* kEventsDir = "events";
+
+/// Cuts the first RiskSpec::scenarios events of the base runs into scenarios (OUT/events) by
+/// a hunt over their runs' seeds, and sets RiskOutcome::cut or cut_note. Nothing is thrown:
+/// a hunt that fails is said in cut_note, the estimate is kept whole.
+void cut_events(const RiskSpec& spec, RiskOutcome& outcome, const std::atomic<bool>* stop);
+
 }  // namespace overtake::batch::risk_detail

@@ -448,7 +448,8 @@ PYBIND11_MODULE(_overtake, m) {
       [](const std::string& policy, const std::string& event, const std::optional<std::string>& map,
          const std::string& traffic, double minutes, std::uint64_t first_seed, double rel_error,
          double budget_hours, std::size_t max_runs, const std::optional<std::string>& config,
-         const std::optional<std::string>& params, int jobs, const std::string& out, bool resume) {
+         const std::optional<std::string>& params, int jobs, const std::string& out, bool resume,
+         int scenarios) {
         batch::RiskSpec spec;
         try {
           spec.policy = policy;
@@ -465,6 +466,7 @@ PYBIND11_MODULE(_overtake, m) {
           spec.jobs = jobs > 0 ? jobs : batch::default_jobs();
           spec.out = out;
           spec.resume = resume;
+          spec.scenarios = scenarios;
           batch::check_risk_spec(spec);
         } catch (const base::UsageError& e) {
           throw py::value_error(e.what());
@@ -489,7 +491,7 @@ PYBIND11_MODULE(_overtake, m) {
       py::arg("traffic") = "faithful", py::arg("minutes") = 10.0, py::arg("first_seed") = 1,
       py::arg("rel_error") = 0.25, py::arg("budget_hours") = 20.0, py::arg("max_runs") = 100000,
       py::arg("config") = py::none(), py::arg("params") = py::none(), py::arg("jobs") = 0,
-      py::arg("out") = "risk-out", py::arg("resume") = false);
+      py::arg("out") = "risk-out", py::arg("resume") = false, py::arg("scenarios") = 5);
 
   m.def("policies", [] {
     py::dict d;

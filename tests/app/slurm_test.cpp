@@ -455,6 +455,50 @@ TEST_F(SlurmCli, AHuntOnSlurmFindsWhatALocalHuntFinds) {
   EXPECT_THAT(err(), HasSubstr("--resume goes with --slurm TASKS"));
 }
 
+// risk.json without what differs between one run here and a merge: the wall time, the folder,
+// the merge's own note.
+json risk_figures(const fs::path& dir) {
+  json j = json::parse(read_file(dir / "risk.json"));
+  for (const char* key : {"wall_s", "merged", "scenarios"}) j.erase(key);
+  return j;
+}
+
+TEST_F(SlurmCli, ARiskOnSlurmGivesTheEstimateOfOneRunHere) {
+  const std::vector<std::string> risk = {
+      "risk",       "--policy", "seed003",     "--event", "near-miss",   "--minutes", "3",
+      "--max-runs", "20",       "--rel-error", "0.6",     "--scenarios", "0"};
+  ASSERT_EQ(run(with(risk, {"--jobs", "2", "--quiet", "--out", path("local").string()})), 0)
+      << err();
+  ASSERT_EQ(
+      run(with(risk, {"--slurm", "3", "--slurm-poll", "0.1", "--out", path("cluster").string()})),
+      0)
+      << err();
+  EXPECT_EQ(sbatch_calls(), 1);
+  EXPECT_THAT(err(), HasSubstr("slurm: submitted 3 tasks as job 100"));
+  EXPECT_TRUE(fs::exists(path("cluster") / "slurm" / "risk.sbatch"));
+  EXPECT_THAT(out(), HasSubstr("3 Slurm tasks (0 submitted again)"));
+  EXPECT_THAT(out(), HasSubstr("| merged | 3 of 3 shards, 20 runs"));
+  const json local = risk_figures(path("local"));
+  ASSERT_EQ(local["stopped_by"], "rel-error");  // before the 20 runs the shards ran
+  EXPECT_LT(local["runs"].get<int>(), 20);
+  EXPECT_EQ(risk_figures(path("cluster")), local);
+  // The shards merge by hand the same way, with the same flags.
+  const fs::path shards = path("cluster") / "shards";
+  ASSERT_EQ(run(with(risk, {"--merge", (shards / "shard-1").string(), (shards / "shard-2").string(),
+                            (shards / "shard-3").string(), "--out", path("by-hand").string()})),
+            0)
+      << err();
+  EXPECT_EQ(risk_figures(path("by-hand")), local);
+  // A shard of another estimate is refused, naming what differs.
+  EXPECT_EQ(run({"risk", "--event", "contact", "--merge", (shards / "shard-1").string(), "--out",
+                 path("other").string()}),
+            kExitUsage);
+  EXPECT_THAT(err(), HasSubstr("is a shard of another"));
+  EXPECT_EQ(run(with(risk, {"--slurm", "2", "--shard", "1/2", "--out", path("x").string()})),
+            kExitUsage);
+  EXPECT_THAT(err(), HasSubstr("--slurm makes the shards itself"));
+}
+
 TEST_F(SlurmCli, ATaskThatFailsEveryTimeIsGivenUpOnSayingWhyAndResumeSubmitsItAgain) {
   write_file_atomic(fake() / "fail", "");
   const auto args = with(sweep(), {"--slurm", "2", "--slurm-retries", "1", "--slurm-poll", "0.1",

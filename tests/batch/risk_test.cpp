@@ -14,6 +14,8 @@
 
 #include "overtake/base/errors.hpp"
 #include "overtake/base/io.hpp"
+#include "overtake/batch/bench.hpp"
+#include "overtake/batch/bench_page.hpp"
 #include "overtake/planners/catalog.hpp"
 #include "overtake/run/config.hpp"
 #include "temp_dir.hpp"
@@ -177,6 +179,79 @@ TEST(Risk, AStopKeepsTheFinishedRuns) {
   EXPECT_EQ(r.runs.size(), o.runs.size() + 1);
 }
 
+TEST(Risk, ShardsMergeIntoTheEstimateOfOneRunHere) {
+  const test::TempDir dir;
+  write(dir.path() / "blocks.json", R"({"batch_runs": 3, "min_runs_with_events": 2})");
+  RiskSpec local = short_spec(dir.path() / "local");
+  local.params = dir.path() / "blocks.json";
+  local.policy = "seed003";  // a near miss in most runs of 3 min
+  local.minutes = 3.0;
+  local.max_runs = 14;
+  local.rel_error = 0.9;  // stops at a block before max-runs
+  local.jobs = 2;
+  const RiskOutcome ol = run_risk(local, nullptr, {});
+  ASSERT_EQ(ol.stopped_by, "rel-error");
+  ASSERT_LT(ol.runs.size(), 14U);
+  ASSERT_EQ(ol.runs.size() % 3, 0U);
+  // Three shards: each runs all of its planned runs (the stopping rules are the merge's).
+  EXPECT_EQ(risk_runs_planned(local), 14U);
+  std::vector<std::filesystem::path> shards;
+  for (int i = 1; i <= 3; ++i) {
+    RiskSpec s = local;
+    s.shard = {i, 3};
+    s.jobs = 1;
+    s.out = dir.path() / ("shard-" + std::to_string(i));
+    const RiskOutcome o = run_risk(s, nullptr, {});
+    EXPECT_EQ(o.stopped_by, "shard");
+    EXPECT_EQ(o.runs.size(), s.shard.size_of(14));
+    for (const RiskRun& r : o.runs) EXPECT_TRUE(s.shard.holds(r.index));
+    shards.push_back(s.out);
+  }
+  RiskSpec merged = local;
+  merged.out = dir.path() / "merged";
+  const RiskOutcome om = merge_risk(merged, shards, nullptr);
+  EXPECT_EQ(om.stopped_by, ol.stopped_by);
+  ASSERT_EQ(om.runs.size(), ol.runs.size());
+  EXPECT_EQ(om.estimate.rate, ol.estimate.rate);
+  EXPECT_EQ(om.estimate.ci, ol.estimate.ci);
+  EXPECT_EQ(om.simulated_h, ol.simulated_h);
+  EXPECT_THAT(om.merged_note, HasSubstr("3 of 3 shards, 14 runs"));
+  // The merged folder is an estimate as a local run writes it: a resume goes on with it.
+  RiskSpec more = merged;
+  more.resume = true;
+  more.rel_error = 0.0;
+  const RiskOutcome resumed = run_risk(more, nullptr, {});
+  EXPECT_EQ(resumed.resumed_runs, ol.runs.size());
+  EXPECT_EQ(resumed.runs.size(), 14U);
+  // Without shard 2 the runs from 0 end at run 1: the estimate is of run 0 alone, and says so.
+  RiskSpec gap = local;
+  gap.out = dir.path() / "gap";
+  const RiskOutcome og = merge_risk(gap, {shards[0], shards[2]}, nullptr);
+  EXPECT_EQ(og.runs.size(), 1U);
+  EXPECT_EQ(og.stopped_by, "shards");
+  // What cannot be merged is refused, naming it.
+  RiskSpec again = local;
+  again.out = dir.path() / "again";
+  EXPECT_THAT(usage_error([&] {
+                (void)merge_risk(again, {shards[0], shards[0]}, nullptr);
+              }),
+              HasSubstr("given twice"));
+  RiskSpec other = again;
+  other.event = parse_risk_event("contact");
+  EXPECT_THAT(usage_error([&] { (void)merge_risk(other, shards, nullptr); }),
+              HasSubstr("is a shard of another event"));
+  EXPECT_THAT(usage_error([&] { (void)merge_risk(merged, shards, nullptr); }),
+              HasSubstr("already holds an estimate"));
+  // A shard's folder goes on only as that shard.
+  RiskSpec whole = local;
+  whole.out = shards[0];
+  whole.resume = true;
+  EXPECT_THAT(usage_error([&] { (void)run_risk(whole, nullptr, {}); }), HasSubstr("--shard"));
+  RiskSpec bad = local;
+  bad.shard = {4, 3};
+  EXPECT_THAT(usage_error([&] { check_risk_spec(bad); }), HasSubstr("--shard"));
+}
+
 TEST(Risk, APlannerProgramIsEstimatedFromPlainRunsAndRefusedWhereTheLevelsSplit) {
   const test::TempDir dir;
   planners::PlannerFlags flags;
@@ -200,6 +275,89 @@ TEST(Risk, APlannerProgramIsEstimatedFromPlainRunsAndRefusedWhereTheLevelsSplit)
   const std::string e = usage_error([&] { check_risk_spec(s); });
   EXPECT_THAT(e, HasSubstr("planner from outside"));
   EXPECT_THAT(e, HasSubstr("plain runs"));
+}
+
+TEST(Risk, TheBaseRunsEventsAreCutIntoScenariosThatRepeatThem) {
+  const test::TempDir dir;
+  RiskSpec s = short_spec(dir.path() / "o");
+  s.policy = "seed003";  // about 20 contacts per 100 mi: several in 16 runs of 3 min
+  s.event = parse_risk_event("contact");
+  s.minutes = 3.0;
+  s.max_runs = 16;
+  s.scenarios = 3;
+  const RiskOutcome o = run_risk(s, nullptr, {});
+  ASSERT_TRUE(o.cut.has_value()) << o.cut_note;
+  EXPECT_EQ(o.cut_note, "");
+  // The hunt found the estimate's own first three events: the same seeds, the same times.
+  std::vector<std::pair<std::uint64_t, double>> events;
+  for (const RiskRun& r : o.runs) {
+    for (const eval::SplitEvent& e : r.tally.events) events.emplace_back(r.seed, e.at);
+  }
+  ASSERT_GE(events.size(), 3U);
+  ASSERT_EQ(o.cut->failures.size(), 3U);
+  for (std::size_t i = 0; i < 3; ++i) {
+    EXPECT_EQ(o.cut->failures[i].seed, events[i].first) << i;
+    EXPECT_NEAR(o.cut->failures[i].t_s, events[i].second, 0.05) << i;
+  }
+  // Each group's scenarios were cut and repeat the contact.
+  ASSERT_FALSE(o.cut->groups.empty());
+  for (const HuntGroup& g : o.cut->groups) {
+    EXPECT_EQ(g.cut_error, "") << g.situation;
+    EXPECT_TRUE(g.reproduced) << g.situation << ": " << g.reproduces_reactive;
+    EXPECT_TRUE(std::filesystem::exists(s.out / "events" / g.reactive)) << g.reactive;
+  }
+  const nlohmann::json j = run::read_json_file(s.out / "risk.json");
+  EXPECT_EQ(j["scenarios"]["folder"], "events");
+  EXPECT_EQ(j["scenarios"]["events"], 3);
+  EXPECT_EQ(j["scenarios"]["groups"].size(), o.cut->groups.size());
+  EXPECT_THAT(base::read_file(s.out / "summary.md"), HasSubstr("The events cut into scenarios"));
+  // None asked: none cut. A near miss has no time to cut at: said.
+  s.scenarios = 0;
+  s.out = dir.path() / "none";
+  EXPECT_FALSE(run_risk(s, nullptr, {}).cut.has_value());
+  EXPECT_FALSE(std::filesystem::exists(s.out / "events"));
+  RiskSpec near = short_spec(dir.path() / "near");
+  near.max_runs = 2;
+  EXPECT_THAT(run_risk(near, nullptr, {}).cut_note, HasSubstr("near misses"));
+  s.scenarios = -1;
+  EXPECT_THAT(usage_error([&] { check_risk_spec(s); }), HasSubstr("--scenarios"));
+}
+
+TEST(Risk, AnAtFaultEstimateIsAPointOfTheBenchPagesChart) {
+  const test::TempDir dir;
+  RiskSpec s = short_spec(dir.path() / "fault");
+  s.event = parse_risk_event("at-fault");
+  s.max_runs = 2;
+  const RiskOutcome o = run_risk(s, nullptr, {});
+  const nlohmann::json p = risk_chart_point(s.out);
+  EXPECT_EQ(p["label"], "reference (risk)");
+  EXPECT_EQ(p["traffic"], "faithful");
+  EXPECT_NEAR(p["mean_speed_mph"].get<double>(), o.miles / o.base_h, 1e-9);
+  EXPECT_GT(p["mean_speed_mph"].get<double>(), 20.0);
+  EXPECT_EQ(p["ci95_per_100mi"].size(), 2U);
+  // The bench page's object carries it.
+  BenchSpec bench;
+  bench.policies = {"reference"};
+  bench.traffic = {"faithful"};
+  bench.seeds = {1};
+  bench.minutes = 1.0;
+  bench.out = dir.path() / "bench";
+  (void)run_bench(bench, nullptr, {});
+  const nlohmann::json page = bench_report_object(bench.out, dir.path(), {s.out});
+  ASSERT_EQ(page["risk"].size(), 1U);
+  EXPECT_EQ(page["risk"][0], p);
+  EXPECT_EQ(bench_report_object(bench.out, dir.path())["risk"].size(), 0U);
+  // An estimate of another event is not on the chart's axis: refused, naming the file.
+  RiskSpec near = short_spec(dir.path() / "near");
+  near.max_runs = 1;
+  (void)run_risk(near, nullptr, {});
+  try {
+    (void)risk_chart_point(near.out);
+    ADD_FAILURE() << "a near-miss estimate was taken";
+  } catch (const std::runtime_error& e) {
+    EXPECT_THAT(e.what(), HasSubstr("risk.json"));
+    EXPECT_THAT(e.what(), HasSubstr("at-fault"));
+  }
 }
 
 }  // namespace

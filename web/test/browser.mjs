@@ -598,6 +598,17 @@ function todaysPairs(rows) {
 
 // The bench data with every key of today's bench filled in (made up), and, in place of its
 // pairs (the page's own are checked on the page itself), pairs of every verdict.
+// Today's bench with two `overtake risk` estimates (bench --risk): one with no event (a bound),
+// one with a rate; the chart draws them hollow on a log rate axis.
+function withRisk(bench) {
+  const b = withTodaysKeys(bench);
+  const row = (b.summary || [])[0] || {};
+  const point = (label, rate, ci, bound) => ({ folder: `risk-${label}`, label: `${row.policy} ${label} (risk)`, policy: row.policy, config: '', traffic: row.traffic,
+    map: null, rate_per_100mi: rate, ci95_per_100mi: ci, upper_bound_only: bound, mean_speed_mph: (row.mean_speed_mph || 45) + 0.3, base_miles: 4000 });
+  b.risk = [point('safe', 0, [0, 0.066], true), point('weak', 0.064, [0.013, 0.19], false)];
+  return b;
+}
+
 function withTodaysKeys(bench) {
   const b = structuredClone(bench);
   b.summary = todaysRows(b.summary);
@@ -703,6 +714,7 @@ function reportVariants(path) {
   delete noSummary.verdicts;
   return [
     { name: 'today', expect: 'today', bench: withTodaysKeys(bench) },
+    { name: 'risk', expect: 'risk', bench: withRisk(bench) },
     { name: 'many', expect: 'many', bench: withManyPolicies(bench) },
     { name: 'before-contacts', expect: 'before-contacts', bench: asBeforeContacts(bench) },
     { name: 'older', expect: 'older', bench: asOlderBench(bench) },
@@ -808,13 +820,16 @@ async function testScatterAndLabels(page, expect) {
     const isCI = (c) => Array.isArray(c) && c.length === 2 && c.every((x) => typeof x === 'number');
     const num = (x) => typeof x === 'number' && Number.isFinite(x);
     const withFigures = rows.filter((r) => num(r.mean_speed_mph) && num((r.collisions || {}).at_fault_per_100mi));
+    const risk = ((rep.bench || {}).risk || []).filter((e) => num(e.mean_speed_mph) && num(e.rate_per_100mi));
     const el = document.getElementById('chart-scatter');
     return {
       rows: rows.length,
-      points: withFigures.length,
-      xBars: withFigures.filter((r) => isCI(r.collisions.at_fault_per_100mi_ci)).length,
+      points: withFigures.length + risk.length,
+      risk: risk.length,
+      xBars: withFigures.filter((r) => isCI(r.collisions.at_fault_per_100mi_ci)).length + risk.filter((e) => isCI(e.ci95_per_100mi)).length,
       yBars: withFigures.filter((r) => isCI(r.mean_speed_mph_ci)).length,
-      oneSided: withFigures.filter((r) => 'intervals' in r && r.collisions.at_fault_per_100mi === 0 && isCI(r.collisions.at_fault_per_100mi_ci) && r.collisions.at_fault_per_100mi_ci[0] === 0).length,
+      oneSided: withFigures.filter((r) => 'intervals' in r && r.collisions.at_fault_per_100mi === 0 && isCI(r.collisions.at_fault_per_100mi_ci) && r.collisions.at_fault_per_100mi_ci[0] === 0).length +
+        risk.filter((e) => e.upper_bound_only).length,
       shown: el && !el.hidden ? { ...el.dataset } : null,
       leftOut: document.querySelector('#chart-scatter .left-out')?.textContent || '',
       leftOutHidden: document.querySelector('#chart-scatter .left-out')?.hidden ?? true,
@@ -832,6 +847,9 @@ async function testScatterAndLabels(page, expect) {
   check(Number(d.xBars) === got.xBars && Number(d.yBars) === got.yBars,
     `and error bars both ways: ${d.xBars} across of ${got.xBars}, ${d.yBars} up of ${got.yBars}`);
   check(Number(d.oneSidedBars) === got.oneSided, `a rate with no event has a one-sided bar (${d.oneSidedBars} of ${got.oneSided})`);
+  check(Number(d.riskPoints) === got.risk && d.xLog === String(got.risk > 0),
+    `risk estimates are hollow points (${d.riskPoints} of ${got.risk}), the rate axis logarithmic with any (${d.xLog})`);
+  if (got.risk > 0) check(got.legend.filter((k) => /\(risk\)$/.test(k)).length === got.risk, `the legend names each risk estimate (${got.legend.join(', ')})`);
   if (got.points < got.rows) check(!got.leftOutHidden && /Left out/.test(got.leftOut), `the rows left out are named (${got.leftOut})`);
   if (got.points > 0) {
     check(got.legend.filter((k) => / traffic$/.test(k)).length === got.traffic, `the legend tells the traffic profiles apart (${got.legend.join(', ')})`);

@@ -5,7 +5,7 @@
 import assert from 'node:assert/strict';
 import { test } from 'node:test';
 
-import { niceTicks, overlapping, placeLabels, scatterLayout, slotLabels, speedSafetyOf } from '../src/report/layout.js';
+import { logTicks, niceTicks, overlapping, placeLabels, riskPointOf, scatterLayout, slotLabels, speedSafetyOf } from '../src/report/layout.js';
 import { summarize } from '../src/report/summary.js';
 import {
   collisionsNote, deltaCI, groupsOf, hasPrecision, intervalMethodText, matrixCell, matrixColumns, matrixPolicies, mirrorFigure,
@@ -374,6 +374,43 @@ function crowdedRows(n) {
   }
   return rows;
 }
+
+test('speed against safety with risk estimates: hollow points, a log rate axis, rates of 0 at its left end', () => {
+  const risk = [
+    { label: 'reference (risk)', policy: 'walkthrough', traffic: 'faithful', mean_speed_mph: 44.9, rate_per_100mi: 0, ci95_per_100mi: [0, 0.066], upper_bound_only: true, base_miles: 4550 },
+    { label: 'reference weak1 (risk)', policy: 'careful', traffic: 'faithful', mean_speed_mph: 45.5, rate_per_100mi: 0.064, ci95_per_100mi: [0.013, 0.19], upper_bound_only: false, base_miles: 6000 },
+    { label: 'broken', policy: 'x', traffic: 'faithful' }, // no figures: left out
+  ];
+  const rows = [NEW_ROW, ZERO_ROW];
+  const lay = scatterLayout(rows, { width: 700, height: 400, measure, policies: ['walkthrough', 'careful'], traffic: ['faithful'], risk });
+  assert.equal(lay.x.log, true);
+  assert.equal(lay.points.length, 4);
+  assert.deepEqual(lay.left, [{ policy: 'broken', traffic: 'faithful' }]);
+  const [a, zero, bound, weak] = lay.points;
+  assert.ok(bound.risk && bound.hollow && weak.hollow && !a.hollow && !zero.hollow);
+  // coloured as their policy, labelled by their own names
+  assert.equal(bound.color, a.color);
+  assert.equal(weak.color, zero.color);
+  assert.deepEqual(lay.labels.map((l) => l && l.text), ['walkthrough', 'careful', 'reference (risk)', 'reference weak1 (risk)']);
+  // log scale: equal ratios, equal distances; the axis from half the least positive figure
+  const X = (v) => lay.plot.x + ((Math.log10(v) - Math.log10(lay.x.min)) / (Math.log10(lay.x.max) - Math.log10(lay.x.min))) * lay.plot.w;
+  assert.ok(Math.abs(lay.x.min - 0.01 / 2) < 1e-12, `least positive 0.01 (NEW_ROW's low end): ${lay.x.min}`);
+  assert.ok(Math.abs(weak.x - X(0.064)) < 1e-9);
+  assert.ok(Math.abs(weak.xBar.from - X(0.013)) < 1e-9 && Math.abs(weak.xBar.to - X(0.19)) < 1e-9);
+  // rates of 0 sit at the left end, their dashed bar up to the bound
+  assert.ok(Math.abs(bound.x - lay.plot.x) < 1e-9 && Math.abs(zero.x - lay.plot.x) < 1e-9);
+  assert.ok(bound.xBar.oneSided && Math.abs(bound.xBar.to - X(0.066)) < 1e-9);
+  assert.equal(bound.yBar, null);
+  // ticks: powers of ten (and 2, 5 between when few), rising, inside the axis, with texts
+  assert.ok(lay.x.ticks.length >= 3);
+  for (const t of lay.x.ticks) assert.ok(t.v >= lay.x.min * (1 - 1e-9) && t.v <= lay.x.max * (1 + 1e-9) && typeof t.text === 'string');
+  assert.ok(lay.x.ticks.every((t, i) => i === 0 || t.v > lay.x.ticks[i - 1].v));
+  assert.deepEqual(logTicks(0.004, 30).map((t) => t.text), ['0.01', '0.1', '1', '10']);
+  assert.deepEqual(logTicks(0.3, 4).map((t) => t.text), ['0.5', '1', '2']);
+  assert.equal(riskPointOf({ rate_per_100mi: 1 }), null);
+  // without risk estimates the axis stays linear from 0
+  assert.equal(scatterLayout(rows, { width: 700, height: 400, measure }).x.log, false);
+});
 
 test('speed against safety: a point per row with collision figures, error bars both ways, a one-sided bar for no event', () => {
   const old = { ...OLD_ROW, policy: 'older' }; // no collision figures: left out

@@ -95,6 +95,43 @@ export function speedSafetyOf(r) {
   };
 }
 
+/// An `overtake risk` estimate (the report's "risk", one per folder given to bench --risk) as a
+/// point of the speed-against-safety chart: its base runs' mean speed (no interval: the bench
+/// rows carry the speed's) and its at-fault rate with its interval; null when it lacks them.
+export function riskPointOf(e) {
+  const r = obj(e);
+  if (!isNum(r.mean_speed_mph) || !isNum(r.rate_per_100mi)) return null;
+  const rateCI = ciOf(r.ci95_per_100mi);
+  return {
+    speed: r.mean_speed_mph,
+    speedCI: null,
+    rate: r.rate_per_100mi,
+    rateCI,
+    oneSided: Boolean(r.upper_bound_only),
+    contacts: true,
+    risk: true,
+    colorOf: String(r.policy ?? '?'),
+  };
+}
+
+/// Ticks of a log axis over [lo, hi] (lo > 0): the powers of ten inside, with 2 and 5 times
+/// them when fewer than three would show; each with its text ("0.001", "20").
+export function logTicks(lo, hi) {
+  const text = (v) => (v >= 1 ? String(Math.round(v)) : v.toFixed(Math.max(0, Math.ceil(-Math.log10(v) - 1e-9))));
+  const out = [];
+  for (const mults of [[1], [1, 2, 5]]) {
+    out.length = 0;
+    for (let e = Math.floor(Math.log10(lo)); e <= Math.ceil(Math.log10(hi)); ++e) {
+      for (const m of mults) {
+        const v = m * 10 ** e;
+        if (v >= lo * (1 - 1e-9) && v <= hi * (1 + 1e-9)) out.push({ v: Number(v.toPrecision(12)), text: text(Number(v.toPrecision(12))) });
+      }
+    }
+    if (out.length >= 3) break;
+  }
+  return out;
+}
+
 /// The marks' shapes, one per traffic profile.
 export const SHAPES = ['circle', 'square', 'triangle', 'diamond', 'down', 'cross'];
 
@@ -107,8 +144,11 @@ const MARK_R = 5;
 /// index by policy (`policies`); an error bar per interval, across for the rate and up for the
 /// speed (a rate with no event: a one-sided bar from 0 to its bound); a label per point, by
 /// name, or numbered (with `legend`) when the names cannot all be placed apart. `measure(text)`
-/// gives a label's width in pixels; `labelHeight` its height.
-export function scatterLayout(rows, { width, height, measure, labelHeight = 14, policies = [], traffic = [] }) {
+/// gives a label's width in pixels; `labelHeight` its height. `risk`: `overtake risk`
+/// estimates (riskPointOf), drawn as hollow marks labelled by their own names and coloured as
+/// their policy; with any, the rate axis is logarithmic (a rate of 0 sits at its left end, its
+/// bar dashed up to its bound).
+export function scatterLayout(rows, { width, height, measure, labelHeight = 14, policies = [], traffic = [], risk = [] }) {
   const plot = { x: PAD.left, y: PAD.top, w: Math.max(10, width - PAD.left - PAD.right), h: Math.max(10, height - PAD.top - PAD.bottom) };
   const points = [];
   const left = [];
@@ -126,6 +166,18 @@ export function scatterLayout(rows, { width, height, measure, labelHeight = 14, 
     if (!trafficOrder.includes(tr)) trafficOrder.push(tr);
     points.push({ row: r, policy, traffic: tr, ...f });
   }
+  for (const e of risk || []) {
+    const f = riskPointOf(e);
+    const tr = String(obj(e).traffic ?? '?');
+    if (!f) {
+      left.push({ policy: String(obj(e).label ?? '?'), traffic: tr });
+      continue;
+    }
+    if (!policyOrder.includes(f.colorOf)) policyOrder.push(f.colorOf);
+    if (!trafficOrder.includes(tr)) trafficOrder.push(tr);
+    points.push({ row: e, policy: String(obj(e).label ?? f.colorOf), traffic: tr, ...f });
+  }
+  const log = points.some((p) => p.risk);
   // the domains: the rate from 0, the speed around the points and their intervals
   let xHi = 0;
   let yLo = Infinity;
@@ -146,18 +198,34 @@ export function scatterLayout(rows, { width, height, measure, labelHeight = 14, 
   const ypad = Math.max(0.5, (yHi - yLo) * 0.08);
   yLo -= ypad;
   yHi += ypad;
-  const xTicks = niceTicks(0, xHi, Math.max(2, Math.round(plot.w / 90)));
   const yTicks = niceTicks(yLo, yHi, Math.max(2, Math.round(plot.h / 45)));
-  // a little room left of 0, so that the marks and bars of rates of 0 stand clear of the axis
-  const xLo = -0.025 * xHi;
-  const X = (v) => plot.x + ((v - xLo) / (xHi - xLo)) * plot.w;
+  let xLo;
+  let X;
+  let xTicks;
+  if (log) {
+    // from half the least positive figure to half again the largest: a rate of 0 at the left
+    const positive = points.flatMap((p) => [p.rate, ...(p.rateCI || [])]).filter((v) => v > 0);
+    xLo = positive.length ? Math.min(...positive) / 2 : 0.001;
+    xHi = positive.length ? Math.max(...positive) * 1.5 : 1;
+    if (!(xHi > xLo * 1.01)) xHi = xLo * 10;
+    const span = Math.log10(xHi) - Math.log10(xLo);
+    X = (v) => plot.x + ((Math.log10(Math.max(v, xLo)) - Math.log10(xLo)) / span) * plot.w;
+    const ticks = logTicks(xLo, xHi);
+    xTicks = { step: 0, ticks: ticks.map((t) => t.v), texts: ticks.map((t) => t.text) };
+  } else {
+    xTicks = niceTicks(0, xHi, Math.max(2, Math.round(plot.w / 90)));
+    // a little room left of 0, so that the marks and bars of rates of 0 stand clear of the axis
+    xLo = -0.025 * xHi;
+    X = (v) => plot.x + ((v - xLo) / (xHi - xLo)) * plot.w;
+  }
   const Y = (v) => plot.y + plot.h - ((v - yLo) / (yHi - yLo)) * plot.h;
   for (const p of points) {
     p.x = X(p.rate);
     p.y = Y(p.speed);
     p.r = MARK_R;
     p.shape = SHAPES[trafficOrder.indexOf(p.traffic) % SHAPES.length];
-    p.color = policyOrder.indexOf(p.policy);
+    p.color = policyOrder.indexOf(p.colorOf ?? p.policy);
+    p.hollow = Boolean(p.risk);
     p.xBar = p.rateCI ? { from: X(p.rateCI[0]), to: X(p.rateCI[1]), y: p.y, oneSided: p.oneSided } : null;
     p.yBar = p.speedCI ? { from: Y(p.speedCI[0]), to: Y(p.speedCI[1]), x: p.x } : null;
   }
@@ -180,8 +248,8 @@ export function scatterLayout(rows, { width, height, measure, labelHeight = 14, 
     unplaced: labels.filter((l) => !l).length,
     legend: mode === 'numbers' ? points.map((p, i) => ({ n: i + 1, policy: p.policy, traffic: p.traffic })) : [],
     traffic: trafficOrder.filter((t) => points.some((p) => p.traffic === t)),
-    policies: policyOrder.filter((q) => points.some((p) => p.policy === q)),
-    x: { min: xLo, max: xHi, ticks: xTicks.ticks.map((v) => ({ v, px: X(v) })), step: xTicks.step },
+    policies: policyOrder.filter((q) => points.some((p) => !p.risk && p.policy === q)),
+    x: { min: xLo, max: xHi, log, ticks: xTicks.ticks.map((v, i) => ({ v, px: X(v), text: xTicks.texts ? xTicks.texts[i] : null })), step: xTicks.step },
     y: { min: yLo, max: yHi, ticks: yTicks.ticks.map((v) => ({ v, px: Y(v) })), step: yTicks.step },
   };
 }

@@ -424,6 +424,10 @@ function renderScatter(node, rows, bench) {
   node.append(title, better, wrap, legend, numbers, leftOut);
   const policies = Array.isArray(bench.policies) ? bench.policies : [];
   const traffic = Array.isArray(bench.traffic) ? bench.traffic : [];
+  const risk = Array.isArray(bench.risk) ? bench.risk : [];
+  if (risk.length) {
+    better.textContent += ' Hollow marks: `overtake risk` estimates (their base runs\' mean speed, their rate and interval); the rate axis is then logarithmic, a rate of 0 at its left end.';
+  }
   const height = 400;
   let lay = null;
   const draw = (width) => {
@@ -436,7 +440,7 @@ function renderScatter(node, rows, bench) {
     ctx.setTransform(px, 0, 0, px, 0, 0);
     ctx.clearRect(0, 0, width, height);
     ctx.font = `${LABEL_FONT}px system-ui, sans-serif`;
-    lay = scatterLayout(rows, { width, height, measure: (t) => ctx.measureText(t).width, labelHeight: LABEL_FONT + 3, policies, traffic });
+    lay = scatterLayout(rows, { width, height, measure: (t) => ctx.measureText(t).width, labelHeight: LABEL_FONT + 3, policies, traffic, risk });
     const { plot } = lay;
     // grid, ticks, axis titles
     ctx.strokeStyle = '#2a3038';
@@ -449,7 +453,7 @@ function renderScatter(node, rows, bench) {
       ctx.moveTo(Math.round(t.px) + 0.5, plot.y);
       ctx.lineTo(Math.round(t.px) + 0.5, plot.y + plot.h);
       ctx.stroke();
-      ctx.fillText(fmtTick(t.v, lay.x.step), t.px, plot.y + plot.h + 5);
+      ctx.fillText(t.text ?? fmtTick(t.v, lay.x.step), t.px, plot.y + plot.h + 5);
     }
     ctx.textAlign = 'right';
     ctx.textBaseline = 'middle';
@@ -464,7 +468,7 @@ function renderScatter(node, rows, bench) {
     ctx.strokeRect(plot.x + 0.5, plot.y + 0.5, plot.w, plot.h);
     ctx.textAlign = 'center';
     ctx.textBaseline = 'bottom';
-    ctx.fillText('at-fault collisions per 100 mi  (← safer)', plot.x + plot.w / 2, height - 4);
+    ctx.fillText(`at-fault collisions per 100 mi${lay.x.log ? ', log scale' : ''}  (← safer)`, plot.x + plot.w / 2, height - 4);
     ctx.save();
     ctx.translate(14, plot.y + plot.h / 2);
     ctx.rotate(-Math.PI / 2);
@@ -519,6 +523,15 @@ function renderScatter(node, rows, bench) {
     ctx.lineWidth = 1.2;
     ctx.strokeStyle = '#0d0f12';
     for (const p of lay.points) {
+      if (p.hollow) { // an `overtake risk` estimate: a ring in its policy's colour
+        ctx.save();
+        ctx.fillStyle = 'rgb(28, 32, 38)';
+        ctx.strokeStyle = color(p);
+        ctx.lineWidth = 2;
+        drawMark(ctx, p.shape, p.x, p.y, p.r);
+        ctx.restore();
+        continue;
+      }
       ctx.fillStyle = color(p);
       drawMark(ctx, p.shape, p.x, p.y, p.r);
     }
@@ -542,7 +555,7 @@ function renderScatter(node, rows, bench) {
     });
     LABEL_BOXES[node.id] = lay.labels.filter(Boolean).map(({ text, x, y, w, h }) => ({ text, x, y, w, h }));
     Object.assign(node.dataset, {
-      points: String(lay.points.length), xBars: String(xBars), yBars: String(yBars), oneSidedBars: String(oneSided),
+      points: String(lay.points.length), riskPoints: String(lay.points.filter((p) => p.risk).length), xLog: String(lay.x.log), xBars: String(xBars), yBars: String(yBars), oneSidedBars: String(oneSided),
       labelMode: lay.mode, unplaced: String(lay.unplaced), overlaps: String(overlapping(LABEL_BOXES[node.id]).length),
     });
     // the legend: shapes by traffic, colours by policy; numbers when the names did not fit
@@ -554,6 +567,9 @@ function renderScatter(node, rows, bench) {
     for (const q of lay.policies) {
       const p = lay.points.find((x) => x.policy === q);
       legend.append(el('span', { class: 'key' }, el('span', { class: 'swatch', style: `background:${color(p)}` }), ` ${q}`));
+    }
+    for (const p of lay.points.filter((x) => x.risk)) {
+      legend.append(el('span', { class: 'key' }, el('span', { class: 'glyph', style: `color:${color(p)}` }, '○'), ` ${p.policy}`));
     }
     numbers.hidden = lay.mode !== 'numbers';
     numbers.textContent = '';
@@ -584,7 +600,9 @@ function renderScatter(node, rows, bench) {
     }
     tip.hidden = !best;
     if (!best) return;
-    tip.textContent = `${best.policy} / ${best.traffic}: ${withCI(best.speed, best.speedCI, 2)} mph; at fault ${rateWithCI(best.rate, best.rateCI, 2, best.oneSided)} per 100 mi`;
+    const digits = best.risk ? 4 : 2;
+    const over = best.risk ? ` (overtake risk over ${Math.round(best.row.base_miles || 0)} mi)` : '';
+    tip.textContent = `${best.policy} / ${best.traffic}: ${withCI(best.speed, best.speedCI, 2)} mph; at fault ${rateWithCI(best.rate, best.rateCI, digits, best.oneSided)} per 100 mi${over}`;
     tip.style.left = `${Math.min(best.x + 12, canvas.clientWidth - 260)}px`;
     tip.style.top = `${best.y + 10}px`;
   });

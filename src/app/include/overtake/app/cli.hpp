@@ -115,7 +115,9 @@ void add_planner_flags(CLI::App& cmd, planners::PlannerFlags& flags,
                        planners::PlannerFlagSet which);
 
 /// Registers --slurm TASKS and the --slurm-* flags on `cmd` (`what`: "bench", "hunt").
-void add_slurm_flags(CLI::App& cmd, cluster::SlurmOptions& options, const std::string& what);
+/// `merge`: how the shards are merged by hand (default: "WHAT merge").
+void add_slurm_flags(CLI::App& cmd, cluster::SlurmOptions& options, const std::string& what,
+                     const std::string& merge = "");
 /// Whether --slurm was given; UsageError when a --slurm-* flag was given without it.
 [[nodiscard]] bool slurm_requested(const CLI::App& cmd);
 /// The options given to `cmd`, as each task gives them again (--name=value; flags as --name),
@@ -125,11 +127,12 @@ void add_slurm_flags(CLI::App& cmd, cluster::SlurmOptions& options, const std::s
 
 /// A bench as a Slurm array of `tasks` (`bench --slurm`, and each bench of `tune --slurm`):
 /// task I runs shard I of `spec` with `args` (the bench's flags, without --out, --jobs,
-/// --shard); the shards merge into spec.out, and its report page into `html` when given.
+/// --shard); the shards merge into spec.out, and its report page into `html` when given (the
+/// `risk` folders drawn on its chart).
 [[nodiscard]] cluster::SlurmArray bench_array(const batch::BenchSpec& spec, int tasks,
                                               std::vector<std::string> args,
-                                              std::optional<std::filesystem::path> html,
-                                              bool quiet);
+                                              std::optional<std::filesystem::path> html, bool quiet,
+                                              std::vector<std::filesystem::path> risk = {});
 
 /// The --policy flag's help: every built-in policy with its summary.
 [[nodiscard]] std::string policy_help();

@@ -18,15 +18,18 @@ inline constexpr std::string_view kReplaysFolder = "replays";
 /// The bench report's data (docs/replay.md): bench.json's object with "runs" (each with
 /// "replay": a link relative to `html_dir`, or null) and "summary". `replay_html_of` maps a
 /// run to its replay page when it has one.
-[[nodiscard]] nlohmann::json bench_report_object(const std::filesystem::path& bench_out,
-                                                 const std::filesystem::path& html_dir);
+/// `risk_dirs`: `overtake risk` folders of at-fault estimates, drawn on the speed-against-
+/// safety chart beside the rows (the object's "risk", batch::risk_chart_point's each).
+[[nodiscard]] nlohmann::json bench_report_object(
+    const std::filesystem::path& bench_out, const std::filesystem::path& html_dir,
+    const std::vector<std::filesystem::path>& risk_dirs = {});
 
 /// Writes the bench report page of `bench_out` to `html`, and beside each recorded replay
 /// (bench_out/replays/*.otr) its self-contained page. Returns the replay pages written.
-std::vector<std::filesystem::path> write_bench_report(const std::filesystem::path& bench_out,
-                                                      const std::filesystem::path& html,
-                                                      std::string_view report_template,
-                                                      std::string_view viewer_template);
+std::vector<std::filesystem::path> write_bench_report(
+    const std::filesystem::path& bench_out, const std::filesystem::path& html,
+    std::string_view report_template, std::string_view viewer_template,
+    const std::vector<std::filesystem::path>& risk_dirs = {});
 
 /// The file name of a bench run's replay: <policy>-<traffic>-seed<N>.otr.
 [[nodiscard]] std::string bench_replay_name(const std::string& policy, const std::string& traffic,

@@ -18,6 +18,7 @@
 #include "overtake/batch/shard.hpp"
 #include "overtake/planners/catalog.hpp"
 #include "overtake/scenarios/cut.hpp"
+#include "overtake/sim/referee.hpp"
 
 namespace overtake::batch {
 
@@ -31,10 +32,15 @@ struct HuntSpec {
   std::vector<std::optional<std::filesystem::path>> maps = {std::nullopt};
   std::vector<std::string> traffic = {"faithful", "calm"};
   std::uint64_t first_seed = 1;
+  /// When not empty, the seeds driven, in this order, instead of first_seed up (the budget
+  /// then allows one run per seed, map and traffic profile): `risk` cuts its runs' events so.
+  std::vector<std::uint64_t> seeds;
   double minutes = 30.0;     ///< per run
   int failures = 5;          ///< stop once this many are found
   double budget_hours = 10;  ///< ... or once this much is simulated
   HuntTarget target = HuntTarget::collisions;
+  /// With target incidents: only incidents of this type are failures.
+  std::optional<sim::IncidentType> incident_type;
   double before_s = 15.0;  ///< the cut scenarios' window
   double after_s = 5.0;
   /// The warm-up a cut of a planner from outside carries (CutOptions::warm_up_s, warm_up_all).

@@ -21,6 +21,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include "overtake/batch/hunt.hpp"
+#include "overtake/batch/shard.hpp"
 #include "overtake/eval/splitting.hpp"
 #include "overtake/planners/catalog.hpp"
 #include "overtake/sim/proximity.hpp"
@@ -87,8 +89,23 @@ struct RiskSpec {
   std::optional<std::filesystem::path> params;
   int jobs = 1;
   std::filesystem::path out = "risk-out";
+  /// The first this many events of the base runs (in run order) are cut into scenarios in
+  /// OUT/events by a hunt over their runs' seeds (batch/hunt.hpp: grouped by situation, each
+  /// group's scenarios checked to repeat the event); 0: none.
+  int scenarios = 5;
   bool resume = false;  ///< take up the runs of --out (refused when they are of another estimate)
+  /// A slice of the runs (--shard I/N, a Slurm task): run k is this shard's when k mod N is
+  /// I - 1, and a shard runs every one of its runs among the planned ones (risk_runs_planned):
+  /// the stopping rules look at the whole estimate, so only the merge applies them. Its
+  /// events are cut by the merge.
+  Shard shard;
 };
+
+/// The base runs an estimate can take before a stopping rule must stop it: every run the
+/// budget buys at a base run's cost (--minutes; copies cost more, so the budget stops no
+/// later), to the end of that block of batch_runs, and at most --max-runs. The shards of a
+/// Slurm array run these between them.
+[[nodiscard]] std::size_t risk_runs_planned(const RiskSpec& spec);
 
 /// One base run and its copies.
 struct RiskRun {
@@ -123,6 +140,12 @@ struct RiskOutcome {
   double wall_s = 0.0;
   std::size_t resumed_runs = 0;
   RiskParams params;  ///< the levels it used
+  /// The events cut into scenarios (RiskSpec::scenarios), when a hunt ran; `cut_note` says
+  /// why not, or how the hunt ended when it did not end well.
+  std::optional<HuntOutcome> cut;
+  std::string cut_note;
+  /// Of a merge (merge_risk): the shards and runs it found, and the runs it kept.
+  std::string merged_note;
 };
 
 /// Refuses what cannot be estimated (UsageError naming the flag): bad numbers, a planner
@@ -134,6 +157,17 @@ void check_risk_spec(const RiskSpec& spec);
 /// a run fails (its planner failed: that is the planner's failure, not the event).
 [[nodiscard]] RiskOutcome run_risk(const RiskSpec& spec, const std::atomic<bool>* stop,
                                    const std::function<void(const RiskProgress&)>& progress);
+
+/// Merges the shards of one estimate into `spec.out` (`overtake risk --merge`, and the end of
+/// a Slurm array): each must be a shard of the estimate `spec` describes (its planner, event,
+/// map, traffic, length, config, levels and build; UsageError naming the shard and what
+/// differs), the shards of one count with none twice. The estimate is that of the runs from
+/// run 0 that the shards hold without a gap, with the stopping rules of `spec` looked at after
+/// each block as the estimate looks at them: the same runs, and so the same estimate, as one
+/// run here with the same flags. Writes --out as run_risk does (and cuts the events).
+[[nodiscard]] RiskOutcome merge_risk(const RiskSpec& spec,
+                                     const std::vector<std::filesystem::path>& shards,
+                                     const std::atomic<bool>* stop);
 
 /// The outcome's figures as risk.json holds them.
 [[nodiscard]] nlohmann::json risk_json(const RiskSpec& spec, const RiskOutcome& outcome);
@@ -149,5 +183,11 @@ void check_risk_spec(const RiskSpec& spec);
 [[nodiscard]] nlohmann::json compare_risk_folders(const std::filesystem::path& base,
                                                   const std::filesystem::path& candidate);
 [[nodiscard]] std::string compare_risk_text(const nlohmann::json& comparison);
+
+/// An at-fault estimate of a risk folder as the bench page's speed-against-safety chart
+/// draws it beside the bench's rows: folder, label, policy, config, traffic, map, rate and
+/// interval per 100 mi, upper_bound_only, mean_speed_mph and base_miles. Throws
+/// std::runtime_error naming the file when it cannot be read or counts another event.
+[[nodiscard]] nlohmann::json risk_chart_point(const std::filesystem::path& dir);
 
 }  // namespace overtake::batch
