@@ -12,6 +12,7 @@ void validate_reference(const PlannerParams& all, std::vector<std::string>& out)
   const ReferenceParams& p = all.reference;
   core::ParamChecker c(out, "planner.reference.");
   c.non_negative("line_smoothing_m3", p.line_smoothing_m3);
+  c.in_range("assertiveness", p.assertiveness, 0.0, 1.0);
   const auto& pr = p.prediction;
   c.positive("prediction.lane_change_speed_mps", pr.lane_change_speed_mps);
   c.positive("prediction.lane_change_offset_m", pr.lane_change_offset_m);

@@ -7,6 +7,7 @@
 #include "overtake/base/text.hpp"
 #include "overtake/core/hash.hpp"
 #include "overtake/core/text_check.hpp"
+#include "overtake/planner/reference/assertiveness.hpp"
 #include "overtake/run/resources.hpp"
 
 namespace overtake::run {
@@ -130,16 +131,34 @@ using sim::describe;
 
 }  // namespace
 
+namespace {
+
+// `j`'s keys over `c`; what cannot be read goes into `errors`, naming the key.
+void read_sections(Config& c, const json& j, std::vector<std::string>& errors) {
+  Reader top(j, "", errors);
+  top.section("road", c.road);
+  top.section("car", c.car);
+  top.section("world", c.world);
+  top.section("planner", c.planner);
+  top.check_unknown();
+}
+
+}  // namespace
+
 Config apply_config_json(Config base, const json& j, std::string_view source) {
   if (!j.is_object()) fail(source, {"the top level must be a JSON object"});
   std::vector<std::string> errors;
-  Reader top(j, "", errors);
-  top.section("road", base.road);
-  top.section("car", base.car);
-  top.section("world", base.world);
-  top.section("planner", base.planner);
-  top.check_unknown();
+  const Config before = base;
+  read_sections(base, j, errors);
   if (!errors.empty()) fail(source, errors);
+  // The file moved the knob: its keys move from where they stood, then the file's own keys
+  // are read over them again, so that a key set by hand keeps its value.
+  const double a = base.planner.reference.assertiveness;
+  if (a != before.planner.reference.assertiveness && a >= 0.0 && a <= 1.0) {
+    base = before;
+    base.planner.reference = planner::with_assertiveness(before.planner.reference, a);
+    read_sections(base, j, errors);
+  }
   // Facts the modules share live once in the file and are copied into each module's params.
   base.world.road = base.road;
   base.planner.road = base.road;

@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "overtake/planner/policy.hpp"
+#include "overtake/planner/reference/assertiveness.hpp"
 #include "overtake/replay/replay.hpp"
 #include "overtake/run/config.hpp"
 #include "overtake/run/drive.hpp"
@@ -43,6 +44,46 @@ TEST(ConfigDefaults, ShippedFileHoldsExactlyTheStructDefaults) {
          "`overtake config --defaults > config/overtake.json`";
   EXPECT_EQ(apply_config_json(Config{}, shipped(), "shipped"), Config{});
   EXPECT_EQ(default_config(), Config{});
+}
+
+// planner.reference.assertiveness: one knob that moves the soft costs, margins and gaps from
+// the shipped defaults (0) to the edge (1) together; a key set by hand in the same file wins.
+TEST(ConfigAssertiveness, TheKnobMovesItsKeysTogetherAndAKeySetByHandWins) {
+  const planner::ReferenceParams d = Config{}.planner.reference;
+  const auto at = [](const std::string& text) {
+    return apply_config_json(Config{}, json::parse(text), "user.json").planner.reference;
+  };
+  EXPECT_EQ(at(R"({"planner": {"reference": {"assertiveness": 0}}})"), d);
+  const planner::ReferenceParams half = at(R"({"planner": {"reference": {"assertiveness": 0.5}}})");
+  EXPECT_DOUBLE_EQ(half.assertiveness, 0.5);
+  EXPECT_DOUBLE_EQ(half.trajectory.proximity_weight, d.trajectory.proximity_weight * 0.25);
+  EXPECT_DOUBLE_EQ(half.trajectory.rear_weight, d.trajectory.rear_weight * 0.25);
+  EXPECT_DOUBLE_EQ(half.trajectory.lon_margin_m, (d.trajectory.lon_margin_m + 0.2) / 2);
+  EXPECT_DOUBLE_EQ(half.behaviour.min_gap_m, (d.behaviour.min_gap_m + 1.0) / 2);
+  EXPECT_DOUBLE_EQ(half.behaviour.lead_brake_mps2, (d.behaviour.lead_brake_mps2 + 9.0) / 2);
+  EXPECT_EQ(half.prediction, d.prediction);  // nothing else moves
+  EXPECT_EQ(half.behaviour.cruise_speed_mps, d.behaviour.cruise_speed_mps);
+  // Every key it moves goes from the default towards the edge, and reaches it at 1.
+  const planner::ReferenceParams edge = at(R"({"planner": {"reference": {"assertiveness": 1}}})");
+  EXPECT_EQ(edge, planner::with_assertiveness(d, 1.0));
+  EXPECT_DOUBLE_EQ(edge.trajectory.proximity_weight, 0.0);
+  EXPECT_DOUBLE_EQ(edge.trajectory.lat_margin_m, 0.1);
+  EXPECT_DOUBLE_EQ(edge.behaviour.follower_brake_mps2, 9.0);
+  EXPECT_EQ(planner::assertiveness_keys().size(), 8U);
+  // A key set by hand keeps its value; the others move.
+  const planner::ReferenceParams mixed =
+      at(R"({"planner": {"reference": {"assertiveness": 0.5, "behaviour": {"min_gap_m": 3.5}}}})");
+  EXPECT_DOUBLE_EQ(mixed.behaviour.min_gap_m, 3.5);
+  EXPECT_DOUBLE_EQ(mixed.trajectory.lon_margin_m, half.trajectory.lon_margin_m);
+  // The config it gives reads back as itself (the knob is not applied twice).
+  const Config c = apply_config_json(
+      Config{}, json::parse(R"({"planner": {"reference": {"assertiveness": 0.5}}})"), "u");
+  EXPECT_EQ(apply_config_json(Config{}, config_to_json(c), "again"), c);
+  // Outside 0..1 it is refused, naming the key.
+  EXPECT_THAT(error_of(json::parse(R"({"planner": {"reference": {"assertiveness": 1.5}}})")),
+              HasSubstr("planner.reference.assertiveness"));
+  EXPECT_THAT(error_of(json::parse(R"({"planner": {"reference": {"assertiveness": "high"}}})")),
+              HasSubstr("planner.reference.assertiveness"));
 }
 
 TEST(ConfigOverrides, ASubsetOfKeysOverridesOnlyThose) {

@@ -599,13 +599,13 @@ function todaysPairs(rows) {
 // The bench data with every key of today's bench filled in (made up), and, in place of its
 // pairs (the page's own are checked on the page itself), pairs of every verdict.
 // Today's bench with two `overtake risk` estimates (bench --risk): one with no event (a bound),
-// one with a rate; the chart draws them hollow on a log rate axis.
+// one with a rate; the chart draws them hollow on a log rate axis, joined as the policy's frontier.
 function withRisk(bench) {
   const b = withTodaysKeys(bench);
   const row = (b.summary || [])[0] || {};
-  const point = (label, rate, ci, bound) => ({ folder: `risk-${label}`, label: `${row.policy} ${label} (risk)`, policy: row.policy, config: '', traffic: row.traffic,
-    map: null, rate_per_100mi: rate, ci95_per_100mi: ci, upper_bound_only: bound, mean_speed_mph: (row.mean_speed_mph || 45) + 0.3, base_miles: 4000 });
-  b.risk = [point('safe', 0, [0, 0.066], true), point('weak', 0.064, [0.013, 0.19], false)];
+  const point = (label, rate, ci, bound, faster) => ({ folder: `risk-${label}`, label: `${row.policy} ${label} (risk)`, policy: row.policy, config: '', traffic: row.traffic,
+    map: null, rate_per_100mi: rate, ci95_per_100mi: ci, upper_bound_only: bound, mean_speed_mph: (row.mean_speed_mph || 45) + faster, base_miles: 4000 });
+  b.risk = [point('safe', 0, [0, 0.066], true, 0.3), point('weak', 0.064, [0.013, 0.19], false, 0.8)];
   return b;
 }
 
@@ -850,6 +850,7 @@ async function testScatterAndLabels(page, expect) {
   check(Number(d.riskPoints) === got.risk && d.xLog === String(got.risk > 0),
     `risk estimates are hollow points (${d.riskPoints} of ${got.risk}), the rate axis logarithmic with any (${d.xLog})`);
   if (got.risk > 0) check(got.legend.filter((k) => /\(risk\)$/.test(k)).length === got.risk, `the legend names each risk estimate (${got.legend.join(', ')})`);
+  if (got.risk > 1) check(d.frontiers === '1', `the estimates of one policy are joined into its frontier (${d.frontiers} curves)`);
   if (got.points < got.rows) check(!got.leftOutHidden && /Left out/.test(got.leftOut), `the rows left out are named (${got.leftOut})`);
   if (got.points > 0) {
     check(got.legend.filter((k) => / traffic$/.test(k)).length === got.traffic, `the legend tells the traffic profiles apart (${got.legend.join(', ')})`);

@@ -5,7 +5,7 @@
 import assert from 'node:assert/strict';
 import { test } from 'node:test';
 
-import { logTicks, niceTicks, overlapping, placeLabels, riskPointOf, scatterLayout, slotLabels, speedSafetyOf } from '../src/report/layout.js';
+import { logTicks, niceTicks, overlapping, paretoOf, placeLabels, riskPointOf, scatterLayout, slotLabels, speedSafetyOf } from '../src/report/layout.js';
 import { summarize } from '../src/report/summary.js';
 import {
   collisionsNote, deltaCI, groupsOf, hasPrecision, intervalMethodText, matrixCell, matrixColumns, matrixPolicies, mirrorFigure,
@@ -408,6 +408,17 @@ test('speed against safety with risk estimates: hollow points, a log rate axis, 
   assert.deepEqual(logTicks(0.004, 30).map((t) => t.text), ['0.01', '0.1', '1', '10']);
   assert.deepEqual(logTicks(0.3, 4).map((t) => t.text), ['0.5', '1', '2']);
   assert.equal(riskPointOf({ rate_per_100mi: 1 }), null);
+  // one estimate a policy: no curve; two or more of one policy (a knob's points): its
+  // frontier, those no other beats on both joined in order of rate (a0, slower than a1 at
+  // more risk, is not on it)
+  assert.equal(lay.frontiers.length, 0);
+  const knob = [0.3, 0, 1.2].map((rate, i) => ({ label: `reference a${i} (risk)`, policy: 'reference', traffic: 'faithful', mean_speed_mph: 45 + i, rate_per_100mi: rate, ci95_per_100mi: [rate / 3, rate * 3 || 0.07], upper_bound_only: rate === 0, base_miles: 2000 }));
+  const fr = scatterLayout(rows, { width: 700, height: 400, measure, risk: knob });
+  assert.equal(fr.frontiers.length, 1);
+  assert.equal(fr.frontiers[0].policy, 'reference');
+  const [k0, k1, k2] = fr.points.filter((p) => p.risk);
+  assert.deepEqual(fr.frontiers[0].points, [k1, k2].map((p) => ({ x: p.x, y: p.y })));
+  assert.deepEqual(paretoOf([{ rate: 0, speed: 45 }, { rate: 0, speed: 45.4 }, { rate: 0.17, speed: 46.7 }, { rate: 1.7, speed: 46.5 }]), [{ rate: 0, speed: 45.4 }, { rate: 0.17, speed: 46.7 }]);
   // without risk estimates the axis stays linear from 0
   assert.equal(scatterLayout(rows, { width: 700, height: 400, measure }).x.log, false);
 });

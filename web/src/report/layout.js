@@ -132,6 +132,13 @@ export function logTicks(lo, hi) {
   return out;
 }
 
+/// The points no other beats on both figures (another as fast or faster at no more risk, and
+/// better on one), in order of rate.
+export function paretoOf(points) {
+  const beats = (a, b) => a.rate <= b.rate && a.speed >= b.speed && (a.rate < b.rate || a.speed > b.speed);
+  return points.filter((p) => !points.some((q) => q !== p && beats(q, p))).sort((a, b) => a.rate - b.rate || a.speed - b.speed);
+}
+
 /// The marks' shapes, one per traffic profile.
 export const SHAPES = ['circle', 'square', 'triangle', 'diamond', 'down', 'cross'];
 
@@ -147,7 +154,10 @@ const MARK_R = 5;
 /// gives a label's width in pixels; `labelHeight` its height. `risk`: `overtake risk`
 /// estimates (riskPointOf), drawn as hollow marks labelled by their own names and coloured as
 /// their policy; with any, the rate axis is logarithmic (a rate of 0 sits at its left end, its
-/// bar dashed up to its bound).
+/// bar dashed up to its bound). Of the estimates of one policy (its configurations, the points
+/// of a knob), those no other of them beats on both (as fast at no more risk) are joined in
+/// order of rate into a curve (`frontiers`, when two or more): what that policy can do at each
+/// risk, against which the bench's other planners stand as points.
 export function scatterLayout(rows, { width, height, measure, labelHeight = 14, policies = [], traffic = [], risk = [] }) {
   const plot = { x: PAD.left, y: PAD.top, w: Math.max(10, width - PAD.left - PAD.right), h: Math.max(10, height - PAD.top - PAD.bottom) };
   const points = [];
@@ -248,6 +258,10 @@ export function scatterLayout(rows, { width, height, measure, labelHeight = 14, 
     unplaced: labels.filter((l) => !l).length,
     legend: mode === 'numbers' ? points.map((p, i) => ({ n: i + 1, policy: p.policy, traffic: p.traffic })) : [],
     traffic: trafficOrder.filter((t) => points.some((p) => p.traffic === t)),
+    frontiers: policyOrder
+      .map((q) => paretoOf(points.filter((p) => p.risk && p.colorOf === q)))
+      .filter((ps) => ps.length >= 2)
+      .map((ps) => ({ policy: ps[0].colorOf, color: ps[0].color, points: ps.map((p) => ({ x: p.x, y: p.y })) })),
     policies: policyOrder.filter((q) => points.some((p) => !p.risk && p.policy === q)),
     x: { min: xLo, max: xHi, log, ticks: xTicks.ticks.map((v, i) => ({ v, px: X(v), text: xTicks.texts ? xTicks.texts[i] : null })), step: xTicks.step },
     y: { min: yLo, max: yHi, ticks: yTicks.ticks.map((v) => ({ v, px: Y(v) })), step: yTicks.step },

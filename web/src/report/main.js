@@ -522,6 +522,16 @@ function renderScatter(node, rows, bench) {
     ctx.restore();
     ctx.lineWidth = 1.2;
     ctx.strokeStyle = '#0d0f12';
+    for (const f of lay.frontiers) { // one policy's estimates, joined in order of rate
+      ctx.save();
+      ctx.strokeStyle = color(lay.points.find((p) => p.risk && p.colorOf === f.policy));
+      ctx.lineWidth = 1.5;
+      ctx.setLineDash([5, 3]);
+      ctx.beginPath();
+      f.points.forEach((q, i) => (i ? ctx.lineTo(q.x, q.y) : ctx.moveTo(q.x, q.y)));
+      ctx.stroke();
+      ctx.restore();
+    }
     for (const p of lay.points) {
       if (p.hollow) { // an `overtake risk` estimate: a ring in its policy's colour
         ctx.save();
@@ -555,7 +565,7 @@ function renderScatter(node, rows, bench) {
     });
     LABEL_BOXES[node.id] = lay.labels.filter(Boolean).map(({ text, x, y, w, h }) => ({ text, x, y, w, h }));
     Object.assign(node.dataset, {
-      points: String(lay.points.length), riskPoints: String(lay.points.filter((p) => p.risk).length), xLog: String(lay.x.log), xBars: String(xBars), yBars: String(yBars), oneSidedBars: String(oneSided),
+      points: String(lay.points.length), riskPoints: String(lay.points.filter((p) => p.risk).length), frontiers: String(lay.frontiers.length), xLog: String(lay.x.log), xBars: String(xBars), yBars: String(yBars), oneSidedBars: String(oneSided),
       labelMode: lay.mode, unplaced: String(lay.unplaced), overlaps: String(overlapping(LABEL_BOXES[node.id]).length),
     });
     // the legend: shapes by traffic, colours by policy; numbers when the names did not fit
