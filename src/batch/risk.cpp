@@ -478,7 +478,7 @@ std::vector<std::size_t> next_batch(const RiskSpec& spec, const RiskParams& para
   const auto block = static_cast<std::size_t>(params.batch_runs);
   std::vector<std::size_t> batch;
   if (spec.shard.count > 1) {
-    const std::size_t planned = risk_runs_planned(spec);
+    const std::size_t planned = risk_detail::planned_runs(spec, params);
     for (std::size_t j = done; batch.size() < block && spec.shard.item(j) < planned; ++j) {
       batch.push_back(spec.shard.item(j));
     }
@@ -533,7 +533,10 @@ std::unique_ptr<Loaded> load_estimate(const RiskSpec& spec) {
 }  // namespace
 
 std::size_t risk_runs_planned(const RiskSpec& spec) {
-  const RiskParams params = load_risk_params(spec.params);
+  return risk_detail::planned_runs(spec, load_risk_params(spec.params));
+}
+
+std::size_t risk_detail::planned_runs(const RiskSpec& spec, const RiskParams& params) {
   const auto block = static_cast<double>(params.batch_runs);
   const double bought = std::ceil(spec.budget_hours * 60.0 / spec.minutes / block) * block;
   return std::min(spec.max_runs, static_cast<std::size_t>(std::max(bought, block)));

@@ -45,6 +45,9 @@ struct Interrupted {};
 
 [[nodiscard]] double miles_of(double metres);
 
+/// risk_runs_planned with the risk params already loaded.
+[[nodiscard]] std::size_t planned_runs(const RiskSpec& spec, const RiskParams& params);
+
 /// The folder of the cut events, under --out.
 inline constexpr const char* kEventsDir = "events";
 

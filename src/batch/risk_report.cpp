@@ -133,7 +133,7 @@ json risk_json(const RiskSpec& spec, const RiskOutcome& o) {
   if (spec.shard.count > 1) {
     j["shard"] = {{"index", spec.shard.index},
                   {"count", spec.shard.count},
-                  {"planned_runs", risk_runs_planned(spec)},
+                  {"planned_runs", risk_detail::planned_runs(spec, o.params)},
                   {"finished", !o.interrupted}};
   }
   if (!o.merged_note.empty()) j["merged"] = o.merged_note;
@@ -168,7 +168,8 @@ std::string risk_markdown(const RiskSpec& spec, const RiskOutcome& o) {
   s << "| gain | " << base::fixed_text(o.gain, 2) << "x |\n";
   s << "| stopped by | " << o.stopped_by << " |\n";
   if (spec.shard.count > 1) {
-    s << "| shard | " << spec.shard.text() << " of the " << risk_runs_planned(spec)
+    s << "| shard | " << spec.shard.text() << " of the "
+      << risk_detail::planned_runs(spec, o.params)
       << " planned runs (the stopping rules are the merge's) |\n";
   }
   if (!o.merged_note.empty()) s << "| merged | " << o.merged_note << " |\n";
