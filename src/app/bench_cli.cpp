@@ -379,7 +379,7 @@ int run_sweep(const BenchState& st, const BenchSpec& spec) {
     const auto network = sandbox::parse_planner_network(st.planners.network);
     if (network == sandbox::PlannerNetwork::automatic) {
       const sandbox::NetworkCheck check = sandbox::check_planner_network(*network);
-      if (!check.isolated) {
+      if (!check.own_network) {
         std::fprintf(stderr,
                      "bench: planner programs run one at a time on the host's network: %s\n",
                      check.why.c_str());

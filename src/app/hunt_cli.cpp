@@ -277,7 +277,7 @@ void add_run_flags(CLI::App& cmd, HuntState& st) {
   cmd.add_option("--first-seed", st.spec.first_seed, "Seeds go up from this one")
       ->check(seed_validator())
       ->capture_default_str();
-  cmd.add_option("--maps", st.maps,
+  cmd.add_option("--maps,--map", st.maps,
                  "Comma-separated map files to drive on, each once (\"default\" for the\n"
                  "built-in track; default: the built-in track)");
   cmd.add_option("--traffic", st.traffic, "Comma-separated traffic profiles, each once")

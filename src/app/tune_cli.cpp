@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cstdio>
 #include <iostream>
+#include <optional>
 #include <set>
 #include <stdexcept>
 
@@ -41,6 +42,11 @@ struct TuneFlags {
   std::vector<std::string> maps;
   std::string config;
   double hours = 0.0;
+  bool quiet = false;
+  std::optional<double> max_risk;
+  std::optional<double> risk_hours;
+  std::string risk_event = "at-fault";
+  batch::TuneRisk risk;
   planners::PlannerFlags planners;
   cluster::SlurmOptions slurm;
   std::set<std::string> planner_options;  ///< the long names of the planner flags
@@ -167,6 +173,19 @@ TuneSpec spec_of(TuneSpec spec, const TuneFlags& f) {
     }
   }
   if (!f.config.empty()) spec.config = f.config;
+  if (f.max_risk || f.risk_hours) {
+    spec.risk = f.risk;
+    try {
+      spec.risk->event = batch::parse_risk_event(f.risk_event);
+    } catch (const UsageError& e) {
+      // risk's words name its own flag, --event
+      std::string what = e.what();
+      if (what.starts_with("--event")) what.insert(2, "risk-");
+      throw UsageError(what);
+    }
+    spec.risk->max_per_100mi = f.max_risk;
+    if (f.risk_hours) spec.risk->hours = *f.risk_hours;
+  }
   if (f.hours > 0.0) {
     // Simulated hours: each trial costs seeds x traffic profiles x minutes.
     const double trial_h =
@@ -188,14 +207,16 @@ TuneSpec spec_of(TuneSpec spec, const TuneFlags& f) {
   return spec;
 }
 
-int report(const TuneSpec& spec, const TuneOutcome& o) {
-  std::cout << o.summary_markdown;
-  if (!o.best_command.empty()) std::cout << "\nbest command: " << o.best_command << "\n";
-  std::cout << "\nwrote " << (spec.out / batch::kTuneTrialsFile).string() << ", "
-            << (spec.out / batch::kTuneSummaryFile).string() << ", "
-            << (spec.out / batch::kTunePageFile).string();
-  if (o.best) std::cout << ", " << (spec.out / batch::kTuneBestFile).string();
-  std::cout << "\n";
+int report(const TuneSpec& spec, const TuneOutcome& o, bool quiet) {
+  if (!quiet) {
+    std::cout << o.summary_markdown;
+    if (!o.best_command.empty()) std::cout << "\nbest command: " << o.best_command << "\n";
+    std::cout << "\nwrote " << (spec.out / batch::kTuneTrialsFile).string() << ", "
+              << (spec.out / batch::kTuneSummaryFile).string() << ", "
+              << (spec.out / batch::kTunePageFile).string();
+    if (o.best) std::cout << ", " << (spec.out / batch::kTuneBestFile).string();
+    std::cout << "\n";
+  }
   if (o.interrupted) {
     std::cerr << "overtake tune: interrupted; " << o.trials.size()
               << " finished trials kept (--resume goes on)\n";
@@ -249,6 +270,35 @@ Subcommand register_tune(CLI::App& app) {
                   "each trial drives every seed on every map, and its figures are over them\n"
                   "all (`default`: the built-in track)");
   cmd->add_option("--config", f->config, "A config file the search starts from");
+  cmd->add_option("--max-risk", f->max_risk,
+                  "RATE: a trial is feasible when its rate of --risk-event per 100 mi, estimated\n"
+                  "by `overtake risk` after its bench (--risk-hours, the same runs for every\n"
+                  "trial), is at most RATE; the validation estimates the start's and the best's\n"
+                  "again on runs of their own and says whether the best is within it")
+      ->check(CLI::Range(0.0, 1e6));
+  cmd->add_option("--risk-event", f->risk_event,
+                  "The event of the risk: at-fault, contact, near-miss or a rubric incident type")
+      ->capture_default_str();
+  cmd->add_option("--risk-hours", f->risk_hours,
+                  "Each trial's risk budget, simulated hours per map and traffic profile (also\n"
+                  "turns on the risk figures without --max-risk, for --objective/--constraint)\n"
+                  "[default: 2]")
+      ->check(CLI::Range(0.001, 1e6));
+  cmd->add_option("--risk-validation-hours", f->risk.validation_hours,
+                  "The validation's risk budget, for the start and the best each, per map and\n"
+                  "traffic profile")
+      ->check(CLI::Range(0.001, 1e6))
+      ->capture_default_str();
+  cmd->add_option("--risk-first-seed", f->risk.first_seed,
+                  "The trials' risk runs are seeded from this one on; the validation's follow\n"
+                  "the last a trial's budget can reach (a training or held-out seed in either\n"
+                  "range is refused)")
+      ->capture_default_str();
+  cmd->add_option("--risk-rel-error", f->risk.rel_error,
+                  "A trial's risk estimate stops early once its interval's half width is\n"
+                  "within this share of the rate (0: the whole --risk-hours)")
+      ->check(CLI::Range(0.0, 9.99))
+      ->capture_default_str();
   cmd->add_option("--trials", spec->trials, "The budget: trials at most")->capture_default_str();
   cmd->add_option("--hours", f->hours,
                   "The budget as simulated hours (training runs), when fewer trials than --trials")
@@ -258,11 +308,13 @@ Subcommand register_tune(CLI::App& app) {
                   "direct (DIRECT-L), crs2 (controlled random search, seeded): global, over\n"
                   "the whole box")
       ->capture_default_str();
-  cmd->add_option("--jobs", spec->jobs, "Runs of a trial at once")
+  cmd->add_option("-j,--jobs", spec->jobs, "Runs of a trial at once")
       ->default_val(batch::default_jobs());
-  cmd->add_option("--out", spec->out, "The output folder")->capture_default_str();
+  cmd->add_option("-o,--out", spec->out, "The output folder")->capture_default_str();
   cmd->add_flag("--resume", spec->resume, "Go on with the search in --out");
   cmd->add_flag("--force", spec->force, "Write into an --out that holds other files");
+  cmd->add_flag("--quiet,-q", f->quiet,
+                "No progress lines or summary (the files of --out are written all the same)");
   std::set<std::string> before;
   for (const CLI::Option* o : cmd->get_options()) {
     if (!o->get_lnames().empty()) before.insert(o->get_lnames().front());
@@ -289,10 +341,11 @@ Subcommand register_tune(CLI::App& app) {
             const InterruptScope interrupt;
             int shown = 0;
             const TuneOutcome o =
-                batch::run_tune(s, &InterruptScope::flag(),
-                                [&](const TuneProgress& p) { show_progress(p, shown); });
-            if (stderr_is_terminal()) std::fprintf(stderr, "\n");
-            return report(s, o);
+                batch::run_tune(s, &InterruptScope::flag(), [&](const TuneProgress& p) {
+                  if (!f->quiet) show_progress(p, shown);
+                });
+            if (stderr_is_terminal() && !f->quiet) std::fprintf(stderr, "\n");
+            return report(s, o, f->quiet);
           }};
 }
 

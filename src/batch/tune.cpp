@@ -21,9 +21,28 @@
 #include "overtake/batch/bench.hpp"
 #include "overtake/eval/metrics.hpp"
 #include "overtake/run/config.hpp"
+#include "tune_internal.hpp"
 
 namespace overtake::batch {
+
+namespace tune_detail {
+
+std::vector<MapChoice> maps_of(const TuneSpec& spec) {
+  return spec.maps.empty() ? std::vector<MapChoice>{std::nullopt} : spec.maps;
+}
+
+std::string map_label(const MapChoice& map) {
+  return map ? map->string() : std::string("the built-in track");
+}
+
+}  // namespace tune_detail
+
 namespace {
+
+using tune_detail::constraints_of;
+using tune_detail::map_label;
+using tune_detail::MapChoice;
+using tune_detail::maps_of;
 
 using base::fixed_text;
 using base::UsageError;
@@ -102,6 +121,17 @@ std::string config_pointer(const json& config, const std::string& name) {
     }
   }
   if (found.empty()) {
+    // A name that ends keys only part-way through their last word ("weight" of
+    // "proximity_weight"): name them, so the user picks one.
+    std::vector<std::string> near;
+    for (const auto& p : paths) {
+      if (p.ends_with(name) && p.starts_with("planner.")) near.push_back(p);
+    }
+    if (!near.empty()) {
+      throw UsageError("--param: '" + name + "' is no key's whole name, and is the ending of " +
+                       std::to_string(near.size()) + " (" + join(near) +
+                       "): give one of them, or a unique ending from a '.'");
+    }
     throw UsageError("--param: '" + name +
                      "' is not a numeric key of the config (`overtake config` lists them; a key "
                      "may be named by its full path or a unique ending)");
@@ -126,6 +156,10 @@ struct Target {
   std::shared_ptr<const planners::PlannerCatalog> catalog;  ///< holds `entry`
   const planners::PlannerEntry* entry = nullptr;
   json base_config;  ///< built-in policies: the starting config, every key
+  /// Built-in policies: the keys the starting config file sets (none without --config). A
+  /// trial's config is these and its parameters, so that a key the file leaves to the
+  /// defaults is still moved by a knob (planner.reference.assertiveness) a trial turns.
+  json file_config = json::object();
   std::vector<Placement> places;
 };
 
@@ -137,6 +171,7 @@ Target resolve_target(const TuneSpec& spec) {
   switch (t.entry->kind) {
     case PlannerKind::builtin:
       t.base_config = run::config_to_json(run::load_config(spec.config));
+      if (spec.config) t.file_config = run::read_json_file(*spec.config);
       for (const auto& p : spec.params) {
         t.places.push_back({Placement::Kind::config, config_pointer(t.base_config, p.name)});
       }
@@ -192,7 +227,7 @@ std::string program_command(const Target& t, const std::vector<double>& x) {
 }
 
 json trial_config(const Target& t, const std::vector<double>& x) {
-  json c = t.base_config;
+  json c = t.file_config;
   for (std::size_t i = 0; i < x.size(); ++i) c[json::json_pointer(t.places[i].key)] = x[i];
   return c;
 }
@@ -214,17 +249,6 @@ std::shared_ptr<const planners::PlannerCatalog> trial_catalog(const Target& t, c
     catalog->add(e.with_params(keywords), planners::flag_of(e.kind));
   }
   return catalog;
-}
-
-using MapChoice = std::optional<fs::path>;
-
-// The maps a trial drives: those named, or the built-in track.
-std::vector<MapChoice> maps_of(const TuneSpec& spec) {
-  return spec.maps.empty() ? std::vector<MapChoice>{std::nullopt} : spec.maps;
-}
-
-std::string map_label(const MapChoice& map) {
-  return map ? map->string() : std::string("the built-in track");
 }
 
 // Where the bench of map `k` of `n` goes under a trial's (or a validation's) folder: the
@@ -301,7 +325,7 @@ void judge(TuneTrial& trial, const TuneSpec& spec) {
   trial.feasible = std::isfinite(trial.objective);
   trial.violations.clear();
   if (!trial.feasible) trial.violations.push_back(spec.objective + " is not known");
-  for (const auto& c : spec.constraints) {
+  for (const auto& c : constraints_of(spec)) {
     const json& v = trial.figures[c.figure];
     if (!v.is_number()) {
       trial.feasible = false;
@@ -320,7 +344,7 @@ void judge(TuneTrial& trial, const TuneSpec& spec) {
 // How far a trial is from meeting its constraints (0 when it does).
 double violation(const TuneTrial& trial, const TuneSpec& spec) {
   double total = 0.0;
-  for (const auto& c : spec.constraints) {
+  for (const auto& c : constraints_of(spec)) {
     const json& v = trial.figures[c.figure];
     if (!v.is_number()) {
       total += 1e6;
@@ -369,6 +393,16 @@ json manifest_of(const TuneSpec& spec, const Target& t) {
             {"map", spec.maps.size() == 1 && spec.maps[0] ? spec.maps[0]->string() : ""},
             {"start_config", t.base_config},
             {"algorithm", spec.algorithm}};
+  if (spec.risk) {
+    // With a risk (a search without one keeps the manifest it always had).
+    const TuneRisk& r = *spec.risk;
+    m["risk"] = {{"event", r.event.name()},
+                 {"max_per_100mi", r.max_per_100mi ? json(*r.max_per_100mi) : json()},
+                 {"hours", r.hours},
+                 {"validation_hours", r.validation_hours},
+                 {"first_seed", r.first_seed},
+                 {"rel_error", r.rel_error}};
+  }
   if (spec.maps.size() > 1) {
     // Several maps (a search of one map keeps the manifest it always had).
     m.erase("map");
@@ -425,6 +459,13 @@ void append_line(const fs::path& file, const std::string& line) {
 std::string trial_folder_name(int number) {
   std::string n = std::to_string(number);
   return std::string(n.size() < 4 ? 4 - n.size() : 0, '0') + n;
+}
+
+// The planner whose risk a bench of `x` into `dir` runs (its config file written there).
+tune_detail::RiskPlanner risk_planner(const TuneSpec& spec, const Target& t,
+                                      const std::vector<double>& x, const fs::path& config_file) {
+  const bool builtin = t.entry->kind == planners::PlannerKind::builtin;
+  return {spec.policy, trial_catalog(t, spec, x), builtin ? config_file : spec.config};
 }
 
 // ---- the search ---------------------------------------------------------------------------
@@ -514,6 +555,15 @@ class Search {
       for (json& r : load_bench_runs(out)) rows.push_back(std::move(r));
     }
     t.figures = figures_of(rows, (dir / kBenchRunsFile).string());
+    if (spec_.risk) {
+      const auto risk = tune_detail::trial_risk(
+          spec_, risk_planner(spec_, target_, x, dir / "config.json"), dir / "risk", stop_);
+      if (!risk) {
+        interrupted = true;
+        return nullptr;
+      }
+      t.figures.update(*risk);
+    }
     judge(t, spec_);
     append_line(spec_.out / kTuneTrialsFile, trial_json(t, spec_).dump());
     trials.push_back(std::move(t));
@@ -673,7 +723,17 @@ std::vector<TuneValidation> run_validation(const TuneSpec& spec, const Target& t
                          interrupted);
     if (interrupted) return {};
     std::string verdict = verdict_of(spec, c);
-    out.push_back({map_label(maps[k]), std::move(c), std::move(verdict)});
+    TuneValidation v{map_label(maps[k]), std::move(c), std::move(verdict), nullptr, ""};
+    if (spec.risk) {
+      const fs::path at = map_folder(dir, k, maps.size());
+      v.risk = tune_detail::validate_risk_on(
+          spec, risk_planner(spec, target, start, at / "start-config.json"),
+          risk_planner(spec, target, best, at / "best-config.json"), maps[k], at, stop,
+          interrupted);
+      if (interrupted) return {};
+      v.risk_verdict = tune_detail::risk_verdict_of(spec, v.risk);
+    }
+    out.push_back(std::move(v));
   }
   return out;
 }
@@ -707,13 +767,22 @@ std::string verdict_of(const TuneSpec& spec, const json& validation) {
          metric + " (" + verdict + "), " + change + ".";
 }
 
+// A trial's risk as the summary shows it: "0.123 (0.01-0.5)", or why there is none.
+std::string risk_cell(const TuneTrial& t) {
+  const json& f = t.figures;
+  if (!f.value("risk_per_100mi", json()).is_number()) return "-";
+  return fixed_text(f["risk_per_100mi"].get<double>(), 3) + " (" +
+         fixed_text(f["risk_low_per_100mi"].get<double>(), 3) + "-" +
+         fixed_text(f["risk_high_per_100mi"].get<double>(), 3) + ")";
+}
+
 std::string summary_of(const TuneSpec& spec, const TuneOutcome& o) {
   std::string s = "# overtake tune: " + spec.policy + "\n\n";
   s +=
       "Objective: " + spec.objective +
       (tune_figure_higher_is_better(spec.objective) ? " (higher is better)" : " (lower is better)");
   std::string cs;
-  for (const auto& c : spec.constraints) {
+  for (const auto& c : constraints_of(spec)) {
     cs += (cs.empty() ? "" : ", ") + c.figure + (c.at_most ? " <= " : " >= ") +
           base::shortest_text(c.bound);
   }
@@ -722,17 +791,26 @@ std::string summary_of(const TuneSpec& spec, const TuneOutcome& o) {
        base::shortest_text(spec.minutes) + " min per traffic profile" +
        (spec.maps.size() > 1 ? " on each of " + std::to_string(spec.maps.size()) + " maps" : "") +
        "; " + std::to_string(o.trials.size()) + " trials (" + spec.algorithm + "); ended by " +
-       o.stop_reason + ".\n\n";
-  s += "| trial |";
+       o.stop_reason + ".\n";
+  if (spec.risk) {
+    s += "Risk: each trial's " + spec.risk->event.name() + " rate per 100 mi by `overtake risk`, " +
+         base::shortest_text(spec.risk->hours) +
+         " simulated hours per map and traffic profile, on the same runs for every trial "
+         "(seeds from " +
+         std::to_string(spec.risk->first_seed) + ").\n";
+  }
+  s += "\n| trial |";
   for (const auto& p : spec.params) s += " " + p.name + " |";
-  s += " " + spec.objective + " | feasible |\n|---:|";
+  s += " " + spec.objective + " |" + (spec.risk ? " risk_per_100mi (95% interval) |" : "") +
+       " feasible |\n|---:|";
   for (std::size_t i = 0; i < spec.params.size(); ++i) s += "---:|";
-  s += "---:|---|\n";
+  s += std::string(spec.risk ? "---:|" : "") + "---:|---|\n";
   const auto row = [&](const TuneTrial& t, const std::string& label) {
     s += "| " + label + " |";
     for (const auto& p : spec.params) s += " " + base::shortest_text(t.params.at(p.name)) + " |";
-    s += " " + (std::isfinite(t.objective) ? fixed_text(t.objective, 3) : std::string("-")) +
-         " | " + (t.feasible ? std::string("yes") : "no: " + t.violations.front()) + " |\n";
+    s += " " + (std::isfinite(t.objective) ? fixed_text(t.objective, 3) : std::string("-")) + " |";
+    if (spec.risk) s += " " + risk_cell(t) + " |";
+    s += " " + (t.feasible ? std::string("yes") : "no: " + t.violations.front()) + " |\n";
   };
   if (!o.trials.empty()) row(o.trials.front(), "1 (start)");
   if (o.best && *o.best != 1) {
@@ -743,6 +821,7 @@ std::string summary_of(const TuneSpec& spec, const TuneOutcome& o) {
   for (const TuneValidation& v : o.validations) {
     if (o.validations.size() > 1) s += "\n### On " + v.map + "\n";
     s += "\n" + v.verdict + "\n\n```\n" + eval::compare_text(v.comparison) + "```\n";
+    if (!v.risk_verdict.empty()) s += "\n" + v.risk_verdict + "\n";
   }
   if (o.validations.empty() && o.best && spec.validation_seeds.empty()) {
     s += "\nNo validation (no --validate-seeds).\n";
@@ -807,6 +886,7 @@ const std::vector<std::string>& tune_figure_names() {
     std::vector<std::string> n;
     for (const eval::Metric m : eval::all_metrics()) n.emplace_back(eval::info(m).name);
     for (const auto& c : count_names()) n.push_back(c);
+    for (const auto& c : tune_risk_figure_names()) n.push_back(c);
     return n;
   }();
   return names;
@@ -850,6 +930,7 @@ void check_tune_spec(const TuneSpec& spec) {
     throw UsageError("--trials must be between 1 and " + std::to_string(kMaxTuneTrials) + " (got " +
                      std::to_string(spec.trials) + ")");
   }
+  tune_detail::check_tune_risk(spec);
   const Target t = resolve_target(spec);
   const std::vector<double> start = start_point(spec, t);
   for (std::size_t i = 0; i < start.size(); ++i) {

@@ -495,7 +495,7 @@ void check_programs_for_slurm(const PlannerCatalog& planners, const std::string&
   const sandbox::NetworkCheck check =
       sandbox::check_planner_network(network == "isolated" ? sandbox::PlannerNetwork::isolated
                                                            : sandbox::PlannerNetwork::automatic);
-  if (check.isolated) return;
+  if (check.own_network) return;
   const std::string& why = check.why;
   if (check.refused) {
     throw UsageError(

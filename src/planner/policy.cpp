@@ -23,6 +23,14 @@ std::vector<PolicyInfo> list_policies() {
   };
 }
 
+std::string unknown_policy_text(std::string_view name, const std::string& available) {
+  std::string names = available;
+  if (names.empty()) {
+    for (const auto& p : list_policies()) names += (names.empty() ? "" : ", ") + p.name;
+  }
+  return "unknown policy '" + std::string(name) + "' (available: " + names + ")";
+}
+
 std::unique_ptr<Policy> make_policy(std::string_view name, const core::ReferenceLine& line,
                                     const PlannerParams& params) {
   if (name == "reference") return std::make_unique<reference::ReferencePolicy>(line, params);

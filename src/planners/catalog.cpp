@@ -13,6 +13,7 @@
 
 #include "overtake/base/errors.hpp"
 #include "overtake/base/text.hpp"
+#include "overtake/planner/policy.hpp"
 #include "overtake/planners/program_planner.hpp"
 #include "overtake/plugin/plugin.hpp"
 #include "overtake/python/python_policy.hpp"
@@ -311,8 +312,7 @@ const PlannerEntry* PlannerCatalog::find(std::string_view name) const {
 const PlannerEntry& PlannerCatalog::require(std::string_view name) const {
   const PlannerEntry* entry = find(name);
   if (!entry) {
-    throw UsageError("--policy: unknown policy '" + std::string(name) +
-                     "' (available: " + names_text() + ")");
+    throw UsageError("--policy: " + planner::unknown_policy_text(name, names_text()));
   }
   return *entry;
 }

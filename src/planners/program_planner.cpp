@@ -173,7 +173,7 @@ bool program_isolated(const PlannerEntry& entry) {
   const PlannerNetwork network = entry.program ? entry.program->network : PlannerNetwork::host;
   const sandbox::NetworkCheck check = sandbox::check_planner_network(network);
   if (check.refused) throw UsageError("--planner-network isolated: " + check.why);
-  return check.isolated;
+  return check.own_network;
 }
 
 ExternalPlanner program_planner(const PlannerEntry& entry, const std::filesystem::path& log) {

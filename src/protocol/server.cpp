@@ -28,6 +28,7 @@
 
 #include "overtake/core/road.hpp"
 #include "overtake/core/units.hpp"
+#include "overtake/planner/policy.hpp"
 
 namespace overtake::protocol {
 namespace {
@@ -300,10 +301,7 @@ void run_server(net::io_context& ioc, const PlannerSetup& setup, const ServeOpti
   planner::PolicyFactory factory =
       setup.factory ? setup.factory : planner::builtin_policy_factory(setup.policy);
   if (!factory) {
-    std::string names;
-    for (const auto& p : planner::list_policies()) names += (names.empty() ? "" : ", ") + p.name;
-    throw std::invalid_argument("--policy: unknown policy '" + setup.policy +
-                                "' (available: " + names + ")");
+    throw std::invalid_argument("--policy: " + planner::unknown_policy_text(setup.policy));
   }
   if (opts.max_frame_bytes == 0)
     throw std::invalid_argument("--max-frame-bytes must be at least 1");

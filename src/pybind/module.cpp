@@ -256,9 +256,7 @@ class BuiltinPolicy {
         track_(run::load_track(map ? std::optional<std::filesystem::path>(*map) : std::nullopt)) {
     policy_ = planner::make_policy(name, track_->line, config_.planner);
     if (!policy_) {
-      std::string names;
-      for (const auto& p : planner::list_policies()) names += (names.empty() ? "" : ", ") + p.name;
-      throw base::UsageError("unknown policy '" + name + "' (available: " + names + ")");
+      throw base::UsageError(planner::unknown_policy_text(name));
     }
   }
 

@@ -164,7 +164,7 @@ PlannerProcess::PlannerProcess(const PlannerProcessOptions& o) {
   const NetworkCheck net =
       check_planner_network(o.isolated ? PlannerNetwork::isolated : PlannerNetwork::automatic);
   if (net.refused) throw std::runtime_error(net.why);
-  const bool namespaces = net.isolated && (o.namespaces || o.isolated);
+  const bool namespaces = net.namespaces && (o.namespaces || o.isolated);
   containment_ = namespaces ? Containment::pid_namespace : Containment::subreaper;
   const int log = open_log(o.log);
   const Channel channel = open_channel(log);

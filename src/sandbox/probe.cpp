@@ -212,7 +212,8 @@ NetworkCheck check_planner_network(PlannerNetwork network) {
   NetworkCheck check;
   if (network == PlannerNetwork::host) return check;
   const bool available = private_network_available(&check.why);
-  check.isolated = available;
+  check.namespaces = available;
+  check.own_network = available;
   check.refused = network == PlannerNetwork::isolated && !available;
   return check;
 }

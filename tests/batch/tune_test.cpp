@@ -265,6 +265,9 @@ TEST(Tune, BadInputIsRefusedBeforeAnyTrialNamingWhatIsWrong) {
   refused(s, "'no_such_key' is not a numeric key of the config");
   s.params = {parse_tune_param("min_gap_m=0:1")};
   refused(s, "names several config keys");
+  s.params = {parse_tune_param("weight=5:100")};
+  refused(s, "'weight' is no key's whole name, and is the ending of");
+  refused(s, "planner.reference.trajectory.proximity_weight");
   s.params = {parse_tune_param("world.step_s=0.01:0.03")};
   refused(s, "is not the planner's");
   s.params = {parse_tune_param("behaviour.min_gap_m=5:6")};

@@ -114,5 +114,13 @@ TEST(PolicyRegistry, ListsAndMakesEveryPolicy) {
   EXPECT_EQ(make_policy("no-such-policy", line, PlannerParams{}), nullptr);
 }
 
+TEST(PolicyRegistry, OneRefusalForAnUnknownNameInEveryLayer) {
+  const std::string text = unknown_policy_text("nope");
+  EXPECT_EQ(text.rfind("unknown policy 'nope' (available: reference, walkthrough, ", 0), 0U)
+      << text;
+  for (const auto& info : list_policies()) EXPECT_NE(text.find(info.name), std::string::npos);
+  EXPECT_EQ(unknown_policy_text("x", "a, b"), "unknown policy 'x' (available: a, b)");
+}
+
 }  // namespace
 }  // namespace overtake::planner

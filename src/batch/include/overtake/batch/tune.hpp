@@ -19,6 +19,7 @@
 #include <nlohmann/json.hpp>
 
 #include "overtake/batch/bench.hpp"
+#include "overtake/batch/risk.hpp"
 #include "overtake/planners/catalog.hpp"
 
 namespace overtake::batch {
@@ -63,8 +64,30 @@ struct TuneConstraint {
 /// Whether a higher value of the figure is better (the objective's direction).
 [[nodiscard]] bool tune_figure_higher_is_better(const std::string& name);
 
+/// The figures of a trial's risk estimate (TuneSpec::risk): the rate of its event per 100 mi
+/// with the 95% interval's ends, the weighted events, the miles and simulated hours spent.
+[[nodiscard]] const std::vector<std::string>& tune_risk_figure_names();
+
 /// The derivative-free optimisers offered (NLopt's local ones, which need no gradient).
 [[nodiscard]] const std::vector<std::string>& tune_algorithm_names();
+
+/// The risk each trial is judged by (`tune --max-risk`, `--risk-hours`): the rate of an event
+/// per 100 mi, estimated by `overtake risk` (batch/risk.hpp) on every map and traffic profile
+/// of the search, the trials on the same runs (common random numbers: a trial's rate is a
+/// deterministic function of its parameters), the validation's on runs of their own.
+struct TuneRisk {
+  RiskEvent event;
+  /// --max-risk: a trial is feasible when its estimate (risk_per_100mi) is at most this; the
+  /// validation says whether the best's held-out estimate, and its interval's upper end, are.
+  std::optional<double> max_per_100mi;
+  double hours = 2.0;              ///< each trial's budget, simulated hours over its maps
+  double validation_hours = 10.0;  ///< the start's and the best's, each, on held-out runs
+  /// The trials' runs are seeded first_seed, first_seed + 1, ... (as risk's --first-seed);
+  /// the validation's follow the last one a trial's budget can reach.
+  std::uint64_t first_seed = 100001;
+  double rel_error = 0.25;  ///< a trial's estimate stops early once this precise
+  friend bool operator==(const TuneRisk&, const TuneRisk&) = default;
+};
 
 /// What to search.
 struct TuneSpec {
@@ -80,7 +103,10 @@ struct TuneSpec {
   /// the built-in track. With several, a trial's figures are over the runs of all of them.
   std::vector<std::optional<std::filesystem::path>> maps;
   std::optional<std::filesystem::path> config;  ///< the starting config (built-in policies)
-  int trials = 40;                              ///< the budget
+  /// Each trial's risk, estimated after its bench; its figures (tune_risk_figure_names) join
+  /// the trial's, for --objective and --constraint. nullopt: no risk estimated.
+  std::optional<TuneRisk> risk;
+  int trials = 40;  ///< the budget
   std::string algorithm = "sbplx";
   int jobs = 1;
   std::filesystem::path out = "tune-out";
@@ -121,6 +147,11 @@ struct TuneValidation {
   /// In a sentence: whether the best's gain in the objective holds on the held-out seeds
   /// (its verdict, change and interval), or that it could not be judged.
   std::string verdict;
+  /// With TuneSpec::risk: the start's and the best's estimates on held-out runs, compared
+  /// (compare_risk_folders; null when not run), and in a sentence whether the best is within
+  /// the limit there.
+  nlohmann::json risk;
+  std::string risk_verdict;
 };
 
 /// What a search produced.

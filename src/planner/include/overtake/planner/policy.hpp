@@ -55,6 +55,11 @@ struct PolicyInfo {
 /// Every selectable policy.
 [[nodiscard]] std::vector<PolicyInfo> list_policies();
 
+/// The words every layer refuses a policy name with: "unknown policy 'NAME' (available: A, B)",
+/// `available` the names that layer knows (the built-in policies' when empty).
+[[nodiscard]] std::string unknown_policy_text(std::string_view name,
+                                              const std::string& available = {});
+
 /// A new instance of the named policy, or nullptr when there is no policy of that name.
 /// `line` must outlive the policy.
 [[nodiscard]] std::unique_ptr<Policy> make_policy(std::string_view name,

@@ -105,9 +105,11 @@ class PlannerProcess {
 
 /// What a planner program that asks for a network gets (check_planner_network).
 struct NetworkCheck {
-  bool isolated = false;  ///< a network of its own
-  bool refused = false;   ///< isolated was asked for and the machine does not allow it
-  std::string why;        ///< when the machine was probed and does not allow it: what is missing
+  /// The machine allows the user, PID and network namespaces (probed unless host).
+  bool namespaces = false;
+  bool own_network = false;  ///< the planner gets a network of its own
+  bool refused = false;      ///< isolated was asked for and the machine does not allow it
+  std::string why;           ///< when the machine was probed and does not allow it: what is missing
 };
 
 /// The namespace check, the one every caller makes: host gets the host's network (the machine
