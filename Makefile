@@ -19,7 +19,8 @@ all: build
 deps:
 	@scripts/install-deps.sh
 
-# What the demo needs: configuring the release preset, the binary with its web pages, the drive.
+# What the demo needs: configuring the demo preset, the binary with its web pages and the Python
+# module, the drive, numpy for the README's Python lines.
 deps-demo:
 	@scripts/install-deps.sh --demo
 
@@ -27,11 +28,12 @@ build: deps
 	@cmake --preset release >/dev/null
 	@cmake --build --preset release
 
-# Only the binary is built (not the tests and benchmarks): the drive, its scorecard, and the
-# drive as one self-contained page to open in a browser.
+# Only the binary and the Python module are built (not the tests and benchmarks; the demo
+# preset shares build/release with the release one): the drive, its scorecard, and the drive
+# as one self-contained page to open in a browser.
 demo: deps-demo
-	@cmake --preset release >/dev/null
-	@cmake --build --preset release --target overtake
+	@cmake --preset demo >/dev/null
+	@cmake --build --preset demo --target overtake overtake_py
 	@mkdir -p build/demo
 	./build/release/overtake drive --minutes 10 --record build/demo/drive.otr
 	@./build/release/overtake view build/demo/drive.otr --html build/demo/drive.html --quiet

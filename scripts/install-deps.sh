@@ -8,8 +8,8 @@
 # Two sets (scripts/install-deps.sh --help lists them):
 #   --all (the default; make check): everything the build, the tests, the sanitizer and fuzz
 #         builds, the format and clang-tidy checks and the cluster and browser tests need;
-#   --demo (make demo): only what configuring the release preset and building the `overtake`
-#         binary need, and what the demo runs.
+#   --demo (make demo): only what configuring the demo preset and building the `overtake`
+#         binary and the Python module need, and what the demo and the README's lines run.
 # --dry-run installs nothing: it prints the set, what it would install and whether it would run
 # npm ci in web/.
 #
@@ -20,10 +20,9 @@ set -euo pipefail
 
 root="$(cd "$(dirname "$0")/.." && pwd)"
 
-# What `cmake --preset release` and `cmake --build --preset release --target overtake` need. The
-# release preset builds the tests and the benchmarks too (OVERTAKE_BUILD_TESTS and
-# OVERTAKE_BUILD_BENCH are ON), so configuring it looks for GoogleTest (with gmock, which the
-# tests link) and Google Benchmark even when only the binary is built.
+# What `cmake --preset demo` and building its `overtake` binary and `overtake_py` module need
+# (the demo preset builds no tests or benchmarks, so GoogleTest and Google Benchmark are not
+# looked for), and what the README's Python lines then use: numpy.
 demo_packages=(
   # The compiler and the build: CMake, Ninja (the presets' generator); make runs the Makefile.
   cmake ninja-build g++ make
@@ -31,16 +30,17 @@ demo_packages=(
   libeigen3-dev nlohmann-json3-dev libcli11-dev libboost-dev zlib1g-dev
   # `overtake tune`'s optimisers (NLopt, with its C++ header).
   libnlopt-cxx-dev
-  # Python planners (--policy-py): the interpreter embedded in the binary (OVERTAKE_PYTHON=ON).
-  python3-dev python3-pybind11
-  # Looked for at configure time by the release preset (tests and benchmarks ON).
-  libgtest-dev libgmock-dev libbenchmark-dev
+  # Python planners (--policy-py): the interpreter embedded in the binary (OVERTAKE_PYTHON=ON),
+  # the Python module, and numpy, which the example Python planner imports.
+  python3-dev python3-pybind11 python3-numpy
 )
 # The rest of what `make check` needs.
 check_packages=(
   pkg-config
-  # The Python module (OVERTAKE_PYTHON) and its tests; the Python example planner.
-  python3-numpy python3-pytest
+  # The release preset's tests and benchmarks (GoogleTest with gmock, Google Benchmark).
+  libgtest-dev libgmock-dev libbenchmark-dev
+  # The Python module's tests.
+  python3-pytest
   # The fuzz harnesses (make fuzz-smoke, make fuzz): clang, and libFuzzer with the sanitizer
   # runtimes of the same version (libclang-rt-14-dev on Debian 12).
   clang libclang-rt-dev
@@ -63,8 +63,9 @@ the web pages' Node packages with npm ci in web/ when web/node_modules is missin
                ${demo_packages[*]}
                ${check_packages[*]}
                chromium, and Node.js and npm (any installed node and npm will do)
-  --demo     what make demo needs: configuring the release preset, building the overtake
-             binary with its web pages, and running the drive:
+  --demo     what make demo needs: configuring the demo preset, building the overtake
+             binary with its web pages and the Python module, running the drive, and the
+             README's Python lines (numpy):
                ${demo_packages[*]}
                Node.js and npm (any installed node and npm will do)
   --dry-run  install nothing; print the set, what would be installed, and whether npm ci

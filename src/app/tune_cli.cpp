@@ -229,6 +229,70 @@ int report(const TuneSpec& spec, const TuneOutcome& o, bool quiet) {
   return kExitOk;
 }
 
+// What is searched, by which figure, on which runs.
+void add_search_flags(CLI::App& cmd, TuneSpec& spec, TuneFlags& f) {
+  cmd.add_option("--param", f.params,
+                 "NAME=LOW:HIGH[@START], repeatable: a built-in policy's config key (full path\n"
+                 "or a unique ending; starts at its config value), a program's {NAME}\n"
+                 "placeholder in --planner-cmd (else the environment variable NAME), or a\n"
+                 "Python planner's keyword argument (starts mid-range unless @START)")
+      ->required();
+  cmd.add_option("--objective", spec.objective,
+                 "The figure optimised (mean_speed_mph: higher is better; counts and rates:\n"
+                 "lower)")
+      ->capture_default_str();
+  cmd.add_option("--constraint", f.constraints,
+                 "FIGURE<=VALUE or FIGURE>=VALUE, repeatable, over a trial's runs together\n"
+                 "(`none`: no constraint)")
+      ->capture_default_str();
+  cmd.add_option("--seeds", f.seeds, "Training seeds (1-8, 1,4,9)")->capture_default_str();
+  cmd.add_option("--validate-seeds", f.validate_seeds,
+                 "Held-out seeds for the validation (none: no validation)");
+  cmd.add_option("--traffic", f.traffic, "Traffic profiles, comma-separated")
+      ->capture_default_str();
+  cmd.add_option("--minutes", spec.minutes, "Simulated minutes per run")
+      ->check(CLI::Range(0.1, 24.0 * 60.0))
+      ->capture_default_str();
+  cmd.add_option("--map", f.maps,
+                 "A map file (the original's format; default: the built-in track), repeatable:\n"
+                 "each trial drives every seed on every map, and its figures are over them\n"
+                 "all (`default`: the built-in track)");
+  cmd.add_option("--config", f.config, "A config file the search starts from");
+}
+
+// --max-risk and the flags of each trial's risk estimate (batch::TuneRisk).
+void add_risk_flags(CLI::App& cmd, TuneFlags& f) {
+  cmd.add_option("--max-risk", f.max_risk,
+                 "RATE: a trial is feasible when its rate of --risk-event per 100 mi, estimated\n"
+                 "by `overtake risk` after its bench (--risk-hours, the same runs for every\n"
+                 "trial), is at most RATE; the validation estimates the start's and the best's\n"
+                 "again on runs of their own and says whether the best is within it")
+      ->check(CLI::Range(0.0, 1e6));
+  cmd.add_option("--risk-event", f.risk_event,
+                 "The event of the risk: at-fault, contact, near-miss or a rubric incident type")
+      ->capture_default_str();
+  cmd.add_option("--risk-hours", f.risk_hours,
+                 "Each trial's risk budget, simulated hours per map and traffic profile (also\n"
+                 "turns on the risk figures without --max-risk, for --objective/--constraint)\n"
+                 "[default: 2]")
+      ->check(CLI::Range(0.001, 1e6));
+  cmd.add_option("--risk-validation-hours", f.risk.validation_hours,
+                 "The validation's risk budget, for the start and the best each, per map and\n"
+                 "traffic profile")
+      ->check(CLI::Range(0.001, 1e6))
+      ->capture_default_str();
+  cmd.add_option("--risk-first-seed", f.risk.first_seed,
+                 "The trials' risk runs are seeded from this one on; the validation's follow\n"
+                 "the last a trial's budget can reach (a training or held-out seed in either\n"
+                 "range is refused)")
+      ->capture_default_str();
+  cmd.add_option("--risk-rel-error", f.risk.rel_error,
+                 "A trial's risk estimate stops early once its interval's half width is\n"
+                 "within this share of the rate (0: the whole --risk-hours)")
+      ->check(CLI::Range(0.0, 9.99))
+      ->capture_default_str();
+}
+
 }  // namespace
 
 Subcommand register_tune(CLI::App& app) {
@@ -243,62 +307,8 @@ Subcommand register_tune(CLI::App& app) {
   cmd->add_option("--policy", spec->policy,
                   "The planner searched: a built-in policy, or a --planner-cmd, --policy-py or\n"
                   "--policy-lib by its name (default: the one planner from outside, when one)");
-  cmd->add_option("--param", f->params,
-                  "NAME=LOW:HIGH[@START], repeatable: a built-in policy's config key (full path\n"
-                  "or a unique ending; starts at its config value), a program's {NAME}\n"
-                  "placeholder in --planner-cmd (else the environment variable NAME), or a\n"
-                  "Python planner's keyword argument (starts mid-range unless @START)")
-      ->required();
-  cmd->add_option("--objective", spec->objective,
-                  "The figure optimised (mean_speed_mph: higher is better; counts and rates:\n"
-                  "lower)")
-      ->capture_default_str();
-  cmd->add_option("--constraint", f->constraints,
-                  "FIGURE<=VALUE or FIGURE>=VALUE, repeatable, over a trial's runs together\n"
-                  "(`none`: no constraint)")
-      ->capture_default_str();
-  cmd->add_option("--seeds", f->seeds, "Training seeds (1-8, 1,4,9)")->capture_default_str();
-  cmd->add_option("--validate-seeds", f->validate_seeds,
-                  "Held-out seeds for the validation (none: no validation)");
-  cmd->add_option("--traffic", f->traffic, "Traffic profiles, comma-separated")
-      ->capture_default_str();
-  cmd->add_option("--minutes", spec->minutes, "Simulated minutes per run")
-      ->check(CLI::Range(0.1, 24.0 * 60.0))
-      ->capture_default_str();
-  cmd->add_option("--map", f->maps,
-                  "A map file (the original's format; default: the built-in track), repeatable:\n"
-                  "each trial drives every seed on every map, and its figures are over them\n"
-                  "all (`default`: the built-in track)");
-  cmd->add_option("--config", f->config, "A config file the search starts from");
-  cmd->add_option("--max-risk", f->max_risk,
-                  "RATE: a trial is feasible when its rate of --risk-event per 100 mi, estimated\n"
-                  "by `overtake risk` after its bench (--risk-hours, the same runs for every\n"
-                  "trial), is at most RATE; the validation estimates the start's and the best's\n"
-                  "again on runs of their own and says whether the best is within it")
-      ->check(CLI::Range(0.0, 1e6));
-  cmd->add_option("--risk-event", f->risk_event,
-                  "The event of the risk: at-fault, contact, near-miss or a rubric incident type")
-      ->capture_default_str();
-  cmd->add_option("--risk-hours", f->risk_hours,
-                  "Each trial's risk budget, simulated hours per map and traffic profile (also\n"
-                  "turns on the risk figures without --max-risk, for --objective/--constraint)\n"
-                  "[default: 2]")
-      ->check(CLI::Range(0.001, 1e6));
-  cmd->add_option("--risk-validation-hours", f->risk.validation_hours,
-                  "The validation's risk budget, for the start and the best each, per map and\n"
-                  "traffic profile")
-      ->check(CLI::Range(0.001, 1e6))
-      ->capture_default_str();
-  cmd->add_option("--risk-first-seed", f->risk.first_seed,
-                  "The trials' risk runs are seeded from this one on; the validation's follow\n"
-                  "the last a trial's budget can reach (a training or held-out seed in either\n"
-                  "range is refused)")
-      ->capture_default_str();
-  cmd->add_option("--risk-rel-error", f->risk.rel_error,
-                  "A trial's risk estimate stops early once its interval's half width is\n"
-                  "within this share of the rate (0: the whole --risk-hours)")
-      ->check(CLI::Range(0.0, 9.99))
-      ->capture_default_str();
+  add_search_flags(*cmd, *spec, *f);
+  add_risk_flags(*cmd, *f);
   cmd->add_option("--trials", spec->trials, "The budget: trials at most")->capture_default_str();
   cmd->add_option("--hours", f->hours,
                   "The budget as simulated hours (training runs), when fewer trials than --trials")

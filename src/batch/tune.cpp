@@ -39,10 +39,23 @@ std::string map_label(const MapChoice& map) {
 
 namespace {
 
+using tune_detail::bench_of;
 using tune_detail::constraints_of;
+using tune_detail::map_folder;
 using tune_detail::map_label;
 using tune_detail::MapChoice;
 using tune_detail::maps_of;
+using tune_detail::parse_number;
+using tune_detail::Placement;
+using tune_detail::program_command;
+using tune_detail::resolve_target;
+using tune_detail::risk_planner;
+using tune_detail::run_bench_of;
+using tune_detail::run_validation;
+using tune_detail::summary_of;
+using tune_detail::Target;
+using tune_detail::trial_catalog;
+using tune_detail::trial_config;
 
 using base::fixed_text;
 using base::UsageError;
@@ -50,29 +63,6 @@ using nlohmann::json;
 namespace fs = std::filesystem;
 
 // ---- numbers and names -----------------------------------------------------------------
-
-std::optional<double> parse_number(std::string_view text) {
-  double v = 0.0;
-  const auto r = std::from_chars(text.data(), text.data() + text.size(), v);
-  if (r.ec != std::errc{} || r.ptr != text.data() + text.size() || !std::isfinite(v)) {
-    return std::nullopt;
-  }
-  return v;
-}
-
-bool valid_param_name(std::string_view name) {
-  if (name.empty()) return false;
-  return std::all_of(name.begin(), name.end(), [](char c) {
-    return std::isalnum(static_cast<unsigned char>(c)) != 0 || c == '_' || c == '.';
-  });
-}
-
-bool identifier(std::string_view name) {
-  if (name.empty() || std::isdigit(static_cast<unsigned char>(name[0])) != 0) return false;
-  return std::all_of(name.begin(), name.end(), [](char c) {
-    return std::isalnum(static_cast<unsigned char>(c)) != 0 || c == '_';
-  });
-}
 
 std::string join(const std::vector<std::string>& names) {
   return base::join_list(names, ", ");
@@ -83,210 +73,6 @@ const std::vector<std::string>& count_names() {
   static const std::vector<std::string> names = {
       "incidents", "collisions", "at_fault_collisions", "near_misses", "ended_early", "runs"};
   return names;
-}
-
-// ---- how a trial gives its parameters to the planner -----------------------------------
-
-// A parameter's place: a config key (as a JSON pointer), a program's placeholder or
-// environment variable, a Python keyword.
-struct Placement {
-  enum class Kind { config, placeholder, environment, keyword } kind = Kind::config;
-  std::string key;  ///< the config's JSON pointer, the placeholder's or variable's name
-};
-
-// Finds the config key a parameter names: the full dotted path, or a unique ending of one
-// ("behaviour.min_gap_m"); only the planner's keys (the world is what a planner is tested on).
-std::string config_pointer(const json& config, const std::string& name) {
-  std::vector<std::string> paths;
-  const std::function<void(const json&, const std::string&)> walk = [&](const json& j,
-                                                                        const std::string& at) {
-    for (const auto& [k, v] : j.items()) {
-      const std::string path = at.empty() ? k : at + "." + k;
-      if (v.is_object()) {
-        walk(v, path);
-      } else if (v.is_number()) {
-        paths.push_back(path);
-      }
-    }
-  };
-  walk(config, "");
-  std::vector<std::string> found;
-  for (const auto& p : paths) {
-    if (p == name) {
-      found = {p};
-      break;
-    }
-    if (p.size() > name.size() && p.ends_with(name) && p[p.size() - name.size() - 1] == '.') {
-      found.push_back(p);
-    }
-  }
-  if (found.empty()) {
-    // A name that ends keys only part-way through their last word ("weight" of
-    // "proximity_weight"): name them, so the user picks one.
-    std::vector<std::string> near;
-    for (const auto& p : paths) {
-      if (p.ends_with(name) && p.starts_with("planner.")) near.push_back(p);
-    }
-    if (!near.empty()) {
-      throw UsageError("--param: '" + name + "' is no key's whole name, and is the ending of " +
-                       std::to_string(near.size()) + " (" + join(near) +
-                       "): give one of them, or a unique ending from a '.'");
-    }
-    throw UsageError("--param: '" + name +
-                     "' is not a numeric key of the config (`overtake config` lists them; a key "
-                     "may be named by its full path or a unique ending)");
-  }
-  if (found.size() > 1) {
-    std::string list;
-    for (const auto& f : found) list += (list.empty() ? "" : ", ") + f;
-    throw UsageError("--param: '" + name + "' names several config keys (" + list +
-                     "): give more of its path");
-  }
-  if (!found[0].starts_with("planner.")) {
-    throw UsageError("--param: '" + found[0] +
-                     "' is not the planner's: tune searches a planner's parameters, and the "
-                     "world, road and car are what planners are tested on");
-  }
-  std::string pointer = "/" + found[0];
-  std::replace(pointer.begin(), pointer.end(), '.', '/');
-  return pointer;
-}
-
-struct Target {
-  std::shared_ptr<const planners::PlannerCatalog> catalog;  ///< holds `entry`
-  const planners::PlannerEntry* entry = nullptr;
-  json base_config;  ///< built-in policies: the starting config, every key
-  /// Built-in policies: the keys the starting config file sets (none without --config). A
-  /// trial's config is these and its parameters, so that a key the file leaves to the
-  /// defaults is still moved by a knob (planner.reference.assertiveness) a trial turns.
-  json file_config = json::object();
-  std::vector<Placement> places;
-};
-
-Target resolve_target(const TuneSpec& spec) {
-  Target t;
-  t.catalog = spec.planners ? spec.planners : std::make_shared<const planners::PlannerCatalog>();
-  t.entry = &t.catalog->require(spec.policy);
-  using planners::PlannerKind;
-  switch (t.entry->kind) {
-    case PlannerKind::builtin:
-      t.base_config = run::config_to_json(run::load_config(spec.config));
-      if (spec.config) t.file_config = run::read_json_file(*spec.config);
-      for (const auto& p : spec.params) {
-        t.places.push_back({Placement::Kind::config, config_pointer(t.base_config, p.name)});
-      }
-      break;
-    case PlannerKind::program:
-      for (const auto& p : spec.params) {
-        const std::string placeholder = "{" + p.name + "}";
-        if (t.entry->program->command.find(placeholder) != std::string::npos) {
-          t.places.push_back({Placement::Kind::placeholder, placeholder});
-        } else if (identifier(p.name)) {
-          t.places.push_back({Placement::Kind::environment, p.name});
-        } else {
-          throw UsageError("--param: '" + p.name + "' is neither a placeholder {" + p.name +
-                           "} of the planner program's command nor a name an environment "
-                           "variable can have");
-        }
-      }
-      break;
-    case PlannerKind::python:
-    case PlannerKind::plugin:
-      if (!t.entry->with_keywords) {
-        throw UsageError("--param: " + t.entry->label() + " cannot be given parameters");
-      }
-      for (const auto& p : spec.params) {
-        if (t.entry->kind == PlannerKind::python && !identifier(p.name)) {
-          throw UsageError("--param: '" + p.name + "' cannot be a Python keyword argument");
-        }
-        t.places.push_back({Placement::Kind::keyword, p.name});
-      }
-      break;
-  }
-  return t;
-}
-
-// The command of a program with the trial's parameters: placeholders replaced, variables set
-// before it.
-std::string program_command(const Target& t, const std::vector<double>& x) {
-  std::string command = t.entry->program->command;
-  std::string env;
-  for (std::size_t i = 0; i < x.size(); ++i) {
-    const Placement& p = t.places[i];
-    if (p.kind == Placement::Kind::placeholder) {
-      std::size_t at = 0;
-      while ((at = command.find(p.key, at)) != std::string::npos) {
-        command.replace(at, p.key.size(), base::shortest_text(x[i]));
-        at += 1;
-      }
-    } else if (p.kind == Placement::Kind::environment) {
-      env += p.key + "=" + base::shortest_text(x[i]) + " ";
-    }
-  }
-  return env.empty() ? command : "export " + env + "&& " + command;
-}
-
-json trial_config(const Target& t, const std::vector<double>& x) {
-  json c = t.file_config;
-  for (std::size_t i = 0; i < x.size(); ++i) c[json::json_pointer(t.places[i].key)] = x[i];
-  return c;
-}
-
-// The catalog a trial's bench runs: the tuned planner with the trial's parameters.
-std::shared_ptr<const planners::PlannerCatalog> trial_catalog(const Target& t, const TuneSpec& spec,
-                                                              const std::vector<double>& x) {
-  using planners::PlannerKind;
-  if (t.entry->kind == PlannerKind::builtin) return spec.planners;
-  auto catalog = std::make_shared<planners::PlannerCatalog>();
-  planners::PlannerEntry e = *t.entry;
-  if (e.kind == PlannerKind::program) {
-    e.program->command = program_command(t, x);
-    e.source = e.program->command;
-    catalog->add(std::move(e), planners::flag_of(PlannerKind::program));
-  } else {
-    std::map<std::string, double> keywords;
-    for (std::size_t i = 0; i < x.size(); ++i) keywords[t.places[i].key] = x[i];
-    catalog->add(e.with_params(keywords), planners::flag_of(e.kind));
-  }
-  return catalog;
-}
-
-// Where the bench of map `k` of `n` goes under a trial's (or a validation's) folder: the
-// folder itself for one map, map-1/, map-2/, ... for several.
-fs::path map_folder(const fs::path& dir, std::size_t k, std::size_t n) {
-  return n == 1 ? dir : dir / ("map-" + std::to_string(k + 1));
-}
-
-// The bench of one point of the search: the planner with parameters `x` on `seeds` and `map`,
-// into `out` (a built-in policy's config with the values is written beside it, as
-// `config_file`).
-BenchSpec bench_of(const TuneSpec& spec, const Target& t, const std::vector<double>& x,
-                   const std::vector<std::uint64_t>& seeds, const MapChoice& map,
-                   const fs::path& out, const fs::path& config_file) {
-  fs::create_directories(out);
-  BenchSpec b;
-  b.policies = {spec.policy};
-  b.traffic = spec.traffic;
-  b.seeds = seeds;
-  b.minutes = spec.minutes;
-  b.map = map;
-  b.jobs = spec.jobs;
-  b.out = out;
-  b.planners = trial_catalog(t, spec, x);
-  if (t.entry->kind == planners::PlannerKind::builtin) {
-    base::write_file_atomic(config_file, trial_config(t, x).dump(2) + "\n");
-    b.config = config_file;
-  } else {
-    b.config = spec.config;
-  }
-  return b;
-}
-
-// Runs bench `b` here, or where the spec says (Slurm); true when it was interrupted.
-bool run_bench_of(const TuneSpec& spec, const BenchSpec& b, const std::atomic<bool>* stop,
-                  const std::function<void(const BenchProgress&)>& progress) {
-  if (spec.run_bench_elsewhere) return spec.run_bench_elsewhere(b, stop);
-  return run_bench(b, stop, progress).interrupted;
 }
 
 // ---- a trial's figures ------------------------------------------------------------------
@@ -459,13 +245,6 @@ void append_line(const fs::path& file, const std::string& line) {
 std::string trial_folder_name(int number) {
   std::string n = std::to_string(number);
   return std::string(n.size() < 4 ? 4 - n.size() : 0, '0') + n;
-}
-
-// The planner whose risk a bench of `x` into `dir` runs (its config file written there).
-tune_detail::RiskPlanner risk_planner(const TuneSpec& spec, const Target& t,
-                                      const std::vector<double>& x, const fs::path& config_file) {
-  const bool builtin = t.entry->kind == planners::PlannerKind::builtin;
-  return {spec.policy, trial_catalog(t, spec, x), builtin ? config_file : spec.config};
 }
 
 // ---- the search ---------------------------------------------------------------------------
@@ -686,181 +465,9 @@ std::string optimise(Search& search, const TuneSpec& spec, const std::vector<dou
   }
 }
 
-// ---- the validation and the reports ---------------------------------------------------------
-
-// The validation of one map: the start and the best benched on the held-out seeds into
-// `dir`/start and `dir`/best, compared (null when interrupted).
-json validate_on(const TuneSpec& spec, const Target& target, const std::vector<double>& start,
-                 const std::vector<double>& best, const MapChoice& map, const fs::path& dir,
-                 const std::atomic<bool>* stop, bool& interrupted) {
-  for (const auto& [name, x] : {std::pair{"start", start}, std::pair{"best", best}}) {
-    const BenchSpec b = bench_of(spec, target, x, spec.validation_seeds, map, dir / name,
-                                 dir / (std::string(name) + "-config.json"));
-    if (run_bench_of(spec, b, stop, nullptr)) {
-      interrupted = true;
-      return nullptr;
-    }
-  }
-  return compare_bench_folders(dir / "start", dir / "best", {});
-}
-
-// Whether the training gain holds on the held-out seeds, from the validation's verdict on the
-// objective (a metric of the evaluation; a count is judged by its rate per 100 miles).
-std::string verdict_of(const TuneSpec& spec, const json& validation);
-
-// The validation on every map, in validation/ (validation/map-K/ for several maps).
-std::vector<TuneValidation> run_validation(const TuneSpec& spec, const Target& target,
-                                           const std::vector<double>& start,
-                                           const std::vector<double>& best,
-                                           const std::atomic<bool>* stop, bool& interrupted) {
-  const fs::path dir = spec.out / kTuneValidationFolder;
-  std::error_code ignored;
-  if (!spec.run_bench_elsewhere) fs::remove_all(dir, ignored);
-  const std::vector<MapChoice> maps = maps_of(spec);
-  std::vector<TuneValidation> out;
-  for (std::size_t k = 0; k < maps.size(); ++k) {
-    json c = validate_on(spec, target, start, best, maps[k], map_folder(dir, k, maps.size()), stop,
-                         interrupted);
-    if (interrupted) return {};
-    std::string verdict = verdict_of(spec, c);
-    TuneValidation v{map_label(maps[k]), std::move(c), std::move(verdict), nullptr, ""};
-    if (spec.risk) {
-      const fs::path at = map_folder(dir, k, maps.size());
-      v.risk = tune_detail::validate_risk_on(
-          spec, risk_planner(spec, target, start, at / "start-config.json"),
-          risk_planner(spec, target, best, at / "best-config.json"), maps[k], at, stop,
-          interrupted);
-      if (interrupted) return {};
-      v.risk_verdict = tune_detail::risk_verdict_of(spec, v.risk);
-    }
-    out.push_back(std::move(v));
-  }
-  return out;
-}
-
-std::string verdict_of(const TuneSpec& spec, const json& validation) {
-  std::string metric = spec.objective;
-  if (!eval::parse_metric(metric)) metric += "_per_100mi";
-  if (!eval::parse_metric(metric) || validation["comparisons"].empty()) {
-    return "The validation has no verdict on " + spec.objective + ".";
-  }
-  const json& f = validation["comparisons"][0]["figures"][metric];
-  if (f.is_null()) return "The validation has no verdict on " + metric + ".";
-  const std::string verdict = f["verdict"].get<std::string>();
-  std::string change = "change " + fixed_text(f["difference"].get<double>(), 3);
-  if (f["ci"].is_array()) {
-    change += " (95% interval " + fixed_text(f["ci"][0].get<double>(), 3) + " to " +
-              fixed_text(f["ci"][1].get<double>(), 3) + ")";
-  }
-  const std::string seeds = std::to_string(spec.validation_seeds.size()) + " held-out seeds";
-  if (verdict == "better") {
-    return "The gain holds on the held-out seeds: " + metric + " better on " + seeds + ", " +
-           change + ".";
-  }
-  if (verdict == "worse") {
-    return "The gain does NOT hold: on " + seeds + " the best is worse than the start in " +
-           metric + ", " + change + " (it fits its training seeds only).";
-  }
-  return "Not shown to hold: on " + seeds +
-         " the best is not different from the start beyond "
-         "noise in " +
-         metric + " (" + verdict + "), " + change + ".";
-}
-
-// A trial's risk as the summary shows it: "0.123 (0.01-0.5)", or why there is none.
-std::string risk_cell(const TuneTrial& t) {
-  const json& f = t.figures;
-  if (!f.value("risk_per_100mi", json()).is_number()) return "-";
-  return fixed_text(f["risk_per_100mi"].get<double>(), 3) + " (" +
-         fixed_text(f["risk_low_per_100mi"].get<double>(), 3) + "-" +
-         fixed_text(f["risk_high_per_100mi"].get<double>(), 3) + ")";
-}
-
-std::string summary_of(const TuneSpec& spec, const TuneOutcome& o) {
-  std::string s = "# overtake tune: " + spec.policy + "\n\n";
-  s +=
-      "Objective: " + spec.objective +
-      (tune_figure_higher_is_better(spec.objective) ? " (higher is better)" : " (lower is better)");
-  std::string cs;
-  for (const auto& c : constraints_of(spec)) {
-    cs += (cs.empty() ? "" : ", ") + c.figure + (c.at_most ? " <= " : " >= ") +
-          base::shortest_text(c.bound);
-  }
-  s += "; constraints: " + (cs.empty() ? std::string("none") : cs) + ".\n";
-  s += "Training: " + std::to_string(spec.seeds.size()) + " seeds x " +
-       base::shortest_text(spec.minutes) + " min per traffic profile" +
-       (spec.maps.size() > 1 ? " on each of " + std::to_string(spec.maps.size()) + " maps" : "") +
-       "; " + std::to_string(o.trials.size()) + " trials (" + spec.algorithm + "); ended by " +
-       o.stop_reason + ".\n";
-  if (spec.risk) {
-    s += "Risk: each trial's " + spec.risk->event.name() + " rate per 100 mi by `overtake risk`, " +
-         base::shortest_text(spec.risk->hours) +
-         " simulated hours per map and traffic profile, on the same runs for every trial "
-         "(seeds from " +
-         std::to_string(spec.risk->first_seed) + ").\n";
-  }
-  s += "\n| trial |";
-  for (const auto& p : spec.params) s += " " + p.name + " |";
-  s += " " + spec.objective + " |" + (spec.risk ? " risk_per_100mi (95% interval) |" : "") +
-       " feasible |\n|---:|";
-  for (std::size_t i = 0; i < spec.params.size(); ++i) s += "---:|";
-  s += std::string(spec.risk ? "---:|" : "") + "---:|---|\n";
-  const auto row = [&](const TuneTrial& t, const std::string& label) {
-    s += "| " + label + " |";
-    for (const auto& p : spec.params) s += " " + base::shortest_text(t.params.at(p.name)) + " |";
-    s += " " + (std::isfinite(t.objective) ? fixed_text(t.objective, 3) : std::string("-")) + " |";
-    if (spec.risk) s += " " + risk_cell(t) + " |";
-    s += " " + (t.feasible ? std::string("yes") : "no: " + t.violations.front()) + " |\n";
-  };
-  if (!o.trials.empty()) row(o.trials.front(), "1 (start)");
-  if (o.best && *o.best != 1) {
-    row(o.trials[static_cast<std::size_t>(*o.best - 1)], std::to_string(*o.best) + " (best)");
-  }
-  if (!o.best) s += "\nNo trial met the constraints.\n";
-  if (!o.validations.empty()) s += "\n## Validation on held-out seeds\n";
-  for (const TuneValidation& v : o.validations) {
-    if (o.validations.size() > 1) s += "\n### On " + v.map + "\n";
-    s += "\n" + v.verdict + "\n\n```\n" + eval::compare_text(v.comparison) + "```\n";
-    if (!v.risk_verdict.empty()) s += "\n" + v.risk_verdict + "\n";
-  }
-  if (o.validations.empty() && o.best && spec.validation_seeds.empty()) {
-    s += "\nNo validation (no --validate-seeds).\n";
-  }
-  if (o.interrupted) s += "\nInterrupted: the trials above are those that finished.\n";
-  return s;
-}
-
 }  // namespace
 
 // ---- parsing ----------------------------------------------------------------------------
-
-TuneParam parse_tune_param(const std::string& text) {
-  const auto eq = text.find('=');
-  const auto bad = [&](const std::string& why) {
-    return UsageError("--param: '" + text + "': " + why +
-                      " (expected NAME=LOW:HIGH or NAME=LOW:HIGH@START)");
-  };
-  if (eq == std::string::npos) throw bad("no '='");
-  TuneParam p;
-  p.name = text.substr(0, eq);
-  if (!valid_param_name(p.name)) throw bad("'" + p.name + "' is not a parameter name");
-  std::string range = text.substr(eq + 1);
-  if (const auto at = range.find('@'); at != std::string::npos) {
-    p.start = parse_number(range.substr(at + 1));
-    if (!p.start) throw bad("the start '" + range.substr(at + 1) + "' is not a number");
-    range = range.substr(0, at);
-  }
-  const auto colon = range.find(':');
-  if (colon == std::string::npos) throw bad("no ':' between LOW and HIGH");
-  const auto low = parse_number(range.substr(0, colon));
-  const auto high = parse_number(range.substr(colon + 1));
-  if (!low || !high) throw bad("LOW and HIGH must be numbers");
-  if (!(*low < *high)) throw bad("LOW must be below HIGH");
-  p.low = *low;
-  p.high = *high;
-  if (p.start && (*p.start < p.low || *p.start > p.high)) throw bad("START is outside the range");
-  return p;
-}
 
 TuneConstraint parse_tune_constraint(const std::string& text) {
   TuneConstraint c;

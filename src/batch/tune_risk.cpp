@@ -282,8 +282,10 @@ std::string risk_verdict_of(const TuneSpec& spec, const json& v) {
     s += ": the best's is higher";
   } else if (verdict == "lower") {
     s += ": the best's is lower";
+  } else if (verdict == "no verdict") {
+    s += ": no verdict (neither saw an event)";
   } else {
-    s += ": no difference shown (" + verdict + ")";
+    s += ": no difference shown";
   }
   s += ".";
   if (const auto limit = spec.risk->max_per_100mi) {

@@ -106,6 +106,96 @@ std::optional<std::pair<std::size_t, std::size_t>> find_crossing(const std::vect
   return std::nullopt;
 }
 
+// One waypoint's checks, against the rules and the waypoint before it (line_of: the file line
+// of each waypoint so far).
+void check_waypoint(const Waypoint& wp, const Map& map, const std::vector<std::size_t>& line_of,
+                    std::string_view source, std::size_t line_no, const MapRules& rules) {
+  const double v[3] = {wp.x_m, wp.y_m, wp.s_m};
+  const double normal_len = std::hypot(wp.dx, wp.dy);
+  if (std::abs(normal_len - 1.0) > rules.normal_tolerance) {
+    fail(source, line_no,
+         "normal (dx, dy) = (" + fmt(wp.dx) + ", " + fmt(wp.dy) + ") has length " +
+             fmt(normal_len) + "; it must be a unit vector (within " +
+             fmt(rules.normal_tolerance * 100.0) + "%)");
+  }
+  for (int c : {0, 1, 2}) {
+    if (std::abs(v[c]) > rules.max_abs_coordinate_m) {
+      fail(source, line_no,
+           std::string(kColumnNames[c]) + " = " + fmt(v[c]) +
+               " is out of range: a map's x, y and s must be within +-" +
+               fmt(rules.max_abs_coordinate_m) + " m");
+    }
+  }
+  if (map.waypoints.size() >= rules.max_waypoints) {
+    fail(source, line_no,
+         "too many waypoints: a map may have at most " + std::to_string(rules.max_waypoints));
+  }
+  if (!map.waypoints.empty() && !(wp.s_m > map.waypoints.back().s_m)) {
+    fail(source, line_no,
+         "s = " + fmt(wp.s_m) + " does not increase (line " + std::to_string(line_of.back()) +
+             " has s = " + fmt(map.waypoints.back().s_m) + ")");
+  }
+  if (!map.waypoints.empty()) {
+    const Waypoint& prev = map.waypoints.back();
+    const double chord = std::hypot(wp.x_m - prev.x_m, wp.y_m - prev.y_m);
+    const double step = wp.s_m - prev.s_m;
+    if (step > rules.max_s_step_ratio * chord + rules.s_step_slack_m ||
+        step < chord / rules.max_s_step_ratio - rules.s_step_slack_m) {
+      fail(source, line_no,
+           "s grows by " + fmt(step) + " m from line " + std::to_string(line_of.back()) +
+               ", but the waypoints are " + fmt(chord) +
+               " m apart; s is the distance along the road");
+    }
+  }
+}
+
+// Duplicate points: sort indices by x and compare neighbours within the tolerance.
+void check_duplicates(const Map& map, const std::vector<std::size_t>& line_of,
+                      std::string_view source, const MapRules& rules) {
+  std::vector<std::size_t> order(map.waypoints.size());
+  std::iota(order.begin(), order.end(), 0);
+  std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+    return map.waypoints[a].x_m < map.waypoints[b].x_m;
+  });
+  const double tol = rules.min_point_spacing_m;
+  for (std::size_t i = 0; i < order.size(); ++i) {
+    const Waypoint& a = map.waypoints[order[i]];
+    for (std::size_t j = i + 1; j < order.size(); ++j) {
+      const Waypoint& b = map.waypoints[order[j]];
+      if (b.x_m - a.x_m > tol) break;
+      if (std::hypot(a.x_m - b.x_m, a.y_m - b.y_m) < tol) {
+        const std::size_t first = std::min(line_of[order[i]], line_of[order[j]]);
+        const std::size_t second = std::max(line_of[order[i]], line_of[order[j]]);
+        fail(source, second,
+             "waypoint (" + fmt(b.x_m) + ", " + fmt(b.y_m) + ") duplicates the point on line " +
+                 std::to_string(first));
+      }
+    }
+  }
+}
+
+// The loop's length, and that the road never crosses itself.
+void check_loop(Map& map, const std::vector<std::size_t>& line_of, std::string_view source,
+                const MapRules& rules) {
+  const Waypoint& first = map.waypoints.front();
+  const Waypoint& last = map.waypoints.back();
+  map.loop_length_m = last.s_m - first.s_m + std::hypot(first.x_m - last.x_m, first.y_m - last.y_m);
+  if (!(map.loop_length_m >= rules.min_loop_length_m) ||
+      !(map.loop_length_m <= rules.max_loop_length_m)) {
+    throw MapError(std::string(source) + ": the loop is " + fmt(map.loop_length_m) +
+                   " m long; a map's loop must be " + fmt(rules.min_loop_length_m) + " to " +
+                   fmt(rules.max_loop_length_m) + " m");
+  }
+  if (const auto crossing = find_crossing(map.waypoints)) {
+    const std::size_t n = map.waypoints.size();
+    const auto seg = [&](std::size_t i) {
+      return "lines " + std::to_string(line_of[i]) + "-" + std::to_string(line_of[(i + 1) % n]);
+    };
+    throw MapError(std::string(source) + ": the road crosses itself: the divider between " +
+                   seg(crossing->first) + " crosses it between " + seg(crossing->second));
+  }
+}
+
 }  // namespace
 
 Map parse_map(std::string_view text, std::string_view source, const MapRules& rules) {
@@ -132,42 +222,7 @@ Map parse_map(std::string_view text, std::string_view source, const MapRules& ru
     double v[5];
     for (int c = 0; c < 5; ++c) v[c] = parse_field(fields[c], source, line_no, c);
     const Waypoint wp{v[0], v[1], v[2], v[3], v[4]};
-    const double normal_len = std::hypot(wp.dx, wp.dy);
-    if (std::abs(normal_len - 1.0) > rules.normal_tolerance) {
-      fail(source, line_no,
-           "normal (dx, dy) = (" + fmt(wp.dx) + ", " + fmt(wp.dy) + ") has length " +
-               fmt(normal_len) + "; it must be a unit vector (within " +
-               fmt(rules.normal_tolerance * 100.0) + "%)");
-    }
-    for (int c : {0, 1, 2}) {
-      if (std::abs(v[c]) > rules.max_abs_coordinate_m) {
-        fail(source, line_no,
-             std::string(kColumnNames[c]) + " = " + fmt(v[c]) +
-                 " is out of range: a map's x, y and s must be within +-" +
-                 fmt(rules.max_abs_coordinate_m) + " m");
-      }
-    }
-    if (map.waypoints.size() >= rules.max_waypoints) {
-      fail(source, line_no,
-           "too many waypoints: a map may have at most " + std::to_string(rules.max_waypoints));
-    }
-    if (!map.waypoints.empty() && !(wp.s_m > map.waypoints.back().s_m)) {
-      fail(source, line_no,
-           "s = " + fmt(wp.s_m) + " does not increase (line " + std::to_string(line_of.back()) +
-               " has s = " + fmt(map.waypoints.back().s_m) + ")");
-    }
-    if (!map.waypoints.empty()) {
-      const Waypoint& prev = map.waypoints.back();
-      const double chord = std::hypot(wp.x_m - prev.x_m, wp.y_m - prev.y_m);
-      const double step = wp.s_m - prev.s_m;
-      if (step > rules.max_s_step_ratio * chord + rules.s_step_slack_m ||
-          step < chord / rules.max_s_step_ratio - rules.s_step_slack_m) {
-        fail(source, line_no,
-             "s grows by " + fmt(step) + " m from line " + std::to_string(line_of.back()) +
-                 ", but the waypoints are " + fmt(chord) +
-                 " m apart; s is the distance along the road");
-      }
-    }
+    check_waypoint(wp, map, line_of, source, line_no, rules);
     map.waypoints.push_back(wp);
     line_of.push_back(line_no);
   }
@@ -181,45 +236,8 @@ Map parse_map(std::string_view text, std::string_view source, const MapRules& ru
                    "; a map needs at least " + std::to_string(rules.min_waypoints));
   }
 
-  // Duplicate points: sort indices by x and compare neighbours within the tolerance.
-  std::vector<std::size_t> order(map.waypoints.size());
-  std::iota(order.begin(), order.end(), 0);
-  std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
-    return map.waypoints[a].x_m < map.waypoints[b].x_m;
-  });
-  const double tol = rules.min_point_spacing_m;
-  for (std::size_t i = 0; i < order.size(); ++i) {
-    const Waypoint& a = map.waypoints[order[i]];
-    for (std::size_t j = i + 1; j < order.size(); ++j) {
-      const Waypoint& b = map.waypoints[order[j]];
-      if (b.x_m - a.x_m > tol) break;
-      if (std::hypot(a.x_m - b.x_m, a.y_m - b.y_m) < tol) {
-        const std::size_t first = std::min(line_of[order[i]], line_of[order[j]]);
-        const std::size_t second = std::max(line_of[order[i]], line_of[order[j]]);
-        fail(source, second,
-             "waypoint (" + fmt(b.x_m) + ", " + fmt(b.y_m) + ") duplicates the point on line " +
-                 std::to_string(first));
-      }
-    }
-  }
-
-  const Waypoint& first = map.waypoints.front();
-  const Waypoint& last = map.waypoints.back();
-  map.loop_length_m = last.s_m - first.s_m + std::hypot(first.x_m - last.x_m, first.y_m - last.y_m);
-  if (!(map.loop_length_m >= rules.min_loop_length_m) ||
-      !(map.loop_length_m <= rules.max_loop_length_m)) {
-    throw MapError(std::string(source) + ": the loop is " + fmt(map.loop_length_m) +
-                   " m long; a map's loop must be " + fmt(rules.min_loop_length_m) + " to " +
-                   fmt(rules.max_loop_length_m) + " m");
-  }
-  if (const auto crossing = find_crossing(map.waypoints)) {
-    const std::size_t n = map.waypoints.size();
-    const auto seg = [&](std::size_t i) {
-      return "lines " + std::to_string(line_of[i]) + "-" + std::to_string(line_of[(i + 1) % n]);
-    };
-    throw MapError(std::string(source) + ": the road crosses itself: the divider between " +
-                   seg(crossing->first) + " crosses it between " + seg(crossing->second));
-  }
+  check_duplicates(map, line_of, source, rules);
+  check_loop(map, line_of, source, rules);
   return map;
 }
 

@@ -118,12 +118,8 @@ void check_waypoints(const Map& map, const TrackSpec& spec, TrackReport& rep) {
   }
 }
 
-void check_line(const Map& map, const ReferenceLine& line, const TrackSpec& spec,
-                TrackReport& rep) {
-  const double length = line.length_m();
-  const double s0 = line.start_s_m();
-
-  // Normals: to the right of travel, along the line's.
+// The waypoints' normals: to the right of travel, along the line's.
+void check_normals(const Map& map, const ReferenceLine& line, TrackReport& rep) {
   bool normals_left = false;
   for (const Waypoint& w : map.waypoints) {
     const RoadFrame f = line.frame(w.s_m);
@@ -142,8 +138,13 @@ void check_line(const Map& map, const ReferenceLine& line, const TrackSpec& spec
     rep.problems.push_back("normals: a waypoint's (dx, dy) is " + num(rep.max_normal_error_deg) +
                            " degrees off the road's normal");
   }
+}
 
-  // Radii on the divider, every lane centre and the outer edge; bends at the road's centre.
+// Radii on the divider, every lane centre and the outer edge; bends at the road's centre; the
+// straight the loop starts with.
+void check_curvature(const ReferenceLine& line, const TrackSpec& spec, TrackReport& rep) {
+  const double length = line.length_m();
+  const double s0 = line.start_s_m();
   std::vector<double> offsets{0.0};
   for (int k = 0; k < spec.road.lane_count; ++k) offsets.push_back(lane_center_d(k, spec.road));
   offsets.push_back(road_width_m(spec.road));
@@ -189,9 +190,14 @@ void check_line(const Map& map, const ReferenceLine& line, const TrackSpec& spec
     rep.problems.push_back("start_straight_m: the road bends " + num(rep.start_straight_m) +
                            " m after the first waypoint, before " + num(start_needed) + " m");
   }
+}
 
-  // Clearance between distant stretches (road band around its centre line) and crossings of
-  // the divider line.
+// Clearance between distant stretches (road band around its centre line) and crossings of
+// the divider line.
+void check_clearance(const ReferenceLine& line, const TrackSpec& spec, TrackReport& rep) {
+  const double length = line.length_m();
+  const double s0 = line.start_s_m();
+  const double centre_d = 0.5 * road_width_m(spec.road);
   const std::size_t m = std::clamp<std::size_t>(
       static_cast<std::size_t>(std::ceil(length / kPairStepM)), 16, kMaxPairSamples);
   const double step = length / static_cast<double>(m);
@@ -244,6 +250,13 @@ void check_line(const Map& map, const ReferenceLine& line, const TrackSpec& spec
         num(rep.min_clearance_m) + " m apart edge to edge, under " + num(spec.min_clearance_m) +
         " m");
   }
+}
+
+void check_line(const Map& map, const ReferenceLine& line, const TrackSpec& spec,
+                TrackReport& rep) {
+  check_normals(map, line, rep);
+  check_curvature(line, spec, rep);
+  check_clearance(line, spec, rep);
 }
 
 }  // namespace

@@ -66,10 +66,9 @@ std::string pad(std::string s, std::size_t width, bool right = false) {
   return right ? fill + s : s + fill;
 }
 
-}  // namespace
-
-json compare_benches(const BenchData& base, const BenchData& candidate,
-                     const CompareOptions& options) {
+// Refuses two benches whose runs are no pairs (other maps, lengths or steps per call); the
+// notes: parameters that differ.
+json check_pairable(const BenchData& base, const BenchData& candidate) {
   // Runs are pairs only on the same road, for the same time, with the same latency draws.
   for (const auto& [pointer, what] : std::vector<std::pair<json::json_pointer, std::string>>{
            {json::json_pointer("/map/hash"), "maps"},
@@ -91,6 +90,12 @@ json compare_benches(const BenchData& base, const BenchData& candidate,
                     "same (a planner's may differ)");
   }
 
+  return notes;
+}
+
+// The policies compared: --pair's, else each policy of both benches with itself.
+std::vector<PolicyPair> pairs_of(const BenchData& base, const BenchData& candidate,
+                                 const CompareOptions& options) {
   const std::vector<std::string> base_policies = policies_of(base);
   const std::vector<std::string> cand_policies = policies_of(candidate);
   std::vector<PolicyPair> pairs = options.pairs;
@@ -114,9 +119,14 @@ json compare_benches(const BenchData& base, const BenchData& candidate,
                                   "' (it has " + list(cand_policies) + ")");
     }
   }
-  std::vector<Metric> metrics = options.metrics;
-  if (metrics.empty()) metrics.assign(all_metrics().begin(), all_metrics().end());
+  return pairs;
+}
 
+// The comparisons of each pair on each traffic profile both benches ran (notes added for
+// what was not compared).
+json comparisons_of(const BenchData& base, const BenchData& candidate,
+                    const std::vector<PolicyPair>& pairs, const std::vector<Metric>& metrics,
+                    const CompareOptions& options, json& notes) {
   const std::vector<std::string> cand_traffic = traffic_of(candidate);
   json comparisons = json::array();
   for (const PolicyPair& p : pairs) {
@@ -155,6 +165,18 @@ json compare_benches(const BenchData& base, const BenchData& candidate,
     throw NotComparable("no runs to pair: " + base.name + " and " + candidate.name +
                         " share no traffic profile and seed for the policies compared");
   }
+  return comparisons;
+}
+
+}  // namespace
+
+json compare_benches(const BenchData& base, const BenchData& candidate,
+                     const CompareOptions& options) {
+  json notes = check_pairable(base, candidate);
+  const std::vector<PolicyPair> pairs = pairs_of(base, candidate, options);
+  std::vector<Metric> metrics = options.metrics;
+  if (metrics.empty()) metrics.assign(all_metrics().begin(), all_metrics().end());
+  json comparisons = comparisons_of(base, candidate, pairs, metrics, options, notes);
   const std::size_t tests = judge_family(comparisons);
   json worse = json::array();
   json withheld = json::array();

@@ -123,9 +123,8 @@ void warn_top_seed(json& warnings, const std::string& figure, const RateFigure& 
   }
 }
 
-json summary_row(const std::string& policy, const std::string& traffic,
-                 const std::vector<const RunRow*>& mine) {
-  const std::string key = policy + "|" + traffic;
+// What a group's rows add up to, besides the collisions and near misses.
+struct RowTotals {
   double miles = 0.0, seconds = 0.0, peak_acc = 0.0, peak_jerk = 0.0, strict_acc = 0.0,
          strict_jerk = 0.0, worst_p99 = 0.0, worst_wall_p99 = 0.0, known_cycles = 0.0;
   std::vector<double> free_miles, p50s, speed_num, speed_den;
@@ -135,160 +134,174 @@ json summary_row(const std::string& policy, const std::string& traffic,
   std::array<double, core::kPlanStatusCount> status_cycles{};
   bool some_unknown = false;  // a row, or some cycles of one, whose plan status is unknown
   std::size_t ended_early = 0;
+};
+
+RowTotals totals_of(const std::vector<const RunRow*>& mine) {
+  RowTotals t;
   for (const RunRow* r : mine) {
-    miles += r->miles;
-    seconds += r->seconds;
-    free_miles.push_back(r->best_incident_free_miles);
-    for (std::size_t t = 0; t < counts.size(); ++t) {
-      counts[t] += r->incidents_by_type[t];
-      by_type[t].events.push_back(r->incidents_by_type[t]);
-      by_type[t].miles.push_back(r->miles);
+    t.miles += r->miles;
+    t.seconds += r->seconds;
+    t.free_miles.push_back(r->best_incident_free_miles);
+    for (std::size_t k = 0; k < t.counts.size(); ++k) {
+      t.counts[k] += r->incidents_by_type[k];
+      t.by_type[k].events.push_back(r->incidents_by_type[k]);
+      t.by_type[k].miles.push_back(r->miles);
     }
-    all_incidents.events.push_back(r->incidents);
-    all_incidents.miles.push_back(r->miles);
-    peak_acc = std::max(peak_acc, r->peak_acceleration_mps2);
-    peak_jerk = std::max(peak_jerk, r->peak_jerk_mps3);
-    strict_acc = std::max(strict_acc, r->peak_strict_acceleration_mps2);
-    strict_jerk = std::max(strict_jerk, r->peak_strict_jerk_mps3);
-    p50s.push_back(r->planner_p50_us);
-    worst_p99 = std::max(worst_p99, r->planner_p99_us);
-    worst_wall_p99 = std::max(worst_wall_p99, r->planner_wall_p99_us);
-    some_unknown = some_unknown || r->plan_status_unknown_cycles > 0 || !r->plan_status_known;
+    t.all_incidents.events.push_back(r->incidents);
+    t.all_incidents.miles.push_back(r->miles);
+    t.peak_acc = std::max(t.peak_acc, r->peak_acceleration_mps2);
+    t.peak_jerk = std::max(t.peak_jerk, r->peak_jerk_mps3);
+    t.strict_acc = std::max(t.strict_acc, r->peak_strict_acceleration_mps2);
+    t.strict_jerk = std::max(t.strict_jerk, r->peak_strict_jerk_mps3);
+    t.p50s.push_back(r->planner_p50_us);
+    t.worst_p99 = std::max(t.worst_p99, r->planner_p99_us);
+    t.worst_wall_p99 = std::max(t.worst_wall_p99, r->planner_wall_p99_us);
+    t.some_unknown = t.some_unknown || r->plan_status_unknown_cycles > 0 || !r->plan_status_known;
     if (r->plan_status_known) {
-      known_cycles += r->planner_cycles - r->plan_status_unknown_cycles;
-      for (std::size_t i = 0; i < status_cycles.size(); ++i)
-        status_cycles[i] += r->plan_status_cycles[i];
+      t.known_cycles += r->planner_cycles - r->plan_status_unknown_cycles;
+      for (std::size_t i = 0; i < t.status_cycles.size(); ++i)
+        t.status_cycles[i] += r->plan_status_cycles[i];
     }
-    if (r->ended_early) ++ended_early;
+    if (r->ended_early) ++t.ended_early;
     const MetricTerms speed = terms(Metric::mean_speed_mph, *r);
-    speed_num.push_back(speed.numerator);
-    speed_den.push_back(speed.denominator);
+    t.speed_num.push_back(speed.numerator);
+    t.speed_den.push_back(speed.denominator);
   }
+  return t;
+}
+
+// The shares of the cycles whose status is known. Null when none is but some cycles are
+// unknown (a planner over the protocol does not say how it planned: its cycles are not
+// normal ones). A group that mixes both (it should not: one planner per policy) gets the
+// shares of the runs that say; those that do not are left out, not counted as normal.
+json plan_status_share(const RowTotals& t) {
+  if (!(t.known_cycles > 0 || !t.some_unknown)) return nullptr;
+  json share = json::object();
+  for (std::size_t i = 0; i < t.status_cycles.size(); ++i) {
+    const std::string name(core::to_string(static_cast<core::PlanStatus>(i)));
+    share[name] = t.known_cycles > 0 ? t.status_cycles[i] / t.known_cycles : 0.0;
+  }
+  // Earlier rows without statuses: their cycles are normal ones.
+  share["normal"] = t.known_cycles > 0
+                        ? 1.0 - share["least_bad"].get<double>() - share["fallback"].get<double>()
+                        : 0.0;
+  return share;
+}
+
+// Collisions as contacts (rows that count them so): all of them, at fault and by kind; and
+// the rubric's collision incidents (one per second of contact) beside them. Null for rows
+// that do not count them; `at_fault` is set when they do.
+json collisions_part(const std::vector<const RunRow*>& mine, const RowTotals& t, bool enough,
+                     json& warnings, std::optional<RateFigure>& at_fault) {
+  if (!available(Metric::collisions_per_100mi, mine)) return nullptr;
+  RateColumns all, mine_fault;
+  std::array<double, sim::kCollisionKindCount> kinds{};
+  double total = 0.0, fault = 0.0;
+  for (const RunRow* r : mine) {
+    all.events.push_back(r->collisions);
+    all.miles.push_back(r->miles);
+    mine_fault.events.push_back(r->at_fault_collisions);
+    mine_fault.miles.push_back(r->miles);
+    total += r->collisions;
+    fault += r->at_fault_collisions;
+    for (std::size_t k = 0; k < kinds.size(); ++k) kinds[k] += r->collisions_by_kind[k];
+  }
+  const RateFigure every = rate_figure(all, enough);
+  at_fault = rate_figure(mine_fault, enough);
+  warn_top_seed(warnings, "collisions_per_100mi", every, mine.size());
+  warn_top_seed(warnings, "at_fault_collisions_per_100mi", *at_fault, mine.size());
+  json by_kind = json::object();
+  for (std::size_t k = 0; k < kinds.size(); ++k) by_kind[kind_name(k)] = kinds[k];
+  const double rubric = t.counts[static_cast<std::size_t>(sim::IncidentType::collision)];
+  return {{"total", total},
+          {"per_100mi", every.value},
+          {"per_100mi_ci", every.ci},
+          {"at_fault", fault},
+          {"at_fault_per_100mi", at_fault->value},
+          {"at_fault_per_100mi_ci", at_fault->ci},
+          {"by_kind", by_kind},
+          {"rubric_incidents", rubric},
+          {"rubric_per_100mi", t.miles > 0 ? 100.0 * rubric / t.miles : 0.0}};
+}
+
+// Near misses (rows that measure them; null for the others).
+json near_misses_part(const std::vector<const RunRow*>& mine, const RowTotals& t, bool enough) {
+  if (!available(Metric::near_misses_per_100mi, mine)) return nullptr;
+  RateColumns episodes;
+  double ttc_below = 0.0, headway_below = 0.0;
+  double ttc_ahead = kInf, ttc_entering = kInf, headway = kInf;
+  for (const RunRow* r : mine) {
+    episodes.events.push_back(r->near_misses);
+    episodes.miles.push_back(r->miles);
+    ttc_below += r->ttc_below_s;
+    headway_below += r->headway_below_s;
+    ttc_ahead = std::min(ttc_ahead, r->min_ttc_ahead_s);
+    ttc_entering = std::min(ttc_entering, r->min_ttc_entering_s);
+    headway = std::min(headway, r->min_headway_s);
+  }
+  const RateFigure near = rate_figure(episodes, enough);
+  double total = 0.0;
+  for (const double e : episodes.events) total += e;
+  return {{"episodes", total},
+          {"per_100mi", near.value},
+          {"per_100mi_ci", near.ci},
+          {"min_ttc_ahead_s", finite_or_null(ttc_ahead)},
+          {"min_ttc_entering_s", finite_or_null(ttc_entering)},
+          {"min_time_headway_s", finite_or_null(headway)},
+          {"share_ttc_below", t.seconds > 0 ? ttc_below / t.seconds : 0.0},
+          {"share_headway_below", t.seconds > 0 ? headway_below / t.seconds : 0.0},
+          {"ttc_threshold_s", mine.front()->ttc_threshold_s},
+          {"headway_threshold_s", mine.front()->headway_threshold_s}};
+}
+
+json summary_row(const std::string& policy, const std::string& traffic,
+                 const std::vector<const RunRow*>& mine) {
+  const std::string key = policy + "|" + traffic;
+  const RowTotals t = totals_of(mine);
   const std::size_t n = mine.size();
   const bool enough = n >= kMinSeeds;
   json warnings = json::array();
   double total_incidents = 0.0;
   json per100 = json::object(), per100_ci = json::object();
-  for (std::size_t t = 0; t < counts.size(); ++t) {
-    const RateFigure f = rate_figure(by_type[t], enough);
-    per100[incident_name(t)] = f.value;
-    per100_ci[incident_name(t)] = f.ci;
-    total_incidents += counts[t];
+  for (std::size_t k = 0; k < t.counts.size(); ++k) {
+    const RateFigure f = rate_figure(t.by_type[k], enough);
+    per100[incident_name(k)] = f.value;
+    per100_ci[incident_name(k)] = f.ci;
+    total_incidents += t.counts[k];
   }
-  // The shares of the cycles whose status is known. Null when none is but some cycles are
-  // unknown (a planner over the protocol does not say how it planned: its cycles are not
-  // normal ones). A group that mixes both (it should not: one planner per policy) gets the
-  // shares of the runs that say; those that do not are left out, not counted as normal.
-  json status_share = nullptr;
-  if (known_cycles > 0 || !some_unknown) {
-    status_share = json::object();
-    for (std::size_t i = 0; i < status_cycles.size(); ++i) {
-      const std::string name(core::to_string(static_cast<core::PlanStatus>(i)));
-      status_share[name] = known_cycles > 0 ? status_cycles[i] / known_cycles : 0.0;
-    }
-    // Earlier rows without statuses: their cycles are normal ones.
-    status_share["normal"] = known_cycles > 0 ? 1.0 - status_share["least_bad"].get<double>() -
-                                                    status_share["fallback"].get<double>()
-                                              : 0.0;
-  }
-
-  const Interval speed_ci = mean_interval(speed_num, speed_den, bootstrap_for("speed|" + key));
-  const RateFigure incidents = rate_figure(all_incidents, enough);
+  const Interval speed_ci = mean_interval(t.speed_num, t.speed_den, bootstrap_for("speed|" + key));
+  const RateFigure incidents = rate_figure(t.all_incidents, enough);
   warn_top_seed(warnings, "incidents_per_100mi", incidents, n);
+  const auto& free = t.free_miles;
 
-  json row = {
-      {"policy", policy},
-      {"traffic", traffic},
-      {"runs", n},
-      {"total_miles", miles},
-      {"intervals", enough ? json(nullptr) : json(too_few(n))},
-      {"mean_speed_mph", value(Metric::mean_speed_mph, mine)},
-      {"mean_speed_mph_ci", ci_or_null(speed_ci, enough)},
-      {"incidents", total_incidents},
-      {"incidents_per_100mi", incidents.value},
-      {"incidents_per_100mi_ci", incidents.ci},
-      {"incidents_per_100mi_by_type", per100},
-      {"incidents_per_100mi_by_type_ci", per100_ci},
-      {"incident_free_miles_median", median(free_miles)},
-      {"incident_free_miles_median_ci", ci_or_null(median_interval(free_miles), enough)},
-      {"incident_free_miles_worst", *std::min_element(free_miles.begin(), free_miles.end())},
-      {"peak_acceleration_mps2", peak_acc},
-      {"peak_jerk_mps3", peak_jerk},
-      {"peak_strict_acceleration_mps2", strict_acc},
-      {"peak_strict_jerk_mps3", strict_jerk},
-      {"plan_status_share", status_share},
-      {"runs_ended_early", ended_early},
-      {"timing",
-       {{"planner_p50_us_median", median(p50s)},
-        {"planner_p99_us_worst", worst_p99},
-        {"planner_wall_p99_us_worst", worst_wall_p99}}}};
-
-  // Collisions as contacts (rows that count them so): all of them, at fault and by kind; and
-  // the rubric's collision incidents (one per second of contact) beside them.
-  json coll = nullptr;
+  json row = {{"policy", policy},
+              {"traffic", traffic},
+              {"runs", n},
+              {"total_miles", t.miles},
+              {"intervals", enough ? json(nullptr) : json(too_few(n))},
+              {"mean_speed_mph", value(Metric::mean_speed_mph, mine)},
+              {"mean_speed_mph_ci", ci_or_null(speed_ci, enough)},
+              {"incidents", total_incidents},
+              {"incidents_per_100mi", incidents.value},
+              {"incidents_per_100mi_ci", incidents.ci},
+              {"incidents_per_100mi_by_type", per100},
+              {"incidents_per_100mi_by_type_ci", per100_ci},
+              {"incident_free_miles_median", median(free)},
+              {"incident_free_miles_median_ci", ci_or_null(median_interval(free), enough)},
+              {"incident_free_miles_worst", *std::min_element(free.begin(), free.end())},
+              {"peak_acceleration_mps2", t.peak_acc},
+              {"peak_jerk_mps3", t.peak_jerk},
+              {"peak_strict_acceleration_mps2", t.strict_acc},
+              {"peak_strict_jerk_mps3", t.strict_jerk},
+              {"plan_status_share", plan_status_share(t)},
+              {"runs_ended_early", t.ended_early},
+              {"timing",
+               {{"planner_p50_us_median", median(t.p50s)},
+                {"planner_p99_us_worst", t.worst_p99},
+                {"planner_wall_p99_us_worst", t.worst_wall_p99}}}};
   std::optional<RateFigure> at_fault;
-  if (available(Metric::collisions_per_100mi, mine)) {
-    RateColumns all, mine_fault;
-    std::array<double, sim::kCollisionKindCount> kinds{};
-    double total = 0.0, fault = 0.0;
-    for (const RunRow* r : mine) {
-      all.events.push_back(r->collisions);
-      all.miles.push_back(r->miles);
-      mine_fault.events.push_back(r->at_fault_collisions);
-      mine_fault.miles.push_back(r->miles);
-      total += r->collisions;
-      fault += r->at_fault_collisions;
-      for (std::size_t k = 0; k < kinds.size(); ++k) kinds[k] += r->collisions_by_kind[k];
-    }
-    const RateFigure every = rate_figure(all, enough);
-    at_fault = rate_figure(mine_fault, enough);
-    warn_top_seed(warnings, "collisions_per_100mi", every, n);
-    warn_top_seed(warnings, "at_fault_collisions_per_100mi", *at_fault, n);
-    json by_kind = json::object();
-    for (std::size_t k = 0; k < kinds.size(); ++k) by_kind[kind_name(k)] = kinds[k];
-    const double rubric = counts[static_cast<std::size_t>(sim::IncidentType::collision)];
-    coll = {{"total", total},
-            {"per_100mi", every.value},
-            {"per_100mi_ci", every.ci},
-            {"at_fault", fault},
-            {"at_fault_per_100mi", at_fault->value},
-            {"at_fault_per_100mi_ci", at_fault->ci},
-            {"by_kind", by_kind},
-            {"rubric_incidents", rubric},
-            {"rubric_per_100mi", miles > 0 ? 100.0 * rubric / miles : 0.0}};
-  }
-  row["collisions"] = coll;
-
-  // Near misses (rows that measure them).
-  if (available(Metric::near_misses_per_100mi, mine)) {
-    RateColumns episodes;
-    double ttc_below = 0.0, headway_below = 0.0;
-    double ttc_ahead = kInf, ttc_entering = kInf, headway = kInf;
-    for (const RunRow* r : mine) {
-      episodes.events.push_back(r->near_misses);
-      episodes.miles.push_back(r->miles);
-      ttc_below += r->ttc_below_s;
-      headway_below += r->headway_below_s;
-      ttc_ahead = std::min(ttc_ahead, r->min_ttc_ahead_s);
-      ttc_entering = std::min(ttc_entering, r->min_ttc_entering_s);
-      headway = std::min(headway, r->min_headway_s);
-    }
-    const RateFigure near = rate_figure(episodes, enough);
-    double total = 0.0;
-    for (const double e : episodes.events) total += e;
-    row["near_misses"] = {{"episodes", total},
-                          {"per_100mi", near.value},
-                          {"per_100mi_ci", near.ci},
-                          {"min_ttc_ahead_s", finite_or_null(ttc_ahead)},
-                          {"min_ttc_entering_s", finite_or_null(ttc_entering)},
-                          {"min_time_headway_s", finite_or_null(headway)},
-                          {"share_ttc_below", seconds > 0 ? ttc_below / seconds : 0.0},
-                          {"share_headway_below", seconds > 0 ? headway_below / seconds : 0.0},
-                          {"ttc_threshold_s", mine.front()->ttc_threshold_s},
-                          {"headway_threshold_s", mine.front()->headway_threshold_s}};
-  } else {
-    row["near_misses"] = nullptr;
-  }
+  row["collisions"] = collisions_part(mine, t, enough, warnings, at_fault);
+  row["near_misses"] = near_misses_part(mine, t, enough);
 
   // How wide each interval is, and how many seeds would halve it (by the same methods).
   json prec = {{"mean_speed_mph", nullptr},
@@ -716,11 +729,16 @@ std::string pairs_csv(const json& pairs) {
   return out;
 }
 
-std::string summary_markdown(const json& rows, const json& pairs) {
+namespace {
+
+// The first cells of a row of the summary's tables.
+std::string row_head(const std::string& p, const std::string& t) {
+  return "| " + p + " | " + t + " | ";
+}
+
+// Speed and incidents, a row per policy and traffic.
+std::string speed_table(const json& rows) {
   std::string out;
-  const auto head = [&](const std::string& p, const std::string& t) {
-    return "| " + p + " | " + t + " | ";
-  };
   out +=
       "Speed and incidents (95% intervals over the seeds: bootstrap-t for speed, order statistics "
       "for the median, overdispersed exact for the rates; a rate with no event: 0 (≤ its "
@@ -733,8 +751,8 @@ std::string summary_markdown(const json& rows, const json& pairs) {
   for (const json& r : rows) {
     const json& by = r["incidents_per_100mi_by_type"];
     const json& c = r["collisions"];
-    out += head(r["policy"], r["traffic"]) + std::to_string(r["runs"].get<std::size_t>()) + " | " +
-           fixed(r["total_miles"], 1) + " | " +
+    out += row_head(r["policy"], r["traffic"]) + std::to_string(r["runs"].get<std::size_t>()) +
+           " | " + fixed(r["total_miles"], 1) + " | " +
            with_ci(r["mean_speed_mph"], r["mean_speed_mph_ci"], 2) + " | " +
            rate_cell(r["incidents_per_100mi"], r["incidents_per_100mi_ci"], 2) + " | " +
            rate_cell(member(c, "per_100mi"), member(c, "per_100mi_ci"), 2) + " | " +
@@ -745,7 +763,12 @@ std::string summary_markdown(const json& rows, const json& pairs) {
     out += " | " + with_ci(r["incident_free_miles_median"], r["incident_free_miles_median_ci"], 2) +
            " / " + fixed(r["incident_free_miles_worst"], 2) + " |\n";
   }
+  return out;
+}
 
+// Near misses, for the rows that measure them (nothing when none does).
+std::string near_miss_table(const json& rows) {
+  std::string out;
   const json* any_near = nullptr;
   for (const json& r : rows) {
     if (!r["near_misses"].is_null()) any_near = &r["near_misses"];
@@ -766,14 +789,19 @@ std::string summary_markdown(const json& rows, const json& pairs) {
     for (const json& r : rows) {
       const json& nm = r["near_misses"];
       if (nm.is_null()) continue;
-      out += head(r["policy"], r["traffic"]) + seconds_or_dash(nm["min_ttc_ahead_s"]) + " | " +
+      out += row_head(r["policy"], r["traffic"]) + seconds_or_dash(nm["min_ttc_ahead_s"]) + " | " +
              seconds_or_dash(nm["min_ttc_entering_s"]) + " | " +
              seconds_or_dash(nm["min_time_headway_s"]) + " | " + percent(nm["share_ttc_below"], 2) +
              " | " + percent(nm["share_headway_below"], 1) + " | " +
              rate_cell(nm["per_100mi"], nm["per_100mi_ci"], 2) + " |\n";
     }
   }
+  return out;
+}
 
+// Collisions by kind, for the rows that count contacts.
+std::string collision_kind_table(const json& rows) {
+  std::string out;
   bool classified = false;
   for (const json& r : rows) classified = classified || !r["collisions"].is_null();
   if (classified) {
@@ -788,7 +816,7 @@ std::string summary_markdown(const json& rows, const json& pairs) {
     for (const json& r : rows) {
       const json& c = r["collisions"];
       if (c.is_null()) continue;
-      out += head(r["policy"], r["traffic"]) + fixed(c["total"], 0) + " | " +
+      out += row_head(r["policy"], r["traffic"]) + fixed(c["total"], 0) + " | " +
              fixed(c["at_fault"], 0) + " |";
       for (std::size_t k = 0; k < sim::kCollisionKindCount; ++k) {
         out += " " + fixed(c["by_kind"][kind_name(k)], 0) + " |";
@@ -796,14 +824,19 @@ std::string summary_markdown(const json& rows, const json& pairs) {
       out += " " + fixed(c["rubric_incidents"], 0) + " |\n";
     }
   }
+  return out;
+}
 
+// Comfort and the planner.
+std::string comfort_table(const json& rows) {
+  std::string out;
   out +=
       "\nComfort and the planner\n\n"
       "| policy | traffic | peak acc / jerk (rubric) | peak acc / jerk (strict) | planner CPU us "
       "(p50 / p99) | cycles least-bad / fallback | ended early |\n"
       "|---|---|---|---|---|---|---:|\n";
   for (const json& r : rows) {
-    out += head(r["policy"], r["traffic"]) + fixed(r["peak_acceleration_mps2"], 1) + " / " +
+    out += row_head(r["policy"], r["traffic"]) + fixed(r["peak_acceleration_mps2"], 1) + " / " +
            fixed(r["peak_jerk_mps3"], 1) + " | " + fixed(r["peak_strict_acceleration_mps2"], 1) +
            " / " + fixed(r["peak_strict_jerk_mps3"], 1) + " | " +
            fixed(r["timing"]["planner_p50_us_median"], 0) + " / " +
@@ -811,7 +844,12 @@ std::string summary_markdown(const json& rows, const json& pairs) {
            status_cells(r["plan_status_share"]) + " | " +
            std::to_string(r["runs_ended_early"].get<std::size_t>()) + " |\n";
   }
+  return out;
+}
 
+// The paired comparisons (nothing without pairs).
+std::string pairs_table(const json& pairs) {
+  std::string out;
   if (!pairs.empty()) {
     out +=
         "\nPaired comparisons (the same seeds; A - B with its 95% interval over the seeds; "
@@ -837,7 +875,12 @@ std::string summary_markdown(const json& rows, const json& pairs) {
              chance_cell(f["at_fault_collisions_per_100mi"]) + " |\n";
     }
   }
+  return out;
+}
 
+// How many seeds each interval would need to halve.
+std::string precision_table(const json& rows) {
+  std::string out;
   out +=
       "\nHow many seeds (± half the 95% interval; the seeds that would halve it, by the same "
       "method, if the spread stayed as it is)\n\n"
@@ -851,11 +894,15 @@ std::string summary_markdown(const json& rows, const json& pairs) {
       return fixed(x["half_width"], decimals) + " | " +
              std::to_string(x["seeds_to_halve"].get<std::size_t>());
     };
-    out += head(r["policy"], r["traffic"]) + std::to_string(r["runs"].get<std::size_t>()) + " | " +
-           cells(p["mean_speed_mph"], 2) + " | " + cells(p["incidents_per_100mi"], 2) + " | " +
-           cells(p["at_fault_collisions_per_100mi"], 2) + " |\n";
+    out += row_head(r["policy"], r["traffic"]) + std::to_string(r["runs"].get<std::size_t>()) +
+           " | " + cells(p["mean_speed_mph"], 2) + " | " + cells(p["incidents_per_100mi"], 2) +
+           " | " + cells(p["at_fault_collisions_per_100mi"], 2) + " |\n";
   }
+  return out;
+}
 
+// The notes under the tables: missing intervals and figures, and the rows' warnings.
+std::string notes_of(const json& rows) {
   std::string notes;
   for (const json& r : rows) {
     const std::string who =
@@ -869,8 +916,14 @@ std::string summary_markdown(const json& rows, const json& pairs) {
     }
     for (const json& w : r["warnings"]) notes += "- " + who + ": " + w.get<std::string>() + "\n";
   }
-  if (!notes.empty()) out += "\nNotes\n\n" + notes;
-  return out;
+  return notes.empty() ? std::string() : "\nNotes\n\n" + notes;
+}
+
+}  // namespace
+
+std::string summary_markdown(const json& rows, const json& pairs) {
+  return speed_table(rows) + near_miss_table(rows) + collision_kind_table(rows) +
+         comfort_table(rows) + pairs_table(pairs) + precision_table(rows) + notes_of(rows);
 }
 
 }  // namespace overtake::eval

@@ -106,6 +106,115 @@ std::optional<std::pair<LogLevel, std::string>> end_line(
                    "closed after a websocket protocol error (" + ec.message() + ")"};
 }
 
+using WsStream = websocket::stream<beast::tcp_stream>;
+
+// The websocket upgrade: true when the connection is open. One from a browser page (an Origin
+// header) is refused with a 403 and closed.
+net::awaitable<bool> upgrade(WsStream& ws, ServerState* st, const std::string& who) {
+  error_code ec;
+  // The upgrade request is read here, not by the accept, to look at its Origin first. (A
+  // client speaks only after the 101, so nothing after the request is left in the buffer.)
+  beast::flat_buffer request_buffer;
+  http::request<http::empty_body> request;
+  beast::get_lowest_layer(ws).expires_after(st->opts.handshake_timeout);
+  co_await http::async_read(ws.next_layer(), request_buffer, request,
+                            net::redirect_error(net::use_awaitable, ec));
+  beast::get_lowest_layer(ws).expires_never();  // the websocket's own timeouts from here on
+  if (!ec) {
+    if (const auto origin = request.find(http::field::origin); origin != request.end()) {
+      // Browsers send an Origin with every websocket upgrade, the simulator and planner
+      // programs none. `serve` serves no page, so any page that opens a websocket here is
+      // another site's (or a DNS-rebinding one's): it would drive a planner of this machine.
+      const std::string_view value(origin->value().data(), origin->value().size());
+      st->log(LogLevel::warning,
+              who + ": websocket upgrade refused: it comes from a browser page (Origin: " +
+                  excerpt(value) + "), closed");
+      http::response<http::string_body> res{http::status::forbidden, request.version()};
+      res.set(http::field::server, "overtake");
+      res.set(http::field::content_type, "text/plain; charset=utf-8");
+      res.keep_alive(false);
+      res.body() =
+          "websocket refused: the request has an Origin header, so it comes from a web page; "
+          "this planner server answers the simulator and planner programs only, which send "
+          "none\n";
+      res.prepare_payload();
+      beast::get_lowest_layer(ws).expires_after(st->opts.handshake_timeout);
+      co_await http::async_write(ws.next_layer(), res, net::redirect_error(net::use_awaitable, ec));
+      beast::get_lowest_layer(ws).socket().shutdown(tcp::socket::shutdown_both, ec);
+      co_return false;
+    }
+    co_await ws.async_accept(request, net::redirect_error(net::use_awaitable, ec));  // any path
+  }
+  if (ec) {
+    if (ec != net::error::operation_aborted) {
+      st->log(LogLevel::warning, who + ": no websocket upgrade (" + ec.message() + "), closed");
+    }
+    co_return false;
+  }
+  co_return true;
+}
+
+// The connection's planner session, frame after frame, until the client leaves or fails.
+net::awaitable<void> session_loop(WsStream& ws, ServerState* st, const std::string& who) {
+  error_code ec;
+  const OpenCount counted(*st);
+  PlannerSession session(st->setup.factory(*st->setup.line, st->setup.params), st->opts.limits,
+                         st->opts.max_frame_bytes);
+  long cycles = 0;
+  beast::flat_buffer buffer;
+  std::string head;
+  for (;;) {
+    buffer.clear();
+    std::size_t size = 0;
+    bool oversized = false;
+    do {
+      const std::size_t n = co_await ws.async_read_some(
+          buffer, kReadChunk, net::redirect_error(net::use_awaitable, ec));
+      if (ec) {
+        if (const auto line = end_line(ec, ws.reason())) {
+          st->log(line->first, who + " " + line->second + " after " + cycles_text(cycles));
+        }
+        co_return;
+      }
+      size += n;
+      if (!oversized && buffer.size() > st->opts.max_frame_bytes) {
+        oversized = true;
+        const auto data = buffer.data();
+        head.assign(static_cast<const char*>(data.data()),
+                    std::min(data.size(), kOversizedHeadBytes));
+      }
+      if (oversized) buffer.clear();  // keep reading the message, keep none of it
+    } while (!ws.is_message_done());
+
+    Frame frame;
+    frame.binary = ws.got_binary();
+    frame.oversized = oversized;
+    frame.size = size;
+    frame.text =
+        oversized ? std::string_view(head)
+                  : std::string_view(static_cast<const char*>(buffer.data().data()), buffer.size());
+    const FrameOutcome out = session.handle(frame);
+    if (out.warning) st->log(LogLevel::warning, who + ": " + *out.warning);
+    if (out.note) st->log(LogLevel::info, who + ": " + *out.note);
+    if (out.planned) {
+      ++cycles;
+      ++st->cycles_total;
+      ++st->cycles_window;
+      st->plan_us_window.push_back(out.plan_us);
+    }
+    if (out.ego) st->last_ego = out.ego;
+    if (!out.reply) continue;
+    ws.text(true);
+    co_await ws.async_write(net::buffer(*out.reply), net::redirect_error(net::use_awaitable, ec));
+    if (ec) {
+      if (const auto line = end_line(ec, ws.reason())) {
+        st->log(line->first, who + " " + line->second + " after " + cycles_text(cycles));
+      }
+      co_return;
+    }
+  }
+}
+
 net::awaitable<void> serve_connection(tcp::socket socket, std::shared_ptr<ServerState> st) {
   const int id = st->next_id++;
   error_code ec;
@@ -115,7 +224,7 @@ net::awaitable<void> serve_connection(tcp::socket socket, std::shared_ptr<Server
   socket.set_option(tcp::no_delay(true), ec);  // small frames, one at a time: no Nagle delay
 
   try {
-    websocket::stream<beast::tcp_stream> ws(std::move(socket));
+    WsStream ws(std::move(socket));
     ws.set_option(websocket::permessage_deflate{});  // the original rejects any extension
     websocket::stream_base::timeout timeouts{};
     timeouts.handshake_timeout = st->opts.handshake_timeout;
@@ -126,103 +235,9 @@ net::awaitable<void> serve_connection(tcp::socket socket, std::shared_ptr<Server
         [](websocket::response_type& res) { res.set(beast::http::field::server, "overtake"); }));
     ws.read_message_max(0);  // sizes are limited below, without failing the connection
 
-    // The upgrade request is read here, not by the accept, to look at its Origin first. (A
-    // client speaks only after the 101, so nothing after the request is left in the buffer.)
-    beast::flat_buffer request_buffer;
-    http::request<http::empty_body> request;
-    beast::get_lowest_layer(ws).expires_after(st->opts.handshake_timeout);
-    co_await http::async_read(ws.next_layer(), request_buffer, request,
-                              net::redirect_error(net::use_awaitable, ec));
-    beast::get_lowest_layer(ws).expires_never();  // the websocket's own timeouts from here on
-    if (!ec) {
-      if (const auto origin = request.find(http::field::origin); origin != request.end()) {
-        // Browsers send an Origin with every websocket upgrade, the simulator and planner
-        // programs none. `serve` serves no page, so any page that opens a websocket here is
-        // another site's (or a DNS-rebinding one's): it would drive a planner of this machine.
-        const std::string_view value(origin->value().data(), origin->value().size());
-        st->log(LogLevel::warning,
-                who + ": websocket upgrade refused: it comes from a browser page (Origin: " +
-                    excerpt(value) + "), closed");
-        http::response<http::string_body> res{http::status::forbidden, request.version()};
-        res.set(http::field::server, "overtake");
-        res.set(http::field::content_type, "text/plain; charset=utf-8");
-        res.keep_alive(false);
-        res.body() =
-            "websocket refused: the request has an Origin header, so it comes from a web page; "
-            "this planner server answers the simulator and planner programs only, which send "
-            "none\n";
-        res.prepare_payload();
-        beast::get_lowest_layer(ws).expires_after(st->opts.handshake_timeout);
-        co_await http::async_write(ws.next_layer(), res,
-                                   net::redirect_error(net::use_awaitable, ec));
-        beast::get_lowest_layer(ws).socket().shutdown(tcp::socket::shutdown_both, ec);
-        co_return;
-      }
-      co_await ws.async_accept(request, net::redirect_error(net::use_awaitable, ec));  // any path
-    }
-    if (ec) {
-      if (ec != net::error::operation_aborted) {
-        st->log(LogLevel::warning, who + ": no websocket upgrade (" + ec.message() + "), closed");
-      }
-      co_return;
-    }
+    if (!co_await upgrade(ws, st.get(), who)) co_return;
     st->log(LogLevel::info, who + " open");
-    const OpenCount counted(*st);
-    PlannerSession session(st->setup.factory(*st->setup.line, st->setup.params), st->opts.limits,
-                           st->opts.max_frame_bytes);
-    long cycles = 0;
-    beast::flat_buffer buffer;
-    std::string head;
-    for (;;) {
-      buffer.clear();
-      std::size_t size = 0;
-      bool oversized = false;
-      do {
-        const std::size_t n = co_await ws.async_read_some(
-            buffer, kReadChunk, net::redirect_error(net::use_awaitable, ec));
-        if (ec) {
-          if (const auto line = end_line(ec, ws.reason())) {
-            st->log(line->first, who + " " + line->second + " after " + cycles_text(cycles));
-          }
-          co_return;
-        }
-        size += n;
-        if (!oversized && buffer.size() > st->opts.max_frame_bytes) {
-          oversized = true;
-          const auto data = buffer.data();
-          head.assign(static_cast<const char*>(data.data()),
-                      std::min(data.size(), kOversizedHeadBytes));
-        }
-        if (oversized) buffer.clear();  // keep reading the message, keep none of it
-      } while (!ws.is_message_done());
-
-      Frame frame;
-      frame.binary = ws.got_binary();
-      frame.oversized = oversized;
-      frame.size = size;
-      frame.text = oversized ? std::string_view(head)
-                             : std::string_view(static_cast<const char*>(buffer.data().data()),
-                                                buffer.size());
-      const FrameOutcome out = session.handle(frame);
-      if (out.warning) st->log(LogLevel::warning, who + ": " + *out.warning);
-      if (out.note) st->log(LogLevel::info, who + ": " + *out.note);
-      if (out.planned) {
-        ++cycles;
-        ++st->cycles_total;
-        ++st->cycles_window;
-        st->plan_us_window.push_back(out.plan_us);
-      }
-      if (out.ego) st->last_ego = out.ego;
-      if (!out.reply) continue;
-      ws.text(true);
-      co_await ws.async_write(net::buffer(*out.reply), net::redirect_error(net::use_awaitable, ec));
-      if (ec) {
-        if (const auto line = end_line(ec, ws.reason())) {
-          st->log(line->first, who + " " + line->second + " after " + cycles_text(cycles));
-        }
-        co_return;
-      }
-    }
+    co_await session_loop(ws, st.get(), who);
   } catch (const std::exception& e) {  // nothing may escape: a session ends, the server stays
     st->log(LogLevel::warning, who + ": internal error (" + e.what() + "), connection closed");
   }

@@ -29,7 +29,22 @@ void ensure_interpreter() {
     if (Py_IsInitialized() != 0) return;  // inside Python: the module's interpreter
     // No signal handlers: Ctrl-C stays the run's (it stops the run, not the interpreter); a
     // planner still running then gets its KeyboardInterrupt from Policy::interrupt().
-    py::initialize_interpreter(/*init_signal_handlers=*/false);
+    PyConfig config;
+    PyConfig_InitIsolatedConfig(&config);
+    config.isolated = 0;
+    config.use_environment = 1;  // PYTHONPATH, PYTHONHOME and the rest are read as Python does
+    config.install_signal_handlers = 0;
+    // The interpreter this binary was built against finds its own standard library and
+    // site-packages; without a program name Python would take the first python3 on PATH
+    // (a pyenv, conda or virtual environment's: another version, other packages, numpy
+    // missing). PYTHONHOME still chooses another.
+    const PyStatus named =
+        PyConfig_SetBytesString(&config, &config.program_name, OVERTAKE_PYTHON_EXECUTABLE);
+    if (PyStatus_Exception(named) != 0) {
+      PyConfig_Clear(&config);
+      throw std::runtime_error("cannot start Python: out of memory");
+    }
+    py::initialize_interpreter(&config);
     try {
       py::module_::import("sys").attr("path").attr("insert")(
           0, std::filesystem::current_path().string());

@@ -379,197 +379,215 @@ class Decoder {
     column("speed", &Fixed::speed, 0, UINT16_MAX);
   }
 
+  // Throws the record's error when its payload is shorter than `bytes`.
+  void need(std::uint8_t kind, std::size_t at, std::string_view p, std::size_t bytes) const {
+    if (p.size() < bytes) {
+      bad_record(
+          kind, at,
+          std::to_string(p.size()) + " bytes where " + std::to_string(bytes) + " are needed");
+    }
+  }
+
   void record(std::uint8_t kind, std::string_view p, std::size_t at) {
     if (ended_) bad_record(kind, at, "a record after the end record");
-    const auto need = [&](std::size_t bytes) {
-      if (p.size() < bytes) {
-        bad_record(
-            kind, at,
-            std::to_string(p.size()) + " bytes where " + std::to_string(bytes) + " are needed");
-      }
-    };
     Reader r(p);
     switch (kind) {
-      case static_cast<std::uint8_t>(ReplayRecordKind::frame): {
-        need(4);
-        ReplayFrame& f = frame_;
-        f.step = static_cast<long>(r.u32());
-        if (st_.last_step && f.step <= *st_.last_step) {
-          bad_record(kind, at,
-                     "step " + std::to_string(f.step) + " does not follow step " +
-                         std::to_string(*st_.last_step));
-        }
-        const Fixed e = ego_after(kind, at, r, p.size());
-        need(p.size() - r.remaining() + kFrameFloatBytes + 1);
-        f.position = {e.x / kCmPerM, e.y / kCmPerM};
-        f.yaw_rad = e.yaw / kYawUnitsPerRad;
-        f.speed_mps = e.speed / kCmPerM;
-        f.s_m = r.f32();
-        f.d_m = r.f32();
-        f.strict.tangential_mps2 = r.f32();
-        f.strict.normal_mps2 = r.f32();
-        f.strict.acceleration_mps2 = r.f32();
-        f.strict.jerk_mps3 = r.f32();
-        f.distance_m = r.f32();
-        f.incident_free_m = r.f32();
-        f.best_incident_free_m = r.f32();
-        const std::size_t cars = r.u8();
-        cars_after(kind, at, r, cars, p.size());
-        f.cars.resize(cars);
-        for (std::size_t k = 0; k < cars; ++k) {
-          const FixedCar& c = next_[k];
-          f.cars[k] = {c.id,
-                       {c.at.x / kCmPerM, c.at.y / kCmPerM},
-                       c.at.yaw / kYawUnitsPerRad,
-                       c.at.speed / kCmPerM};
-        }
-        // Added within version 2: TTC ahead, TTC entering a lane, headway (older files: none).
-        f.safety = {};
-        if (r.remaining() >= kFrameSafetyBytes) {
-          f.safety.ttc_ahead_s = seconds_of(r.u16());
-          f.safety.ttc_entering_s = seconds_of(r.u16());
-          f.safety.headway_s = seconds_of(r.u16());
-        }
-        ego_ = e;
-        cars_.swap(next_);
-        st_.last_step = f.step;
-        sink_.frame(f);
-        return;
-      }
-      case static_cast<std::uint8_t>(ReplayRecordKind::path): {
-        if (!st_.last_step) bad_record(kind, at, "a path before the first frame");
-        need(2);
-        ReplayPath path;
-        path.step = *st_.last_step;
-        const std::size_t m = r.u16();
-        path.points.resize(m);
-        std::int64_t x = ego_.x;
-        std::int64_t y = ego_.y;
-        for (std::size_t i = 0; i < m; ++i) {
-          const auto dx = r.delta();
-          const auto dy = dx ? r.delta() : std::nullopt;
-          if (!dy) {
-            bad_varint(
-                kind, at, r,
-                "its " + std::to_string(m) + " points (from point " + std::to_string(i + 1) + ")",
-                p.size());
-          }
-          x = in_range(kind, at, x + *dx, INT32_MIN, INT32_MAX, "a path point", "x");
-          y = in_range(kind, at, y + *dy, INT32_MIN, INT32_MAX, "a path point", "y");
-          path.points[i] = {static_cast<double>(x) / kCmPerM, static_cast<double>(y) / kCmPerM};
-        }
-        if (r.remaining() >= kExactHeadBytes) {  // added later within version 2
-          const std::uint32_t n = r.u32();
-          const std::uint8_t form = r.u8();
-          if (n != m || form > 1) {
-            bad_record(kind, at,
-                       "its exact points are " + std::to_string(n) + " of form " +
-                           std::to_string(form) + ", its points " + std::to_string(m));
-          }
-          path.exact.resize(n);
-          if (form == 1) {
-            std::int64_t ux = 0;
-            std::int64_t uy = 0;
-            for (std::size_t i = 0; i < n; ++i) {
-              const auto dx = r.delta();
-              const auto dy = dx ? r.delta() : std::nullopt;
-              if (!dy) {
-                bad_varint(kind, at, r,
-                           "its exact points (from point " + std::to_string(i + 1) + ")", p.size());
-              }
-              ux += *dx;
-              uy += *dy;
-              path.exact[i] = {exact_of_units(ux), exact_of_units(uy)};
-            }
-          } else {
-            need(p.size() - r.remaining() + std::size_t{n} * kExactPointBytes);
-            std::uint64_t bx = 0;
-            std::uint64_t by = 0;
-            for (core::Vec2& e : path.exact) {
-              bx ^= r.u64();
-              by ^= r.u64();
-              e = {std::bit_cast<double>(bx), std::bit_cast<double>(by)};
-            }
-          }
-          for (const core::Vec2& e : path.exact) {
-            if (!std::isfinite(e.x) || !std::isfinite(e.y)) {
-              bad_record(kind, at, "an exact path point that is not finite");
-            }
-          }
-          path.has_exact = true;
-        }
-        sink_.path(std::move(path));
-        return;
-      }
-      case static_cast<std::uint8_t>(ReplayRecordKind::incident): {
-        if (!st_.last_step) bad_record(kind, at, "an incident before the first frame");
-        need(kIncidentBytes);
-        ReplayIncident i;
-        i.step = *st_.last_step;
-        i.type = r.u8();
-        if (static_cast<std::size_t>(i.type) >= incident_types_) {
-          bad_record(kind, at,
-                     "incident type " + std::to_string(i.type) + " is not in the header's " +
-                         std::to_string(incident_types_) + " incident_types");
-        }
-        i.value = r.f32();
-        i.s_m = r.f32();
-        i.lane = r.u8();
-        i.position.x = r.metres();
-        i.position.y = r.metres();
-        if (r.remaining() >= kCollisionClassBytes) {  // added within version 2
-          const std::uint8_t k = r.u8();
-          const std::uint8_t fault = r.u8();
-          if (k != kNoCollisionKind) {
-            if (k >= collision_kinds_ || fault > 1) {
-              bad_record(kind, at,
-                         "collision kind " + std::to_string(k) + " (at fault " +
-                             std::to_string(fault) + ") is not one of the header's " +
-                             std::to_string(collision_kinds_) + " collision_kinds");
-            }
-            i.collision = sim::CollisionClass{static_cast<sim::CollisionKind>(k), fault == 1};
-          }
-        }
-        if (r.remaining() >= kContactBytes) {  // added later within version 2
-          const std::uint32_t contact = r.u32();
-          if (contact > 0 && (!i.collision || i.type != collision_type_)) {
-            bad_record(kind, at, "a contact number on an incident that is no classified collision");
-          }
-          if (contact > 0) i.contact = static_cast<long>(contact) - 1;
-        }
-        sink_.incident(i);
-        return;
-      }
-      case static_cast<std::uint8_t>(ReplayRecordKind::checkpoint): {
-        if (!st_.last_step) bad_record(kind, at, "a checkpoint before the first frame");
-        ReplayCheckpoint c;
-        c.step = *st_.last_step;
-        try {
-          const sim::Checkpoint decoded = sim::decode_checkpoint(p, "the checkpoint");
-          if (decoded.info.step != c.step) {
-            bad_record(kind, at,
-                       "a checkpoint of step " + std::to_string(decoded.info.step) + " at frame " +
-                           std::to_string(c.step));
-          }
-          c.t_s = decoded.info.t_s;
-        } catch (const core::StateError& e) {
-          bad_record(kind, at, e.what());
-        }
-        c.bytes.assign(p);
-        sink_.checkpoint(std::move(c));
-        return;
-      }
-      case static_cast<std::uint8_t>(ReplayRecordKind::end): {
-        std::string text(p);
-        if (!json::accept(text)) bad_record(kind, at, "the report is not valid JSON");
-        ended_ = true;
-        sink_.end(std::move(text));
-        return;
-      }
+      case static_cast<std::uint8_t>(ReplayRecordKind::frame):
+        return frame_record(kind, p, at, r);
+      case static_cast<std::uint8_t>(ReplayRecordKind::path):
+        return path_record(kind, p, at, r);
+      case static_cast<std::uint8_t>(ReplayRecordKind::incident):
+        return incident_record(kind, p, at, r);
+      case static_cast<std::uint8_t>(ReplayRecordKind::checkpoint):
+        return checkpoint_record(kind, p, at);
+      case static_cast<std::uint8_t>(ReplayRecordKind::end):
+        return end_record(kind, p, at);
       default:
         sink_.unknown();
         return;
     }
+  }
+
+  void frame_record(std::uint8_t kind, std::string_view p, std::size_t at, Reader& r) {
+    need(kind, at, p, 4);
+    ReplayFrame& f = frame_;
+    f.step = static_cast<long>(r.u32());
+    if (st_.last_step && f.step <= *st_.last_step) {
+      bad_record(kind, at,
+                 "step " + std::to_string(f.step) + " does not follow step " +
+                     std::to_string(*st_.last_step));
+    }
+    const Fixed e = ego_after(kind, at, r, p.size());
+    need(kind, at, p, p.size() - r.remaining() + kFrameFloatBytes + 1);
+    f.position = {e.x / kCmPerM, e.y / kCmPerM};
+    f.yaw_rad = e.yaw / kYawUnitsPerRad;
+    f.speed_mps = e.speed / kCmPerM;
+    f.s_m = r.f32();
+    f.d_m = r.f32();
+    f.strict.tangential_mps2 = r.f32();
+    f.strict.normal_mps2 = r.f32();
+    f.strict.acceleration_mps2 = r.f32();
+    f.strict.jerk_mps3 = r.f32();
+    f.distance_m = r.f32();
+    f.incident_free_m = r.f32();
+    f.best_incident_free_m = r.f32();
+    const std::size_t cars = r.u8();
+    cars_after(kind, at, r, cars, p.size());
+    f.cars.resize(cars);
+    for (std::size_t k = 0; k < cars; ++k) {
+      const FixedCar& c = next_[k];
+      f.cars[k] = {c.id,
+                   {c.at.x / kCmPerM, c.at.y / kCmPerM},
+                   c.at.yaw / kYawUnitsPerRad,
+                   c.at.speed / kCmPerM};
+    }
+    // Added within version 2: TTC ahead, TTC entering a lane, headway (older files: none).
+    f.safety = {};
+    if (r.remaining() >= kFrameSafetyBytes) {
+      f.safety.ttc_ahead_s = seconds_of(r.u16());
+      f.safety.ttc_entering_s = seconds_of(r.u16());
+      f.safety.headway_s = seconds_of(r.u16());
+    }
+    ego_ = e;
+    cars_.swap(next_);
+    st_.last_step = f.step;
+    sink_.frame(f);
+  }
+
+  void path_record(std::uint8_t kind, std::string_view p, std::size_t at, Reader& r) {
+    if (!st_.last_step) bad_record(kind, at, "a path before the first frame");
+    need(kind, at, p, 2);
+    ReplayPath path;
+    path.step = *st_.last_step;
+    const std::size_t m = r.u16();
+    path.points.resize(m);
+    std::int64_t x = ego_.x;
+    std::int64_t y = ego_.y;
+    for (std::size_t i = 0; i < m; ++i) {
+      const auto dx = r.delta();
+      const auto dy = dx ? r.delta() : std::nullopt;
+      if (!dy) {
+        bad_varint(
+            kind, at, r,
+            "its " + std::to_string(m) + " points (from point " + std::to_string(i + 1) + ")",
+            p.size());
+      }
+      x = in_range(kind, at, x + *dx, INT32_MIN, INT32_MAX, "a path point", "x");
+      y = in_range(kind, at, y + *dy, INT32_MIN, INT32_MAX, "a path point", "y");
+      path.points[i] = {static_cast<double>(x) / kCmPerM, static_cast<double>(y) / kCmPerM};
+    }
+    // Added later within version 2.
+    if (r.remaining() >= kExactHeadBytes) read_exact(kind, at, p, r, path);
+    sink_.path(std::move(path));
+  }
+
+  // The exact points of a path (after its rounded ones): as deltas of units, or as the bits
+  // of each double, each XOR the one before.
+  void read_exact(std::uint8_t kind, std::size_t at, std::string_view p, Reader& r,
+                  ReplayPath& path) const {
+    const std::uint32_t n = r.u32();
+    const std::uint8_t form = r.u8();
+    if (n != path.points.size() || form > 1) {
+      bad_record(kind, at,
+                 "its exact points are " + std::to_string(n) + " of form " + std::to_string(form) +
+                     ", its points " + std::to_string(path.points.size()));
+    }
+    path.exact.resize(n);
+    if (form == 1) {
+      std::int64_t ux = 0;
+      std::int64_t uy = 0;
+      for (std::size_t i = 0; i < n; ++i) {
+        const auto dx = r.delta();
+        const auto dy = dx ? r.delta() : std::nullopt;
+        if (!dy) {
+          bad_varint(kind, at, r, "its exact points (from point " + std::to_string(i + 1) + ")",
+                     p.size());
+        }
+        ux += *dx;
+        uy += *dy;
+        path.exact[i] = {exact_of_units(ux), exact_of_units(uy)};
+      }
+    } else {
+      need(kind, at, p, p.size() - r.remaining() + std::size_t{n} * kExactPointBytes);
+      std::uint64_t bx = 0;
+      std::uint64_t by = 0;
+      for (core::Vec2& e : path.exact) {
+        bx ^= r.u64();
+        by ^= r.u64();
+        e = {std::bit_cast<double>(bx), std::bit_cast<double>(by)};
+      }
+    }
+    for (const core::Vec2& e : path.exact) {
+      if (!std::isfinite(e.x) || !std::isfinite(e.y)) {
+        bad_record(kind, at, "an exact path point that is not finite");
+      }
+    }
+    path.has_exact = true;
+  }
+
+  void incident_record(std::uint8_t kind, std::string_view p, std::size_t at, Reader& r) {
+    if (!st_.last_step) bad_record(kind, at, "an incident before the first frame");
+    need(kind, at, p, kIncidentBytes);
+    ReplayIncident i;
+    i.step = *st_.last_step;
+    i.type = r.u8();
+    if (static_cast<std::size_t>(i.type) >= incident_types_) {
+      bad_record(kind, at,
+                 "incident type " + std::to_string(i.type) + " is not in the header's " +
+                     std::to_string(incident_types_) + " incident_types");
+    }
+    i.value = r.f32();
+    i.s_m = r.f32();
+    i.lane = r.u8();
+    i.position.x = r.metres();
+    i.position.y = r.metres();
+    if (r.remaining() >= kCollisionClassBytes) {  // added within version 2
+      const std::uint8_t k = r.u8();
+      const std::uint8_t fault = r.u8();
+      if (k != kNoCollisionKind) {
+        if (k >= collision_kinds_ || fault > 1) {
+          bad_record(kind, at,
+                     "collision kind " + std::to_string(k) + " (at fault " + std::to_string(fault) +
+                         ") is not one of the header's " + std::to_string(collision_kinds_) +
+                         " collision_kinds");
+        }
+        i.collision = sim::CollisionClass{static_cast<sim::CollisionKind>(k), fault == 1};
+      }
+    }
+    if (r.remaining() >= kContactBytes) {  // added later within version 2
+      const std::uint32_t contact = r.u32();
+      if (contact > 0 && (!i.collision || i.type != collision_type_)) {
+        bad_record(kind, at, "a contact number on an incident that is no classified collision");
+      }
+      if (contact > 0) i.contact = static_cast<long>(contact) - 1;
+    }
+    sink_.incident(i);
+  }
+
+  void checkpoint_record(std::uint8_t kind, std::string_view p, std::size_t at) {
+    if (!st_.last_step) bad_record(kind, at, "a checkpoint before the first frame");
+    ReplayCheckpoint c;
+    c.step = *st_.last_step;
+    try {
+      const sim::Checkpoint decoded = sim::decode_checkpoint(p, "the checkpoint");
+      if (decoded.info.step != c.step) {
+        bad_record(kind, at,
+                   "a checkpoint of step " + std::to_string(decoded.info.step) + " at frame " +
+                       std::to_string(c.step));
+      }
+      c.t_s = decoded.info.t_s;
+    } catch (const core::StateError& e) {
+      bad_record(kind, at, e.what());
+    }
+    c.bytes.assign(p);
+    sink_.checkpoint(std::move(c));
+  }
+
+  void end_record(std::uint8_t kind, std::string_view p, std::size_t at) {
+    std::string text(p);
+    if (!json::accept(text)) bad_record(kind, at, "the report is not valid JSON");
+    ended_ = true;
+    sink_.end(std::move(text));
   }
 
   std::string_view bytes_;

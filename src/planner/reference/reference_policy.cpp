@@ -90,15 +90,15 @@ core::Vec2 ReferencePolicy::sent_as_read(std::size_t i) const {
                        : core::round_like_wire(std::vector<core::Vec2>{sent_[i]}).front();
 }
 
-core::PlanResult ReferencePolicy::plan(const core::Telemetry& t) {
+// Where the car is on the last plan: the simulator consumed the points not queued. Sets
+// synced_ (and `car`, the driven states and the band time) when the queue and the car are
+// where the plan put them; returns the points consumed.
+std::size_t ReferencePolicy::sync_to(const core::Telemetry& t, FrenetState& car) {
   const auto& tp = p_.trajectory;
   const double dt = step_s_;
-
-  // Where the car is on the last plan: the simulator consumed the points not queued.
   const std::size_t remaining = t.previous_path.size();
   synced_ = false;
   std::size_t consumed = 0;
-  FrenetState car;
   if (have_plan_ && remaining >= 2 && remaining <= sent_.size()) {
     consumed = sent_.size() - remaining;
     const bool queue_matches =
@@ -119,6 +119,43 @@ core::PlanResult ReferencePolicy::plan(const core::Telemetry& t) {
       }
     }
   }
+  return consumed;
+}
+
+// The path up to the start (driven, then kept), every check step back from the start, for
+// the checks across the joint.
+std::vector<FrenetState> ReferencePolicy::history_before(const std::vector<FrenetState>& states,
+                                                         const FrenetState& start) const {
+  const auto& tp = p_.trajectory;
+  const double dt = step_s_;
+  std::vector<FrenetState> history;
+  std::vector<FrenetState> past(driven_);
+  past.insert(past.end(), states.begin(), states.end());
+  if (past.empty() || !synced_) past.clear();
+  for (std::size_t j = 1; j <= 3 && !past.empty(); ++j) {
+    // The newest state is the start: the last kept point, or the car (the last driven).
+    const std::size_t newest = past.size() - 1;
+    const double back_steps = static_cast<double>(j) * tp.check_step_s / dt;
+    const long nearest = std::lround(back_steps);
+    if (nearest < 1 || static_cast<std::size_t>(nearest) > newest) break;
+    FrenetState x = past[newest - static_cast<std::size_t>(nearest)];
+    if (std::abs(back_steps - static_cast<double>(nearest)) > kWholeStepTolerance) {
+      // A check step that is no whole number of world steps: carried from the nearest state.
+      x = carried(x, (static_cast<double>(nearest) - back_steps) * dt);
+    }
+    x.s_m = start.s_m + line_.s_ahead(start.s_m, x.s_m);
+    history.push_back(x);
+  }
+  return history;
+}
+
+core::PlanResult ReferencePolicy::plan(const core::Telemetry& t) {
+  const auto& tp = p_.trajectory;
+  const double dt = step_s_;
+
+  FrenetState car;
+  const std::size_t consumed = sync_to(t, car);
+  const std::size_t remaining = t.previous_path.size();
   std::vector<FrenetState> states;
   std::vector<core::Vec2> points;
   const auto n_points = static_cast<std::size_t>(std::max(tp.path_points, 2));
@@ -168,26 +205,7 @@ core::PlanResult ReferencePolicy::plan(const core::Telemetry& t) {
 
   TrajectoryRequest req;
   req.start = start;
-  {
-    // The path up to the start (driven, then kept), every check step back from the start.
-    std::vector<FrenetState> past(driven_);
-    past.insert(past.end(), states.begin(), states.end());
-    if (past.empty() || !synced_) past.clear();
-    for (std::size_t j = 1; j <= 3 && !past.empty(); ++j) {
-      // The newest state is the start: the last kept point, or the car (the last driven).
-      const std::size_t newest = past.size() - 1;
-      const double back_steps = static_cast<double>(j) * tp.check_step_s / dt;
-      const long nearest = std::lround(back_steps);
-      if (nearest < 1 || static_cast<std::size_t>(nearest) > newest) break;
-      FrenetState x = past[newest - static_cast<std::size_t>(nearest)];
-      if (std::abs(back_steps - static_cast<double>(nearest)) > kWholeStepTolerance) {
-        // A check step that is no whole number of world steps: carried from the nearest state.
-        x = carried(x, (static_cast<double>(nearest) - back_steps) * dt);
-      }
-      x.s_m = start.s_m + line_.s_ahead(start.s_m, x.s_m);
-      req.history.push_back(x);
-    }
-  }
+  req.history = history_before(states, start);
   req.start_delay_s = start_delay;
   req.target_lane = decision_.target_lane;
   req.wanted_speed_mps = decision_.speed_mps;
@@ -202,6 +220,16 @@ core::PlanResult ReferencePolicy::plan(const core::Telemetry& t) {
     behaviour_.goal_lane = chosen.trajectory.end_lane;
   }
 
+  return commit(std::move(states), std::move(points), car, n_points);
+}
+
+// The plan sent: the kept points and then the chosen trajectory's, to n_points; remembered
+// (sent_, states_, origin_) to sync with at the next cycle.
+core::PlanResult ReferencePolicy::commit(std::vector<FrenetState> states,
+                                         std::vector<core::Vec2> points, const FrenetState& car,
+                                         std::size_t n_points) {
+  const double dt = step_s_;
+  const TrajectoryPlan& chosen = plan_;
   const std::size_t fresh = n_points - states.size();
   for (std::size_t i = 1; i <= fresh; ++i) {
     const FrenetState x = chosen.trajectory.at(static_cast<double>(i) * dt);

@@ -50,6 +50,11 @@ class ReferencePolicy final : public Policy {
 
  private:
   [[nodiscard]] FrenetState observed_state(const core::Telemetry& t) const;
+  std::size_t sync_to(const core::Telemetry& t, FrenetState& car);
+  core::PlanResult commit(std::vector<FrenetState> states, std::vector<core::Vec2> points,
+                          const FrenetState& car, std::size_t n_points);
+  [[nodiscard]] std::vector<FrenetState> history_before(const std::vector<FrenetState>& states,
+                                                        const FrenetState& start) const;
   /// Sent point `i` as the simulator read it.
   [[nodiscard]] core::Vec2 sent_as_read(std::size_t i) const;
 
