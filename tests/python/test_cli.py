@@ -36,6 +36,22 @@ def test_the_example_planner_from_its_folder(run_binary):
     assert report["incident_counts"]["collision"] == 0 and report["distance_miles"] > 0.4
 
 
+def test_the_embedded_python_is_the_build_s_whatever_python3_is_first_on_path(run_binary,
+                                                                                tmp_path):
+    # A python3 of another installation first on PATH (a pyenv, conda or virtual
+    # environment's) must not become the embedded interpreter's home: here one that is no
+    # Python at all. The example planner still imports numpy from the build's Python.
+    fake = tmp_path / "bin"
+    fake.mkdir()
+    (fake / "python3").write_text("#!/bin/sh\nexit 3\n")
+    (fake / "python3").chmod(0o755)
+    env = {"PATH": str(fake) + os.pathsep + os.environ.get("PATH", "")}
+    code, report, err = run_binary("drive", "--policy-py", "planner:plan", "--minutes", "0.5",
+                                   cwd=SOURCE / "examples/python", env=env)
+    assert code == 0, err
+    assert report["end"] == "completed"
+
+
 def test_a_planner_that_raises_ends_the_run_as_planner_failed(run_binary):
     code, report, err = run_binary("drive", "--policy-py", "broken:raises", "--minutes", "1",
                                    cwd=PLANNERS)
