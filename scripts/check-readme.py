@@ -8,7 +8,8 @@ fill in what a reader brings: their own planner program (./my_planner, and the c
 project in ~/CarND-Path-Planning-Project: build/path_planning reading ../data/highway_map.csv;
 both the tests' example program), map files (my_track.csv, highway_map.csv: tracks
 `overtake track` makes), a config (mine.json), two
-benches to compare (before/, after/). The repository's folders the lines name (data/,
+benches to compare (before/, after/; old/ and new/, of a Python planner named mine and
+mine-v2), a Python planner class (planner.py:Planner, with a speed keyword). The repository's folders the lines name (data/,
 examples/, include/, build/release/) are links to the real ones.
 
 A line must exit 0. A line still running after --budget seconds is stopped as a user would
@@ -33,6 +34,25 @@ import tempfile
 import time
 
 NOT_RUN = re.compile(r"\[not run: ([^\]]+)\]")
+
+# The example planner with its speed limit as a keyword, in a class.
+PYTHON_PLANNER = """import importlib.util
+import os
+
+_EXAMPLE = os.path.join(os.path.dirname(os.path.abspath(__file__)), "examples", "python",
+                        "planner.py")
+
+
+class Planner:
+    def __init__(self, speed_mps=20.0):
+        spec = importlib.util.spec_from_file_location("readme_example", _EXAMPLE)
+        self.example = importlib.util.module_from_spec(spec)
+        spec.loader.exec_module(self.example)
+        self.example.LIMIT = speed_mps
+
+    def __call__(self, telemetry):
+        return self.example.plan(telemetry)
+"""
 
 
 def command_lines(text):
@@ -110,10 +130,15 @@ def fixtures(work, home, binary_dir, source, env):
                 os.path.join(project, "data", "highway_map.csv"))
     for path, map_file in ((os.path.join(project, "build", "path_planning"),
                             "../data/highway_map.csv"),
-                           (os.path.join(work, "my_planner"), "data/tracks/default.csv")):
+                           (os.path.join(work, "my_planner"), "data/tracks/default.csv"),
+                           (os.path.join(work, "planner"), "data/tracks/default.csv"),
+                           (os.path.join(work, "path_planning"), "data/tracks/default.csv")):
         with open(path, "w") as f:
-            f.write("#!/bin/sh\nexec " + program + " " + map_file + "\n")
+            f.write("#!/bin/sh\nexec " + program + " " + map_file + ' "$@"\n')
         os.chmod(path, 0o755)
+    # A Python planner of the reader's, as a class with a keyword (planner.py:Planner).
+    with open(os.path.join(work, "planner.py"), "w") as f:
+        f.write(PYTHON_PLANNER)
     with open(os.path.join(work, "mine.json"), "w") as f:
         f.write('{"planner": {"reference": {"assertiveness": 0.25}}}\n')
     steps = [
@@ -122,6 +147,13 @@ def fixtures(work, home, binary_dir, source, env):
         [overtake, "bench", "--quiet", "--seeds", "1-8", "--minutes", "1", "--out", "before"],
         [overtake, "bench", "--quiet", "--seeds", "1-8", "--minutes", "1", "--config",
          "mine.json", "--out", "after"],
+        # Two benches of the reader's planner, before and after a change of its name.
+        [overtake, "bench", "--quiet", "--policies", "mine", "--policy-py",
+         "mine=examples/python/planner.py:plan", "--seeds", "1-8", "--minutes", "1", "--out",
+         "old"],
+        [overtake, "bench", "--quiet", "--policies", "mine-v2", "--policy-py",
+         "mine-v2=examples/python/planner.py:plan", "--seeds", "1-8", "--minutes", "1", "--out",
+         "new"],
     ]
     for step in steps:
         r = subprocess.run(step, cwd=work, env=env, capture_output=True, text=True)
@@ -177,7 +209,8 @@ def main():
             took = time.monotonic() - started
             ok = status in (130, -signal.SIGINT, 128 + signal.SIGINT) if stopped else status == 0
             tag = ("stopped " if stopped else "ran     ") if ok else "FAILED  "
-            counts["stopped" if stopped else "ran"] += 1
+            if ok:
+                counts["stopped" if stopped else "ran"] += 1
             print(f"{tag} {where}  {first}  ({took:.1f} s, exit {status})")
             if not ok:
                 failures.append((where, cmd, status, out))

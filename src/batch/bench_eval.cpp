@@ -55,7 +55,8 @@ eval::BenchData load_bench_for_compare(const std::filesystem::path& dir,
   const auto runs_path = dir / kBenchRunsFile;
   if (!std::filesystem::is_directory(dir)) {
     throw std::runtime_error(dir.string() +
-                             ": no such folder (give two `overtake bench --out` folders)");
+                             ": no such folder (give two `overtake bench --out` folders, or two "
+                             "`overtake risk --out` folders)");
   }
   try {
     b.manifest = read_json_file(manifest_path);
