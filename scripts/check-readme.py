@@ -35,26 +35,6 @@ import time
 
 NOT_RUN = re.compile(r"\[not run: ([^\]]+)\]")
 
-# The example planner with its speed limit as a keyword, in a class.
-PYTHON_PLANNER = """import importlib.util
-import os
-
-_EXAMPLE = os.path.join(os.path.dirname(os.path.abspath(__file__)), "examples", "python",
-                        "planner.py")
-
-
-class Planner:
-    def __init__(self, speed_mps=20.0):
-        spec = importlib.util.spec_from_file_location("readme_example", _EXAMPLE)
-        self.example = importlib.util.module_from_spec(spec)
-        spec.loader.exec_module(self.example)
-        self.example.LIMIT = speed_mps
-
-    def __call__(self, telemetry):
-        return self.example.plan(telemetry)
-"""
-
-
 def command_lines(text):
     """(line number, command) of each command in the ```sh blocks, continuations joined."""
     out = []
@@ -136,9 +116,10 @@ def fixtures(work, home, binary_dir, source, env):
         with open(path, "w") as f:
             f.write("#!/bin/sh\nexec " + program + " " + map_file + ' "$@"\n')
         os.chmod(path, 0o755)
-    # A Python planner of the reader's, as a class with a keyword (planner.py:Planner).
-    with open(os.path.join(work, "planner.py"), "w") as f:
-        f.write(PYTHON_PLANNER)
+    # A Python planner of the reader's, as a class with a keyword (planner.py:Planner): the
+    # tests' example planner with its speed as a keyword.
+    os.symlink(os.path.join(source, "tests", "python", "planners", "keyword_speed.py"),
+               os.path.join(work, "planner.py"))
     with open(os.path.join(work, "mine.json"), "w") as f:
         f.write('{"planner": {"reference": {"assertiveness": 0.25}}}\n')
     steps = [

@@ -44,10 +44,41 @@ std::string num(double v) {
   return fixed_text(v, 1);
 }
 
+// A chart's frame: its size and margins, and the objective's range along y.
+struct Frame {
+  double w, h, left, right, top, bottom;
+  double lo, hi;  ///< the objective's range, padded
+  [[nodiscard]] double y(double v) const { return top + (h - top - bottom) * (hi - v) / (hi - lo); }
+};
+
+// The frame of objective values in [lo, hi] (a point widened to 1, then 8% each side).
+Frame frame_of(double w, double h, double lo, double hi) {
+  if (hi - lo < 1e-9) {
+    lo -= 0.5;
+    hi += 0.5;
+  }
+  const double pad = (hi - lo) * 0.08;
+  return {w, h, 60, 20, 20, 50, lo - pad, hi + pad};
+}
+
+// The SVG's opening, its plot area and the objective's ticks along y.
+std::string open_svg(const Frame& f, const std::string& label) {
+  std::string s = "<svg xmlns='http://www.w3.org/2000/svg' width='" + num(f.w) + "' height='" +
+                  num(f.h) + "' role='img' aria-label='" + label + "'>\n";
+  s += "<rect x='" + num(f.left) + "' y='" + num(f.top) + "' width='" +
+       num(f.w - f.left - f.right) + "' height='" + num(f.h - f.top - f.bottom) +
+       "' fill='#fafafa' stroke='#ccc'/>\n";
+  for (int k = 0; k <= 4; ++k) {
+    const double v = f.lo + (f.hi - f.lo) * k / 4.0;
+    s += "<text x='" + num(f.left - 6) + "' y='" + num(f.y(v) + 4) +
+         "' text-anchor='end' font-size='11'>" + fixed_text(v, 2) + "</text>\n";
+  }
+  return s;
+}
+
 // The chart: trials along x, the objective along y; feasible trials as dots, the best so far
 // as a step line, the others as crosses under the axis.
 std::string chart(const TuneSpec& spec, const TuneOutcome& o) {
-  constexpr double kW = 760, kH = 280, kLeft = 60, kRight = 20, kTop = 20, kBottom = 50;
   const bool higher = tune_figure_higher_is_better(spec.objective);
   double lo = std::numeric_limits<double>::infinity(), hi = -lo;
   for (const auto& t : o.trials) {
@@ -59,27 +90,14 @@ std::string chart(const TuneSpec& spec, const TuneOutcome& o) {
     lo = 0;
     hi = 1;
   }
-  if (hi - lo < 1e-9) {
-    lo -= 0.5;
-    hi += 0.5;
-  }
-  const double pad = (hi - lo) * 0.08;
-  lo -= pad;
-  hi += pad;
+  const Frame f = frame_of(760, 280, lo, hi);
+  const double kH = f.h, kLeft = f.left, kBottom = f.bottom;
   const double n = std::max<double>(1.0, static_cast<double>(o.trials.size()));
   const auto sx = [&](double trial) {
-    return kLeft + (kW - kLeft - kRight) * (n <= 1 ? 0.5 : (trial - 1) / (n - 1));
+    return kLeft + (f.w - kLeft - f.right) * (n <= 1 ? 0.5 : (trial - 1) / (n - 1));
   };
-  const auto sy = [&](double v) { return kTop + (kH - kTop - kBottom) * (hi - v) / (hi - lo); };
-  std::string s = "<svg xmlns='http://www.w3.org/2000/svg' width='" + num(kW) + "' height='" +
-                  num(kH) + "' role='img' aria-label='objective per trial'>\n";
-  s += "<rect x='" + num(kLeft) + "' y='" + num(kTop) + "' width='" + num(kW - kLeft - kRight) +
-       "' height='" + num(kH - kTop - kBottom) + "' fill='#fafafa' stroke='#ccc'/>\n";
-  for (int k = 0; k <= 4; ++k) {
-    const double v = lo + (hi - lo) * k / 4.0;
-    s += "<text x='" + num(kLeft - 6) + "' y='" + num(sy(v) + 4) +
-         "' text-anchor='end' font-size='11'>" + fixed_text(v, 2) + "</text>\n";
-  }
+  const auto sy = [&](double v) { return f.y(v); };
+  std::string s = open_svg(f, "objective per trial");
   s += "<text x='" + num(kLeft) + "' y='" + num(kH - 8) + "' font-size='12'>trial 1 … " +
        std::to_string(o.trials.size()) + " · " + html(spec.objective) +
        " (dots: trials that met the constraints; line: best so far; red crosses: broke "
@@ -120,7 +138,6 @@ std::optional<double> figure(const TuneTrial& t, const char* name) {
 // its interval's upper end, hollow), the objective along y; the Pareto set (no other trial
 // both better in the objective and lower in risk) joined, --max-risk as a dashed line.
 std::string risk_plane(const TuneSpec& spec, const TuneOutcome& o) {
-  constexpr double kW = 760, kH = 320, kLeft = 60, kRight = 20, kTop = 20, kBottom = 50;
   const bool higher = tune_figure_higher_is_better(spec.objective);
   struct Point {
     const TuneTrial* t;
@@ -150,30 +167,17 @@ std::string risk_plane(const TuneSpec& spec, const TuneOutcome& o) {
   }
   const double llo = std::floor(std::log10(rlo)),
                lhi = std::max(llo + 1, std::ceil(std::log10(rhi)));
-  if (hi - lo < 1e-9) {
-    lo -= 0.5;
-    hi += 0.5;
-  }
-  const double pad = (hi - lo) * 0.08;
-  lo -= pad;
-  hi += pad;
+  const Frame f = frame_of(760, 320, lo, hi);
+  const double kH = f.h, kLeft = f.left, kTop = f.top, kBottom = f.bottom;
   const auto sx = [&](double r) {
-    return kLeft + (kW - kLeft - kRight) * (std::log10(std::max(r, 1e-6)) - llo) / (lhi - llo);
+    return kLeft + (f.w - kLeft - f.right) * (std::log10(std::max(r, 1e-6)) - llo) / (lhi - llo);
   };
-  const auto sy = [&](double v) { return kTop + (kH - kTop - kBottom) * (hi - v) / (hi - lo); };
-  std::string s = "<svg xmlns='http://www.w3.org/2000/svg' width='" + num(kW) + "' height='" +
-                  num(kH) + "' role='img' aria-label='objective against risk'>\n";
-  s += "<rect x='" + num(kLeft) + "' y='" + num(kTop) + "' width='" + num(kW - kLeft - kRight) +
-       "' height='" + num(kH - kTop - kBottom) + "' fill='#fafafa' stroke='#ccc'/>\n";
+  const auto sy = [&](double v) { return f.y(v); };
+  std::string s = open_svg(f, "objective against risk");
   for (double d = llo; d <= lhi + 1e-9; d += 1.0) {
     s += "<text x='" + num(sx(std::pow(10.0, d))) + "' y='" + num(kH - kBottom + 16) +
          "' text-anchor='middle' font-size='11'>" + base::shortest_text(std::pow(10.0, d)) +
          "</text>\n";
-  }
-  for (int k = 0; k <= 4; ++k) {
-    const double v = lo + (hi - lo) * k / 4.0;
-    s += "<text x='" + num(kLeft - 6) + "' y='" + num(sy(v) + 4) +
-         "' text-anchor='end' font-size='11'>" + fixed_text(v, 2) + "</text>\n";
   }
   s += "<text x='" + num(kLeft) + "' y='" + num(kH - 8) + "' font-size='12'>" +
        html(spec.risk->event.name()) + " per 100 mi (log; hollow: no event, at the interval's " +

@@ -58,20 +58,14 @@ RiskSpec risk_spec_of(const TuneSpec& spec, const RiskPlanner& p, const MapChoic
 
 // The trials' risk runs, and where the validation's begin: past every run a trial's budget
 // can reach, so the two never share a run.
-std::size_t trial_runs_planned(const TuneSpec& spec) {
+std::size_t runs_planned(const TuneSpec& spec, double hours) {
   RiskSpec r;
   r.minutes = spec.minutes;
-  r.budget_hours = spec.risk->hours;
-  return risk_runs_planned(r);
-}
-std::size_t validation_runs_planned(const TuneSpec& spec) {
-  RiskSpec r;
-  r.minutes = spec.minutes;
-  r.budget_hours = spec.risk->validation_hours;
+  r.budget_hours = hours;
   return risk_runs_planned(r);
 }
 std::uint64_t validation_first_seed(const TuneSpec& spec) {
-  return spec.risk->first_seed + trial_runs_planned(spec);
+  return spec.risk->first_seed + runs_planned(spec, spec.risk->hours);
 }
 
 // Where the estimate of map `k` of `maps` and traffic profile `traffic` goes under `dir`.
@@ -194,11 +188,11 @@ void check_tune_risk(const TuneSpec& spec) {
   }
   for (const std::string& traffic : spec.traffic) {
     check_risk_spec(risk_spec_of(spec, {spec.policy, spec.planners, spec.config}, std::nullopt,
-                                 traffic, r.first_seed, r.hours, r.rel_error, "risk-out"));
+                                 traffic, r.first_seed, r.hours, r.rel_error, spec.out / "trials"));
   }
   // The trials' runs must not be held-out ones, nor the validation's training ones.
   const std::uint64_t trials_end = validation_first_seed(spec);
-  const std::uint64_t validation_end = trials_end + validation_runs_planned(spec);
+  const std::uint64_t validation_end = trials_end + runs_planned(spec, r.validation_hours);
   const auto within = [](std::uint64_t s, std::uint64_t lo, std::uint64_t hi) {
     return s >= lo && s < hi;
   };
@@ -249,10 +243,10 @@ json validate_risk_on(const TuneSpec& spec, const RiskPlanner& start, const Risk
   const std::vector<std::pair<std::size_t, MapChoice>> one = {{0, map}};
   json v = {{"first_seed", validation_first_seed(spec)}, {"hours", spec.risk->validation_hours}};
   std::vector<eval::RateEstimate> rates;
+  TuneSpec one_map = spec;
+  one_map.maps = {map};
   for (const auto& [name, planner] : {std::pair{"start", &start}, std::pair{"best", &best}}) {
     // The full budget each (no early stop), on the same held-out runs.
-    TuneSpec one_map = spec;
-    one_map.maps = {map};
     const Pooled p =
         estimate(one_map, *planner, one, validation_first_seed(spec), spec.risk->validation_hours,
                  0.0, dir / (std::string("risk-") + name), stop);

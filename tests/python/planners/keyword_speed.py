@@ -4,8 +4,9 @@ own. For the tests of `overtake tune` on a Python planner's keyword."""
 import importlib.util
 import os
 
-_EXAMPLE = os.path.join(os.path.dirname(__file__), "..", "..", "..", "examples", "python",
-                        "planner.py")
+# From the file itself, not a link to it (the docs tests link it in as a reader's planner.py).
+_EXAMPLE = os.path.join(os.path.dirname(os.path.realpath(__file__)), "..", "..", "..",
+                        "examples", "python", "planner.py")
 
 
 class Planner:
