@@ -2,11 +2,8 @@
 
 #include <algorithm>
 #include <cstdio>
-#include <fstream>
 #include <iostream>
 #include <optional>
-#include <set>
-#include <thread>
 
 #include "overtake/app/cli.hpp"
 #include "overtake/app/interrupt.hpp"
@@ -16,8 +13,10 @@
 #include "overtake/batch/bench.hpp"
 #include "overtake/batch/bench_page.hpp"
 #include "overtake/batch/pool.hpp"
+#include "overtake/batch/progress.hpp"
 #include "overtake/batch/risk.hpp"
 #include "overtake/batch/suite_run.hpp"
+#include "overtake/cluster/arrays.hpp"
 #include "overtake/cluster/slurm.hpp"
 #include "overtake/core/units.hpp"
 #include "overtake/planners/catalog.hpp"
@@ -28,23 +27,18 @@
 
 namespace overtake::app {
 
-using base::kExitFailure;
 using base::kExitInterrupted;
 using base::kExitOk;
 using base::split_list;
-using base::stderr_is_terminal;
 using base::UsageError;
 using batch::bench_combinations;
+using batch::bench_files_text;
 using batch::BenchOutcome;
 using batch::BenchProgress;
 using batch::BenchSpec;
-using batch::check_bench_out;
 using batch::check_bench_spec;
-using batch::kBenchFiles;
-using batch::kBenchManifestFile;
+using batch::check_report_pages;
 using batch::kBenchRunsFile;
-using batch::kBenchSummaryJsonFile;
-using batch::load_bench_runs;
 using batch::merge_bench;
 using batch::parse_seed_list;
 using batch::parse_shard;
@@ -52,153 +46,17 @@ using batch::run_bench;
 using batch::run_suite;
 using batch::Shard;
 using batch::SuiteSpec;
-using batch::write_bench_report;
+using batch::write_bench_report_page;
+using cluster::bench_array;
 using cluster::check_programs_for_slurm;
 using cluster::run_slurm_array;
-using cluster::slurm_array_here;
-using cluster::slurm_shard_runs;
 using cluster::SlurmArray;
 using cluster::SlurmOptions;
-using cluster::SlurmShardState;
 using planners::catalog_from_flags;
 using planners::PlannerCatalog;
 using planners::PlannerFlags;
 using planners::PlannerFlagSet;
-using run::embedded_page;
-using run::kReportPageName;
-using run::kViewerPageName;
-using scenarios::suite_table;
 using scenarios::SuiteOutcome;
-namespace {
-
-std::string duration_text(double s) {
-  char buf[32];
-  if (s >= 3600)
-    std::snprintf(buf, sizeof buf, "%dh%02dm", static_cast<int>(s / 3600),
-                  static_cast<int>(s / 60) % 60);
-  else if (s >= 60)
-    std::snprintf(buf, sizeof buf, "%dm%02ds", static_cast<int>(s / 60), static_cast<int>(s) % 60);
-  else
-    std::snprintf(buf, sizeof buf, "%ds", static_cast<int>(s));
-  return buf;
-}
-
-void draw_progress(const BenchProgress& p, double total_sim_s) {
-  constexpr int kWidth = 24;
-  const double frac = p.total ? static_cast<double>(p.done) / static_cast<double>(p.total) : 1.0;
-  const int filled = static_cast<int>(frac * kWidth);
-  std::string bar(static_cast<std::size_t>(filled), '#');
-  bar.resize(kWidth, '.');
-  std::string eta = "--";
-  if (p.simulated_s > 0 && total_sim_s > p.simulated_s) {
-    eta = duration_text(p.wall_s * (total_sim_s - p.simulated_s) / p.simulated_s);
-  } else if (p.done >= p.total) {
-    eta = "0s";
-  }
-  std::fprintf(stderr, "\r  [%s] %zu/%zu runs  %9.1f mi simulated  elapsed %s  ETA %s   ",
-               bar.c_str(), p.done, p.total, core::metres_to_miles(p.simulated_m),
-               duration_text(p.wall_s).c_str(), eta.c_str());
-  std::fflush(stderr);
-}
-
-// Complete lines (runs written) in a shard's runs.jsonl: a cheap count for the progress line.
-std::size_t lines_in(const std::filesystem::path& file) {
-  std::ifstream in(file, std::ios::binary);
-  std::size_t n = 0;
-  char buf[1 << 16];
-  while (in.read(buf, sizeof buf) || in.gcount() > 0) {
-    n += static_cast<std::size_t>(std::count(buf, buf + in.gcount(), '\n'));
-  }
-  return n;
-}
-
-// The files a bench writes, as the command line names them: {runs.jsonl,summary.md,...}.
-std::string bench_files_text() {
-  std::string text = "{";
-  for (const char* name : kBenchFiles) {
-    text += std::string(text.size() > 1 ? "," : "") + name;
-  }
-  return text + "}";
-}
-
-// The pages come from the binary: checked before any run, so that none is run in vain.
-void check_pages() {
-  (void)embedded_page(kReportPageName);
-  (void)embedded_page(kViewerPageName);
-}
-
-// Writes the bench report page of `out` (and its replays' pages) to `html`.
-void write_report_page(const std::filesystem::path& out, const std::filesystem::path& html,
-                       bool quiet, const std::vector<std::filesystem::path>& risk = {}) {
-  const auto pages = write_bench_report(out, html, embedded_page(kReportPageName),
-                                        embedded_page(kViewerPageName), risk);
-  if (!quiet) {
-    std::cout << "report: " << html.string() << " (" << pages.size() << " replay page"
-              << (pages.size() == 1 ? "" : "s") << " linked)\n";
-  }
-}
-
-}  // namespace
-
-// A bench as a Slurm array of `tasks`: task I runs shard I with --resume; a shard is finished
-// when it holds every run of its slice and its summary; the shards merge as `bench merge`.
-SlurmArray bench_array(const BenchSpec& spec, int tasks, std::vector<std::string> args,
-                       std::optional<std::filesystem::path> html, bool quiet,
-                       std::vector<std::filesystem::path> risk) {
-  namespace fs = std::filesystem;
-  SlurmArray a = slurm_array_here("bench", spec.out);
-  if (fs::exists(a.out / kBenchRunsFile) || fs::exists(a.out / kBenchManifestFile)) {
-    throw UsageError("--out: " + a.out.string() +
-                     " already holds bench results (merged, or a local bench); choose another "
-                     "--out");
-  }
-  // The shards merge into --out at the end: what the merge would refuse is refused now.
-  check_bench_out(a.out, false, "--out: ", "move it away, or choose another --out");
-  a.args = std::move(args);
-  a.task_flags = {"--resume", "--quiet"};
-  a.runs = bench_combinations(spec).size();
-  a.resume = spec.resume;
-  a.quiet = quiet;
-  const std::size_t runs = a.runs;
-  const auto slice = [runs, tasks](int task) {
-    return tasks > 0 ? slurm_shard_runs(runs, tasks, task) : 0;
-  };
-  a.shard_state = [slice](const fs::path& shard, int task) {
-    SlurmShardState st;
-    const std::size_t want = slice(task);
-    try {
-      const std::size_t have = load_bench_runs(shard).size();
-      st.finished = have == want && fs::exists(shard / kBenchSummaryJsonFile);
-      st.so_far = std::to_string(have) + " of " + std::to_string(want) + " runs";
-    } catch (const std::exception& e) {  // not finished: the merge names what is wrong
-      st.so_far = e.what();
-    }
-    return st;
-  };
-  a.progress = [slice, runs](const std::vector<fs::path>& shards) {
-    std::size_t have = 0;
-    for (std::size_t i = 0; i < shards.size(); ++i) {
-      have += std::min(lines_in(shards[i] / kBenchRunsFile), slice(static_cast<int>(i) + 1));
-    }
-    return std::to_string(have) + "/" + std::to_string(runs) + " runs";
-  };
-  const fs::path out = a.out;
-  a.merge = [out, html, quiet, risk = std::move(risk)](const std::vector<fs::path>& shards,
-                                                       double wall_s, int resubmitted) {
-    const BenchOutcome o = merge_bench(shards, out);
-    if (!quiet) {
-      std::cout << o.summary_markdown << "\n";
-      std::printf("%zu runs in %zu Slurm tasks (%d submitted again) in %.1f s\n", o.runs_done,
-                  shards.size(), resubmitted, wall_s);
-      std::cout << "written: " << out.string() << "/" << bench_files_text() << "\n";
-      for (const auto& r : o.replays) std::cout << "replay: " << r.string() << "\n";
-    }
-    if (html) write_report_page(out, *html, quiet, risk);
-    return kExitOk;
-  };
-  return a;
-}
-
 namespace {
 
 // The flags of `overtake bench` and `overtake bench merge`.
@@ -249,13 +107,13 @@ std::vector<std::string> chosen_policies(const BenchState& st, const PlannerCata
 
 // `overtake bench merge`.
 int run_merge(const BenchState& st) {
-  if (!st.merge_html.empty()) check_pages();
+  if (!st.merge_html.empty()) check_report_pages();
   const BenchOutcome o = merge_bench(
       std::vector<std::filesystem::path>(st.merge_dirs.begin(), st.merge_dirs.end()), st.merge_out);
   std::cout << "merged " << o.runs_done << " runs into " << st.merge_out << "\n\n"
             << o.summary_markdown;
   for (const auto& r : o.replays) std::cout << "replay: " << r.string() << "\n";
-  if (!st.merge_html.empty()) write_report_page(st.merge_out, st.merge_html, false);
+  if (!st.merge_html.empty()) write_bench_report_page(st.merge_out, st.merge_html, false);
   return kExitOk;
 }
 
@@ -289,32 +147,15 @@ int run_scenarios(const BenchState& st) {
   if (!st.map.empty()) suite.map = st.map;
   suite.jobs = st.spec.jobs;
   if (st.out_opt->count() > 0) suite.out = st.out;
-  const bool draw = !st.quiet && stderr_is_terminal();
   SuiteOutcome o;
   {
+    base::StatusLine line(!st.quiet);
     const InterruptScope interrupt;
     o = run_suite(suite, &InterruptScope::flag(), [&](std::size_t done, std::size_t all) {
-      if (draw) std::fprintf(stderr, "\r  scenarios: %zu/%zu   ", done, all);
+      line.draw("  scenarios: " + std::to_string(done) + "/" + std::to_string(all) + "   ");
     });
-    if (draw) std::fprintf(stderr, "\n");
   }
-  for (const std::string& f : o.skipped) {
-    std::cerr << "bench: skipped " << (suite.dir / f).string()
-              << ": a suite's verdicts, not a scenario\n";
-  }
-  if (!st.quiet) {
-    std::cout << suite_table(o);
-    if (suite.out && o.write_errors.empty()) {
-      std::cout << "written: " << suite.out->string() << "/{suite.md,suite.json}\n";
-    }
-  }
-  for (const std::string& e : o.write_errors) std::cerr << "bench: " << e << "\n";
-  if (!o.write_errors.empty()) return kExitFailure;
-  if (o.interrupted) {
-    std::cerr << "bench: interrupted; " << o.verdicts.size() << " scenario runs judged\n";
-    return kExitInterrupted;
-  }
-  return o.failed > 0 ? kExitFailure : kExitOk;
+  return batch::report_suite(suite, o, st.quiet);
 }
 
 // The sweep the flags name.
@@ -341,15 +182,24 @@ int run_on_slurm(const BenchState& st, const CLI::App& cmd, const BenchSpec& spe
   check_bench_spec(spec);
   check_programs_for_slurm(*spec.planners, st.planners.network);
   check_risk_dirs(st);
-  std::optional<std::filesystem::path> html;
-  if (!st.html.empty()) {
-    check_pages();
-    html = st.html;
-  }
-  const SlurmArray array = bench_array(
+  if (!st.html.empty()) check_report_pages();
+  const auto merged = [&st](const BenchOutcome& o, const std::filesystem::path& out,
+                            std::size_t shards, double wall_s, int resubmitted) {
+    if (!st.quiet) {
+      std::cout << o.summary_markdown << "\n";
+      std::printf("%zu runs in %zu Slurm tasks (%d submitted again) in %.1f s\n", o.runs_done,
+                  shards, resubmitted, wall_s);
+      std::cout << "written: " << out.string() << "/" << bench_files_text() << "\n";
+      for (const auto& r : o.replays) std::cout << "replay: " << r.string() << "\n";
+    }
+    if (!st.html.empty()) write_bench_report_page(out, st.html, st.quiet, st.risk);
+    return kExitOk;
+  };
+  SlurmArray array = bench_array(
       spec, st.slurm.tasks,
       task_arguments(cmd, {"out", "jobs", "resume", "quiet", "html", "shard", "force", "risk"}),
-      html, st.quiet, st.risk);
+      merged);
+  array.quiet = st.quiet;
   const InterruptScope interrupt;
   return run_slurm_array(array, st.slurm, &InterruptScope::flag());
 }
@@ -358,19 +208,11 @@ int run_on_slurm(const BenchState& st, const CLI::App& cmd, const BenchSpec& spe
 BenchOutcome run_bench_here(const BenchState& st, const BenchSpec& spec) {
   const double total_sim_s =
       spec.minutes * 60.0 * static_cast<double>(bench_combinations(spec).size()) / spec.shard_count;
-  const bool draw = !st.quiet && stderr_is_terminal();
-  BenchOutcome o;
+  base::StatusLine line(!st.quiet);
   const InterruptScope interrupt;
-  try {
-    o = run_bench(spec, &InterruptScope::flag(), [&](const BenchProgress& p) {
-      if (draw) draw_progress(p, total_sim_s);
-    });
-  } catch (...) {
-    if (draw) std::fprintf(stderr, "\n");
-    throw;
-  }
-  if (draw) std::fprintf(stderr, "\n");
-  return o;
+  return run_bench(spec, &InterruptScope::flag(), [&](const BenchProgress& p) {
+    line.draw(batch::progress_text(p, total_sim_s));
+  });
 }
 
 // `overtake bench`: the sweep here, its summary and report page.
@@ -386,7 +228,7 @@ int run_sweep(const BenchState& st, const BenchSpec& spec) {
       }
     }
   }
-  if (!st.html.empty()) check_pages();
+  if (!st.html.empty()) check_report_pages();
   check_risk_dirs(st);
   const BenchOutcome o = run_bench_here(st, spec);
   if (o.interrupted) {
@@ -405,7 +247,7 @@ int run_sweep(const BenchState& st, const BenchSpec& spec) {
     std::cout << "written: " << spec.out.string() << "/" << bench_files_text() << "\n";
     for (const auto& r : o.replays) std::cout << "replay: " << r.string() << "\n";
   }
-  if (!st.html.empty()) write_report_page(spec.out, st.html, st.quiet, st.risk);
+  if (!st.html.empty()) write_bench_report_page(spec.out, st.html, st.quiet, st.risk);
   return kExitOk;
 }
 

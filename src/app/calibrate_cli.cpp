@@ -2,7 +2,6 @@
 
 #include <cstdio>
 #include <iostream>
-#include <thread>
 
 #include "overtake/app/cli.hpp"
 #include "overtake/app/interrupt.hpp"
@@ -18,75 +17,34 @@
 namespace overtake::app {
 
 using base::fixed_text;
-using base::json_text;
-using base::kExitFailure;
-using base::kExitInterrupted;
-using base::kExitOk;
-using base::stderr_is_terminal;
 using base::UsageError;
-using base::write_file_atomic;
 using batch::calibrate;
 using batch::CalibrateOptions;
 using batch::Calibration;
-using batch::calibration_to_json;
 using batch::CalibrationProgress;
-using batch::CalibrationRow;
-using batch::compare_with_original;
-using batch::format_calibration;
 using batch::parse_seed_list;
-using batch::TrafficFigures;
+using batch::report_calibration;
 
 namespace {
 
 // A terminal gets one progress line drawn over; anything else (a log) a line per seed done.
-void show_progress(const CalibrationProgress& p, std::size_t& shown) {
-  if (stderr_is_terminal()) {
-    std::fprintf(stderr, "\r  calibrate: %zu/%zu seeds, %.0f s   ", p.done, p.total, p.wall_s);
+void show_progress(base::StatusLine& line, const CalibrationProgress& p, std::size_t& shown) {
+  if (line.on()) {
+    line.draw("  calibrate: " + std::to_string(p.done) + "/" + std::to_string(p.total) +
+              " seeds, " + fixed_text(p.wall_s, 0) + " s   ");
   } else if (p.done > shown) {
     std::fprintf(stderr, "calibrate: %zu of %zu seeds done\n", p.done, p.total);
   }
-  std::fflush(stderr);
   shown = p.done;
 }
 
 // Drives the seeds under Ctrl-C: an interrupted calibration keeps the seeds that finished.
 Calibration calibrate_here(const CalibrateOptions& o) {
+  base::StatusLine line(true);
   const InterruptScope interrupt;
   std::size_t shown = 0;
-  Calibration c;
-  try {
-    c = calibrate(o, &InterruptScope::flag(),
-                  [&](const CalibrationProgress& p) { show_progress(p, shown); });
-  } catch (...) {
-    if (stderr_is_terminal()) std::fprintf(stderr, "\n");
-    throw;
-  }
-  if (stderr_is_terminal()) std::fprintf(stderr, "\n");
-  return c;
-}
-
-// Prints the figures beside the original's and writes them as JSON; the exit status.
-int report_calibration(const CalibrateOptions& o, const Calibration& c, const std::string& json) {
-  const TrafficFigures& f = c.figures;
-  const std::vector<CalibrationRow> rows = compare_with_original(f);
-  std::printf(
-      "overtake calibrate: %zu seeds x %g min, policy %s, %s traffic, %ld rows (%.0f "
-      "car-minutes)\n",
-      c.runs, o.minutes, o.policy.c_str(), o.traffic.c_str(), f.rows, f.car_minutes);
-  std::cout << format_calibration(rows);
-  std::cout.flush();
-  nlohmann::json j = calibration_to_json(f, rows);
-  if (c.interrupted) {
-    j["interrupted"] = true;
-    j["seeds_finished"] = c.runs;
-  }
-  if (!json.empty()) write_file_atomic(json, json_text(j, 2) + "\n");
-  if (c.interrupted) {
-    std::cerr << "calibrate: interrupted; the figures are those of the " << c.runs << " of "
-              << o.seeds.size() << " seeds that finished\n";
-    return kExitInterrupted;
-  }
-  return j["all_pass"].get<bool>() ? kExitOk : kExitFailure;
+  return calibrate(o, &InterruptScope::flag(),
+                   [&](const CalibrationProgress& p) { show_progress(line, p, shown); });
 }
 
 }  // namespace

@@ -1,22 +1,15 @@
-#include <poll.h>
-#include <sys/stat.h>
-#include <unistd.h>
 #include <CLI/CLI.hpp>
 #include <algorithm>
-#include <cerrno>
 #include <charconv>
 #include <chrono>
 #include <cstdio>
-#include <cstring>
 #include <iostream>
 #include <optional>
 #include <string_view>
-#include <thread>
 #include <vector>
 
 #include "overtake/app/cli.hpp"
 #include "overtake/app/interrupt.hpp"
-#include "overtake/app/progress.hpp"
 #include "overtake/base/build_info.hpp"
 #include "overtake/base/errors.hpp"
 #include "overtake/base/io.hpp"
@@ -28,16 +21,19 @@
 #include "overtake/planners/catalog.hpp"
 #include "overtake/run/config.hpp"
 #include "overtake/run/drive.hpp"
+#include "overtake/run/finish.hpp"
 #include "overtake/run/pages.hpp"
+#include "overtake/run/progress.hpp"
 #include "overtake/run/report.hpp"
 
 namespace overtake::app {
 
+using base::flush_stdout_or_throw;
 using base::json_text;
 using base::kExitFailure;
-using base::kExitInterrupted;
 using base::kExitOk;
 using base::kExitUsage;
+using base::OutputClosed;
 using base::overtake_version;
 using base::same_file;
 using base::UsageError;
@@ -50,10 +46,11 @@ using run::Config;
 using run::config_to_json;
 using run::drive;
 using run::DriveOptions;
+using run::DriveOutputs;
 using run::DriveResult;
-using run::format_scorecard;
+using run::finish_drive;
 using run::load_config;
-using run::report_to_json;
+using run::ProgressLine;
 
 std::string policy_help() {
   std::string out = "Policy (built-in planner). Available:";
@@ -74,12 +71,12 @@ int cmd_drive(DriveOptions opts, const std::optional<std::filesystem::path>& jso
   const auto wall0 = std::chrono::steady_clock::now();
   const DriveResult result = drive(
       opts, [&](double t, double dist) { progress.update(t, dist); }, &InterruptScope::flag());
-  RunOutputs out;
+  DriveOutputs out;
   out.json = json_out;
   out.quiet = quiet;
   out.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
   progress.clear();
-  return finish_run(result, opts, out);
+  return finish_drive(result, opts, out, &InterruptScope::flag());
 }
 
 /// A track spec's error in the command line's words: its fields by their flags.
@@ -101,21 +98,16 @@ std::string in_flag_words(std::string message) {
 
 int cmd_track(const core::TrackSpec& spec, const std::optional<std::filesystem::path>& out_path,
               bool quiet) {
-  std::vector<core::Waypoint> waypoints;
+  const std::string name = out_path ? out_path->string() : "generated track";
+  core::GeneratedTrack track;
   try {
-    waypoints = core::generate_track(spec);
+    track = core::generate_checked_track(spec, name);
   } catch (const std::invalid_argument& e) {
     throw UsageError(in_flag_words(e.what()));
   }
-  const std::string text = core::format_map(waypoints);
-  const std::string name = out_path ? out_path->string() : "generated track";
-  const core::Map map = core::parse_map(text, name);
-  const core::TrackReport check = core::check_track(map, spec);
-  if (!check.problems.empty()) {
-    std::string msg = "generated track fails its checks:";
-    for (const auto& p : check.problems) msg += "\n  - " + p;
-    throw std::runtime_error(msg);
-  }
+  const std::string& text = track.text;
+  const core::Map& map = track.map;
+  const core::TrackReport& check = track.check;
   if (out_path) {
     write_file_atomic(*out_path, text);
   } else {
@@ -140,39 +132,6 @@ void print_live_address(const std::string& url) {
                url.c_str());
 }
 
-int finish_run(const DriveResult& result, const DriveOptions& opts, const RunOutputs& out) {
-  std::cout << format_scorecard(result.report, result.provenance);
-  if (!out.quiet) {
-    std::printf("  wall time          %.2f s (%.1fx real time%s%s)\n", out.wall_s,
-                out.wall_s > 0 ? result.report.duration_s / out.wall_s : 0.0,
-                out.mode.empty() ? "" : ", ", out.mode.c_str());
-  }
-  std::cout.flush();
-  if (out.json) {
-    write_file_atomic(*out.json,
-                      json_text(report_to_json(result.report, result.provenance), 2) + "\n");
-    if (!out.quiet) std::cout << "  report written to " << out.json->string() << "\n";
-  }
-  if (opts.record && !out.quiet)
-    std::cout << "  replay written to " << opts.record->string() << "\n";
-  flush_stdout_or_throw();  // now: a live view may keep the process up until Ctrl-C
-  switch (result.report.outcome.end) {
-    case sim::RunEnd::stopped:
-      return kExitInterrupted;
-    case sim::RunEnd::planner_failed:
-      return kExitFailure;
-    case sim::RunEnd::completed:
-      break;
-  }
-  if (result.live) {
-    std::fprintf(stderr, "the run is over; the live view stays at %s until Ctrl-C\n",
-                 result.live->url().c_str());
-    while (!InterruptScope::flag().load())
-      std::this_thread::sleep_for(std::chrono::milliseconds(100));
-  }
-  return kExitOk;
-}
-
 const CLI::Validator& seed_validator() {
   static const CLI::Validator v(
       [](std::string& text) -> std::string {
@@ -186,37 +145,6 @@ const CLI::Validator& seed_validator() {
       },
       "SEED");
   return v;
-}
-
-namespace {
-
-// Whether `fd` is a pipe whose reading end is closed (the write error itself may have come
-// while stdio flushed earlier, its errno long overwritten).
-bool reader_gone(int fd) {
-  struct stat st {};
-  if (::fstat(fd, &st) != 0 || !S_ISFIFO(st.st_mode)) return false;
-  pollfd p{fd, POLLOUT, 0};
-  return ::poll(&p, 1, 0) == 1 && (p.revents & POLLERR) != 0;
-}
-
-}  // namespace
-
-void flush_stdout_or_throw() {
-  errno = 0;
-  std::cout.flush();
-  int err = errno;
-  const bool lost = !std::cout || std::fflush(stdout) != 0 || std::ferror(stdout) != 0;
-  if (err == 0) err = errno;
-  if (lost) {
-    std::cout.clear();
-    std::clearerr(stdout);
-    if (err == EPIPE || reader_gone(STDOUT_FILENO)) {
-      throw OutputClosed("standard output: the reader has gone");
-    }
-    throw std::runtime_error(std::string("standard output: write failed") +
-                             (err ? std::string(" (") + std::strerror(err) + ")" : std::string()) +
-                             "; the output is incomplete");
-  }
 }
 
 void add_run_flags(CLI::App& cmd, RunFlags& f) {
@@ -385,23 +313,6 @@ constexpr CommandLine kCommands[] = {
     {"config", "print the parameters in effect as JSON"},
 };
 
-// The number of single-character edits (insertions, deletions, substitutions, swaps of two
-// neighbours) that turn `a` into `b`.
-std::size_t edit_distance(std::string_view a, std::string_view b) {
-  std::vector<std::vector<std::size_t>> d(a.size() + 1, std::vector<std::size_t>(b.size() + 1));
-  for (std::size_t i = 0; i <= a.size(); ++i) d[i][0] = i;
-  for (std::size_t j = 0; j <= b.size(); ++j) d[0][j] = j;
-  for (std::size_t i = 1; i <= a.size(); ++i) {
-    for (std::size_t j = 1; j <= b.size(); ++j) {
-      const std::size_t cost = a[i - 1] == b[j - 1] ? 0 : 1;
-      d[i][j] = std::min({d[i - 1][j] + 1, d[i][j - 1] + 1, d[i - 1][j - 1] + cost});
-      if (i > 1 && j > 1 && a[i - 1] == b[j - 2] && a[i - 2] == b[j - 1])
-        d[i][j] = std::min(d[i][j], d[i - 2][j - 2] + 1);
-    }
-  }
-  return d[a.size()][b.size()];
-}
-
 // The command of that name, or null (CLI11 2.1 throws for an unknown name).
 const CLI::App* find_command(const CLI::App& app, std::string_view name) {
   const auto found = app.get_subcommands([&](const CLI::App* c) { return c->get_name() == name; });
@@ -432,20 +343,10 @@ std::string command_overview(const CLI::App& app) {
 }
 
 std::optional<std::string> nearest_command(const CLI::App& app, std::string_view typed) {
-  std::optional<std::string> best;
-  std::size_t best_distance = 0;
-  for (const CLI::App* command : app.get_subcommands([](const CLI::App*) { return true; })) {
-    const std::string& name = command->get_name();
-    const std::size_t distance = edit_distance(typed, name);
-    if (!best || distance < best_distance) {
-      best = name;
-      best_distance = distance;
-    }
-  }
-  // Further than this, the word was not a mistyped command but something else.
-  const std::size_t allowed = std::max<std::size_t>(2, typed.size() / 3);
-  if (best && best_distance <= allowed) return best;
-  return std::nullopt;
+  std::vector<std::string> names;
+  for (const CLI::App* command : app.get_subcommands([](const CLI::App*) { return true; }))
+    names.push_back(command->get_name());
+  return base::nearest_word(names, typed);
 }
 
 int run_cli(int argc, const char* const* argv) {

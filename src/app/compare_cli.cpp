@@ -3,30 +3,14 @@
 // corrected for the family of figures compared); `--fail-if-worse` turns a significant
 // worsening into exit status 1 for a planner's CI, and too few seeds to judge into 2.
 
-#include <iostream>
-#include <set>
+#include <memory>
+#include <string>
+#include <vector>
 
 #include "overtake/app/cli.hpp"
-#include "overtake/base/errors.hpp"
-#include "overtake/base/io.hpp"
-#include "overtake/base/text.hpp"
 #include "overtake/batch/bench.hpp"
-#include "overtake/batch/risk.hpp"
-#include "overtake/run/config.hpp"
-#include "overtake/run/drive.hpp"
 
 namespace overtake::app {
-
-using base::json_text;
-using base::kExitFailure;
-using base::kExitOk;
-using base::kExitUsage;
-using base::same_file;
-using base::UsageError;
-using base::write_file_atomic;
-using batch::compare_bench_folders;
-using batch::parse_metric_list;
-using batch::parse_policy_pair;
 
 Subcommand register_compare(CLI::App& app) {
   struct State {
@@ -67,52 +51,8 @@ Subcommand register_compare(CLI::App& app) {
   cmd->add_option("--json", st->json, "Also write the comparison as JSON to this file");
   cmd->add_flag("--quiet,-q", st->quiet, "Print nothing (the exit status and --json say it)");
   return {cmd, [st] {
-            eval::CompareOptions o;
-            std::set<std::string> seen;
-            for (const auto& p : st->pairs) {
-              o.pairs.push_back(parse_policy_pair(p));
-              if (!seen.insert(o.pairs.back().base + "=" + o.pairs.back().candidate).second) {
-                throw UsageError("--pair: '" + p + "' is given twice");
-              }
-            }
-            if (!st->figures.empty()) o.metrics = parse_metric_list(st->figures);
-            // The comparison never takes the place of a bench's own files.
-            for (const std::string& dir : {st->before, st->after}) {
-              for (const char* name : batch::kBenchFiles) {
-                const std::filesystem::path file = std::filesystem::path(dir) / name;
-                if (!st->json.empty() && same_file(st->json, file)) {
-                  throw UsageError("--json: " + st->json + " is " + file.string() +
-                                   ", a file of a bench being compared; write it elsewhere");
-                }
-              }
-            }
-            // Two risk estimates compare as a ratio of rates.
-            const bool risk_a = batch::holds_risk(st->before),
-                       risk_b = batch::holds_risk(st->after);
-            if (risk_a != risk_b) {
-              throw UsageError(
-                  "one folder holds a risk estimate (risk.json) and the other not: "
-                  "compare two benches, or two risk estimates");
-            }
-            if (risk_a) {
-              const nlohmann::json result = batch::compare_risk_folders(st->before, st->after);
-              if (!st->json.empty()) write_file_atomic(st->json, json_text(result, 2) + "\n");
-              if (!st->quiet) std::cout << batch::compare_risk_text(result);
-              if (st->fail_if_worse && result["verdict"] == "higher") return kExitFailure;
-              return kExitOk;
-            }
-            const nlohmann::json result = compare_bench_folders(st->before, st->after, o);
-            if (!st->json.empty()) write_file_atomic(st->json, json_text(result, 2) + "\n");
-            if (!st->quiet) std::cout << eval::compare_text(result);
-            if (!st->fail_if_worse) return kExitOk;
-            if (!result["worse"].empty()) return kExitFailure;
-            if (!result["withheld"].empty()) {
-              for (const auto& w : result["withheld"]) {
-                std::cerr << "overtake compare: no verdict, " << w.get<std::string>() << "\n";
-              }
-              return kExitUsage;
-            }
-            return kExitOk;
+            return batch::compare_folders({st->before, st->after, st->pairs, st->figures, st->json,
+                                           st->fail_if_worse, st->quiet});
           }};
 }
 

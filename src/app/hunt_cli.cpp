@@ -5,7 +5,6 @@
 #include <optional>
 #include <sstream>
 #include <string>
-#include <thread>
 #include <vector>
 
 #include <nlohmann/json.hpp>
@@ -18,6 +17,8 @@
 #include "overtake/batch/bench.hpp"
 #include "overtake/batch/hunt.hpp"
 #include "overtake/batch/pool.hpp"
+#include "overtake/batch/progress.hpp"
+#include "overtake/cluster/arrays.hpp"
 #include "overtake/cluster/slurm.hpp"
 #include "overtake/planners/catalog.hpp"
 #include "overtake/run/config.hpp"
@@ -26,16 +27,11 @@
 namespace overtake::app {
 
 using base::fixed_text;
-using base::kExitInterrupted;
 using base::kExitOk;
 using base::read_file;
 using base::split_list;
-using base::stderr_is_terminal;
 using base::UsageError;
-using batch::check_hunt_out;
 using batch::check_hunt_spec;
-using batch::hunt_markdown;
-using batch::hunt_max_runs;
 using batch::HuntOutcome;
 using batch::HuntProgress;
 using batch::HuntSpec;
@@ -45,83 +41,19 @@ using batch::parse_shard;
 using batch::run_hunt;
 using batch::Shard;
 using cluster::check_programs_for_slurm;
+using cluster::hunt_array;
 using cluster::run_slurm_array;
-using cluster::slurm_array_here;
 using cluster::SlurmArray;
 using cluster::SlurmOptions;
-using cluster::SlurmShardState;
 using planners::catalog_from_flags;
 using planners::chosen_policy;
 using planners::PlannerFlags;
 using planners::PlannerFlagSet;
-using run::read_json_file;
 using scenarios::kDefaultWarmUpS;
 using scenarios::parse_warm_up;
 namespace {
 
 using nlohmann::json;
-
-// A shard's hunt.json, or null while there is none that can be read.
-json shard_report(const std::filesystem::path& shard) {
-  try {
-    return read_json_file(shard / "hunt.json");
-  } catch (const std::exception&) {
-    return nullptr;
-  }
-}
-
-// A hunt as a Slurm array: task I hunts slice I (starting over when submitted again: the same
-// runs find the same failures); a shard is finished when its hunt.json says so; the shards
-// merge as `hunt merge`.
-SlurmArray hunt_array(const HuntSpec& spec, std::vector<std::string> args, bool resume,
-                      bool quiet) {
-  namespace fs = std::filesystem;
-  SlurmArray a = slurm_array_here("hunt", spec.out);
-  if (fs::exists(a.out / "hunt.json")) {
-    throw UsageError("--out: " + a.out.string() +
-                     " already holds a hunt (merged, or a local hunt); choose another --out");
-  }
-  // The shards merge into --out at the end: what the merge would refuse is refused now.
-  check_hunt_out(a.out, false, "--out: ", "move it away, or choose another --out");
-  a.args = std::move(args);
-  // A task submitted again starts its shard over, in the array's own folder.
-  a.task_flags = {"--force", "--quiet"};
-  a.runs = hunt_max_runs(spec);
-  a.resume = resume;
-  a.quiet = quiet;
-  a.shard_state = [](const fs::path& shard, int) {
-    SlurmShardState st;
-    const json j = shard_report(shard);
-    if (j.is_object()) {
-      st.finished = j.contains("shard") && j["shard"].value("finished", false);
-      st.so_far = std::to_string(j.value("runs", 0)) + " runs and " +
-                  std::to_string(j.value("failures", json::array()).size()) + " failures";
-    }
-    return st;
-  };
-  a.progress = [](const std::vector<fs::path>& shards) {
-    std::size_t runs = 0, failures = 0;
-    for (const auto& shard : shards) {
-      const json j = shard_report(shard);
-      if (!j.is_object()) continue;
-      runs += j.value("runs", std::size_t{0});
-      failures += j.value("failures", json::array()).size();
-    }
-    return std::to_string(runs) + " runs, " + std::to_string(failures) + " failures found";
-  };
-  const fs::path out = a.out;
-  a.merge = [out, quiet](const std::vector<fs::path>& shards, double wall_s, int resubmitted) {
-    (void)merge_hunt(shards, out);
-    if (!quiet) {
-      std::cout << read_file(out / "hunt.md");
-      std::printf("%zu Slurm tasks (%d submitted again) in %.1f s\n", shards.size(), resubmitted,
-                  wall_s);
-      std::cout << "written: " << out.string() << "/{hunt.md,hunt.json,replays,scenarios}\n";
-    }
-    return kExitOk;
-  };
-  return a;
-}
 
 // The flags of `overtake hunt` and `overtake hunt merge`.
 struct HuntState {
@@ -215,49 +147,16 @@ int run_on_slurm(const HuntState& st, const CLI::App& cmd, const HuntSpec& spec)
   return run_slurm_array(array, st.slurm, &InterruptScope::flag());
 }
 
-void draw_progress(const HuntProgress& p) {
-  const double rate = p.wall_s > 0 ? (p.simulated_s / 3600.0) / (p.wall_s / 60.0) : 0;
-  const double left_s =
-      p.simulated_s > 0 ? p.wall_s * (p.budget_s - p.simulated_s) / p.simulated_s : 0;
-  std::fprintf(stderr,
-               "\r  hunt: %zu runs, %.1f of %.1f simulated h, %zu failures in %zu "
-               "situations, %.1f sim-h/min, at most %.0f s to go   ",
-               p.runs, p.simulated_s / 3600.0, p.budget_s / 3600.0, p.failures, p.groups, rate,
-               left_s);
-  std::fflush(stderr);
-}
-
 // `overtake hunt` here, under Ctrl-C: its table and exit status.
 int run_here(const HuntState& st, const HuntSpec& spec) {
-  const bool draw = !st.quiet && stderr_is_terminal();
   HuntOutcome o;
   {
+    base::StatusLine line(!st.quiet);
     const InterruptScope interrupt;
-    try {
-      o = run_hunt(spec, &InterruptScope::flag(), [&](const HuntProgress& p) {
-        if (draw) draw_progress(p);
-      });
-    } catch (...) {
-      if (draw) std::fprintf(stderr, "\n");
-      throw;
-    }
-    if (draw) std::fprintf(stderr, "\n");
+    o = run_hunt(spec, &InterruptScope::flag(),
+                 [&](const HuntProgress& p) { line.draw(batch::progress_text(p)); });
   }
-  if (!st.quiet) {
-    std::cout << hunt_markdown(spec, o);
-    const double rate = o.wall_s > 0 ? (o.simulated_s / 3600.0) / (o.wall_s / 60.0) : 0;
-    std::printf(
-        "%.2f simulated hours in %.1f s on %d jobs: %.1f simulated hours per "
-        "wall-clock minute\n",
-        o.simulated_s / 3600.0, o.wall_s, spec.jobs, rate);
-    std::cout << "written: " << spec.out.string() << "/{hunt.md,hunt.json,replays,scenarios}\n";
-  }
-  if (o.interrupted) {
-    std::cerr << "hunt: interrupted; " << o.failures.size() << " failures kept in "
-              << spec.out.string() << "\n";
-    return kExitInterrupted;
-  }
-  return kExitOk;
+  return batch::report_hunt(spec, o, st.quiet);
 }
 
 // What the hunt drives: the planner, the budget, the runs' seeds, maps, traffic and length.

@@ -2,21 +2,15 @@
 // (our simulator for any planner written for the original), over the original protocol.
 
 #include <algorithm>
-#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <csignal>
 #include <cstdio>
 #include <iostream>
-#include <limits>
 #include <memory>
-#include <thread>
-
-#include <boost/asio/io_context.hpp>
 
 #include "overtake/app/cli.hpp"
 #include "overtake/app/interrupt.hpp"
-#include "overtake/app/progress.hpp"
 #include "overtake/base/errors.hpp"
 #include "overtake/base/io.hpp"
 #include "overtake/core/hash.hpp"
@@ -30,7 +24,9 @@
 #include "overtake/protocol/server.hpp"
 #include "overtake/run/config.hpp"
 #include "overtake/run/drive.hpp"
+#include "overtake/run/finish.hpp"
 #include "overtake/run/pages.hpp"
+#include "overtake/run/progress.hpp"
 #include "overtake/sim/world.hpp"
 
 namespace overtake::app {
@@ -49,10 +45,13 @@ using run::Config;
 using run::drive_loaded;
 using run::DriveInputs;
 using run::DriveOptions;
+using run::DriveOutputs;
 using run::DriveResult;
+using run::finish_drive;
 using run::load_config;
 using run::load_drive_inputs;
 using run::load_track;
+using run::ProgressLine;
 using run::validate_drive_options;
 namespace {
 
@@ -119,30 +118,9 @@ int cmd_serve(const ServeArgs& a) {
   opts.status_lines = !a.quiet;
   opts.log = protocol::stderr_log(!a.quiet);
 
-  boost::asio::io_context ioc;
-  // Stops the server when the flag is set; ends with this function, however it ends.
-  struct Stopper {
-    std::atomic<bool> served{false};
-    std::thread thread;
-    Stopper() = default;
-    Stopper(const Stopper&) = delete;
-    Stopper& operator=(const Stopper&) = delete;
-    ~Stopper() {
-      served = true;
-      if (thread.joinable()) thread.join();
-    }
-  } stopper;
-  stopper.thread = std::thread([&ioc, &a, &served = stopper.served] {
-    while (!served.load()) {
-      if (InterruptScope::flag().load()) {
-        if (!a.quiet) std::fprintf(stderr, "stopping\n");
-        ioc.stop();
-        return;
-      }
-      std::this_thread::sleep_for(std::chrono::milliseconds(50));
-    }
+  protocol::serve_until(setup, opts, InterruptScope::flag(), [&a] {
+    if (!a.quiet) std::fprintf(stderr, "stopping\n");
   });
-  protocol::run_server(ioc, setup, opts);
   return kExitOk;
 }
 
@@ -195,14 +173,14 @@ int cmd_sim_program(SimArgs& a) {
   const auto wall0 = std::chrono::steady_clock::now();
   const DriveResult result = drive_loaded(
       inputs, [&progress](double t, double d) { progress.update(t, d); }, &InterruptScope::flag());
-  RunOutputs out;
+  DriveOutputs out;
   out.json = json_out;
   out.quiet = quiet;
   out.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
   out.mode = std::string(a.realtime ? "real time" : "lock-step") + " over the protocol, program " +
              opts.policy + ", its output in " + opts.planner_log->string();
   progress.clear();
-  return finish_run(result, opts, out);
+  return finish_drive(result, opts, out, &InterruptScope::flag());
 }
 
 int cmd_sim(SimArgs& a) {
@@ -261,13 +239,13 @@ int cmd_sim(SimArgs& a) {
   const DriveResult result = drive_loaded(
       inputs, [&progress](double t, double d) { progress.update(t, d); }, &InterruptScope::flag());
   connection->close();
-  RunOutputs out;
+  DriveOutputs out;
   out.json = json_out;
   out.quiet = quiet;
   out.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
   out.mode = a.realtime ? "real time over the protocol" : "lock-step over the protocol";
   progress.clear();
-  return finish_run(result, opts, out);
+  return finish_drive(result, opts, out, &InterruptScope::flag());
 }
 
 }  // namespace

@@ -4,7 +4,6 @@
 #include <CLI/CLI.hpp>
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
 #include <iostream>
 #include <memory>
 #include <optional>
@@ -19,7 +18,9 @@
 #include "overtake/base/io.hpp"
 #include "overtake/base/text.hpp"
 #include "overtake/batch/pool.hpp"
+#include "overtake/batch/progress.hpp"
 #include "overtake/batch/risk.hpp"
+#include "overtake/cluster/arrays.hpp"
 #include "overtake/cluster/slurm.hpp"
 #include "overtake/planners/catalog.hpp"
 #include "overtake/run/config.hpp"
@@ -28,9 +29,6 @@ namespace overtake::app {
 
 namespace {
 
-using base::kExitInterrupted;
-using base::kExitOk;
-using base::stderr_is_terminal;
 using base::UsageError;
 
 struct RiskState {
@@ -43,15 +41,6 @@ struct RiskState {
   cluster::SlurmOptions slurm;
   bool quiet = false;
 };
-
-void draw_progress(const batch::RiskProgress& p) {
-  std::fprintf(stderr,
-               "\r  risk: %zu runs, %.1f of %.1f simulated h, %.2f weighted events, "
-               "%.4f per 100 mi (+-%.0f%%), %.0f s   ",
-               p.runs, p.simulated_h, p.budget_h, p.weighted_events, p.rate_per_100mi,
-               100.0 * p.rel_half_width, p.wall_s);
-  std::fflush(stderr);
-}
 
 batch::RiskSpec spec_of(const RiskState& st) {
   batch::RiskSpec spec = st.spec;
@@ -67,42 +56,21 @@ batch::RiskSpec spec_of(const RiskState& st) {
 }
 
 // What an estimate prints and writes beside --out (--json); its exit status.
-int report(const RiskState& st, const batch::RiskSpec& spec, const batch::RiskOutcome& o,
-           const std::string& how) {
-  const nlohmann::json j = batch::risk_json(spec, o);
-  if (!st.json.empty()) base::write_file_atomic(st.json, j.dump(2) + "\n");
-  if (!st.quiet) {
-    std::cout << batch::risk_markdown(spec, o) << how;
-    std::cout << "written: " << spec.out.string() << "/{risk.json,summary.md,runs.jsonl}"
-              << (o.cut ? ", " + (spec.out / "events").string() + "/ (the cut scenarios)" : "")
-              << "\n";
-  }
-  if (o.interrupted) {
-    std::cerr << "risk: interrupted; " << o.runs.size() << " runs kept in " << spec.out.string()
-              << " (--resume goes on with them)\n";
-    return kExitInterrupted;
-  }
-  return kExitOk;
+int report(const RiskState& st, const batch::RiskSpec& spec, const batch::RiskOutcome& o) {
+  return batch::report_risk(spec, o, st.json, st.quiet, "");
 }
 
 int run_risk_here(const RiskState& st) {
   const batch::RiskSpec spec = spec_of(st);
   batch::check_risk_spec(spec);
-  const bool draw = !st.quiet && stderr_is_terminal();
   batch::RiskOutcome o;
   {
+    base::StatusLine line(!st.quiet);
     const InterruptScope interrupt;
-    try {
-      o = batch::run_risk(spec, &InterruptScope::flag(), [&](const batch::RiskProgress& p) {
-        if (draw) draw_progress(p);
-      });
-    } catch (...) {
-      if (draw) std::fprintf(stderr, "\n");
-      throw;
-    }
-    if (draw) std::fprintf(stderr, "\n");
+    o = batch::run_risk(spec, &InterruptScope::flag(),
+                        [&](const batch::RiskProgress& p) { line.draw(batch::progress_text(p)); });
   }
-  return report(st, spec, o, "");
+  return report(st, spec, o);
 }
 
 // --merge: the shards' folders into --out, as one run here with the same flags would write it.
@@ -110,60 +78,17 @@ int merge_here(const RiskState& st) {
   const batch::RiskSpec spec = spec_of(st);
   const InterruptScope interrupt;
   const batch::RiskOutcome o = batch::merge_risk(spec, st.merge, &InterruptScope::flag());
-  return report(st, spec, o, "");
+  return report(st, spec, o);
 }
 
-// The runs a shard's runs.jsonl holds (lines; a last one cut short counts, as it is redone).
-std::size_t runs_in(const std::filesystem::path& shard) {
-  std::ifstream in(shard / "runs.jsonl");
-  std::size_t n = 0;
-  for (std::string line; std::getline(in, line);) ++n;
-  return n;
-}
-
-// `overtake risk --slurm TASKS`: task I runs shard I of the planned runs with --resume (so a
-// task submitted again goes on with its runs); a shard is finished when its risk.json says so;
-// the shards merge as --merge does, with the stopping rules of these flags.
-int run_on_slurm(const RiskState& st, const CLI::App& cmd, batch::RiskSpec spec) {
-  namespace fs = std::filesystem;
+// `overtake risk --slurm TASKS` (cluster::risk_array).
+int run_on_slurm(const RiskState& st, const CLI::App& cmd, const batch::RiskSpec& spec) {
   batch::check_risk_spec(spec);
   cluster::check_programs_for_slurm(*spec.planners, st.planners.network);
-  cluster::SlurmArray a = cluster::slurm_array_here("risk", spec.out);
-  if (fs::exists(a.out / "risk-spec.json") || fs::exists(a.out / "runs.jsonl")) {
-    throw UsageError("--out: " + a.out.string() +
-                     " already holds an estimate (merged, or a local one); choose another --out");
-  }
-  a.args = task_arguments(cmd, {"out", "jobs", "resume", "quiet", "shard", "json", "scenarios"});
-  a.task_flags = {"--resume", "--quiet"};
-  a.runs = batch::risk_runs_planned(spec);
-  a.resume = spec.resume;
-  a.quiet = st.quiet;
-  const std::size_t runs = a.runs;
-  const int tasks = st.slurm.tasks;
-  a.shard_state = [runs, tasks](const fs::path& shard, int task) {
-    cluster::SlurmShardState s;
-    const std::size_t want = cluster::slurm_shard_runs(runs, tasks, task);
-    try {
-      const nlohmann::json j = run::read_json_file(shard / "risk.json");
-      s.finished = j.contains("shard") && j["shard"].value("finished", false);
-    } catch (const std::exception&) {  // not finished: the merge names what is wrong
-    }
-    s.so_far = std::to_string(runs_in(shard)) + " of " + std::to_string(want) + " runs";
-    return s;
-  };
-  a.progress = [runs](const std::vector<fs::path>& shards) {
-    std::size_t have = 0;
-    for (const auto& shard : shards) have += runs_in(shard);
-    return std::to_string(have) + "/" + std::to_string(runs) + " runs";
-  };
-  spec.out = a.out;
-  spec.resume = false;
-  a.merge = [&st, spec](const std::vector<fs::path>& shards, double wall_s, int resubmitted) {
-    const batch::RiskOutcome o = batch::merge_risk(spec, shards, &InterruptScope::flag());
-    return report(st, spec, o,
-                  std::to_string(shards.size()) + " Slurm tasks (" + std::to_string(resubmitted) +
-                      " submitted again) in " + base::fixed_text(wall_s, 1) + " s\n");
-  };
+  const cluster::SlurmArray a = cluster::risk_array(
+      spec, st.slurm.tasks,
+      task_arguments(cmd, {"out", "jobs", "resume", "quiet", "shard", "json", "scenarios"}),
+      st.json, st.quiet, &InterruptScope::flag());
   const InterruptScope interrupt;
   return cluster::run_slurm_array(a, st.slurm, &InterruptScope::flag());
 }

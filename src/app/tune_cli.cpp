@@ -16,15 +16,13 @@
 #include "overtake/base/text.hpp"
 #include "overtake/batch/bench.hpp"
 #include "overtake/batch/pool.hpp"
+#include "overtake/batch/progress.hpp"
 #include "overtake/batch/tune.hpp"
+#include "overtake/cluster/arrays.hpp"
 
 namespace overtake::app {
 
-using base::kExitFailure;
-using base::kExitInterrupted;
-using base::kExitOk;
 using base::split_list;
-using base::stderr_is_terminal;
 using base::UsageError;
 using batch::parse_seed_list;
 using batch::TuneOutcome;
@@ -53,81 +51,12 @@ struct TuneFlags {
 };
 
 // A terminal gets one line drawn over; anything else (a log) a line as each trial starts.
-void show_progress(const TuneProgress& p, int& shown) {
+void show_progress(base::StatusLine& line, const TuneProgress& p, int& shown) {
+  if (line.on()) return line.draw(batch::progress_text(p));
+  if (p.trial <= shown) return;
   const std::string best = p.best ? ", best " + base::fixed_text(*p.best, 3) : std::string();
-  if (stderr_is_terminal()) {
-    std::fprintf(stderr, "\r  tune: trial %d of %d, run %zu/%zu%s   ", p.trial, p.trials,
-                 p.runs_done, p.runs_total, best.c_str());
-  } else if (p.trial > shown) {
-    std::fprintf(stderr, "tune: trial %d of %d%s\n", p.trial, p.trials, best.c_str());
-    shown = p.trial;
-  }
-  std::fflush(stderr);
-}
-
-// The flags a bench task runs `b` with: its sweep, its map and config, and its planner as the
-// trial gives it (a program's command with the values in it), with the planner flags given to
-// tune (timeouts, network, ...).
-std::vector<std::string> bench_task_flags(const batch::BenchSpec& b,
-                                          const std::vector<std::string>& planner_flags) {
-  namespace fs = std::filesystem;
-  std::vector<std::string> seeds;
-  for (const std::uint64_t s : b.seeds) seeds.push_back(std::to_string(s));
-  std::vector<std::string> args = {"--policies=" + base::join_list(b.policies, ","),
-                                   "--seeds=" + base::join_list(seeds, ","),
-                                   "--traffic=" + base::join_list(b.traffic, ","),
-                                   "--minutes=" + base::shortest_text(b.minutes)};
-  if (b.map) args.push_back("--map=" + fs::absolute(*b.map).string());
-  if (b.config) args.push_back("--config=" + fs::absolute(*b.config).string());
-  for (const std::string& name : b.planners->added_names()) {
-    const planners::PlannerEntry& e = *b.planners->find(name);
-    switch (e.kind) {
-      case planners::PlannerKind::program:
-        args.push_back(std::string(planners::flag_of(e.kind)) + "=" + e.program->command);
-        args.push_back("--planner-name=" + e.name);
-        break;
-      case planners::PlannerKind::python:
-      case planners::PlannerKind::plugin:
-        // The task's working directory is this one (sbatch --chdir): the source as given.
-        args.push_back(std::string(planners::flag_of(e.kind)) + "=" + e.name + "=" + e.source);
-        if (!e.params.empty()) {
-          args.push_back("--planner-params=" + e.name + "=" + nlohmann::json(e.params).dump());
-        }
-        break;
-      case planners::PlannerKind::builtin:
-        break;
-    }
-  }
-  args.insert(args.end(), planner_flags.begin(), planner_flags.end());
-  return args;
-}
-
-// `tune --slurm TASKS`: each bench of the search as a Slurm array, merged into its folder. A
-// bench already merged (a trial cut off after its merge) is not run again; one whose array
-// was submitted before (a trial cut off by Ctrl-C) is followed again, not submitted again.
-std::function<bool(const batch::BenchSpec&, const std::atomic<bool>*)> slurm_runner(
-    const cluster::SlurmOptions& options, std::vector<std::string> planner_flags) {
-  return [options, planner_flags](const batch::BenchSpec& b, const std::atomic<bool>* stop) {
-    namespace fs = std::filesystem;
-    if (fs::exists(b.out / batch::kBenchRunsFile) &&
-        fs::exists(b.out / batch::kBenchSummaryJsonFile))
-      return false;
-    std::fprintf(stderr, "tune: the bench %s as a Slurm array of %d tasks\n", b.out.c_str(),
-                 options.tasks);
-    batch::BenchSpec spec = b;
-    spec.resume = fs::exists(cluster::slurm_dir(b.out) / "state.json");
-    cluster::SlurmArray array =
-        bench_array(spec, options.tasks, bench_task_flags(b, planner_flags), std::nullopt, true);
-    const int status = cluster::run_slurm_array(array, options, stop);
-    if (status == kExitInterrupted) return true;
-    if (status != kExitOk) {
-      throw std::runtime_error("the bench " + b.out.string() + " did not finish on Slurm (exit " +
-                               std::to_string(status) + "); its tasks' logs are in " +
-                               cluster::slurm_dir(b.out).string() +
-                               ", and --resume takes the search up again");
-    }
-    return false;
-  };
+  std::fprintf(stderr, "tune: trial %d of %d%s\n", p.trial, p.trials, best.c_str());
+  shown = p.trial;
 }
 
 // `tune --slurm`: what the tasks could not do is refused before anything is submitted.
@@ -152,7 +81,7 @@ std::function<bool(const batch::BenchSpec&, const std::atomic<bool>*)> slurm_for
         name == "policy-py" || name == "policy-lib" || name == "planner-params")
       leave_out.insert(name);
   }
-  return slurm_runner(f.slurm, task_arguments(cmd, leave_out));
+  return cluster::tune_bench_runner(f.slurm, task_arguments(cmd, leave_out));
 }
 
 TuneSpec spec_of(TuneSpec spec, const TuneFlags& f) {
@@ -205,28 +134,6 @@ TuneSpec spec_of(TuneSpec spec, const TuneFlags& f) {
     spec.policy = added.front();
   }
   return spec;
-}
-
-int report(const TuneSpec& spec, const TuneOutcome& o, bool quiet) {
-  if (!quiet) {
-    std::cout << o.summary_markdown;
-    if (!o.best_command.empty()) std::cout << "\nbest command: " << o.best_command << "\n";
-    std::cout << "\nwrote " << (spec.out / batch::kTuneTrialsFile).string() << ", "
-              << (spec.out / batch::kTuneSummaryFile).string() << ", "
-              << (spec.out / batch::kTunePageFile).string();
-    if (o.best) std::cout << ", " << (spec.out / batch::kTuneBestFile).string();
-    std::cout << "\n";
-  }
-  if (o.interrupted) {
-    std::cerr << "overtake tune: interrupted; " << o.trials.size()
-              << " finished trials kept (--resume goes on)\n";
-    return kExitInterrupted;
-  }
-  if (!o.best) {
-    std::cerr << "overtake tune: no trial met the constraints\n";
-    return kExitFailure;
-  }
-  return kExitOk;
 }
 
 // What is searched, by which figure, on which runs.
@@ -348,14 +255,16 @@ Subcommand register_tune(CLI::App& app) {
             TuneSpec s = spec_of(*spec, *f);
             if (slurm_requested(*cmd)) s.run_bench_elsewhere = slurm_for(*cmd, s, *f);
             if (f->hours > 0.0) s.trials = std::min(s.trials, spec->trials);
-            const InterruptScope interrupt;
-            int shown = 0;
-            const TuneOutcome o =
-                batch::run_tune(s, &InterruptScope::flag(), [&](const TuneProgress& p) {
-                  if (!f->quiet) show_progress(p, shown);
-                });
-            if (stderr_is_terminal() && !f->quiet) std::fprintf(stderr, "\n");
-            return report(s, o, f->quiet);
+            TuneOutcome o;
+            {
+              base::StatusLine line(!f->quiet);
+              const InterruptScope interrupt;
+              int shown = 0;
+              o = batch::run_tune(s, &InterruptScope::flag(), [&](const TuneProgress& p) {
+                if (!f->quiet) show_progress(line, p, shown);
+              });
+            }
+            return batch::report_tune(s, o, f->quiet);
           }};
 }
 

@@ -1,13 +1,16 @@
 #include "overtake/base/io.hpp"
 
 #include <fcntl.h>
+#include <poll.h>
 #include <sys/stat.h>
 #include <unistd.h>
 #include <algorithm>
 #include <cctype>
 #include <cerrno>
+#include <cstdio>
 #include <cstring>
 #include <fstream>
+#include <iostream>
 #include <stdexcept>
 #include <system_error>
 
@@ -118,6 +121,48 @@ bool same_file(const std::filesystem::path& a, const std::filesystem::path& b) {
 
 bool stderr_is_terminal() {
   return ::isatty(STDERR_FILENO) != 0;
+}
+
+namespace {
+
+// Whether `fd` is a pipe whose reading end is closed (the write error itself may have come
+// while stdio flushed earlier, its errno long overwritten).
+bool reader_gone(int fd) {
+  struct stat st {};
+  if (::fstat(fd, &st) != 0 || !S_ISFIFO(st.st_mode)) return false;
+  pollfd p{fd, POLLOUT, 0};
+  return ::poll(&p, 1, 0) == 1 && (p.revents & POLLERR) != 0;
+}
+
+}  // namespace
+
+void flush_stdout_or_throw() {
+  errno = 0;
+  std::cout.flush();
+  int err = errno;
+  const bool lost = !std::cout || std::fflush(stdout) != 0 || std::ferror(stdout) != 0;
+  if (err == 0) err = errno;
+  if (lost) {
+    std::cout.clear();
+    std::clearerr(stdout);
+    if (err == EPIPE || reader_gone(STDOUT_FILENO)) {
+      throw OutputClosed("standard output: the reader has gone");
+    }
+    throw std::runtime_error(std::string("standard output: write failed") +
+                             (err ? std::string(" (") + std::strerror(err) + ")" : std::string()) +
+                             "; the output is incomplete");
+  }
+}
+
+StatusLine::~StatusLine() {
+  if (drawn_) std::fputc('\n', stderr);
+}
+
+void StatusLine::draw(std::string_view text) {
+  if (!on_) return;
+  std::fprintf(stderr, "\r%.*s", static_cast<int>(text.size()), text.data());
+  std::fflush(stderr);
+  drawn_ = true;
 }
 
 }  // namespace overtake::base

@@ -77,4 +77,36 @@ void check_unique_names(const std::vector<std::string>& names, const std::string
   }
 }
 
+std::size_t edit_distance(std::string_view a, std::string_view b) {
+  std::vector<std::vector<std::size_t>> d(a.size() + 1, std::vector<std::size_t>(b.size() + 1));
+  for (std::size_t i = 0; i <= a.size(); ++i) d[i][0] = i;
+  for (std::size_t j = 0; j <= b.size(); ++j) d[0][j] = j;
+  for (std::size_t i = 1; i <= a.size(); ++i) {
+    for (std::size_t j = 1; j <= b.size(); ++j) {
+      const std::size_t cost = a[i - 1] == b[j - 1] ? 0 : 1;
+      d[i][j] = std::min({d[i - 1][j] + 1, d[i][j - 1] + 1, d[i - 1][j - 1] + cost});
+      if (i > 1 && j > 1 && a[i - 1] == b[j - 2] && a[i - 2] == b[j - 1])
+        d[i][j] = std::min(d[i][j], d[i - 2][j - 2] + 1);
+    }
+  }
+  return d[a.size()][b.size()];
+}
+
+std::optional<std::string> nearest_word(const std::vector<std::string>& words,
+                                        std::string_view typed) {
+  std::optional<std::string> best;
+  std::size_t best_distance = 0;
+  for (const std::string& word : words) {
+    const std::size_t distance = edit_distance(typed, word);
+    if (!best || distance < best_distance) {
+      best = word;
+      best_distance = distance;
+    }
+  }
+  // Further than this, the word was not a mistyping but something else.
+  const std::size_t allowed = std::max<std::size_t>(2, typed.size() / 3);
+  if (best && best_distance <= allowed) return best;
+  return std::nullopt;
+}
+
 }  // namespace overtake::base

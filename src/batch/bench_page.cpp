@@ -2,6 +2,7 @@
 #include "overtake/base/text.hpp"
 
 #include <cstdio>
+#include <iostream>
 #include <set>
 
 #include "overtake/base/io.hpp"
@@ -101,6 +102,29 @@ std::vector<fs::path> write_bench_report(const fs::path& bench_out, const fs::pa
   const json object = bench_report_object(bench_out, dir, risk_dirs);
   write_file_atomic(html, view::report_page(report_template, json_text(object)));
   return pages;
+}
+
+void write_bench_report_page(const fs::path& bench_out, const fs::path& html, bool quiet,
+                             const std::vector<fs::path>& risk_dirs) {
+  const auto pages = write_bench_report(bench_out, html, run::embedded_page(run::kReportPageName),
+                                        run::embedded_page(run::kViewerPageName), risk_dirs);
+  if (!quiet) {
+    std::cout << "report: " << html.string() << " (" << pages.size() << " replay page"
+              << (pages.size() == 1 ? "" : "s") << " linked)\n";
+  }
+}
+
+void check_report_pages() {
+  (void)run::embedded_page(run::kReportPageName);
+  (void)run::embedded_page(run::kViewerPageName);
+}
+
+std::string bench_files_text() {
+  std::string text = "{";
+  for (const char* name : kBenchFiles) {
+    text += std::string(text.size() > 1 ? "," : "") + name;
+  }
+  return text + "}";
 }
 
 }  // namespace overtake::batch

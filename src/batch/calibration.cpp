@@ -5,9 +5,12 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <iostream>
 #include <numeric>
 
 #include "overtake/base/errors.hpp"
+#include "overtake/base/io.hpp"
+#include "overtake/base/text.hpp"
 #include "overtake/batch/policies.hpp"
 #include "overtake/batch/pool.hpp"
 #include "overtake/core/units.hpp"
@@ -489,6 +492,30 @@ json calibration_to_json(const TrafficFigures& f, const std::vector<CalibrationR
   j["comparison"] = cmp;
   j["all_pass"] = all;
   return j;
+}
+
+int report_calibration(const CalibrateOptions& o, const Calibration& c,
+                       const std::filesystem::path& json) {
+  const TrafficFigures& f = c.figures;
+  const std::vector<CalibrationRow> rows = compare_with_original(f);
+  std::printf(
+      "overtake calibrate: %zu seeds x %g min, policy %s, %s traffic, %ld rows (%.0f "
+      "car-minutes)\n",
+      c.runs, o.minutes, o.policy.c_str(), o.traffic.c_str(), f.rows, f.car_minutes);
+  std::cout << format_calibration(rows);
+  std::cout.flush();
+  nlohmann::json j = calibration_to_json(f, rows);
+  if (c.interrupted) {
+    j["interrupted"] = true;
+    j["seeds_finished"] = c.runs;
+  }
+  if (!json.empty()) base::write_file_atomic(json, base::json_text(j, 2) + "\n");
+  if (c.interrupted) {
+    std::cerr << "calibrate: interrupted; the figures are those of the " << c.runs << " of "
+              << o.seeds.size() << " seeds that finished\n";
+    return base::kExitInterrupted;
+  }
+  return j["all_pass"].get<bool>() ? base::kExitOk : base::kExitFailure;
 }
 
 }  // namespace overtake::batch

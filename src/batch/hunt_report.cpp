@@ -1,10 +1,13 @@
 // `overtake hunt`: what a hunt found, as hunt.md and hunt.json.
 
+#include <cstdio>
+#include <iostream>
 #include <sstream>
 #include <string>
 
 #include <nlohmann/json.hpp>
 
+#include "overtake/base/errors.hpp"
 #include "overtake/base/text.hpp"
 #include "overtake/batch/hunt.hpp"
 
@@ -98,6 +101,24 @@ nlohmann::json hunt_json(const HuntSpec& spec, const HuntOutcome& o) {
                   {"revision", o.shard->revision}};
   }
   return j;
+}
+
+int report_hunt(const HuntSpec& spec, const HuntOutcome& o, bool quiet) {
+  if (!quiet) {
+    std::cout << hunt_markdown(spec, o);
+    const double rate = o.wall_s > 0 ? (o.simulated_s / 3600.0) / (o.wall_s / 60.0) : 0;
+    std::printf(
+        "%.2f simulated hours in %.1f s on %d jobs: %.1f simulated hours per "
+        "wall-clock minute\n",
+        o.simulated_s / 3600.0, o.wall_s, spec.jobs, rate);
+    std::cout << "written: " << spec.out.string() << "/{hunt.md,hunt.json,replays,scenarios}\n";
+  }
+  if (o.interrupted) {
+    std::cerr << "hunt: interrupted; " << o.failures.size() << " failures kept in "
+              << spec.out.string() << "\n";
+    return base::kExitInterrupted;
+  }
+  return base::kExitOk;
 }
 
 }  // namespace overtake::batch

@@ -2,10 +2,13 @@
 // command prints), the events cut into scenarios among them.
 
 #include <algorithm>
+#include <iostream>
 #include <sstream>
 #include <string>
 #include <vector>
 
+#include "overtake/base/errors.hpp"
+#include "overtake/base/io.hpp"
 #include "overtake/base/text.hpp"
 #include "overtake/batch/risk.hpp"
 #include "risk_internal.hpp"
@@ -220,6 +223,23 @@ std::string risk_markdown(const RiskSpec& spec, const RiskOutcome& o) {
     if (shown > 20) s << "- ... and " << (shown - 20) << " more (risk.json lists them all)\n";
   }
   return s.str();
+}
+
+int report_risk(const RiskSpec& spec, const RiskOutcome& o, const std::filesystem::path& json_out,
+                bool quiet, const std::string& how) {
+  if (!json_out.empty()) base::write_file_atomic(json_out, risk_json(spec, o).dump(2) + "\n");
+  if (!quiet) {
+    std::cout << risk_markdown(spec, o) << how;
+    std::cout << "written: " << spec.out.string() << "/{risk.json,summary.md,runs.jsonl}"
+              << (o.cut ? ", " + (spec.out / "events").string() + "/ (the cut scenarios)" : "")
+              << "\n";
+  }
+  if (o.interrupted) {
+    std::cerr << "risk: interrupted; " << o.runs.size() << " runs kept in " << spec.out.string()
+              << " (--resume goes on with them)\n";
+    return base::kExitInterrupted;
+  }
+  return base::kExitOk;
 }
 
 }  // namespace overtake::batch

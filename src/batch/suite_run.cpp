@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <iostream>
 #include <mutex>
 #include <thread>
 
@@ -263,6 +264,26 @@ SuiteOutcome run_suite(const SuiteSpec& spec, const std::atomic<bool>* stop,
   outcome.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
   if (spec.out) write_suite(*spec.out, outcome);
   return outcome;
+}
+
+int report_suite(const SuiteSpec& suite, const scenarios::SuiteOutcome& o, bool quiet) {
+  for (const std::string& f : o.skipped) {
+    std::cerr << "bench: skipped " << (suite.dir / f).string()
+              << ": a suite's verdicts, not a scenario\n";
+  }
+  if (!quiet) {
+    std::cout << scenarios::suite_table(o);
+    if (suite.out && o.write_errors.empty()) {
+      std::cout << "written: " << suite.out->string() << "/{suite.md,suite.json}\n";
+    }
+  }
+  for (const std::string& e : o.write_errors) std::cerr << "bench: " << e << "\n";
+  if (!o.write_errors.empty()) return base::kExitFailure;
+  if (o.interrupted) {
+    std::cerr << "bench: interrupted; " << o.verdicts.size() << " scenario runs judged\n";
+    return base::kExitInterrupted;
+  }
+  return o.failed > 0 ? base::kExitFailure : base::kExitOk;
 }
 
 }  // namespace overtake::batch

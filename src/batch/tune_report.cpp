@@ -2,7 +2,9 @@
 // each map; with a risk, their estimates on runs of their own) and the summary.
 
 #include <cmath>
+#include <iostream>
 
+#include "overtake/base/errors.hpp"
 #include "overtake/base/text.hpp"
 #include "overtake/eval/compare.hpp"
 #include "overtake/eval/metrics.hpp"
@@ -165,3 +167,29 @@ std::string summary_of(const TuneSpec& spec, const TuneOutcome& o) {
 }
 
 }  // namespace overtake::batch::tune_detail
+
+namespace overtake::batch {
+
+int report_tune(const TuneSpec& spec, const TuneOutcome& o, bool quiet) {
+  if (!quiet) {
+    std::cout << o.summary_markdown;
+    if (!o.best_command.empty()) std::cout << "\nbest command: " << o.best_command << "\n";
+    std::cout << "\nwrote " << (spec.out / kTuneTrialsFile).string() << ", "
+              << (spec.out / kTuneSummaryFile).string() << ", "
+              << (spec.out / kTunePageFile).string();
+    if (o.best) std::cout << ", " << (spec.out / kTuneBestFile).string();
+    std::cout << "\n";
+  }
+  if (o.interrupted) {
+    std::cerr << "overtake tune: interrupted; " << o.trials.size()
+              << " finished trials kept (--resume goes on)\n";
+    return base::kExitInterrupted;
+  }
+  if (!o.best) {
+    std::cerr << "overtake tune: no trial met the constraints\n";
+    return base::kExitFailure;
+  }
+  return base::kExitOk;
+}
+
+}  // namespace overtake::batch

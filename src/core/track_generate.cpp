@@ -589,4 +589,17 @@ std::vector<Waypoint> generate_track(const TrackSpec& spec) {
                            std::to_string(spec.seed) + "); last problem: " + last);
 }
 
+GeneratedTrack generate_checked_track(const TrackSpec& spec, const std::string& name) {
+  GeneratedTrack t;
+  t.text = format_map(generate_track(spec));
+  t.map = parse_map(t.text, name);
+  t.check = check_track(t.map, spec);
+  if (!t.check.problems.empty()) {
+    std::string msg = "generated track fails its checks:";
+    for (const auto& p : t.check.problems) msg += "\n  - " + p;
+    throw std::runtime_error(msg);
+  }
+  return t;
+}
+
 }  // namespace overtake::core

@@ -3,9 +3,12 @@
 #include "overtake/protocol/server.hpp"
 
 #include <algorithm>
+#include <atomic>
+#include <chrono>
 #include <cstdio>
 #include <exception>
 #include <stdexcept>
+#include <thread>
 #include <utility>
 #include <vector>
 
@@ -344,6 +347,34 @@ void run_server(net::io_context& ioc, const PlannerSetup& setup, const ServeOpti
   if (opts.status_lines) net::co_spawn(ioc, status_loop(st), net::detached);
   if (on_listening) on_listening(bound.port());
   ioc.run();
+}
+
+void serve_until(const PlannerSetup& setup, const ServeOptions& opts, const std::atomic<bool>& stop,
+                 const std::function<void()>& on_stop) {
+  net::io_context ioc;
+  // Stops the server when the flag is set; ends with this function, however it ends.
+  struct Stopper {
+    std::atomic<bool> served{false};
+    std::thread thread;
+    Stopper() = default;
+    Stopper(const Stopper&) = delete;
+    Stopper& operator=(const Stopper&) = delete;
+    ~Stopper() {
+      served = true;
+      if (thread.joinable()) thread.join();
+    }
+  } stopper;
+  stopper.thread = std::thread([&ioc, &stop, &on_stop, &served = stopper.served] {
+    while (!served.load()) {
+      if (stop.load()) {
+        if (on_stop) on_stop();
+        ioc.stop();
+        return;
+      }
+      std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    }
+  });
+  run_server(ioc, setup, opts);
 }
 
 }  // namespace overtake::protocol

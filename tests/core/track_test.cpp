@@ -416,5 +416,15 @@ TEST(TrackReferenceLineRoundTrip, FrenetToCartesianAndBackAroundTheWholeLoop) {
   EXPECT_GT(checked, 20000);
 }
 
+TEST(TrackGenerate, TheCheckedTrackIsItsTextReadBackAndPassesItsCheck) {
+  const TrackSpec spec = spec_with(6);
+  const GeneratedTrack t = generate_checked_track(spec, "gen.csv");
+  EXPECT_EQ(t.text, format_map(generate_track(spec)));
+  EXPECT_EQ(t.map.waypoints.size(), generate_track(spec).size());
+  EXPECT_EQ(t.map.source, "gen.csv");
+  EXPECT_TRUE(t.check.problems.empty());
+  EXPECT_GT(t.check.min_radius_m, 0.0);
+}
+
 }  // namespace
 }  // namespace overtake::core

@@ -26,21 +26,6 @@ struct Subcommand {
   std::function<int()> run;
 };
 
-/// What the command line does with a finished run.
-struct RunOutputs {
-  std::optional<std::filesystem::path> json;  ///< write the JSON report here
-  bool quiet = false;
-  double wall_s = 0.0;  ///< the run's wall time, for the scorecard's last line
-  std::string mode;     ///< how it ran, appended to the wall time line (may be empty)
-};
-
-/// The one post-run path of `drive` and `sim`: prints the scorecard and the wall time, writes
-/// the JSON report, says where the replay went, and returns the exit status (0 completed,
-/// 1 ended early by the planner, 130 stopped by the user). With a live view, waits for
-/// Ctrl-C before returning (the page stays served).
-[[nodiscard]] int finish_run(const run::DriveResult& result, const run::DriveOptions& opts,
-                             const RunOutputs& out);
-
 /// Every command, registered on `app`.
 [[nodiscard]] std::vector<Subcommand> register_commands(CLI::App& app);
 
@@ -75,18 +60,6 @@ Subcommand register_risk(CLI::App& app);
 /// A seed: a whole number from 0 to 2^64 - 1, written out; anything else (-1, 2^64, 1e3) is
 /// refused with the range, never wrapped or saturated.
 [[nodiscard]] const CLI::Validator& seed_validator();
-
-/// Standard output's reader has gone (EPIPE: `overtake config | head`). Not an error to
-/// report: the reader stopped reading on purpose; run_cli exits without a message.
-class OutputClosed : public std::runtime_error {
- public:
-  using std::runtime_error::runtime_error;
-};
-
-/// Flushes standard output and throws std::runtime_error when anything written to it was lost
-/// (a full disk, an error of the device): a command whose output did not arrive must not exit
-/// 0. Throws OutputClosed when the reader of a pipe has gone.
-void flush_stdout_or_throw();
 
 /// The flags of every command that runs a drive (`drive`, `sim`): --map, --config,
 /// --scenario, --minutes, --seed, --traffic, --steps-per-call, --json, --record, --live with
@@ -124,15 +97,6 @@ void add_slurm_flags(CLI::App& cmd, cluster::SlurmOptions& options, const std::s
 /// without the --slurm flags and those whose long name is in `leave_out`.
 [[nodiscard]] std::vector<std::string> task_arguments(const CLI::App& cmd,
                                                       const std::set<std::string>& leave_out);
-
-/// A bench as a Slurm array of `tasks` (`bench --slurm`, and each bench of `tune --slurm`):
-/// task I runs shard I of `spec` with `args` (the bench's flags, without --out, --jobs,
-/// --shard); the shards merge into spec.out, and its report page into `html` when given (the
-/// `risk` folders drawn on its chart).
-[[nodiscard]] cluster::SlurmArray bench_array(const batch::BenchSpec& spec, int tasks,
-                                              std::vector<std::string> args,
-                                              std::optional<std::filesystem::path> html, bool quiet,
-                                              std::vector<std::filesystem::path> risk = {});
 
 /// The --policy flag's help: every built-in policy with its summary.
 [[nodiscard]] std::string policy_help();

@@ -4,6 +4,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <stdexcept>
 #include <string>
 #include <string_view>
 
@@ -28,7 +29,37 @@ void write_file_atomic(const std::filesystem::path& path, std::string_view conte
 /// existing parts, and hard links of existing files).
 [[nodiscard]] bool same_file(const std::filesystem::path& a, const std::filesystem::path& b);
 
+/// Standard output's reader has gone (EPIPE: `overtake config | head`). Not an error to
+/// report: the reader stopped reading on purpose; the command line exits without a message.
+class OutputClosed : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+/// Flushes standard output and throws std::runtime_error when anything written to it was lost
+/// (a full disk, an error of the device): a command whose output did not arrive must not exit
+/// 0. Throws OutputClosed when the reader of a pipe has gone.
+void flush_stdout_or_throw();
+
 /// Whether progress lines may be drawn (stderr is a terminal).
 [[nodiscard]] bool stderr_is_terminal();
+
+/// One status line on stderr, drawn over each time (a long command's progress): silent unless
+/// enabled and stderr is a terminal; ends its line when destroyed, however the command ends.
+class StatusLine {
+ public:
+  explicit StatusLine(bool enabled) : on_(enabled && stderr_is_terminal()) {}
+  ~StatusLine();
+  StatusLine(const StatusLine&) = delete;
+  StatusLine& operator=(const StatusLine&) = delete;
+
+  /// Draws `text` over the line (when on).
+  void draw(std::string_view text);
+  [[nodiscard]] bool on() const { return on_; }
+
+ private:
+  bool on_;
+  bool drawn_ = false;
+};
 
 }  // namespace overtake::base

@@ -2,6 +2,7 @@
 // Small text helpers every room uses: numbers as tables print them, words quoted for sh, and
 // the comma-separated lists of names that flags take, JSON as text.
 
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -38,5 +39,14 @@ template <class Json>
 /// (--policies, --traffic, --maps) names each thing once, or its runs would be driven, and
 /// their failures counted, twice.
 void check_unique_names(const std::vector<std::string>& names, const std::string& flag);
+
+/// The number of single-character edits (insertions, deletions, substitutions, swaps of two
+/// neighbours) that turn `a` into `b`.
+[[nodiscard]] std::size_t edit_distance(std::string_view a, std::string_view b);
+
+/// The word of `words` nearest to `typed` by edit_distance, when near enough to be a mistyping
+/// of it (at most 2 edits, or a third of the typed length), else none.
+[[nodiscard]] std::optional<std::string> nearest_word(const std::vector<std::string>& words,
+                                                      std::string_view typed);
 
 }  // namespace overtake::base

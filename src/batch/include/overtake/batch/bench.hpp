@@ -205,6 +205,23 @@ void check_bench_rows(const std::vector<BenchRow>& rows, const nlohmann::json& m
 [[nodiscard]] nlohmann::json compare_bench_folders(const std::filesystem::path& base,
                                                    const std::filesystem::path& candidate,
                                                    const eval::CompareOptions& options);
+/// What `overtake compare` is asked (its arguments and flags, as given).
+struct CompareRequest {
+  std::filesystem::path before, after;  ///< the base's and the candidate's --out folders
+  std::vector<std::string> pairs;       ///< --pair OLD=NEW, each once
+  std::string figures;                  ///< --figures, comma-separated; empty: all
+  std::filesystem::path json;           ///< --json; empty: none
+  bool fail_if_worse = false;
+  bool quiet = false;
+};
+
+/// `overtake compare` whole: two bench folders compared (compare_bench_folders) or two risk
+/// estimates (compare_risk_folders), printed unless quiet and written to `json`. Returns the
+/// exit status: 0; with fail_if_worse 1 when a figure is worse (a rate higher), 2 when a
+/// comparison has too few seeds for a verdict. UsageError for bad flags, a --json that is a
+/// bench's own file, or a bench compared with a risk estimate.
+[[nodiscard]] int compare_folders(const CompareRequest& request);
+
 /// Parses "OLD=NEW" (a --pair). Throws UsageError naming --pair.
 [[nodiscard]] eval::PolicyPair parse_policy_pair(const std::string& text);
 /// Parses a comma-separated list of metric names (--figures). Throws UsageError naming them.

@@ -31,6 +31,19 @@ std::vector<std::filesystem::path> write_bench_report(
     std::string_view report_template, std::string_view viewer_template,
     const std::vector<std::filesystem::path>& risk_dirs = {});
 
+/// write_bench_report with the pages embedded in the binary, saying on stdout (unless `quiet`)
+/// where the page is and how many replay pages it links.
+void write_bench_report_page(const std::filesystem::path& bench_out,
+                             const std::filesystem::path& html, bool quiet,
+                             const std::vector<std::filesystem::path>& risk_dirs = {});
+
+/// Throws std::runtime_error when a page the report needs is not in the binary: checked
+/// before any run, so that none is run in vain.
+void check_report_pages();
+
+/// The files a bench writes, as a command line names them: {runs.jsonl,summary.md,...}.
+[[nodiscard]] std::string bench_files_text();
+
 /// The file name of a bench run's replay: <policy>-<traffic>-seed<N>.otr.
 [[nodiscard]] std::string bench_replay_name(const std::string& policy, const std::string& traffic,
                                             std::uint64_t seed);

@@ -170,4 +170,10 @@ struct CalibrationRow {
 [[nodiscard]] nlohmann::json calibration_to_json(const TrafficFigures& f,
                                                  const std::vector<CalibrationRow>& rows);
 
+/// What `overtake calibrate` prints (the figures beside the original's) and writes to `json`
+/// (when not empty); the exit status: 0 when every row passes, 1 when one fails, 130 when the
+/// calibration was interrupted (the figures are those of the seeds that finished).
+[[nodiscard]] int report_calibration(const CalibrateOptions& options, const Calibration& c,
+                                     const std::filesystem::path& json);
+
 }  // namespace overtake::batch

@@ -162,6 +162,10 @@ void check_hunt_spec(const HuntSpec& spec);
                                      const std::filesystem::path& out);
 
 [[nodiscard]] std::string hunt_markdown(const HuntSpec& spec, const HuntOutcome& outcome);
+
+/// What `overtake hunt` prints (its table, its pace, the files written; unless `quiet`) and
+/// its exit status: 130 when interrupted (saying what was kept), else 0.
+[[nodiscard]] int report_hunt(const HuntSpec& spec, const HuntOutcome& outcome, bool quiet);
 [[nodiscard]] nlohmann::json hunt_json(const HuntSpec& spec, const HuntOutcome& outcome);
 
 }  // namespace overtake::batch

@@ -174,6 +174,13 @@ void check_risk_spec(const RiskSpec& spec);
 /// The summary (summary.md, and what the command prints).
 [[nodiscard]] std::string risk_markdown(const RiskSpec& spec, const RiskOutcome& outcome);
 
+/// What an estimate's command prints (unless `quiet`: the summary, `how` it ran, the files
+/// written) and writes to `json_out` (`--json`, when given); the exit status: 130 when it was
+/// interrupted (saying so on stderr, with what was kept), else 0.
+[[nodiscard]] int report_risk(const RiskSpec& spec, const RiskOutcome& outcome,
+                              const std::filesystem::path& json_out, bool quiet,
+                              const std::string& how);
+
 /// True when `dir` holds a risk estimate (risk.json).
 [[nodiscard]] bool holds_risk(const std::filesystem::path& dir);
 /// Two risk estimates compared (`overtake compare A B` of two risk --out folders): the ratio of

@@ -39,4 +39,10 @@ struct SuiteSpec {
     const SuiteSpec& spec, const std::atomic<bool>* stop,
     const std::function<void(std::size_t done, std::size_t total)>& progress);
 
+/// What `bench --scenarios` prints (the skipped files, the table, where it was written) and
+/// the exit status: 1 when a scenario failed or a file could not be written, 130 when
+/// interrupted, else 0.
+[[nodiscard]] int report_suite(const SuiteSpec& suite, const scenarios::SuiteOutcome& outcome,
+                               bool quiet);
+
 }  // namespace overtake::batch

@@ -179,6 +179,10 @@ void check_tune_spec(const TuneSpec& spec);
 [[nodiscard]] TuneOutcome run_tune(const TuneSpec& spec, const std::atomic<bool>* stop,
                                    const std::function<void(const TuneProgress&)>& progress);
 
+/// What `overtake tune` prints (its summary, the best command, the files written; unless
+/// `quiet`) and its exit status: 130 when interrupted, 1 when no trial met the constraints.
+[[nodiscard]] int report_tune(const TuneSpec& spec, const TuneOutcome& outcome, bool quiet);
+
 /// The search's page: the objective of each trial, the best so far, the trials that broke a
 /// constraint, the validation. Self-contained HTML.
 [[nodiscard]] std::string tune_page(const TuneSpec& spec, const TuneOutcome& outcome);

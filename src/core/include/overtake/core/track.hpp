@@ -107,6 +107,19 @@ void validate_track_spec(const TrackSpec& spec);
 /// std::runtime_error when no attempt passes the check.
 [[nodiscard]] std::vector<Waypoint> generate_track(const TrackSpec& spec);
 
+/// A generated track as written (the map file's text), read back as a map is loaded, and its
+/// check.
+struct GeneratedTrack {
+  std::string text;
+  Map map;
+  TrackReport check;
+};
+
+/// generate_track, written out by format_map and parsed back as `name`, then checked once more
+/// against `spec` as a user's map is: std::runtime_error listing the problems when the map
+/// read back fails (generate_track's own exceptions otherwise).
+[[nodiscard]] GeneratedTrack generate_checked_track(const TrackSpec& spec, const std::string& name);
+
 /// Checks a map as users load it against `spec`: length, radii on every lane, spacing, bends
 /// both ways, self-intersection, clearance, coordinates, direction, normals, s values and the
 /// straight start. Never throws for a bad map (a map whose reference line cannot be built is

@@ -8,6 +8,7 @@
 // peer sends ends the server: every bad frame gets one log line and, when the simulator is
 // waiting for an answer, `manual`.
 
+#include <atomic>
 #include <chrono>
 #include <cstddef>
 #include <cstdint>
@@ -99,5 +100,11 @@ struct ServeOptions {
 /// destroying `ioc` releases it.
 void run_server(boost::asio::io_context& ioc, const PlannerSetup& setup, const ServeOptions& opts,
                 const std::function<void(std::uint16_t port)>& on_listening = {});
+
+/// run_server on a context of its own, until `stop` is set (looked at every 50 ms: a planner
+/// that hangs in the serving thread does not delay it; `on_stop` is called then) or the server
+/// ends. Throws what run_server throws.
+void serve_until(const PlannerSetup& setup, const ServeOptions& opts, const std::atomic<bool>& stop,
+                 const std::function<void()>& on_stop = {});
 
 }  // namespace overtake::protocol

@@ -1,12 +1,11 @@
-#include "overtake/app/progress.hpp"
+#include "overtake/run/progress.hpp"
 
 #include <cstdio>
 
-#include "overtake/app/cli.hpp"
 #include "overtake/base/io.hpp"
 #include "overtake/core/units.hpp"
 
-namespace overtake::app {
+namespace overtake::run {
 
 using base::stderr_is_terminal;
 
@@ -34,4 +33,4 @@ void ProgressLine::clear() {
   shown_ = false;
 }
 
-}  // namespace overtake::app
+}  // namespace overtake::run

@@ -3,7 +3,7 @@
 
 #include <chrono>
 
-namespace overtake::app {
+namespace overtake::run {
 
 /// One status line on a terminal, redrawn at most ten times a second: simulated minutes (of
 /// the total when known), miles, and the real-time factor. Silent when disabled or when
@@ -27,4 +27,4 @@ class ProgressLine {
   std::chrono::steady_clock::time_point last_{};
 };
 
-}  // namespace overtake::app
+}  // namespace overtake::run
