@@ -28,8 +28,9 @@ declare -A may_use=(
   [scenarios]="base sandbox planners run $lower"
   [batch]="base sandbox planners run scenarios $lower"
   [cluster]="base sandbox planners run scenarios batch $lower"
+  [learn]="base sandbox planners run $lower"
   [app]="base sandbox planners run scenarios batch cluster $lower"
-  [pybind]="base sandbox planners run scenarios batch $lower"
+  [pybind]="base sandbox planners run scenarios batch learn $lower"
 )
 
 problems=0

@@ -18,7 +18,8 @@ for "interrupted, what was done is kept": its flags were taken and its work bega
 cannot run this way carries `[not run: REASON]` in its comment in the README and is listed as
 not run, never skipped silently; so is a line with a planner program (--planner-cmd) on a
 machine that gives processes no network of their own, where the program would take the
-host's port 4567.
+host's port 4567. A line whose work a later line reads (a search whose best trial a drive
+then takes) carries `[budget: N s ...]` and runs that long before it is stopped.
 
 Usage: check-readme.py --source DIR --binary-dir DIR [--budget S] [--file README.md]
 """
@@ -34,6 +35,7 @@ import tempfile
 import time
 
 NOT_RUN = re.compile(r"\[not run: ([^\]]+)\]")
+BUDGET = re.compile(r"\[budget: (\d+) s\b[^\]]*\]")
 
 def command_lines(text):
     """(line number, command) of each command in the ```sh blocks, continuations joined."""
@@ -186,7 +188,9 @@ def main():
                       "on this machine: the program would listen on the host's port 4567)")
                 continue
             started = time.monotonic()
-            status, out, stopped = run(cmd, work, env, a.budget)
+            longer = BUDGET.search(cmd)
+            budget = float(longer.group(1)) if longer else a.budget
+            status, out, stopped = run(cmd, work, env, budget)
             took = time.monotonic() - started
             ok = status in (130, -signal.SIGINT, 128 + signal.SIGINT) if stopped else status == 0
             tag = ("stopped " if stopped else "ran     ") if ok else "FAILED  "

@@ -3,6 +3,8 @@
 - ``World``: the world stepped one planner reply at a time (``reset``, ``step``, ``report``),
   exactly as ``overtake drive`` steps it.
 - ``Env``: the same world behind a Gymnasium-style interface (``reset``, ``step``).
+- ``VecEnv``: the learning environment, many worlds a call, numpy arrays in and out, decisions
+  carried out by the reference planner (``overtake.learning``; ``HighwayEnv`` one world).
 - ``drive``: a whole drive in C++ with a Python callable (or a built-in policy) as the planner;
   returns the report ``overtake drive --json`` writes.
 - ``builtin_policy``: a built-in policy as a Python callable (telemetry dict in, path out).
@@ -24,8 +26,9 @@ from ._overtake import bench_summary as _bench_summary
 from ._overtake import compare as _compare
 from ._overtake import drive as _drive
 from ._overtake import risk as _risk
+from .learning import HighwayEnv, VecEnv
 
-__all__ = ["World", "Env", "drive", "builtin_policy", "policies", "BuiltinPolicy", "compare",
+__all__ = ["World", "Env", "VecEnv", "HighwayEnv", "drive", "builtin_policy", "policies", "BuiltinPolicy", "compare",
            "bench_summary", "risk", "STEP_S"]
 
 STEP_S = 0.02

@@ -13,6 +13,8 @@
 #include <optional>
 #include <string>
 
+#include "convert.hpp"
+#include "learn.hpp"
 #include "overtake/base/errors.hpp"
 #include "overtake/batch/bench.hpp"
 #include "overtake/batch/pool.hpp"
@@ -34,35 +36,6 @@ namespace {
 
 namespace py = pybind11;
 using Clock = std::chrono::steady_clock;
-
-// A JSON value (a report) as Python values.
-py::object to_python(const nlohmann::json& j) {
-  using T = nlohmann::json::value_t;
-  switch (j.type()) {
-    case T::boolean:
-      return py::bool_(j.get<bool>());
-    case T::number_integer:
-      return py::int_(j.get<std::int64_t>());
-    case T::number_unsigned:
-      return py::int_(j.get<std::uint64_t>());
-    case T::number_float:
-      return py::float_(j.get<double>());
-    case T::string:
-      return py::str(j.get_ref<const std::string&>());
-    case T::array: {
-      py::list l;
-      for (const auto& e : j) l.append(to_python(e));
-      return l;
-    }
-    case T::object: {
-      py::dict d;
-      for (const auto& [k, v] : j.items()) d[py::str(k)] = to_python(v);
-      return d;
-    }
-    default:
-      return py::none();
-  }
-}
 
 // Options of a drive from keyword arguments, as `overtake drive` takes them from flags.
 run::DriveOptions drive_options(const std::optional<std::string>& map, std::uint64_t seed,
@@ -490,6 +463,8 @@ PYBIND11_MODULE(_overtake, m) {
       py::arg("rel_error") = 0.25, py::arg("budget_hours") = 20.0, py::arg("max_runs") = 100000,
       py::arg("config") = py::none(), py::arg("params") = py::none(), py::arg("jobs") = 0,
       py::arg("out") = "risk-out", py::arg("resume") = false, py::arg("scenarios") = 5);
+
+  register_learning(m);
 
   m.def("policies", [] {
     py::dict d;

@@ -202,6 +202,7 @@ core::PlanResult ReferencePolicy::plan(const core::Telemetry& t) {
   ego.speed_mps = car.s_dot * at_car.along_scale;
   ego.m_per_unit_s = at_car.along_scale;
   decision_ = decide(predictions_, ego, behaviour_, elapsed, car_.length_m, p_.behaviour, road_);
+  if (command_) take_command(*command_);
 
   TrajectoryRequest req;
   req.start = start;
@@ -221,6 +222,15 @@ core::PlanResult ReferencePolicy::plan(const core::Telemetry& t) {
   }
 
   return commit(std::move(states), std::move(points), car, n_points);
+}
+
+// A decision from outside takes the behaviour layer's place (its state follows it).
+void ReferencePolicy::take_command(const DrivingCommand& c) {
+  decision_.target_lane = std::clamp(c.target_lane, 0, road_.lane_count - 1);
+  decision_.goal_lane = decision_.target_lane;
+  decision_.speed_mps = std::clamp(c.speed_mps, 0.0, p_.behaviour.cruise_speed_mps);
+  behaviour_.target_lane = decision_.target_lane;
+  behaviour_.goal_lane = decision_.target_lane;
 }
 
 // The plan sent: the kept points and then the chosen trajectory's, to n_points; remembered

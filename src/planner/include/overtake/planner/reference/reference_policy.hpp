@@ -7,6 +7,7 @@
 // the latency.
 
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -26,6 +27,16 @@ namespace overtake::planner::reference {
 /// Why a plan is not feasible, in a few words (empty when it is).
 [[nodiscard]] std::string status_reason(const TrajectoryPlan& plan);
 
+/// A decision given to the reference policy from outside (a learned agent's meta-action, say):
+/// the lane to drive in and the speed wanted, in place of its behaviour layer's. Prediction
+/// and the trajectory layer work as always, so that the path stays within the limits and
+/// clear of the predicted cars: a lane change the trajectory layer cannot take safely is not
+/// taken (the target lane then follows the lane it keeps), and a car ahead is followed.
+struct DrivingCommand {
+  int target_lane = 1;     ///< clamped to the road's lanes
+  double speed_mps = 0.0;  ///< clamped to [0, the behaviour's cruise speed]
+};
+
 /// The reference policy ("reference").
 class ReferencePolicy final : public Policy {
  public:
@@ -34,6 +45,10 @@ class ReferencePolicy final : public Policy {
   /// What carries from one cycle to the next: the points sent and their states, the states
   /// driven, the cars' tracks and the behaviour's state.
   bool archive_state(core::StateArchive& ar) override;
+
+  /// From the next plan() on, drive by `command` instead of the behaviour layer's decision
+  /// (nullopt: by the behaviour layer again). Not part of the archived state.
+  void set_command(const std::optional<DrivingCommand>& command) { command_ = command; }
 
   /// The last cycle's behaviour decision (for tests and tools).
   [[nodiscard]] const BehaviourDecision& last_decision() const { return decision_; }
@@ -51,6 +66,7 @@ class ReferencePolicy final : public Policy {
  private:
   [[nodiscard]] FrenetState observed_state(const core::Telemetry& t) const;
   std::size_t sync_to(const core::Telemetry& t, FrenetState& car);
+  void take_command(const DrivingCommand& c);
   core::PlanResult commit(std::vector<FrenetState> states, std::vector<core::Vec2> points,
                           const FrenetState& car, std::size_t n_points);
   [[nodiscard]] std::vector<FrenetState> history_before(const std::vector<FrenetState>& states,
@@ -84,7 +100,8 @@ class ReferencePolicy final : public Policy {
   BehaviourDecision decision_;
   PlanStatus status_ = PlanStatus::feasible;
   TrajectoryPlan plan_;
-  TrajectoryScratch scratch_;  // buffers one plan leaves for the next; no state
+  TrajectoryScratch scratch_;              // buffers one plan leaves for the next; no state
+  std::optional<DrivingCommand> command_;  // a decision from outside (set_command)
 };
 
 }  // namespace overtake::planner::reference

@@ -1,0 +1,189 @@
+"""overtake.VecEnv: the learning environment's arrays, spaces, determinism, autoreset, bad
+actions and the GIL."""
+
+import math
+import sys
+import threading
+
+import numpy as np
+import pytest
+
+import overtake
+from overtake import learning
+
+
+def test_shapes_spaces_and_the_observation_layout():
+    env = overtake.VecEnv(4, seed=1, minutes=0.2)
+    assert env.num_envs == 4 and env.lanes == 3 and env.observation_size == 31
+    assert len(learning.observation_names(3)) == 31
+    assert env.single_observation_space.shape == (31,)
+    assert env.observation_space.shape == (4, 31)
+    assert env.single_action_space.n == 5
+    obs, info = env.reset()
+    assert obs.shape == (4, 31) and obs.dtype == np.float32
+    assert np.all(np.abs(obs) <= 2.0)
+    assert info["episode_seed"].tolist() == [1, 2, 3, 4]
+    obs, reward, terminated, truncated, info = env.step(np.zeros(4, dtype=np.int64))
+    assert obs.shape == (4, 31) and reward.shape == (4,) and reward.dtype == np.float32
+    assert terminated.dtype == np.bool_ and truncated.dtype == np.bool_
+    assert set(info) >= {"time_s", "distance_m", "speed_mps", "lane", "episode_return"}
+    assert info["time_s"] == pytest.approx([0.2] * 4)
+    for kind, shape in (("continuous", (2,)), ("path", (500, 2))):
+        e = overtake.VecEnv(2, actions=kind, minutes=0.1)
+        assert e.single_action_space.shape == shape
+        assert e.action_space.shape == (2,) + shape
+
+
+def run(env, calls, seed):
+    rng = np.random.default_rng(seed)
+    out = [env.reset()[0]]
+    for _ in range(calls):
+        a = rng.integers(0, 5, size=env.num_envs)
+        obs, reward, terminated, truncated, _ = env.step(a)
+        out += [obs, reward, terminated, truncated]
+    return out
+
+
+def test_the_same_seeds_give_the_same_arrays_byte_for_byte():
+    a = run(overtake.VecEnv(3, seed=7, minutes=0.3, threads=1), 100, seed=0)
+    b = run(overtake.VecEnv(3, seed=7, minutes=0.3, threads=2), 100, seed=0)
+    assert all(x.tobytes() == y.tobytes() for x, y in zip(a, b))
+    c = run(overtake.VecEnv(3, seed=8, minutes=0.3), 100, seed=0)
+    assert any(x.tobytes() != y.tobytes() for x, y in zip(a, c))  # other seeds, other traffic
+
+
+def test_n_worlds_in_one_vec_env_are_n_one_world_envs():
+    many = overtake.VecEnv(3, seed=30, minutes=0.2)
+    alone = [overtake.VecEnv(1, seed=30 + i, minutes=0.2) for i in range(3)]
+    obs = many.reset()[0]
+    for i, e in enumerate(alone):
+        assert e.reset()[0][0].tobytes() == obs[i].tobytes()
+    rng = np.random.default_rng(1)
+    for _ in range(70):  # the episodes end at 60 decisions: autoreset included
+        a = rng.integers(0, 5, size=3)
+        obs, reward, term, trunc, _ = many.step(a)
+        for i, e in enumerate(alone):
+            o, r, te, tr, _ = e.step(a[i:i + 1])
+            assert o[0].tobytes() == obs[i].tobytes()
+            assert r[0] == reward[i] and te[0] == term[i] and tr[0] == trunc[i]
+
+
+def test_next_step_autoreset_and_the_episode_report():
+    env = overtake.VecEnv(2, seed=4, minutes=0.1)  # 30 decisions
+    env.reset()
+    for call in range(30):
+        obs, reward, terminated, truncated, info = env.step([0, 0])
+    assert truncated.all() and not terminated.any()
+    assert info["_final_report"].all()
+    report = info["final_report"][0]
+    assert report["config"]["policy"] == "agent" and report["config"]["seed"] == 4
+    assert report["end"] == "completed"
+    assert report["distance_miles"] * 1609.344 == pytest.approx(info["distance_m"][0], abs=0.01)
+    assert info["episode"]["l"].tolist() == [30, 30]
+    obs, reward, terminated, truncated, info = env.step([1, 2])
+    assert reward.tolist() == [0.0, 0.0] and not truncated.any() and not terminated.any()
+    assert info["was_reset"].all() and info["episode"].tolist() == [2, 2]
+    fresh = overtake.VecEnv(1, seed=4 + 2**32, minutes=0.1)
+    assert fresh.reset()[0][0].tobytes() == obs[0].tobytes()
+
+
+def test_bad_actions_get_a_clear_error_and_the_interpreter_lives():
+    env = overtake.VecEnv(2, minutes=0.1)
+    with pytest.raises(RuntimeError, match="reset"):
+        env.step([0, 0])
+    env.reset()
+    with pytest.raises(ValueError, match="env 1 is 7"):
+        env.step([0, 7])
+    with pytest.raises(ValueError, match="dimension 0 is 3, not 2"):
+        env.step([0, 0, 0])
+    with pytest.raises(ValueError, match="whole number"):
+        env.step([0.5, 1.0])
+    with pytest.raises(ValueError, match="whole number"):
+        env.step([math.nan, 1.0])
+    with pytest.raises(TypeError):
+        env.step(["left", "right"])
+    cont = overtake.VecEnv(1, actions="continuous", minutes=0.1)
+    cont.reset()
+    with pytest.raises(ValueError, match="target speed"):
+        cont.step([[1.5, 0.0]])
+    with pytest.raises(ValueError, match="target lane"):
+        cont.step([[0.5, math.nan]])
+    with pytest.raises(ValueError, match="2 dimensions"):
+        cont.step([0.5, 0.0])
+    path = overtake.VecEnv(1, actions="path", minutes=0.1)
+    path.reset()
+    with pytest.raises(ValueError, match="not finite"):
+        path.step(np.array([[[1.0, math.inf]]]))
+    with pytest.raises(ValueError, match="at most max_path_points"):
+        path.step(np.zeros((1, 501, 2)))
+    with pytest.raises(ValueError, match="not a kind of action"):
+        overtake.VecEnv(1, actions="steer")
+    with pytest.raises(ValueError, match="num_envs"):
+        overtake.VecEnv(0)
+    with pytest.raises(ValueError, match="traffic profile"):
+        overtake.VecEnv(1, traffic="heavy")
+    # after every refusal the environment still steps
+    obs, *_ = env.step([0, 0])
+    assert obs.shape == (2, 31)
+
+
+def test_the_worlds_step_with_the_gil_released():
+    env = overtake.VecEnv(128, minutes=5.0)
+    env.reset()
+    ticks = [0]
+    running = threading.Event()
+    stop = threading.Event()
+
+    def count():
+        running.set()
+        while not stop.is_set():
+            ticks[0] += 1
+
+    old = sys.getswitchinterval()
+    sys.setswitchinterval(1e-4)
+    counter = threading.Thread(target=count)
+    counter.start()
+    running.wait()
+    try:
+        during = []
+        for _ in range(5):
+            before = ticks[0]
+            env.step(np.zeros(128, dtype=np.int64))  # a few milliseconds of C++
+            during.append(ticks[0] - before)
+    finally:
+        stop.set()
+        counter.join()
+        sys.setswitchinterval(old)
+    # Python ran in the other thread while the worlds stepped.
+    assert max(during) > 100, during
+
+
+def test_telemetry_observations_and_the_one_world_env():
+    env = overtake.VecEnv(2, minutes=0.1, observation="telemetry")
+    obs, _ = env.reset()
+    assert isinstance(obs, list) and len(obs) == 2 and "sensor_fusion" in obs[0]
+    one = overtake.HighwayEnv(seed=3, minutes=0.1)
+    o, info = one.reset()
+    assert o.shape == (31,) and info["episode_seed"] == 3
+    done = False
+    steps = 0
+    while not done:
+        o, r, terminated, truncated, info = one.step(0)
+        done = terminated or truncated
+        steps += 1
+    assert steps == 30 and truncated and info["final_report"]["config"]["seed"] == 3
+    with pytest.raises(RuntimeError, match="over"):
+        one.step(0)
+
+
+def test_params_files_change_the_decisions_and_reward(tmp_path):
+    params = tmp_path / "learn.json"
+    params.write_text('{"decision_steps": 5, "reward": {"progress": 2.0}}')
+    env = overtake.VecEnv(1, seed=2, minutes=0.1, params=params)
+    assert env.params["decision_steps"] == 5 and env.params["reward"]["progress"] == 2.0
+    env.reset()
+    _, _, _, _, info = env.step([0])
+    assert info["time_s"][0] == pytest.approx(0.1)
+    params.write_text('{"reward": {"progres": 2.0}}')
+    with pytest.raises(ValueError, match="reward.progres: is not a key"):
+        overtake.VecEnv(1, params=params)
