@@ -26,9 +26,9 @@ from ._overtake import bench_summary as _bench_summary
 from ._overtake import compare as _compare
 from ._overtake import drive as _drive
 from ._overtake import risk as _risk
-from .learning import HighwayEnv, VecEnv
+from .learning import Driver, HighwayEnv, VecEnv
 
-__all__ = ["World", "Env", "VecEnv", "HighwayEnv", "drive", "builtin_policy", "policies", "BuiltinPolicy", "compare",
+__all__ = ["World", "Env", "VecEnv", "HighwayEnv", "Driver", "drive", "builtin_policy", "policies", "BuiltinPolicy", "compare",
            "bench_summary", "risk", "STEP_S"]
 
 STEP_S = 0.02

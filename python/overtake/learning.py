@@ -23,6 +23,7 @@ two NaN ends a path early).
 import numpy as np
 
 from ._overtake import EGO_FEATURES, META_ACTIONS, SLOT_FEATURES
+from ._overtake import PolicyDriverCore as _DriverCore
 from ._overtake import VecEnvCore as _Core
 
 try:  # real spaces and a registration when gymnasium is there; small ones otherwise
@@ -32,7 +33,7 @@ except ImportError:  # pragma: no cover - depends on the machine
     _gym = None
     _spaces = None
 
-__all__ = ["VecEnv", "HighwayEnv", "Box", "Discrete", "META_ACTIONS", "META_ACTION_NAMES",
+__all__ = ["VecEnv", "HighwayEnv", "Driver", "Box", "Discrete", "META_ACTIONS", "META_ACTION_NAMES",
            "observation_names"]
 
 META_ACTION_NAMES = ("keep", "left", "right", "faster", "slower")
@@ -265,6 +266,39 @@ class VecEnv:
     def __repr__(self):
         return (f"overtake.VecEnv(num_envs={self.num_envs}, actions={self.actions!r}, "
                 f"observation_size={self.observation_size})")
+
+
+class Driver:
+    """A policy learned on VecEnv as a planner: telemetry dict in, (path_x, path_y) out, so it
+    drives, benches and is judged like any other planner (``overtake drive --policy-py
+    FILE:NAME``, ``bench``, ``risk``, ``overtake.drive``).
+
+    Driver(policy, actions="meta", map=None, config=None, params=None)
+
+    ``policy(observation)`` is called every ``decision_steps`` world steps (as in the
+    environment) with the observation VecEnv gives, and returns an action of the kind
+    ``actions`` (a meta-action 0..4, or [speed, lane] for "continuous"); the reference
+    planner's trajectory layer carries the decisions out, planning on with the last targets at
+    every call between two decisions. map, config and params: those the policy was trained
+    with. For ``--policy-py FILE:NAME``, NAME is a class or function making the Driver.
+    """
+
+    def __init__(self, policy, actions="meta", map=None, config=None, params=None):
+        if not callable(policy):
+            raise TypeError("policy must be a callable: observation in, action out")
+        self.policy = policy
+        self._core = _DriverCore(str(actions), _fspath(map), _fspath(config), _fspath(params))
+
+    def __call__(self, telemetry):
+        if self._core.decision_due(telemetry):
+            action = self.policy(self._core.observe(telemetry))
+            return self._core.plan(telemetry, action)
+        return self._core.plan(telemetry, None)
+
+    @property
+    def targets(self):
+        """The lane and speed the decisions so far drive toward."""
+        return self._core.targets
 
 
 _EnvBase = _gym.Env if _gym is not None else object

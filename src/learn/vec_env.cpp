@@ -8,11 +8,13 @@
 
 #include "overtake/core/cpu_clock.hpp"
 #include "overtake/core/plan.hpp"
+#include "overtake/learn/command.hpp"
 #include "overtake/learn/observation.hpp"
 #include "overtake/planner/reference/reference_policy.hpp"
 #include "overtake/run/config.hpp"
 #include "overtake/run/drive.hpp"
 #include "overtake/run/report.hpp"
+#include "overtake/sim/faithful_traffic.hpp"
 #include "overtake/sim/run.hpp"
 #include "overtake/sim/world.hpp"
 #include "step_pool.hpp"
@@ -73,6 +75,8 @@ struct VecEnv::Impl {
   EnvParams params;
   run::DriveInputs inputs;
   sim::TrafficProfile profile{};
+  // Faithful traffic's table of the map, built once for every world of every episode.
+  std::shared_ptr<const sim::OpenRoadTable> open_road;
   std::vector<Slot> slots;
   std::unique_ptr<StepPool> pool;
   std::size_t obs_size = 0;
@@ -95,7 +99,8 @@ struct VecEnv::Impl {
 void VecEnv::Impl::begin_episode(Slot& s, std::uint64_t seed) {
   const run::Track& track = *inputs.track;
   s.stepper.reset();
-  s.world = std::make_unique<sim::World>(track.map, track.line, config().world, profile, seed);
+  s.world =
+      std::make_unique<sim::World>(track.map, track.line, config().world, profile, seed, open_road);
   sim::RunOptions run;
   run.duration_s = spec.minutes * 60.0;
   run.steps_per_call = params.decision_steps;
@@ -196,26 +201,9 @@ core::PlanResult VecEnv::Impl::decide(Slot& s, const Actions& a, std::size_t i,
   const int lanes = config().road.lane_count;
   EgoContext& e = s.ego;
   if (spec.actions == ActionKind::meta) {
-    switch (a.meta[i]) {
-      case MetaAction::left:
-        e.target_lane = std::max(0, e.target_lane - 1);
-        break;
-      case MetaAction::right:
-        e.target_lane = std::min(lanes - 1, e.target_lane + 1);
-        break;
-      case MetaAction::faster:
-        e.target_speed_mps = std::min(cruise_mps(), e.target_speed_mps + params.speed_step_mps);
-        break;
-      case MetaAction::slower:
-        e.target_speed_mps = std::max(0.0, e.target_speed_mps - params.speed_step_mps);
-        break;
-      default:
-        break;
-    }
+    apply_meta(e, a.meta[i], lanes, cruise_mps(), params.speed_step_mps);
   } else {
-    e.target_speed_mps = static_cast<double>(a.continuous[2 * i]) * cruise_mps();
-    const double lane = (static_cast<double>(a.continuous[2 * i + 1]) + 1.0) / 2.0 * (lanes - 1);
-    e.target_lane = std::clamp(static_cast<int>(std::lround(lane)), 0, lanes - 1);
+    apply_continuous(e, a.continuous[2 * i], a.continuous[2 * i + 1], lanes, cruise_mps());
   }
   asked_lane = e.target_lane;
   s.executor->set_command(DrivingCommand{e.target_lane, e.target_speed_mps});
@@ -304,8 +292,9 @@ void VecEnv::Impl::step_env(std::size_t i, const Actions& a, const StepOutputs& 
   const double decision_s = params.decision_steps * config().world.step_s;
   s.ego.accel_mps2 = (now.ego.speed_mps - s.last_speed_mps) / decision_s;
   s.last_speed_mps = now.ego.speed_mps;
+  // The time since the target lane last changed, a decision's time after a change.
   if (s.ego.target_lane != lane_before) {
-    s.ego.manoeuvre_s = 0.0;
+    s.ego.manoeuvre_s = decision_s;
     reward -= static_cast<float>(params.reward.lane_change);
   } else {
     s.ego.manoeuvre_s += decision_s;
@@ -375,6 +364,10 @@ VecEnv::VecEnv(const VecEnvSpec& spec) : impl_(std::make_unique<Impl>()) {
                                 std::to_string(kMaxLanes) + " are observed");
   }
   m.obs_size = learn::observation_size(lanes);
+  if (m.profile == sim::TrafficProfile::faithful) {
+    const sim::WorldParams& w = m.config().world;
+    m.open_road = sim::build_open_road_table(m.inputs.track->line, w.road, w.traffic.faithful);
+  }
   m.slots.resize(spec.num_envs);
   for (std::size_t i = 0; i < spec.num_envs; ++i) m.slots[i].base_seed = spec.seed + i;
   const int hw = static_cast<int>(std::max(1U, std::thread::hardware_concurrency()));

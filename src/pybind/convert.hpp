@@ -5,8 +5,11 @@
 
 #include <cstdint>
 #include <string>
+#include <vector>
 
 #include <nlohmann/json.hpp>
+
+#include "overtake/core/geometry.hpp"
 
 namespace overtake::pybind {
 
@@ -37,6 +40,17 @@ inline pybind11::object to_python(const nlohmann::json& j) {
     default:
       return pybind11::none();
   }
+}
+
+/// A path as a planner answers it to Python: (path_x, path_y), two lists.
+inline pybind11::tuple path_to_python(const std::vector<core::Vec2>& path) {
+  pybind11::list xs(path.size());
+  pybind11::list ys(path.size());
+  for (std::size_t i = 0; i < path.size(); ++i) {
+    xs[i] = path[i].x;
+    ys[i] = path[i].y;
+  }
+  return pybind11::make_tuple(xs, ys);
 }
 
 }  // namespace overtake::pybind

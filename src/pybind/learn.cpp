@@ -13,10 +13,13 @@
 #include <string>
 
 #include "convert.hpp"
+#include "overtake/learn/driver.hpp"
 #include "overtake/learn/observation.hpp"
+#include "overtake/learn/params.hpp"
 #include "overtake/learn/vec_env.hpp"
 #include "overtake/python/bridge.hpp"
 #include "overtake/run/config.hpp"
+#include "overtake/run/drive.hpp"
 
 namespace overtake::pybind {
 namespace {
@@ -239,9 +242,86 @@ class VecEnvCore {
   std::unique_ptr<learn::VecEnv> env_;
 };
 
+// A learned policy's decisions carried out as the environment carries them out, from a
+// planner's seat (learn::PolicyDriver): the telemetry dict in, the observation or the path out.
+class PolicyDriverCore {
+ public:
+  PolicyDriverCore(const std::string& actions, const std::optional<std::string>& map,
+                   const std::optional<std::string>& config,
+                   const std::optional<std::string>& params) {
+    try {
+      config_ =
+          run::load_config(config ? std::optional<std::filesystem::path>(*config) : std::nullopt);
+      track_ = run::load_track(map ? std::optional<std::filesystem::path>(*map) : std::nullopt);
+      driver_ = std::make_unique<learn::PolicyDriver>(
+          track_->line, track_->map.loop_length_m, config_,
+          learn::load_env_params(params ? std::optional<std::filesystem::path>(*params)
+                                        : std::nullopt),
+          learn::parse_action_kind(actions));
+    } catch (const std::invalid_argument& e) {
+      throw py::value_error(e.what());
+    } catch (const run::ConfigError& e) {
+      throw py::value_error(e.what());
+    }
+  }
+
+  bool decision_due(const py::handle& telemetry) const {
+    return driver_->decision_due(python::telemetry_from_dict(telemetry));
+  }
+
+  py::array_t<float> observe(const py::handle& telemetry) const {
+    py::array_t<float> obs(static_cast<py::ssize_t>(driver_->observation_size()));
+    driver_->observe(python::telemetry_from_dict(telemetry),
+                     std::span<float>(obs.mutable_data(), driver_->observation_size()));
+    return obs;
+  }
+
+  py::tuple plan(const py::handle& telemetry, const py::object& action) {
+    const core::Telemetry t = python::telemetry_from_dict(telemetry);
+    core::PlanResult plan;
+    try {
+      if (action.is_none()) {
+        plan = driver_->plan(t, nullptr, nullptr);
+      } else if (py::isinstance<py::int_>(action) || py::array::ensure(action).ndim() == 0) {
+        const double x = py::float_(action).cast<double>();
+        if (!std::isfinite(x) || x != std::floor(x))
+          throw std::invalid_argument("the policy's action is not a whole number");
+        const auto a = static_cast<std::int64_t>(x);
+        plan = driver_->plan(t, &a, nullptr);
+      } else {
+        auto arr = checked_array<float>(action, {2}, "the policy's action");
+        plan = driver_->plan(t, nullptr, arr.data());
+      }
+    } catch (const std::invalid_argument& e) {
+      throw py::value_error(e.what());
+    }
+    return path_to_python(plan.path);
+  }
+
+  [[nodiscard]] py::dict targets() const {
+    py::dict d;
+    d["lane"] = driver_->targets().target_lane;
+    d["speed_mps"] = driver_->targets().target_speed_mps;
+    return d;
+  }
+
+ private:
+  run::Config config_;
+  std::shared_ptr<const run::Track> track_;
+  std::unique_ptr<learn::PolicyDriver> driver_;  // refers to config_ and track_
+};
+
 }  // namespace
 
 void register_learning(py::module_& m) {
+  py::class_<PolicyDriverCore>(m, "PolicyDriverCore")
+      .def(py::init<const std::string&, const std::optional<std::string>&,
+                    const std::optional<std::string>&, const std::optional<std::string>&>(),
+           py::arg("actions"), py::arg("map"), py::arg("config"), py::arg("params"))
+      .def("decision_due", &PolicyDriverCore::decision_due, py::arg("telemetry"))
+      .def("observe", &PolicyDriverCore::observe, py::arg("telemetry"))
+      .def("plan", &PolicyDriverCore::plan, py::arg("telemetry"), py::arg("action"))
+      .def_property_readonly("targets", &PolicyDriverCore::targets);
   py::class_<VecEnvCore>(m, "VecEnvCore")
       .def(py::init<std::size_t, std::uint64_t, const std::string&,
                     const std::optional<std::string>&, const std::string&,

@@ -244,13 +244,7 @@ class BuiltinPolicy {
       plan = policy_->plan(t);
     }
     status_ = std::string(core::to_string(plan.status));
-    py::list xs(plan.path.size());
-    py::list ys(plan.path.size());
-    for (std::size_t i = 0; i < plan.path.size(); ++i) {
-      xs[i] = plan.path[i].x;
-      ys[i] = plan.path[i].y;
-    }
-    return py::make_tuple(xs, ys);
+    return path_to_python(plan.path);
   }
 
   [[nodiscard]] const std::string& name() const { return name_; }

@@ -64,7 +64,7 @@ double SmoothNoise::at(double x) {
 FaithfulTraffic::FaithfulTraffic(const core::WaypointFrenet& chords,
                                  const core::ReferenceLine& line, const TrafficParams& params,
                                  const core::RoadParams& road, const core::CarFootprint& car,
-                                 std::uint64_t seed)
+                                 std::uint64_t seed, std::shared_ptr<const OpenRoadTable> open_road)
     : chords_(chords),
       line_(line),
       params_(params),
@@ -84,25 +84,29 @@ FaithfulTraffic::FaithfulTraffic(const core::WaypointFrenet& chords,
   }
   units_.resize(n);
   body_reach_m_ = 0.5 * std::hypot(car_.length_m, car_.width_m) + kRayCullSlackM;
-  build_open_road_table();
+  open_road_ = open_road ? std::move(open_road) : build_open_road_table(line, road, f_);
 }
 
-void FaithfulTraffic::build_open_road_table() {
+std::shared_ptr<const OpenRoadTable> build_open_road_table(const core::ReferenceLine& line,
+                                                           const core::RoadParams& road,
+                                                           const FaithfulTrafficParams& f) {
+  auto table = std::make_shared<OpenRoadTable>();
+  std::size_t& bins = table->bins;
+  std::vector<unsigned char>& open = table->open;
   // A straight ray from a lane's centre along the road drifts off it where the road bends:
   // by K(x) = integral over [0, x] of (x - w) * curvature(s + w) dw, to the outside of the
   // bend. I1, I2: running integrals of the curvature at 1 m steps (past the end by the
   // horizon, wrapping).
-  const double horizon = f_.ray_horizon_m;
-  const double length = line_.length_m();
-  open_road_bins_ = static_cast<std::size_t>(std::ceil(length));
+  const double horizon = f.ray_horizon_m;
+  const double length = line.length_m();
+  bins = static_cast<std::size_t>(std::ceil(length));
   const std::size_t extra = static_cast<std::size_t>(std::ceil(horizon)) + 2;
-  const std::size_t total = open_road_bins_ + extra;
+  const std::size_t total = bins + extra;
   std::vector<double> i1(total, 0.0);
   std::vector<double> i2(total, 0.0);
   double prev_k = 0.0;
   for (std::size_t b = 0; b < total; ++b) {
-    const core::RoadFrame fr =
-        line_.frame(line_.wrap_s(line_.start_s_m() + static_cast<double>(b)));
+    const core::RoadFrame fr = line.frame(line.wrap_s(line.start_s_m() + static_cast<double>(b)));
     // The frame's normal is on the side d grows: turning left moves a straight ray to the
     // right of the road.
     const double side = core::cross(fr.tangent, fr.normal) < 0.0 ? 1.0 : -1.0;
@@ -113,22 +117,23 @@ void FaithfulTraffic::build_open_road_table() {
     }
     prev_k = k;
   }
-  const double road_width = core::road_width_m(road_);
-  const auto lanes = static_cast<std::size_t>(road_.lane_count);
-  open_road_.assign(lanes * open_road_bins_, 1);
+  const double road_width = core::road_width_m(road);
+  const auto lanes = static_cast<std::size_t>(road.lane_count);
+  open.assign(lanes * bins, 1);
   for (std::size_t lane = 0; lane < lanes; ++lane) {
-    const double d0 = core::lane_center_d(static_cast<int>(lane), road_);
-    for (std::size_t b = 0; b < open_road_bins_; ++b) {
+    const double d0 = core::lane_center_d(static_cast<int>(lane), road);
+    for (std::size_t b = 0; b < bins; ++b) {
       for (double x = kOpenRoadStepM; x <= horizon; x += kOpenRoadStepM) {
         const auto bx = b + static_cast<std::size_t>(x);
         const double d = d0 + (i2[bx] - i2[b] - x * i1[b]);
-        if (d < -f_.scenery_margin_m || d > road_width + f_.scenery_margin_m) {
-          open_road_[lane * open_road_bins_ + b] = 0;
+        if (d < -f.scenery_margin_m || d > road_width + f.scenery_margin_m) {
+          open[lane * bins + b] = 0;
           break;
         }
       }
     }
   }
+  return table;
 }
 
 // ----- start, parking, placement -----------------------------------------------------------
@@ -284,9 +289,10 @@ bool FaithfulTraffic::road_open_ahead(std::size_t i) const {
   double s = c.map_frenet.s_m - line_.start_s_m();
   s = std::fmod(s, line_.length_m());
   if (s < 0.0) s += line_.length_m();
-  const auto bin = std::min(open_road_bins_ - 1, static_cast<std::size_t>(s));
+  const OpenRoadTable& table = *open_road_;
+  const auto bin = std::min(table.bins - 1, static_cast<std::size_t>(s));
   const auto lane = static_cast<std::size_t>(core::lane_of(c.map_frenet.d_m, road_));
-  return open_road_[lane * open_road_bins_ + bin] != 0;
+  return table.open[lane * table.bins + bin] != 0;
 }
 
 FaithfulTraffic::Sight FaithfulTraffic::look(std::size_t i, const EgoView& ego, core::Vec2 ego_axis,

@@ -87,7 +87,8 @@ std::string_view to_string(TrafficProfile p) {
 Traffic::Traffic(const core::Map& map, const core::ReferenceLine& line,
                  const core::WaypointFrenet& chords, const TrafficParams& params,
                  const core::RoadParams& road, const core::CarFootprint& car,
-                 TrafficProfile profile, std::uint64_t seed)
+                 TrafficProfile profile, std::uint64_t seed,
+                 std::shared_ptr<const OpenRoadTable> open_road)
     : map_(map),
       line_(line),
       chords_(chords),
@@ -97,7 +98,8 @@ Traffic::Traffic(const core::Map& map, const core::ReferenceLine& line,
       profile_(profile),
       seed_(seed) {
   if (profile == TrafficProfile::faithful) {
-    model_ = std::make_unique<FaithfulTraffic>(chords, line, params, road, car, seed);
+    model_ = std::make_unique<FaithfulTraffic>(chords, line, params, road, car, seed,
+                                               std::move(open_road));
   } else {
     model_ = std::make_unique<CalmTraffic>(map, line, chords, params, road, car, seed);
   }

@@ -53,12 +53,13 @@ void round_new_points(std::vector<core::Vec2>& path, const std::deque<core::Vec2
 }  // namespace
 
 World::World(const core::Map& map, const core::ReferenceLine& line, const WorldParams& params,
-             TrafficProfile profile, std::uint64_t seed)
+             TrafficProfile profile, std::uint64_t seed,
+             std::shared_ptr<const OpenRoadTable> open_road)
     : line_(line),
       chords_(map),
       params_(params),
       traffic_(map, line, chords_, params.traffic, params.road, params.car, profile,
-               core::derive_seed(seed, kTrafficStream)) {
+               core::derive_seed(seed, kTrafficStream), std::move(open_road)) {
   place_ego({params.ego.start_s_m, params.ego.start_d_m});
   traffic_.place_initial(ego_view());
 }

@@ -187,3 +187,63 @@ def test_params_files_change_the_decisions_and_reward(tmp_path):
     params.write_text('{"reward": {"progres": 2.0}}')
     with pytest.raises(ValueError, match="reward.progres: is not a key"):
         overtake.VecEnv(1, params=params)
+
+
+def test_a_learned_policy_drives_as_a_planner_as_it_drove_in_the_environment():
+    # A policy that changes lanes and speeds now and then, by its observation's clock.
+    calls = []
+
+    def policy(obs):
+        calls.append(obs)
+        k = len(calls) % 60
+        return 1 if k == 20 else 2 if k == 40 else 3 if k == 50 else 4 if k == 10 else 0
+
+    env = overtake.VecEnv(1, seed=5, minutes=0.5)
+    obs, _ = env.reset()
+    done = False
+    while not done:
+        obs, _, terminated, truncated, info = env.step([policy(obs[0])])
+        done = terminated[0] or truncated[0]
+    in_env = info["final_report"][0]
+    in_env_observations = calls[:]
+    calls.clear()
+    driver = overtake.Driver(policy)
+    # One decision a call, ten steps a call: the environment's cadence.
+    report = overtake.drive(driver, seed=5, minutes=0.5, steps_per_call=10, name="agent")
+    assert len(calls) == len(in_env_observations) == 150
+    # The same observations, so the same decisions, and the same drive (the telemetry reaches
+    # a Python planner through its dict, in the original's units: equal to float precision).
+    for a, b in zip(calls, in_env_observations):
+        np.testing.assert_allclose(a, b, atol=1e-5)
+    assert report["distance_miles"] == pytest.approx(in_env["distance_miles"], rel=1e-6)
+    assert report["lane_changes"] == in_env["lane_changes"]
+    assert report["collisions"] == in_env["collisions"]
+    # At the drive's own cadence (1-3 steps a call) it decides every 10 steps, planning on between.
+    calls.clear()
+    report = overtake.drive(overtake.Driver(policy), seed=5, minutes=0.5)
+    assert 140 <= len(calls) <= 150 and report["end"] == "completed"
+
+
+def test_a_driver_refuses_bad_actions_and_path_policies():
+    with pytest.raises(ValueError, match="paths itself"):
+        overtake.Driver(lambda o: 0, actions="path")
+    with pytest.raises(TypeError):
+        overtake.Driver(3)
+    report = overtake.drive(overtake.Driver(lambda o: 9), seed=1, minutes=0.1)
+    assert report["end"] == "planner_failed" and "meta-action" in report["ended_early"]
+
+
+def test_a_learned_policy_drives_from_the_command_line(run_binary, tmp_path):
+    planner = tmp_path / "learned.py"
+    planner.write_text(
+        "import overtake\n\n"
+        "def keep(observation):\n"
+        "    return 0\n\n"
+        "class Learned(overtake.Driver):\n"
+        "    def __init__(self):\n"
+        "        super().__init__(keep)\n")
+    code, report, err = run_binary("drive", "--policy-py", f"{planner}:Learned", "--minutes", "0.5",
+                                   "--seed", "3")
+    assert code == 0, err
+    assert report["end"] == "completed" and report["mean_speed_mph"] > 20
+    assert report["incident_counts"]["collision"] == 0

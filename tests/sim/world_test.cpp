@@ -80,6 +80,26 @@ TEST(WorldStart, TheDefaultTrackStartsHeadingAlongX) {
   EXPECT_EQ(w.telemetry().ego.yaw_rad, 0.0);
 }
 
+TEST_F(WorldTest, AWorldWithASharedOpenRoadTableIsTheWorldThatBuildsItsOwn) {
+  const core::Map stadium = test::stadium_map();
+  const core::ReferenceLine line(stadium);
+  WorldParams p;
+  const auto table = build_open_road_table(line, p.road, p.traffic.faithful);
+  ASSERT_EQ(table->open.size(), static_cast<std::size_t>(p.road.lane_count) * table->bins);
+  // On a stadium's bends a ray along a lane leaves the road; on its straights it does not.
+  EXPECT_GT(std::count(table->open.begin(), table->open.end(), 0), 0);
+  EXPECT_GT(std::count(table->open.begin(), table->open.end(), 1), 0);
+  for (std::uint64_t seed : {1U, 7U}) {
+    World own(stadium, line, p, TrafficProfile::faithful, seed);
+    World shared(stadium, line, p, TrafficProfile::faithful, seed, table);
+    for (int step = 0; step < 3000; ++step) {  // a minute, the ego standing
+      own.step();
+      shared.step();
+    }
+    EXPECT_EQ(own.telemetry(), shared.telemetry()) << "seed " << seed;
+  }
+}
+
 TEST_F(WorldTest, WithOnePointLeftTheCarStaysAndThePointIsDropped) {
   World w = make_world(0);
   const core::Vec2 start = w.ego().position;

@@ -24,6 +24,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <deque>
+#include <memory>
 #include <vector>
 
 #include "overtake/core/random.hpp"
@@ -53,6 +54,18 @@ class SmoothNoise {
 /// What a car's ray met at its last step.
 enum class SightKind { nothing, scenery, car, ego };
 
+/// Whether a ray along the road from lane k's centre at s stays on the road for the whole
+/// horizon (it then meets nothing): lanes x bins of 1 m of s from the line's start. It depends
+/// on the line, the road and the faithful params only, so one table may serve every world of
+/// a map (the learning environment's, say): a world built without one builds its own.
+struct OpenRoadTable {
+  std::vector<unsigned char> open;
+  std::size_t bins = 0;
+};
+
+[[nodiscard]] std::shared_ptr<const OpenRoadTable> build_open_road_table(
+    const core::ReferenceLine& line, const core::RoadParams& road, const FaithfulTrafficParams& f);
+
 class FaithfulTraffic final : public TrafficModel {
  public:
   /// One car's driver: the state the original's CarAIControl keeps.
@@ -76,9 +89,11 @@ class FaithfulTraffic final : public TrafficModel {
     double pedal = 0.0;  ///< throttle (> 0) or brake (< 0), in [-1, 1]
   };
 
+  /// `open_road`: the table of the line, road and params (null: built here).
   FaithfulTraffic(const core::WaypointFrenet& chords, const core::ReferenceLine& line,
                   const TrafficParams& params, const core::RoadParams& road,
-                  const core::CarFootprint& car, std::uint64_t seed);
+                  const core::CarFootprint& car, std::uint64_t seed,
+                  std::shared_ptr<const OpenRoadTable> open_road = nullptr);
 
   void start(const EgoView& ego) override;
   void step(const EgoView& ego, double dt_s) override;
@@ -130,7 +145,6 @@ class FaithfulTraffic final : public TrafficModel {
   void spawn(std::size_t i, const EgoView& ego);
   void park(std::size_t i);
   void refresh_frenet(std::size_t i);
-  void build_open_road_table();
 
   const core::WaypointFrenet& chords_;
   const core::ReferenceLine& line_;
@@ -149,10 +163,7 @@ class FaithfulTraffic final : public TrafficModel {
   int frame_counter_ = 0;
   int frames_to_batch_ = 0;
   double time_s_ = 0.0;
-  // Whether a ray along the road from lane k's centre at s stays on the road for the whole
-  // horizon (it then meets nothing): lanes * bins of 1 m of s from the line's start.
-  std::vector<unsigned char> open_road_;
-  std::size_t open_road_bins_ = 0;
+  std::shared_ptr<const OpenRoadTable> open_road_;  // never null
   // Caches, rebuilt from the state above (not saved in checkpoints): each car's heading as
   // a unit vector (its ray's direction and its body's axis), the ego's, and how far from a
   // ray a car's body can reach (half its diagonal plus slack).

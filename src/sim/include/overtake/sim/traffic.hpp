@@ -76,13 +76,17 @@ class TrafficModel {
 /// A traffic car's body through a checkpoint; `lanes` and `waypoints` bound what is read.
 void archive_car(core::StateArchive& ar, TrafficCar& car, int lanes, std::size_t waypoints);
 
+struct OpenRoadTable;
+
 /// All traffic. Deterministic from the seed. Keeps references to the map, its line and its
 /// chords, which must outlive it.
 class Traffic {
  public:
+  /// `open_road`: faithful traffic's table of the line (null: built here).
   Traffic(const core::Map& map, const core::ReferenceLine& line, const core::WaypointFrenet& chords,
           const TrafficParams& params, const core::RoadParams& road, const core::CarFootprint& car,
-          TrafficProfile profile, std::uint64_t seed);
+          TrafficProfile profile, std::uint64_t seed,
+          std::shared_ptr<const OpenRoadTable> open_road = nullptr);
   ~Traffic();
   Traffic(const Traffic&) = delete;
   Traffic& operator=(const Traffic&) = delete;

@@ -5,6 +5,7 @@
 
 #include <cstdint>
 #include <deque>
+#include <memory>
 #include <optional>
 #include <vector>
 
@@ -32,8 +33,11 @@ struct EgoState {
 /// One simulated world. The map and line must outlive it.
 class World {
  public:
+  /// `open_road`: faithful traffic's table of this line, road and params, shared by worlds of
+  /// one map (build_open_road_table; null: built here). The same world either way.
   World(const core::Map& map, const core::ReferenceLine& line, const WorldParams& params,
-        TrafficProfile profile, std::uint64_t seed);
+        TrafficProfile profile, std::uint64_t seed,
+        std::shared_ptr<const OpenRoadTable> open_road = nullptr);
   /// A scripted world: the scenario's start state, its cars instead of random traffic, and
   /// its events at their times. An ego starting at speed has one second of path queued
   /// along its lane at that speed.
