@@ -290,10 +290,7 @@ class Driver:
         self._core = _DriverCore(str(actions), _fspath(map), _fspath(config), _fspath(params))
 
     def __call__(self, telemetry):
-        if self._core.decision_due(telemetry):
-            action = self.policy(self._core.observe(telemetry))
-            return self._core.plan(telemetry, action)
-        return self._core.plan(telemetry, None)
+        return self._core(telemetry, self.policy)
 
     @property
     def targets(self):

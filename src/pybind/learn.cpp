@@ -265,19 +265,16 @@ class PolicyDriverCore {
     }
   }
 
-  bool decision_due(const py::handle& telemetry) const {
-    return driver_->decision_due(python::telemetry_from_dict(telemetry));
-  }
-
-  py::array_t<float> observe(const py::handle& telemetry) const {
-    py::array_t<float> obs(static_cast<py::ssize_t>(driver_->observation_size()));
-    driver_->observe(python::telemetry_from_dict(telemetry),
-                     std::span<float>(obs.mutable_data(), driver_->observation_size()));
-    return obs;
-  }
-
-  py::tuple plan(const py::handle& telemetry, const py::object& action) {
+  // One call of the planner: the telemetry read once; when a decision is due, `policy` is
+  // asked with the observation; then the path.
+  py::tuple call(const py::handle& telemetry, const py::object& policy) {
     const core::Telemetry t = python::telemetry_from_dict(telemetry);
+    py::object action = py::none();
+    if (driver_->decision_due(t)) {
+      py::array_t<float> obs(static_cast<py::ssize_t>(driver_->observation_size()));
+      driver_->observe(t, std::span<float>(obs.mutable_data(), driver_->observation_size()));
+      action = policy(obs);
+    }
     core::PlanResult plan;
     try {
       if (action.is_none()) {
@@ -318,9 +315,7 @@ void register_learning(py::module_& m) {
       .def(py::init<const std::string&, const std::optional<std::string>&,
                     const std::optional<std::string>&, const std::optional<std::string>&>(),
            py::arg("actions"), py::arg("map"), py::arg("config"), py::arg("params"))
-      .def("decision_due", &PolicyDriverCore::decision_due, py::arg("telemetry"))
-      .def("observe", &PolicyDriverCore::observe, py::arg("telemetry"))
-      .def("plan", &PolicyDriverCore::plan, py::arg("telemetry"), py::arg("action"))
+      .def("__call__", &PolicyDriverCore::call, py::arg("telemetry"), py::arg("policy"))
       .def_property_readonly("targets", &PolicyDriverCore::targets);
   py::class_<VecEnvCore>(m, "VecEnvCore")
       .def(py::init<std::size_t, std::uint64_t, const std::string&,
