@@ -39,8 +39,10 @@ check_packages=(
   pkg-config
   # The release preset's tests and benchmarks (GoogleTest with gmock, Google Benchmark).
   libgtest-dev libgmock-dev libbenchmark-dev
-  # The Python module's tests.
-  python3-pytest
+  # The Python module's tests; `pip install --no-build-isolation .` into a fresh virtual
+  # environment (test_install.py: venv, setuptools, wheel); the learning example's training
+  # (examples/learning, PyTorch).
+  python3-pytest python3-venv python3-setuptools python3-wheel python3-torch
   # The fuzz harnesses (make fuzz-smoke, make fuzz): clang, and libFuzzer with the sanitizer
   # runtimes of the same version (libclang-rt-14-dev on Debian 12).
   clang libclang-rt-dev

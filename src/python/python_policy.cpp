@@ -20,9 +20,10 @@ namespace py = pybind11;
 namespace {
 
 // Starts the interpreter (once), puts the current directory first on sys.path (PYTHONPATH
-// comes next, as Python reads it), and releases the GIL: every call into Python takes it
-// (gil_scoped_acquire), from whichever thread runs the planner. The interpreter lives until
-// the process exits (it is never finalized: planners may still hold objects at exit).
+// comes next, as Python reads it) and the build's Python package last, and releases the GIL: every
+// call into Python takes it (gil_scoped_acquire), from whichever thread runs the planner. The
+// interpreter lives until the process exits (it is never finalized: planners may still hold objects
+// at exit).
 void ensure_interpreter() {
   static std::once_flag once;
   std::call_once(once, [] {
@@ -46,8 +47,15 @@ void ensure_interpreter() {
     }
     py::initialize_interpreter(&config);
     try {
-      py::module_::import("sys").attr("path").attr("insert")(
-          0, std::filesystem::current_path().string());
+      const py::object path = py::module_::import("sys").attr("path");
+      path.attr("insert")(0, std::filesystem::current_path().string());
+      // Last, the package built beside this binary: a planner's `import overtake` (a learned
+      // policy's overtake.Driver) finds the module of this very build when nothing on the path
+      // before it (PYTHONPATH, an installed package) provides one.
+      std::error_code ec;
+      if (std::filesystem::is_directory(OVERTAKE_PYTHON_PACKAGE_DIR, ec)) {
+        path.attr("append")(OVERTAKE_PYTHON_PACKAGE_DIR);
+      }
     } catch (const py::error_already_set&) {  // sys.path stays as it is
     }
     (void)py::detail::get_internals();  // pybind11's per-thread state, made with the GIL held

@@ -2,8 +2,11 @@
 actions and the GIL."""
 
 import math
+import signal
+import subprocess
 import sys
 import threading
+import time
 
 import numpy as np
 import pytest
@@ -156,6 +159,39 @@ def test_the_worlds_step_with_the_gil_released():
         sys.setswitchinterval(old)
     # Python ran in the other thread while the worlds stepped.
     assert max(during) > 100, during
+
+
+def test_ctrl_c_stops_a_loop_of_steps_of_many_worlds_at_once():
+    # 512 worlds a call: a step lasts tens of milliseconds; Ctrl-C lands when the step in
+    # progress returns, with the interpreter's own handler (a shell may start a background
+    # process with SIGINT ignored).
+    code = """if True:
+        import signal
+        signal.signal(signal.SIGINT, signal.default_int_handler)
+        import numpy as np
+        import overtake
+        env = overtake.VecEnv(512, seed=5, minutes=30, threads=2)
+        env.reset()
+        actions = np.zeros(512, dtype=np.int64)
+        print("stepping", flush=True)
+        for _ in range(100000):
+            env.step(actions)
+        print("finished", flush=True)
+    """
+    p = subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.PIPE,
+                         stderr=subprocess.PIPE, text=True)
+    try:
+        assert p.stdout.readline() == "stepping\n"
+        time.sleep(1.0)
+        sent = time.monotonic()
+        p.send_signal(signal.SIGINT)
+        out, err = p.communicate(timeout=120)
+        waited_s = time.monotonic() - sent
+    finally:
+        p.kill()
+    assert "KeyboardInterrupt" in err and "finished" not in out, err[-2000:]
+    assert p.returncode != 0
+    assert waited_s < 1.0, f"the steps went on for {waited_s:.2f} s after Ctrl-C"
 
 
 def test_telemetry_observations_and_the_one_world_env():
