@@ -77,6 +77,8 @@ struct VecEnv::Impl {
   sim::TrafficProfile profile{};
   // Faithful traffic's table of the map, built once for every world of every episode.
   std::shared_ptr<const sim::OpenRoadTable> open_road;
+  // The executor's smoothed line and lane frame, built once for every reference policy.
+  std::shared_ptr<const planner::reference::ReferenceGeometry> geometry;
   std::vector<Slot> slots;
   std::unique_ptr<StepPool> pool;
   std::size_t obs_size = 0;
@@ -106,7 +108,7 @@ void VecEnv::Impl::begin_episode(Slot& s, std::uint64_t seed) {
   run.steps_per_call = params.decision_steps;
   run.seed = seed;
   s.stepper = std::make_unique<sim::Stepper>(*s.world, run);
-  s.executor = std::make_unique<ReferencePolicy>(track.line, config().planner);
+  s.executor = std::make_unique<ReferencePolicy>(track.line, config().planner, geometry);
   run::DriveOptions o = inputs.options;
   o.seed = seed;
   s.provenance = run::drive_provenance(track, config(), o, nullptr);
@@ -368,6 +370,8 @@ VecEnv::VecEnv(const VecEnvSpec& spec) : impl_(std::make_unique<Impl>()) {
     const sim::WorldParams& w = m.config().world;
     m.open_road = sim::build_open_road_table(m.inputs.track->line, w.road, w.traffic.faithful);
   }
+  m.geometry =
+      planner::reference::make_reference_geometry(m.inputs.track->line, m.config().planner);
   m.slots.resize(spec.num_envs);
   for (std::size_t i = 0; i < spec.num_envs; ++i) m.slots[i].base_seed = spec.seed + i;
   const int hw = static_cast<int>(std::max(1U, std::thread::hardware_concurrency()));

@@ -4,6 +4,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <stdexcept>
+#include <vector>
 
 #include "overtake/core/map.hpp"
 #include "overtake/core/track.hpp"
@@ -58,6 +60,36 @@ TEST_F(PolicyTest, KeepsAShortPrefixAndKnowsWhereTheCarIs) {
     path = next;
   }
   EXPECT_GT(t.ego.speed_mps, 5.0);  // it got going
+}
+
+TEST_F(PolicyTest, APolicyOnASharedGeometryPlansAsOneThatBuildsItsOwn) {
+  const auto geometry = make_reference_geometry(line_, params_);
+  ReferencePolicy own(line_, params_);
+  ReferencePolicy first(line_, params_, geometry);
+  ReferencePolicy second(line_, params_, geometry);
+  core::Telemetry t = test::ego_at(line_, 500.0, 6.0, 0.0);
+  std::vector<core::Vec2> path = own.plan(t).path;
+  ASSERT_EQ(first.plan(t).path, path);
+  ASSERT_EQ(second.plan(t).path, path);
+  for (int cycle = 0; cycle < 300; ++cycle) {
+    t = after(t, path, 1 + static_cast<std::size_t>(cycle % 3));
+    path = own.plan(t).path;
+    ASSERT_EQ(first.plan(t).path, path) << cycle;
+    ASSERT_EQ(second.plan(t).path, path) << cycle;
+  }
+}
+
+TEST_F(PolicyTest, AGeometryOfAnotherLineSmoothingOrRoadIsRefused) {
+  const auto geometry = make_reference_geometry(line_, params_);
+  const core::ReferenceLine other(map_);
+  EXPECT_THROW(ReferencePolicy(other, params_, geometry), std::invalid_argument);
+  PlannerParams smoother = params_;
+  smoother.reference.line_smoothing_m3 *= 2.0;
+  EXPECT_THROW(ReferencePolicy(line_, smoother, geometry), std::invalid_argument);
+  PlannerParams wider = params_;
+  wider.road.lane_width_m += 0.5;
+  EXPECT_THROW(ReferencePolicy(line_, wider, geometry), std::invalid_argument);
+  EXPECT_THROW(ReferencePolicy(line_, params_, nullptr), std::invalid_argument);
 }
 
 TEST_F(PolicyTest, TheJointWithTheKeptPathIsSmooth) {

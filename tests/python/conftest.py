@@ -2,7 +2,10 @@
 import json
 import os
 import pathlib
+import signal
 import subprocess
+import sys
+import time
 
 import pytest
 
@@ -35,6 +38,26 @@ def path_onto_a_car_ahead(t, steps=40):
     xs = [t["x"] + (gx - t["x"]) * (i + 1) / steps for i in range(steps)]
     ys = [t["y"] + (gy - t["y"]) * (i + 1) / steps for i in range(steps)]
     return car, (xs, ys)
+
+
+def interrupt_script(body, started, wait_s=1.0, timeout_s=300):
+    """Runs `body` (Python, indented as a block) in a fresh interpreter with Python's own
+    SIGINT handler (a shell may start a background process with SIGINT ignored), waits for it
+    to print `started`, then `wait_s` more, and sends Ctrl-C. (stdout, stderr, exit code,
+    seconds from the signal to its end)."""
+    code = ("if True:\n        import signal\n"
+            "        signal.signal(signal.SIGINT, signal.default_int_handler)\n" + body)
+    p = subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.PIPE,
+                         stderr=subprocess.PIPE, text=True)
+    try:
+        assert p.stdout.readline() == started + "\n"
+        time.sleep(wait_s)
+        sent = time.monotonic()
+        p.send_signal(signal.SIGINT)
+        out, err = p.communicate(timeout=timeout_s)
+        return out, err, p.returncode, time.monotonic() - sent
+    finally:
+        p.kill()
 
 
 @pytest.fixture(scope="session")

@@ -1,14 +1,11 @@
 """overtake.drive: a whole drive in C++ with a Python callable as the planner."""
 import importlib.util
-import signal
-import subprocess
 import sys
-import time
 
 import pytest
 
 import overtake
-from conftest import PLANNERS, SOURCE, comparable
+from conftest import PLANNERS, SOURCE, comparable, interrupt_script
 
 sys.path.insert(0, str(PLANNERS))
 import broken  # noqa: E402
@@ -114,26 +111,12 @@ def test_a_class_that_raises_keyboard_interrupt_when_made_stops_the_drive():
 
 
 def test_ctrl_c_stops_a_long_drive_of_a_builtin_policy():
-    # Python's own handler (a shell may start a background process with SIGINT ignored).
-    code = """if True:
-        import signal
-        signal.signal(signal.SIGINT, signal.default_int_handler)
+    out, err, code, waited_s = interrupt_script("""
         import overtake
         print("driving", flush=True)
         overtake.drive("reference", minutes=60)
         print("finished", flush=True)
-    """
-    p = subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.PIPE,
-                         stderr=subprocess.PIPE, text=True)
-    try:
-        assert p.stdout.readline() == "driving\n"
-        time.sleep(1.0)
-        sent = time.monotonic()
-        p.send_signal(signal.SIGINT)
-        out, err = p.communicate(timeout=300)
-        waited_s = time.monotonic() - sent
-    finally:
-        p.kill()
+    """, "driving")
     assert "KeyboardInterrupt" in err and "finished" not in out, err[-2000:]
-    assert p.returncode != 0
+    assert code != 0
     assert waited_s < 2.0, f"the drive went on for {waited_s:.1f} s after Ctrl-C"

@@ -2,16 +2,14 @@
 actions and the GIL."""
 
 import math
-import signal
-import subprocess
 import sys
 import threading
-import time
 
 import numpy as np
 import pytest
 
 import overtake
+from conftest import interrupt_script
 from overtake import learning
 
 
@@ -163,11 +161,8 @@ def test_the_worlds_step_with_the_gil_released():
 
 def test_ctrl_c_stops_a_loop_of_steps_of_many_worlds_at_once():
     # 512 worlds a call: a step lasts tens of milliseconds; Ctrl-C lands when the step in
-    # progress returns, with the interpreter's own handler (a shell may start a background
-    # process with SIGINT ignored).
-    code = """if True:
-        import signal
-        signal.signal(signal.SIGINT, signal.default_int_handler)
+    # progress returns.
+    out, err, code, waited_s = interrupt_script("""
         import numpy as np
         import overtake
         env = overtake.VecEnv(512, seed=5, minutes=30, threads=2)
@@ -177,20 +172,9 @@ def test_ctrl_c_stops_a_loop_of_steps_of_many_worlds_at_once():
         for _ in range(100000):
             env.step(actions)
         print("finished", flush=True)
-    """
-    p = subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.PIPE,
-                         stderr=subprocess.PIPE, text=True)
-    try:
-        assert p.stdout.readline() == "stepping\n"
-        time.sleep(1.0)
-        sent = time.monotonic()
-        p.send_signal(signal.SIGINT)
-        out, err = p.communicate(timeout=120)
-        waited_s = time.monotonic() - sent
-    finally:
-        p.kill()
+    """, "stepping", timeout_s=120)
     assert "KeyboardInterrupt" in err and "finished" not in out, err[-2000:]
-    assert p.returncode != 0
+    assert code != 0
     assert waited_s < 1.0, f"the steps went on for {waited_s:.2f} s after Ctrl-C"
 
 

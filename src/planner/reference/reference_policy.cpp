@@ -4,7 +4,10 @@
 #include <array>
 #include <cmath>
 #include <cstdio>
+#include <memory>
+#include <stdexcept>
 #include <string>
+#include <utility>
 
 namespace overtake::planner::reference {
 namespace {
@@ -67,11 +70,39 @@ std::string status_reason(const TrajectoryPlan& plan) {
                                                      : ": braking in the lane");
 }
 
+std::shared_ptr<const ReferenceGeometry> make_reference_geometry(const core::ReferenceLine& line,
+                                                                 const PlannerParams& params) {
+  auto smooth =
+      std::make_shared<const core::ReferenceLine>(line.map(), params.reference.line_smoothing_m3);
+  LaneFrame frame = LaneFrame::chord_aligned(*smooth, params.road);
+  return std::make_shared<const ReferenceGeometry>(ReferenceGeometry{
+      &line, params.reference.line_smoothing_m3, params.road, std::move(smooth), std::move(frame)});
+}
+
+namespace {
+
+std::shared_ptr<const ReferenceGeometry> checked_geometry(
+    const core::ReferenceLine& line, const PlannerParams& params,
+    std::shared_ptr<const ReferenceGeometry> geometry) {
+  if (!geometry || geometry->base != &line ||
+      geometry->line_smoothing_m3 != params.reference.line_smoothing_m3 ||
+      geometry->road != params.road) {
+    throw std::invalid_argument(
+        "ReferencePolicy: the geometry given was not built for this line, smoothing and road");
+  }
+  return geometry;
+}
+
+}  // namespace
+
 ReferencePolicy::ReferencePolicy(const core::ReferenceLine& line, const PlannerParams& params)
+    : ReferencePolicy(line, params, make_reference_geometry(line, params)) {}
+
+ReferencePolicy::ReferencePolicy(const core::ReferenceLine& line, const PlannerParams& params,
+                                 std::shared_ptr<const ReferenceGeometry> geometry)
     : line_(line),
-      smooth_line_(std::make_shared<const core::ReferenceLine>(line.map(),
-                                                               params.reference.line_smoothing_m3)),
-      frame_(LaneFrame::chord_aligned(*smooth_line_, params.road)),
+      geometry_(checked_geometry(line, params, std::move(geometry))),
+      frame_(geometry_->frame),
       road_(params.road),
       step_s_(params.step_s),
       car_(params.car),

@@ -37,10 +37,29 @@ struct DrivingCommand {
   double speed_mps = 0.0;  ///< clamped to [0, the behaviour's cruise speed]
 };
 
+/// The reference policy's map geometry: its own smoothed line near the waypoints and the lane
+/// frame on it. Immutable and a function of the map's line, the smoothing and the road only,
+/// so that many policies on one map (the worlds of a learning environment) build it once.
+struct ReferenceGeometry {
+  const core::ReferenceLine* base = nullptr;  ///< the map's line it was built from
+  double line_smoothing_m3 = 0.0;
+  core::RoadParams road;
+  std::shared_ptr<const core::ReferenceLine> smooth_line;
+  LaneFrame frame;  ///< on smooth_line, d as the original measures it
+};
+
+/// The geometry a ReferencePolicy on `line` with `params` builds for itself.
+[[nodiscard]] std::shared_ptr<const ReferenceGeometry> make_reference_geometry(
+    const core::ReferenceLine& line, const PlannerParams& params);
+
 /// The reference policy ("reference").
 class ReferencePolicy final : public Policy {
  public:
   ReferencePolicy(const core::ReferenceLine& line, const PlannerParams& params);
+  /// The same on a geometry built before (make_reference_geometry of this very line and of
+  /// params with the same smoothing and road; anything else throws std::invalid_argument).
+  ReferencePolicy(const core::ReferenceLine& line, const PlannerParams& params,
+                  std::shared_ptr<const ReferenceGeometry> geometry);
   [[nodiscard]] core::PlanResult plan(const core::Telemetry& telemetry) override;
   /// What carries from one cycle to the next: the points sent and their states, the states
   /// driven, the cars' tracks and the behaviour's state.
@@ -75,10 +94,10 @@ class ReferencePolicy final : public Policy {
   [[nodiscard]] core::Vec2 sent_as_read(std::size_t i) const;
 
   const core::ReferenceLine& line_;  // the map's line (the loop's s)
-  // The planner's own line, near the waypoints (shared and immutable: copies of the policy
-  // keep the frame's pointer valid).
-  std::shared_ptr<const core::ReferenceLine> smooth_line_;
-  LaneFrame frame_;  // on it, d as the original measures it
+  // The planner's own line near the waypoints and the frame on it (shared and immutable:
+  // copies of the policy keep the frame valid).
+  std::shared_ptr<const ReferenceGeometry> geometry_;
+  const LaneFrame& frame_;  // geometry_->frame: d as the original measures it
   core::RoadParams road_;
   double step_s_;           // the world's step: spacing of path points in time
   core::CarFootprint car_;  // every car's, the ego's included
