@@ -59,10 +59,6 @@ def judge(choose, seed, runs, minutes, threads=0):
             "lane_changes": sum(r["lane_changes"] for r in reports)}
 
 
-def greedy_chooser(policy):
-    return Greedy(policy)
-
-
 def sampled_chooser(policy, seed):
     """The policy as it was trained: each action drawn from the network's probabilities
     (numpy's generator seeded by `seed`, so the same every time)."""
@@ -181,7 +177,7 @@ def main(argv=None):
                                     row["update"] == 1):
             # The greedy policy so far on validation seeds of their own (neither the training's
             # nor the held-out ones): the curve's second line. Training draws nothing here.
-            judged = judge(greedy_chooser(load_policy(args.out / "policy.json")),
+            judged = judge(Greedy(load_policy(args.out / "policy.json")),
                            args.validate_seed, args.validate_runs, args.validate_minutes,
                            settings.threads)
             row["greedy_mph"] = judged["mean_speed_mph"]
@@ -199,7 +195,7 @@ def main(argv=None):
               file=sys.stderr)
         return 130
     policy = load_policy(args.out / "policy.json")
-    heldout = {"learned": judge(greedy_chooser(policy), args.heldout_seed, args.heldout_runs,
+    heldout = {"learned": judge(Greedy(policy), args.heldout_seed, args.heldout_runs,
                                 args.heldout_minutes, settings.threads),
                "sampled": judge(sampled_chooser(policy, args.heldout_seed), args.heldout_seed,
                                 args.heldout_runs, args.heldout_minutes, settings.threads),
