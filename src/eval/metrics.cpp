@@ -174,6 +174,14 @@ RunRow read_run_row(const json& row, std::string_view where) {
     out.plan_status_unknown_cycles = cycles.contains("unknown")
                                          ? r.amount(cycles, "unknown", "plan_status.cycles.unknown")
                                          : 0.0;
+    const json& status = row["plan_status"];
+    if (status.contains("lane_changes_declined")) {
+      const json& d =
+          r.object(status, "lane_changes_declined", "plan_status.lane_changes_declined");
+      out.changes_declined = std::array<double, 2>{
+          r.amount(d, "for_cost", "plan_status.lane_changes_declined.for_cost"),
+          r.amount(d, "for_safety", "plan_status.lane_changes_declined.for_safety")};
+    }
   }
   out.ended_early = row.contains("ended_early") && !row["ended_early"].is_null();
   return out;

@@ -134,7 +134,19 @@ struct RowTotals {
   std::array<double, core::kPlanStatusCount> status_cycles{};
   bool some_unknown = false;  // a row, or some cycles of one, whose plan status is unknown
   std::size_t ended_early = 0;
+  std::array<double, 2> declined{};  // lane changes declined, for cost and for safety
+  bool declined_known = true;        // every row says how many
 };
+
+RowTotals totals_of(const std::vector<const RunRow*>& mine);
+
+// Lane changes declined per 100 miles over the group, for cost and for safety: null unless
+// every run says (a planner over the protocol does not).
+json declined_per_100mi(const RowTotals& t) {
+  if (!t.declined_known || !(t.miles > 0.0)) return nullptr;
+  return {{"for_cost", 100.0 * t.declined[0] / t.miles},
+          {"for_safety", 100.0 * t.declined[1] / t.miles}};
+}
 
 RowTotals totals_of(const std::vector<const RunRow*>& mine) {
   RowTotals t;
@@ -163,6 +175,12 @@ RowTotals totals_of(const std::vector<const RunRow*>& mine) {
         t.status_cycles[i] += r->plan_status_cycles[i];
     }
     if (r->ended_early) ++t.ended_early;
+    if (r->changes_declined) {
+      t.declined[0] += (*r->changes_declined)[0];
+      t.declined[1] += (*r->changes_declined)[1];
+    } else {
+      t.declined_known = false;
+    }
     const MetricTerms speed = terms(Metric::mean_speed_mph, *r);
     t.speed_num.push_back(speed.numerator);
     t.speed_den.push_back(speed.denominator);
@@ -294,6 +312,7 @@ json summary_row(const std::string& policy, const std::string& traffic,
               {"peak_strict_acceleration_mps2", t.strict_acc},
               {"peak_strict_jerk_mps3", t.strict_jerk},
               {"plan_status_share", plan_status_share(t)},
+              {"lane_changes_declined_per_100mi", declined_per_100mi(t)},
               {"runs_ended_early", t.ended_early},
               {"timing",
                {{"planner_p50_us_median", median(t.p50s)},

@@ -55,7 +55,9 @@ json plan_status_json(const sim::RunReport& r) {
   if (r.plan_status_unknown_cycles > 0) cycles["unknown"] = r.plan_status_unknown_cycles;
   return {
       {"cycles", cycles},
-      {"first_reason", r.first_plan_reason.empty() ? json(nullptr) : json(r.first_plan_reason)}};
+      {"first_reason", r.first_plan_reason.empty() ? json(nullptr) : json(r.first_plan_reason)},
+      {"lane_changes_declined",
+       {{"for_cost", r.changes_declined_for_cost}, {"for_safety", r.changes_declined_for_safety}}}};
 }
 
 // A figure that may never have been measured (infinity): null in JSON.
@@ -373,6 +375,11 @@ void scorecard_planner(std::ostream& os, const sim::RunReport& r) {
         share(core::PlanStatus::normal), share(core::PlanStatus::least_bad),
         share(core::PlanStatus::fallback));
     os << "    first: " << r.first_plan_reason << "\n";
+  }
+  if (r.changes_declined_for_cost + r.changes_declined_for_safety > 0) {
+    os << printf_string(
+        "  changes declined   %ld for their cost, %ld for safety (chosen, not taken)\n",
+        r.changes_declined_for_cost, r.changes_declined_for_safety);
   }
 }
 

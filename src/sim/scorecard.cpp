@@ -111,6 +111,8 @@ void Scorecard::count_cycle(const core::PlanResult& plan, double cycle_us, doubl
     return;
   }
   ++status_cycles_[static_cast<std::size_t>(plan.status)];
+  if (plan.change_declined == core::ChangeDeclined::for_cost) ++declined_for_cost_;
+  if (plan.change_declined == core::ChangeDeclined::for_safety) ++declined_for_safety_;
   if (plan.status != core::PlanStatus::normal && first_reason_.empty()) {
     first_reason_ = plan.reason.empty() ? std::string(core::to_string(plan.status)) : plan.reason;
   }
@@ -158,6 +160,8 @@ RunReport Scorecard::report(const World& world, RunOutcome outcome, CycleClock c
   r.plan_status_cycles = status_cycles_;
   r.first_plan_reason = first_reason_;
   r.plan_status_unknown_cycles = unknown_status_cycles_;
+  r.changes_declined_for_cost = declined_for_cost_;
+  r.changes_declined_for_safety = declined_for_safety_;
   r.timing.p50_us = cycle_us_.quantile(0.5);
   r.timing.p99_us = cycle_us_.quantile(0.99);
   r.timing.max_us = cycle_us_.max();
@@ -200,6 +204,17 @@ void Scorecard::archive_contacts(core::StateArchive& ar) {
   ar.require(static_cast<std::size_t>(safety_.contacts_begun()) == contacts_.size(),
              "contacts: another number than the safety monitor began");
   if (ar.loading()) referee_.link_contacts(contacts_);
+  // The lane changes declined, after the contacts: a checkpoint of a build before them
+  // counts none so far.
+  if (ar.loading() && ar.at_end()) {
+    declined_for_cost_ = 0;
+    declined_for_safety_ = 0;
+    return;
+  }
+  ar.part("lane changes declined");
+  constexpr long kMaxCycles = std::numeric_limits<long>::max();
+  ar.io_range(declined_for_cost_, 0, kMaxCycles, "lane changes declined for cost");
+  ar.io_range(declined_for_safety_, 0, kMaxCycles, "lane changes declined for safety");
 }
 
 void Scorecard::archive(core::StateArchive& ar) {

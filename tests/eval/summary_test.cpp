@@ -303,6 +303,45 @@ TEST(Summary, PlanStatusSharesAreNullWhenNoRunSaysHowItPlanned) {
   EXPECT_EQ(lines[2][fallback], "");
 }
 
+// The lane changes a planner declined, per 100 miles over the group's runs; null when a run
+// does not say (a planner over the protocol, a row of a build before they were counted), and
+// a bad count is named.
+TEST(Summary, LaneChangesDeclinedPer100Miles) {
+  std::vector<json> rows;
+  for (std::uint64_t s = 1; s <= 4; ++s) {
+    json r = row("builtin", "faithful", s, 44.0);
+    r["plan_status"] = {{"cycles", {{"normal", 30000}}},
+                        {"first_reason", nullptr},
+                        {"lane_changes_declined", {{"for_cost", 10 * s}, {"for_safety", s}}}};
+    rows.push_back(r);
+    json old = r;
+    old["config"]["policy"] = "older";
+    old["plan_status"].erase("lane_changes_declined");
+    rows.push_back(s == 3 ? old : r);
+    rows.back()["config"]["policy"] = "older";
+  }
+  const auto runs = rows_of(rows);
+  ASSERT_TRUE(runs[0].changes_declined.has_value());
+  EXPECT_EQ(*runs[0].changes_declined, (std::array<double, 2>{10.0, 1.0}));
+  const json summary = summarize(runs, {"builtin", "older"}, {"faithful"});
+  ASSERT_EQ(summary.size(), 2u);
+  double miles = 0.0;
+  for (std::size_t i = 0; i < runs.size(); i += 2) miles += runs[i].miles;
+  const json& d = summary[0]["lane_changes_declined_per_100mi"];
+  EXPECT_NEAR(d["for_cost"].get<double>(), 100.0 * 100.0 / miles, 1e-9);
+  EXPECT_NEAR(d["for_safety"].get<double>(), 100.0 * 10.0 / miles, 1e-9);
+  EXPECT_TRUE(summary[1]["lane_changes_declined_per_100mi"].is_null());
+
+  json bad = rows[0];
+  bad["plan_status"]["lane_changes_declined"]["for_safety"] = -1;
+  try {
+    (void)rows_of({bad});
+    ADD_FAILURE() << "a negative count was read";
+  } catch (const std::exception& e) {
+    EXPECT_THAT(e.what(), HasSubstr("plan_status.lane_changes_declined.for_safety"));
+  }
+}
+
 /// 20 seeds of two policies: b's speed on each seed is a's plus `delta` plus noise of `sd`.
 std::vector<RunRow> two_policies(double delta, double sd, int a_collisions_every = 0) {
   core::Rng rng(3);

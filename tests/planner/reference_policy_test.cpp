@@ -92,6 +92,33 @@ TEST_F(PolicyTest, AGeometryOfAnotherLineSmoothingOrRoadIsRefused) {
   EXPECT_THROW(ReferencePolicy(line_, params_, nullptr), std::invalid_argument);
 }
 
+// A lane change asked for (here by a command, as the learning environment asks) that the
+// trajectory layer does not take is said in the cycle's answer: for safety with a file of
+// cars alongside in that lane, not at all when the lane is free (the change is taken).
+TEST_F(PolicyTest, ALaneChangeNotTakenIsSaidWithWhy) {
+  const auto first_answer = [&](bool car_alongside) {
+    ReferencePolicy p(line_, params_);
+    p.set_command(DrivingCommand{0, 20.0});
+    core::Telemetry t = test::ego_at(line_, 500.0, 6.0, 20.0);
+    // A file of cars in that lane from 40 m behind to 40 m ahead, at the ego's speed.
+    for (int k = 0; car_alongside && k < 9; ++k)
+      t.cars.push_back(test::observed_car(line_, 3 + k, 460.0 + 10.0 * k, 2.0, 20.0));
+    const core::PlanResult r = p.plan(t);
+    return std::pair{r.change_declined, p.last_plan().trajectory.end_lane};
+  };
+  const auto [free_declined, free_end] = first_answer(false);
+  EXPECT_EQ(free_declined, core::ChangeDeclined::no);
+  EXPECT_EQ(free_end, 0);
+  const auto [blocked_declined, blocked_end] = first_answer(true);
+  EXPECT_EQ(blocked_declined, core::ChangeDeclined::for_safety);
+  EXPECT_EQ(blocked_end, 1);
+  // Keeping the lane declines nothing.
+  ReferencePolicy keep(line_, params_);
+  keep.set_command(DrivingCommand{1, 20.0});
+  EXPECT_EQ(keep.plan(test::ego_at(line_, 500.0, 6.0, 20.0)).change_declined,
+            core::ChangeDeclined::no);
+}
+
 TEST_F(PolicyTest, TheJointWithTheKeptPathIsSmooth) {
   // Drive a while, then look at second and third differences of the points across joints:
   // no spike beyond the limits (the strict figures' 0.1 s windows).

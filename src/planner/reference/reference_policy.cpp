@@ -252,7 +252,9 @@ core::PlanResult ReferencePolicy::plan(const core::Telemetry& t) {
     behaviour_.goal_lane = chosen.trajectory.end_lane;
   }
 
-  return commit(std::move(states), std::move(points), car, n_points);
+  core::PlanResult result = commit(std::move(states), std::move(points), car, n_points);
+  result.change_declined = plan_.change_declined;
+  return result;
 }
 
 // A decision from outside takes the behaviour layer's place (its state follows it).

@@ -286,6 +286,25 @@ LeastBad least_bad_search(std::vector<Failed> failed, double fallback_incident_s
   return out;
 }
 
+/// Why a plan ending in `end_lane` declined the change to `target_lane` (see
+/// TrajectoryPlan::change_declined): the combinations into that lane, cheapest first, are
+/// checked until one passes both checks (at most max_kinematic_checks Cartesian checks).
+/// Called only when a change was declined, so a cycle that takes it costs nothing more.
+core::ChangeDeclined why_declined(int end_lane, int target_lane, const std::vector<Combo>& combos,
+                                  const Candidates& c, const Checker& check) {
+  if (target_lane == check.start_lane || end_lane == target_lane) return core::ChangeDeclined::no;
+  int kinematic = 0;
+  for (const Combo& combo : combos) {
+    const LatCandidate& lat = c.lats[combo.lat];
+    if (lat.end_lane != target_lane || lat.overstay_s < kInf) continue;
+    const LonCandidate& lon = c.lons[combo.lon];
+    if (!check.collision(lon.samples, lat).ok) continue;
+    if (kinematic++ >= check.params.trajectory.max_kinematic_checks) break;
+    if (check.kinematic(lon.samples, lat.samples, true).ok) return core::ChangeDeclined::for_cost;
+  }
+  return core::ChangeDeclined::for_safety;
+}
+
 }  // namespace
 }  // namespace trajectory_detail
 
@@ -342,8 +361,13 @@ TrajectoryPlan plan_trajectory(const LaneFrame& line, const TrajectoryRequest& r
   plan.collision_failures = checked.collision_failures;
   plan.blocking_car = checked.blocking_car;
   plan.blocking_time_s = checked.blocking_time_s;
+  const auto declined = [&] {
+    plan.change_declined =
+        why_declined(plan.trajectory.end_lane, req.target_lane, combos, c, check);
+  };
   if (checked.passed) {
     choose(*checked.passed, PlanStatus::feasible);
+    declined();
     return plan;
   }
 
@@ -355,10 +379,12 @@ TrajectoryPlan plan_trajectory(const LaneFrame& line, const TrajectoryRequest& r
   plan.kinematic_checks += least_bad.kinematic_checks;
   if (least_bad.passed) {
     choose(*least_bad.passed, PlanStatus::least_bad);
+    declined();
     return plan;
   }
   plan.trajectory = fallback.trajectory;
   plan.status = PlanStatus::fallback;
+  declined();
   return plan;
 }
 

@@ -37,6 +37,12 @@ inline constexpr std::size_t kPlanStatusCount = 3;
   return "unknown";
 }
 
+/// A lane change the planner's decision layer chose that its path layer did not take this
+/// cycle (it planned to stay, or to go back): for its cost (a path into the lane passed every
+/// check, or none was checked because staying was cheaper) or for safety (a cheaper path into
+/// the lane failed a check, or nothing passed at all). Built-in planners say; others do not.
+enum class ChangeDeclined : std::uint8_t { no, for_cost, for_safety };
+
 /// Why a running plan() is asked to give up (planner::Policy::interrupt).
 enum class PlanInterruption : std::uint8_t {
   timeout,    ///< it took longer than its reply timeout
@@ -56,6 +62,8 @@ struct PlanResult {
   /// False when the planner does not say how it planned (a program over the protocol, which
   /// answers points only): `status` then means nothing, and reports show it as unknown.
   bool status_known = true;
+  /// Whether the path layer declined its decision layer's lane change this cycle.
+  ChangeDeclined change_declined = ChangeDeclined::no;
 };
 
 /// How far from the map's origin, on either axis, a path point may be: ten times as far as a

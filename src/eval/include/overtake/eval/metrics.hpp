@@ -65,6 +65,10 @@ struct RunRow {
   /// Cycles whose status is unknown: all of them when plan_status is null, else those the row
   /// counts as `unknown` (none but in a run that mixes both).
   double plan_status_unknown_cycles = 0.0;
+  /// Lane changes the planner's decision layer chose and its path layer did not take, for
+  /// their cost and for safety (plan_status.lane_changes_declined); nullopt when the row does
+  /// not say (a planner over the protocol, or a row written before they were counted).
+  std::optional<std::array<double, 2>> changes_declined;
   bool ended_early = false;
 };
 

@@ -99,6 +99,10 @@ struct RunReport {
   /// Cycles whose planner did not say how it planned (a program over the protocol answers
   /// points only). They count in planner_cycles, not in plan_status_cycles.
   long plan_status_unknown_cycles = 0;
+  /// Lane changes the planner's decision layer chose and its path layer did not take (cycles
+  /// with core::ChangeDeclined for_cost / for_safety; built-in planners say, others count 0).
+  long changes_declined_for_cost = 0;
+  long changes_declined_for_safety = 0;
   /// False when no cycle said how it was planned, though some were counted: the run's plan
   /// statuses are unknown (not all normal), and reports show none.
   [[nodiscard]] bool plan_status_known() const {
@@ -179,6 +183,8 @@ class Scorecard {
   core::PlanStatusCounts status_cycles_{};
   std::string first_reason_;
   long unknown_status_cycles_ = 0;  // cycles whose planner did not say how it planned
+  long declined_for_cost_ = 0;
+  long declined_for_safety_ = 0;
 };
 
 }  // namespace overtake::sim

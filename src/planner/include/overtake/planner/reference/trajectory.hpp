@@ -10,6 +10,7 @@
 
 #include <vector>
 
+#include "overtake/core/plan.hpp"
 #include "overtake/core/reference_line.hpp"
 #include "overtake/core/road.hpp"
 #include "overtake/planner/params.hpp"
@@ -96,6 +97,10 @@ struct TrajectoryPlan {
   int collision_failures = 0;    ///< candidates that failed the collision check
   int blocking_car = -1;         ///< id of the car the cheapest candidate would have hit
   double blocking_time_s = 0.0;  ///< ... and when
+  /// A change to the requested lane (another than the start lane) that this plan does not
+  /// take: for its cost when some candidate into that lane passes every check (staying was
+  /// cheaper), for safety when none does; `no` when the plan goes there or none was asked.
+  core::ChangeDeclined change_declined = core::ChangeDeclined::no;
 };
 
 /// Sample buffers one plan leaves for the next: kept by the policy, a cycle's samples reuse
