@@ -288,8 +288,9 @@ LeastBad least_bad_search(std::vector<Failed> failed, double fallback_incident_s
 
 /// Why a plan ending in `end_lane` declined the change to `target_lane` (see
 /// TrajectoryPlan::change_declined): the combinations into that lane, cheapest first, are
-/// checked until one passes both checks (at most max_kinematic_checks Cartesian checks).
-/// Called only when a change was declined, so a cycle that takes it costs nothing more.
+/// checked until one passes both checks (at most max_kinematic_checks Cartesian checks; past
+/// them it counts as for safety). Called only when a change was declined, so a cycle that
+/// takes it costs nothing more.
 core::ChangeDeclined why_declined(int end_lane, int target_lane, const std::vector<Combo>& combos,
                                   const Candidates& c, const Checker& check) {
   if (target_lane == check.start_lane || end_lane == target_lane) return core::ChangeDeclined::no;

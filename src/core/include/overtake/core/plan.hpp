@@ -38,9 +38,9 @@ inline constexpr std::size_t kPlanStatusCount = 3;
 }
 
 /// A lane change the planner's decision layer chose that its path layer did not take this
-/// cycle (it planned to stay, or to go back): for its cost (a path into the lane passed every
-/// check, or none was checked because staying was cheaper) or for safety (a cheaper path into
-/// the lane failed a check, or nothing passed at all). Built-in planners say; others do not.
+/// cycle (it planned to stay, or to go back): for its cost (some path into the lane passes
+/// every check, and staying was cheaper) or for safety (none does). Built-in planners say;
+/// others answer `no`.
 enum class ChangeDeclined : std::uint8_t { no, for_cost, for_safety };
 
 /// Why a running plan() is asked to give up (planner::Policy::interrupt).
