@@ -122,8 +122,10 @@ Subcommand register_risk(CLI::App& app) {
       "risk.json, summary.md and runs.jsonl into --out. Ctrl-C keeps the finished runs;\n"
       "--resume goes on with them (docs/evaluation.md, \"Rare events\"). --slurm TASKS shares\n"
       "the runs out as a Slurm array; --shard and --merge do it by hand (docs/cluster.md).\n"
-      "Exit status: 0; 130 when interrupted; 1 when a run fails (its planner failed: the\n"
-      "planner's failure, not the event) or a file cannot be written; 2 for bad flags.");
+      "A run whose planner fails (crashes, stalls, sends no path) ends there: what it drove\n"
+      "until then counts, the failure is listed as the planner's and is never the event.\n"
+      "Exit status: 0; 130 when interrupted; 1 when the planner failed in every run so far\n"
+      "(nothing to estimate) or a file cannot be written; 2 for bad flags.");
   st->policy_opt =
       cmd->add_option("--policy", st->spec.policy, policy_help())->capture_default_str();
   add_planner_flags(*cmd, st->planners, planners::PlannerFlagSet::all);

@@ -106,6 +106,14 @@ json shard_identity(const RiskSpec& spec, const RunInputs& in, const RiskParams&
   return j;
 }
 
+json failures_json(const RiskRun& r) {
+  json failures = json::array();
+  for (const RiskFailure& f : r.failures) {
+    failures.push_back({{"path", f.path}, {"t_s", f.t_s}, {"reason", f.reason}});
+  }
+  return failures;
+}
+
 json run_to_json(const RiskRun& r) {
   json events = json::array();
   for (const eval::SplitEvent& e : r.tally.events) {
@@ -125,6 +133,7 @@ json run_to_json(const RiskRun& r) {
           {"paths", r.tally.paths},
           {"crossings", r.tally.crossings},
           {"events", events},
+          {"planner_failures", failures_json(r)},
           {"wall_s", r.wall_s}};
 }
 
@@ -143,6 +152,13 @@ RiskRun run_from_json(const json& j) {
     r.tally.events.push_back({e.at("weight").get<double>(), e.at("level").get<int>(),
                               e.at("path").get<std::size_t>(), e.at("branch_t_s").get<double>(),
                               e.at("t_s").get<double>()});
+  }
+  // (Runs written before planner failures were kept have none.)
+  if (j.contains("planner_failures")) {
+    for (const json& f : j.at("planner_failures")) {
+      r.failures.push_back({f.at("path").get<std::size_t>(), f.at("t_s").get<double>(),
+                            f.at("reason").get<std::string>()});
+    }
   }
   r.wall_s = j.at("wall_s").get<double>();
   return r;
@@ -268,6 +284,22 @@ std::string stop_rule(const RiskSpec& spec, const RiskParams& params, const Risk
   return {};
 }
 
+// A planner that failed in every run so far gives nothing to estimate (a rate of no miles):
+// the estimate ends there, naming the first failure, its runs kept.
+void refuse_when_every_run_failed(const RiskSpec& spec, const RiskOutcome& o) {
+  if (o.runs.empty() ||
+      !std::all_of(o.runs.begin(), o.runs.end(), [](const RiskRun& r) { return r.base_failed(); }))
+    return;
+  const RiskRun& first = o.runs.front();
+  const RiskFailure& f = first.failures.front();
+  throw std::runtime_error("the planner failed in every one of the " +
+                           std::to_string(o.runs.size()) + " runs so far (the first: run " +
+                           std::to_string(first.index) + ", seed " + std::to_string(first.seed) +
+                           ", at t = " + base::fixed_text(f.t_s, 2) + " s: " + f.reason +
+                           "); there is nothing to estimate (its runs are kept in " +
+                           (spec.out / kRunsFile).string() + ")");
+}
+
 RunInputs load_inputs(const RiskSpec& spec, const RiskParams& params,
                       const planners::PlannerCatalog& catalog) {
   RunInputs in;
@@ -291,12 +323,14 @@ std::optional<RiskRun> one_run(const RiskSpec& spec, const RunInputs& in,
   const auto w0 = std::chrono::steady_clock::now();
   try {
     if (in.entry->kind != planners::PlannerKind::builtin) {
-      const auto t = risk_detail::plain_run(in, spec, r.index, r.seed, halt);
+      std::optional<RiskFailure> failure;
+      const auto t = risk_detail::plain_run(in, spec, r.index, r.seed, halt, failure);
       if (!t) return std::nullopt;
       r.tally = *t;
       r.tally.crossings.assign(levels.thresholds.size(), 0.0);
+      if (failure) r.failures.push_back(std::move(*failure));
     } else {
-      const auto sys = risk_detail::make_world_branches(in, r.seed, halt);
+      const auto sys = risk_detail::make_world_branches(in, r.seed, halt, &r.failures);
       r.tally = eval::run_split(
           *sys, levels,
           {.max_paths = in.params->max_paths, .seed = core::derive_seed(r.seed, 0x7269736bULL)});
@@ -433,6 +467,7 @@ RiskOutcome run_risk(const RiskSpec& spec, const std::atomic<bool>* stop,
           return true;
         };
     (void)run_pool<std::optional<RiskRun>>(batch.size(), pool, work, deliver);
+    refuse_when_every_run_failed(spec, o);
     if (halted || (stop && stop->load())) {
       o.interrupted = true;
       o.stopped_by = "interrupted";
@@ -538,6 +573,7 @@ RiskOutcome merge_risk(const RiskSpec& spec, const std::vector<std::filesystem::
                   " of them from run 0 without a gap; the stopping rules kept " +
                   std::to_string(o.runs.size());
   { std::ofstream runs_out = open_runs(spec, identity, o); }
+  refuse_when_every_run_failed(spec, o);
   o.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   write_outcome(spec, o, stop);
   return o;

@@ -71,6 +71,15 @@ json compare_risk_folders(const std::filesystem::path& base,
                       b.j.value(key, json()).dump() + "): the rates are of different roads");
     }
   }
+  // Runs cut short by the planner's failure: the rate is one of the miles it could drive.
+  for (const auto& [f, dir] : {std::pair{&a, &base}, std::pair{&b, &candidate}}) {
+    const long ended = f->j.value("runs_ended_by_planner", 0L);
+    if (ended > 0) {
+      notes.push_back(dir->string() + ": " + std::to_string(ended) + " of " +
+                      std::to_string(f->j.value("runs", 0L)) +
+                      " runs ended by the planner's failure (their miles until then counted)");
+    }
+  }
   const eval::RateRatio r = eval::rate_ratio(a.rate, b.rate);
   const auto side = [](const RiskFile& f, const std::filesystem::path& dir) {
     std::string who = f.j.value("policy", "");

@@ -30,18 +30,20 @@ struct RunInputs {
 /// Thrown by a path's step once the stop flag is set: the base run is dropped.
 struct Interrupted {};
 
-/// A base run of the world with seed `seed` and the entry's in-process policy.
-[[nodiscard]] std::unique_ptr<eval::SplitSystem> make_world_branches(const RunInputs& in,
-                                                                     std::uint64_t seed,
-                                                                     const std::atomic<bool>* stop);
+/// A base run of the world with seed `seed` and the entry's in-process policy. A path whose
+/// policy throws ends there (its step says `ended`), and the failure is appended to `failures`
+/// (the base path as path 0, a copy by its number among the copies made, from 1).
+[[nodiscard]] std::unique_ptr<eval::SplitSystem> make_world_branches(
+    const RunInputs& in, std::uint64_t seed, const std::atomic<bool>* stop,
+    std::vector<RiskFailure>* failures);
 
 /// A plain run of a planner from outside (a program, a plugin, Python) as the drive runs it,
-/// its events counted from the report; nullopt when it was stopped. Throws
-/// std::runtime_error naming the seed when its planner failed (the planner's failure, not the
-/// event).
+/// its events counted from the report; nullopt when it was stopped. A run its planner ended
+/// counts up to the failure, which is set in `failure` (the planner's failure, not the event).
 [[nodiscard]] std::optional<eval::SplitTally> plain_run(const RunInputs& in, const RiskSpec& spec,
                                                         std::size_t index, std::uint64_t seed,
-                                                        const std::atomic<bool>* stop);
+                                                        const std::atomic<bool>* stop,
+                                                        std::optional<RiskFailure>& failure);
 
 [[nodiscard]] double miles_of(double metres);
 

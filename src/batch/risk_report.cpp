@@ -49,6 +49,24 @@ json cut_json(const RiskSpec& spec, const RiskOutcome& o) {
   return j;
 }
 
+// The paths the planner ended, every run's, in run order.
+struct FailureRow {
+  const RiskRun* run = nullptr;
+  const RiskFailure* failure = nullptr;
+};
+std::vector<FailureRow> failure_rows(const RiskOutcome& o) {
+  std::vector<FailureRow> rows;
+  for (const RiskRun& r : o.runs) {
+    for (const RiskFailure& f : r.failures) rows.push_back({&r, &f});
+  }
+  return rows;
+}
+
+std::size_t runs_ended_by_planner(const RiskOutcome& o) {
+  return static_cast<std::size_t>(std::count_if(o.runs.begin(), o.runs.end(),
+                                                [](const RiskRun& r) { return r.base_failed(); }));
+}
+
 std::string risk_json_method(const RiskOutcome& o) {
   const bool splits =
       std::any_of(o.params.splits.begin(), o.params.splits.end(), [](int r) { return r > 1; });
@@ -132,6 +150,16 @@ json risk_json(const RiskSpec& spec, const RiskOutcome& o) {
             {"crossings_per_100mi", crossings},
             {"events_at_level_share", recall},
             {"events", events}};
+  json failures = json::array();
+  for (const FailureRow& f : failure_rows(o)) {
+    failures.push_back({{"run", f.run->index},
+                        {"seed", f.run->seed},
+                        {"path", f.failure->path},
+                        {"t_s", f.failure->t_s},
+                        {"reason", f.failure->reason}});
+  }
+  j["runs_ended_by_planner"] = runs_ended_by_planner(o);
+  j["planner_failures"] = std::move(failures);
   j["scenarios"] = cut_json(spec, o);
   if (spec.shard.count > 1) {
     j["shard"] = {{"index", spec.shard.index},
@@ -169,6 +197,15 @@ std::string risk_markdown(const RiskSpec& spec, const RiskOutcome& o) {
   s << "| simulated hours (all paths) | " << base::fixed_text(o.simulated_h, 2) << " |\n";
   s << "| plain Monte Carlo hours, same variance | " << base::fixed_text(o.plain_mc_h, 2) << " |\n";
   s << "| gain | " << base::fixed_text(o.gain, 2) << "x |\n";
+  const std::vector<FailureRow> failed = failure_rows(o);
+  if (!failed.empty()) {
+    s << "| ended by the planner's failure | " << runs_ended_by_planner(o) << " of "
+      << o.runs.size() << " runs";
+    if (failed.size() > runs_ended_by_planner(o)) {
+      s << ", " << failed.size() - runs_ended_by_planner(o) << " copies";
+    }
+    s << " (each counts what it drove until then; a failure is not the event) |\n";
+  }
   s << "| stopped by | " << o.stopped_by << " |\n";
   if (spec.shard.count > 1) {
     s << "| shard | " << spec.shard.text() << " of the "
@@ -198,6 +235,19 @@ std::string risk_markdown(const RiskSpec& spec, const RiskOutcome& o) {
                " -o event" + std::to_string(shown) + ".json" +
                (spec.config ? " --config " + spec.config->string() : "") + "`\n";
     }
+  }
+  if (!failed.empty()) {
+    s << "\n## The planner's failures (" << failed.size() << ")\n\n"
+      << "Each ended its path there: the miles and events before it count, the rest of the run "
+         "was not driven. A failure is the planner's, never the event; a planner that fails "
+         "often makes the rate one of the miles it could drive.\n\n";
+    for (std::size_t k = 0; k < failed.size() && k < 20; ++k) {
+      const FailureRow& f = failed[k];
+      s << "- run " << f.run->index << " (seed " << f.run->seed << ")"
+        << (f.failure->path == 0 ? "" : ", copy " + std::to_string(f.failure->path)) << ", t "
+        << base::fixed_text(f.failure->t_s, 2) << " s: " << f.failure->reason << "\n";
+    }
+    if (failed.size() > 20) s << "- ... and " << (failed.size() - 20) << " more (risk.json)\n";
   }
   if (o.cut) {
     s << "\n## The events cut into scenarios\n\n"

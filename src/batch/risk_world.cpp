@@ -40,8 +40,9 @@ long event_count(const sim::Scorecard& card, const RiskEvent& event) {
 
 class WorldBranches final : public eval::SplitSystem {
  public:
-  WorldBranches(const RunInputs& in, std::uint64_t seed, const std::atomic<bool>* stop)
-      : in_(in), stop_(stop), seed_(seed) {
+  WorldBranches(const RunInputs& in, std::uint64_t seed, const std::atomic<bool>* stop,
+                std::vector<RiskFailure>* failures)
+      : in_(in), stop_(stop), failures_(failures), seed_(seed) {
     world_ = std::make_unique<sim::World>(in.track->map, in.track->line, in.config.world,
                                           in.profile, seed);
     policy_ = in.entry->make(in.track->line, in.config.planner);
@@ -55,7 +56,7 @@ class WorldBranches final : public eval::SplitSystem {
   double score() override { return -sim::proximity(*world_, in_.params->score).margin_m; }
 
   std::size_t save() override {
-    saved_[next_] = {stepper_->save(), planner::save_policy_state(*policy_)};
+    saved_[next_] = {stepper_->save(), planner::save_policy_state(*policy_), path_};
     return next_++;
   }
 
@@ -73,7 +74,9 @@ class WorldBranches final : public eval::SplitSystem {
       policy_ = in_.entry->make(in_.track->line, in_.config.planner);
     }
     sync();
-    branch_ = reseed.has_value();
+    // A copy is numbered as the splitting numbers it (in the order copies are made, from 1);
+    // going back to a saved state goes back to the path that saved it.
+    path_ = reseed.has_value() ? ++copies_ : s.path;
   }
 
   void release(std::size_t handle) override { saved_.erase(handle); }
@@ -84,9 +87,13 @@ class WorldBranches final : public eval::SplitSystem {
     try {
       plan = policy_->plan(stepper_->telemetry());
     } catch (const std::exception& e) {
-      throw std::runtime_error("seed " + std::to_string(seed_) +
-                               ": the planner failed at t = " + std::to_string(world_->time_s()) +
-                               " s" + (branch_ ? " in a branch" : "") + ": " + e.what());
+      // The planner's failure ends this path where it is: what it drove counts, the failure
+      // is said, and it is never the event.
+      if (failures_) failures_->push_back({path_, world_->time_s(), e.what()});
+      eval::SplitStep s;
+      s.ended = true;
+      s.at = world_->time_s();
+      return s;
     }
     stepper_->apply(std::move(plan), 0.0, 0.0);
     stepper_->step_one_call();
@@ -110,6 +117,7 @@ class WorldBranches final : public eval::SplitSystem {
   struct Saved {
     std::string run;
     std::string policy;
+    std::size_t path = 0;  // the path that saved it
   };
 
   // The running counts from the scorecard and world as they are now.
@@ -121,6 +129,7 @@ class WorldBranches final : public eval::SplitSystem {
 
   const RunInputs& in_;
   const std::atomic<bool>* stop_;
+  std::vector<RiskFailure>* failures_;
   std::uint64_t seed_;
   std::unique_ptr<sim::World> world_;
   std::unique_ptr<planner::Policy> policy_;
@@ -130,19 +139,22 @@ class WorldBranches final : public eval::SplitSystem {
   long count_ = 0;
   double distance_m_ = 0.0;
   double t_s_ = 0.0;
-  bool branch_ = false;
+  std::size_t path_ = 0;    // the path running now: 0 the base path, else a copy's number
+  std::size_t copies_ = 0;  // copies made so far
 };
 
 }  // namespace
 
 std::unique_ptr<eval::SplitSystem> make_world_branches(const RunInputs& in, std::uint64_t seed,
-                                                       const std::atomic<bool>* stop) {
-  return std::make_unique<WorldBranches>(in, seed, stop);
+                                                       const std::atomic<bool>* stop,
+                                                       std::vector<RiskFailure>* failures) {
+  return std::make_unique<WorldBranches>(in, seed, stop, failures);
 }
 
 std::optional<eval::SplitTally> plain_run(const RunInputs& in, const RiskSpec& spec,
                                           std::size_t index, std::uint64_t seed,
-                                          const std::atomic<bool>* stop) {
+                                          const std::atomic<bool>* stop,
+                                          std::optional<RiskFailure>& failure) {
   run::DriveOptions o;
   o.policy = spec.policy;
   o.planners = spec.planners;
@@ -156,10 +168,10 @@ std::optional<eval::SplitTally> plain_run(const RunInputs& in, const RiskSpec& s
   const run::DriveResult r = run::drive_on(*in.track, in.config, o, {}, stop);
   const sim::RunReport& rep = r.report;
   if (rep.outcome.end == sim::RunEnd::stopped) return std::nullopt;
+  failure.reset();
   if (rep.outcome.end == sim::RunEnd::planner_failed) {
-    throw std::runtime_error("seed " + std::to_string(seed) + ": " +
-                             sim::ended_early_text(rep.outcome) +
-                             " (the planner's failure, not the event)");
+    // What it drove until then counts; the failure is the planner's, not the event.
+    failure = RiskFailure{0, rep.outcome.t_s, rep.outcome.reason};
   }
   long events = 0;
   switch (in.event.kind) {

@@ -277,6 +277,92 @@ TEST(Risk, APlannerProgramIsEstimatedFromPlainRunsAndRefusedWhereTheLevelsSplit)
   EXPECT_THAT(e, HasSubstr("plain runs"));
 }
 
+// The tests' course planner as a --planner-cmd: `wrapper` around it (sh), named "course".
+RiskSpec program_spec(const std::filesystem::path& out, const std::string& command) {
+  planners::PlannerFlags flags;
+  flags.commands = {command};
+  flags.names = {"course"};
+  RiskSpec s = short_spec(out);
+  s.planners = planners::catalog_from_flags(flags);
+  s.policy = "course";
+  s.event = parse_risk_event("outside_lane");
+  return s;
+}
+
+std::string course_planner() {
+  return (std::filesystem::path(OVERTAKE_BINARY_DIR) / "tests" / "overtake_course_planner")
+      .string();
+}
+
+TEST(Risk, APlannersFailureEndsItsRunThereAndIsNeverTheEvent) {
+  const test::TempDir dir;
+  // The second run's planner crashes after 600 answers (about 24 s); the others drive on. One
+  // job: the runs start in order, so the counter tells them apart.
+  const std::string counter = (dir.path() / "count").string();
+  const std::string cmd = "n=$(cat " + counter + " 2>/dev/null || echo 0); echo $((n+1)) > " +
+                          counter + "; if [ \"$n\" = 1 ]; then exec " + course_planner() +
+                          " --crash-after 600; else exec " + course_planner() + "; fi";
+  RiskSpec s = program_spec(dir.path() / "o", cmd);
+  s.max_runs = 3;
+  s.jobs = 1;
+  const RiskOutcome o = run_risk(s, nullptr, {});
+  ASSERT_EQ(o.runs.size(), 3U);
+  EXPECT_FALSE(o.runs[0].base_failed());
+  EXPECT_FALSE(o.runs[2].base_failed());
+  ASSERT_TRUE(o.runs[1].base_failed());
+  ASSERT_EQ(o.runs[1].failures.size(), 1U);
+  const RiskFailure& f = o.runs[1].failures[0];
+  EXPECT_GT(f.t_s, 5.0);
+  EXPECT_LT(f.t_s, 50.0);
+  EXPECT_FALSE(f.reason.empty());
+  // What it drove until then counts, and no more.
+  EXPECT_GT(o.runs[1].tally.exposure, 0.0);
+  EXPECT_LT(o.runs[1].tally.exposure, 0.9 * o.runs[0].tally.exposure);
+  EXPECT_NEAR(o.runs[1].tally.base_cost, f.t_s, 0.1);
+  double metres = 0.0;
+  for (const RiskRun& r : o.runs) metres += r.tally.exposure;
+  EXPECT_NEAR(o.miles, metres / 1609.344, 1e-9);
+  // Said in risk.json and the summary, with its seed and time.
+  const nlohmann::json j = run::read_json_file(s.out / "risk.json");
+  EXPECT_EQ(j["runs_ended_by_planner"], 1);
+  ASSERT_EQ(j["planner_failures"].size(), 1U);
+  EXPECT_EQ(j["planner_failures"][0]["seed"], s.first_seed + 1);
+  EXPECT_EQ(j["planner_failures"][0]["path"], 0);
+  const std::string md = base::read_file(s.out / "summary.md");
+  EXPECT_THAT(md, HasSubstr("ended by the planner's failure | 1 of 3 runs"));
+  EXPECT_THAT(md, HasSubstr("run 1 (seed " + std::to_string(s.first_seed + 1) + ")"));
+  // A comparison says so.
+  const nlohmann::json c = compare_risk_folders(s.out, s.out);
+  ASSERT_FALSE(c["notes"].empty());
+  EXPECT_THAT(c["notes"][0].get<std::string>(), HasSubstr("1 of 3 runs ended by the planner"));
+  // Kept through a resume.
+  s.resume = true;
+  s.max_runs = 4;
+  const RiskOutcome again = run_risk(s, nullptr, {});
+  ASSERT_EQ(again.runs.size(), 4U);
+  EXPECT_EQ(again.runs[1].failures, o.runs[1].failures);
+}
+
+TEST(Risk, APlannerThatFailsInEveryRunStopsTheEstimateNamingTheFailure) {
+  const test::TempDir dir;
+  RiskSpec s = program_spec(dir.path() / "o", course_planner() + " --crash-after 100");
+  s.max_runs = 40;
+  std::string what;
+  try {
+    (void)run_risk(s, nullptr, {});
+  } catch (const std::runtime_error& e) {
+    what = e.what();
+  }
+  EXPECT_THAT(what, HasSubstr("failed in every one of the 16 runs"));
+  EXPECT_THAT(what, HasSubstr("seed " + std::to_string(s.first_seed)));
+  EXPECT_THAT(what, HasSubstr("runs.jsonl"));
+  // Its runs are kept.
+  std::ifstream runs(s.out / "runs.jsonl");
+  int lines = 0;
+  for (std::string line; std::getline(runs, line);) ++lines;
+  EXPECT_EQ(lines, 16);
+}
+
 TEST(Risk, TheBaseRunsEventsAreCutIntoScenariosThatRepeatThem) {
   const test::TempDir dir;
   RiskSpec s = short_spec(dir.path() / "o");

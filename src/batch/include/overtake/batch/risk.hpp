@@ -10,6 +10,7 @@
 // rate means what the bench's rate means. Run r's seed is first_seed + r; its copies' draws
 // come from a seed derived from it, so the estimate does not depend on --jobs.
 
+#include <algorithm>
 #include <atomic>
 #include <cstdint>
 #include <filesystem>
@@ -107,12 +108,28 @@ struct RiskSpec {
 /// Slurm array run these between them.
 [[nodiscard]] std::size_t risk_runs_planned(const RiskSpec& spec);
 
+/// A path of a run that its planner ended: it failed (threw, crashed, stalled, sent what is
+/// not a path). The path ends there; its miles and events up to then count, the failure is the
+/// planner's, never the event.
+struct RiskFailure {
+  std::size_t path = 0;  ///< 0: the base run itself; else a copy
+  double t_s = 0.0;      ///< simulated time of the failure
+  std::string reason;
+  friend bool operator==(const RiskFailure&, const RiskFailure&) = default;
+};
+
 /// One base run and its copies.
 struct RiskRun {
   std::size_t index = 0;
   std::uint64_t seed = 0;
   eval::SplitTally tally;  ///< exposure in metres, cost in simulated seconds
   double wall_s = 0.0;
+  std::vector<RiskFailure> failures;  ///< the paths its planner ended, in the order they ended
+  /// True when the base run itself was ended by its planner.
+  [[nodiscard]] bool base_failed() const {
+    return std::any_of(failures.begin(), failures.end(),
+                       [](const RiskFailure& f) { return f.path == 0; });
+  }
 };
 
 /// Where an estimate stands.
@@ -153,8 +170,10 @@ struct RiskOutcome {
 void check_risk_spec(const RiskSpec& spec);
 
 /// Runs the estimate; `stop` (may be null) ends it keeping the finished runs (runs.jsonl in
-/// --out, written as each finishes). Throws std::runtime_error naming the run and seed when
-/// a run fails (its planner failed: that is the planner's failure, not the event).
+/// --out, written as each finishes). A path whose planner fails ends there (RiskRun::failures:
+/// the planner's failure, never the event). Throws std::runtime_error naming the first failure
+/// when the planner failed in every run so far (checked after each block of runs), and
+/// naming the run and seed when a run cannot be run at all.
 [[nodiscard]] RiskOutcome run_risk(const RiskSpec& spec, const std::atomic<bool>* stop,
                                    const std::function<void(const RiskProgress&)>& progress);
 
