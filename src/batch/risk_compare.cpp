@@ -3,6 +3,8 @@
 
 #include <cmath>
 #include <filesystem>
+#include <fstream>
+#include <map>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -10,11 +12,17 @@
 #include "overtake/base/text.hpp"
 #include "overtake/batch/risk.hpp"
 #include "overtake/eval/splitting.hpp"
+#include "overtake/eval/stats.hpp"
+#include "overtake/eval/summary.hpp"
 #include "overtake/run/config.hpp"
 
 namespace overtake::batch {
 
 using nlohmann::json;
+
+namespace {
+constexpr double kMetresPerMile = 1609.344;
+}  // namespace
 
 bool holds_risk(const std::filesystem::path& dir) {
   return std::filesystem::is_regular_file(dir / "risk.json");
@@ -53,6 +61,74 @@ RiskFile read_risk_file(const std::filesystem::path& dir) {
   return f;
 }
 
+// Each base run's miles and hours by seed, from the folder's runs.jsonl (empty when there is
+// none: an estimate written before it, or by hand).
+std::map<std::uint64_t, std::pair<double, double>> runs_by_seed(const std::filesystem::path& dir) {
+  std::map<std::uint64_t, std::pair<double, double>> out;
+  std::ifstream in(dir / "runs.jsonl");
+  for (std::string line; std::getline(in, line);) {
+    try {
+      const json r = json::parse(line);
+      const double metres = r.at("exposure_m").get<double>();
+      const double seconds = r.at("base_cost_s").get<double>();
+      if (std::isfinite(metres) && std::isfinite(seconds) && metres >= 0.0 && seconds > 0.0)
+        out[r.at("seed").get<std::uint64_t>()] = {metres / kMetresPerMile, seconds / 3600.0};
+    } catch (const std::exception&) {
+      // A line cut short (the last, by a crash) is skipped, as --resume skips it.
+    }
+  }
+  return out;
+}
+
+// The two planners' mean speeds on the seeds both estimates drove (on the same map, traffic
+// and run length: their runs are the same runs of the world), paired by seed: the bench's
+// bootstrap-t interval of the difference and its paired t-test. Null (with a note) when they
+// share fewer than eval::kMinSeeds seeds or drove different roads.
+json speed_on_common_seeds(const std::filesystem::path& base,
+                           const std::filesystem::path& candidate, bool same_roads, json& notes) {
+  const auto a = runs_by_seed(base);
+  const auto b = runs_by_seed(candidate);
+  std::vector<double> ma, ha, mb, hb;
+  for (const auto& [seed, run] : a) {
+    const auto it = b.find(seed);
+    if (it == b.end()) continue;
+    ma.push_back(run.first);
+    ha.push_back(run.second);
+    mb.push_back(it->second.first);
+    hb.push_back(it->second.second);
+  }
+  if (!same_roads) return nullptr;
+  if (ma.size() < eval::kMinSeeds) {
+    notes.push_back("the estimates share " + std::to_string(ma.size()) +
+                    " seeds: too few to compare their speeds (at least " +
+                    std::to_string(eval::kMinSeeds) + "; give them the same --first-seed)");
+    return nullptr;
+  }
+  const auto sum = [](const std::vector<double>& v) {
+    double t = 0.0;
+    for (double x : v) t += x;
+    return t;
+  };
+  const double speed_a = sum(ma) / sum(ha);
+  const double speed_b = sum(mb) / sum(hb);
+  const eval::PairedRatios pairs{mb, hb, ma, ha};  // candidate - base
+  eval::BootstrapOptions boot;
+  boot.seed = eval::bootstrap_seed("risk-speed|" + std::to_string(ma.size()));
+  const eval::Interval ci = eval::mean_difference_interval(pairs, boot);
+  const double p = eval::mean_difference_p_value(pairs);
+  const std::string verdict = ci.lo > 0.0 ? "faster" : (ci.hi < 0.0 ? "slower" : "no difference");
+  return {{"seeds", ma.size()},
+          {"base_mph", speed_a},
+          {"candidate_mph", speed_b},
+          {"difference_mph", speed_b - speed_a},
+          {"ci95_mph", {ci.lo, ci.hi}},
+          {"p_value", p},
+          {"verdict", verdict},
+          {"method",
+           "paired by seed: the bootstrap-t interval of the difference of miles over hours "
+           "(the bench's), on the seeds both drove"}};
+}
+
 }  // namespace
 
 json compare_risk_folders(const std::filesystem::path& base,
@@ -80,6 +156,7 @@ json compare_risk_folders(const std::filesystem::path& base,
                       " runs ended by the planner's failure (their miles until then counted)");
     }
   }
+  const json speed = speed_on_common_seeds(base, candidate, notes.empty(), notes);
   const eval::RateRatio r = eval::rate_ratio(a.rate, b.rate);
   const auto side = [](const RiskFile& f, const std::filesystem::path& dir) {
     std::string who = f.j.value("policy", "");
@@ -99,6 +176,7 @@ json compare_risk_folders(const std::filesystem::path& base,
       {"ratio_ci95", {r.ci.lo, std::isfinite(r.ci.hi) ? json(r.ci.hi) : json(nullptr)}},
       {"verdict", r.verdict},
       {"method", "MOVER on the log scale from the two 95% intervals (independent estimates)"},
+      {"speed_on_common_seeds", speed},
       {"notes", notes}};
   return out;
 }
@@ -158,6 +236,17 @@ std::string compare_risk_text(const json& c) {
   } else {
     s << "candidate / base: at least " << base::fixed_text(ci[0].get<double>(), 3)
       << " (the base saw no event): " << c["verdict"].get<std::string>() << "\n";
+  }
+  const json& speed = c.value("speed_on_common_seeds", json());
+  if (speed.is_object()) {
+    const json& sci = speed["ci95_mph"];
+    s << "mean speed on the " << speed["seeds"].get<std::size_t>() << " seeds both drove: base "
+      << base::fixed_text(speed["base_mph"].get<double>(), 2) << " mph, candidate "
+      << base::fixed_text(speed["candidate_mph"].get<double>(), 2)
+      << " mph: " << eval::signed_fixed(speed["difference_mph"].get<double>(), 2) << " ("
+      << eval::signed_fixed(sci[0].get<double>(), 2) << " to "
+      << eval::signed_fixed(sci[1].get<double>(), 2)
+      << ", paired): " << speed["verdict"].get<std::string>() << "\n";
   }
   for (const json& n : c["notes"]) s << "note: " << n.get<std::string>() << "\n";
   return s.str();

@@ -67,6 +67,14 @@ std::size_t runs_ended_by_planner(const RiskOutcome& o) {
                                                 [](const RiskRun& r) { return r.base_failed(); }));
 }
 
+// The command that drives the estimate's planner (a planner from outside with its flags).
+std::string drive_command(const RiskSpec& spec) {
+  const planners::PlannerEntry* e = spec.planners ? spec.planners->find(spec.policy) : nullptr;
+  if (e) return planners::planner_command_line(planners::call_of(*e));
+  return planners::planner_command_line(
+      {planners::PlannerKind::builtin, spec.policy, {}, {}, 4567});
+}
+
 std::string risk_json_method(const RiskOutcome& o) {
   const bool splits =
       std::any_of(o.params.splits.begin(), o.params.splits.end(), [](int r) { return r > 1; });
@@ -223,9 +231,9 @@ std::string risk_markdown(const RiskSpec& spec, const RiskOutcome& o) {
       if (ev.path != 0) continue;
       ++base_events;
       if (shown++ >= 20) continue;
-      std::string drive = "overtake drive --policy " + spec.policy + " --seed " +
-                          std::to_string(r.seed) + " --minutes " +
-                          base::fixed_text(spec.minutes, 0) + " --traffic " + spec.traffic;
+      std::string drive = drive_command(spec) + " --seed " + std::to_string(r.seed) +
+                          " --minutes " + base::fixed_text(spec.minutes, 0) + " --traffic " +
+                          spec.traffic;
       if (spec.map) drive += " --map " + spec.map->string();
       if (spec.config) drive += " --config " + spec.config->string();
       const std::string replay = "run" + std::to_string(r.seed) + ".otr";

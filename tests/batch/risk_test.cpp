@@ -409,6 +409,50 @@ TEST(Risk, TheBaseRunsEventsAreCutIntoScenariosThatRepeatThem) {
   EXPECT_THAT(usage_error([&] { check_risk_spec(s); }), HasSubstr("--scenarios"));
 }
 
+TEST(Risk, TwoEstimatesOnTheSameSeedsCompareTheirSpeedsPairedBySeed) {
+  const test::TempDir dir;
+  // The reference against seed000 (a lane keeper) on the same eight seeds of 2 minutes.
+  RiskSpec a = short_spec(dir.path() / "reference");
+  a.event = parse_risk_event("at-fault");
+  a.minutes = 2.0;
+  a.max_runs = 8;
+  a.jobs = 2;
+  RiskSpec b = a;
+  b.policy = "seed000";
+  b.out = dir.path() / "seed000";
+  const RiskOutcome oa = run_risk(a, nullptr, {});
+  const RiskOutcome ob = run_risk(b, nullptr, {});
+  const nlohmann::json c = compare_risk_folders(a.out, b.out);
+  const nlohmann::json& speed = c["speed_on_common_seeds"];
+  ASSERT_TRUE(speed.is_object()) << c.dump(2);
+  EXPECT_EQ(speed["seeds"], 8);
+  // The speeds are the estimates' own (miles over hours of the same runs).
+  EXPECT_NEAR(speed["base_mph"].get<double>(), oa.miles / oa.base_h, 1e-9);
+  EXPECT_NEAR(speed["candidate_mph"].get<double>(), ob.miles / ob.base_h, 1e-9);
+  const double d = speed["difference_mph"].get<double>();
+  EXPECT_NEAR(d, ob.miles / ob.base_h - oa.miles / oa.base_h, 1e-9);
+  const double lo = speed["ci95_mph"][0].get<double>();
+  const double hi = speed["ci95_mph"][1].get<double>();
+  EXPECT_LT(lo, d);
+  EXPECT_GT(hi, d);
+  EXPECT_EQ(speed["verdict"], lo > 0.0 ? "faster" : (hi < 0.0 ? "slower" : "no difference"));
+  EXPECT_THAT(compare_risk_text(c), HasSubstr("seeds both drove"));
+  // The same planner against itself: no difference, exactly 0.
+  const nlohmann::json self = compare_risk_folders(a.out, a.out);
+  EXPECT_EQ(self["speed_on_common_seeds"]["difference_mph"], 0.0);
+  EXPECT_EQ(self["speed_on_common_seeds"]["verdict"], "no difference");
+  // Estimates of other seeds share none: no speeds, and the note says why.
+  RiskSpec other = a;
+  other.first_seed = 1001;
+  other.max_runs = 2;
+  other.out = dir.path() / "other";
+  (void)run_risk(other, nullptr, {});
+  const nlohmann::json none = compare_risk_folders(a.out, other.out);
+  EXPECT_TRUE(none["speed_on_common_seeds"].is_null());
+  ASSERT_FALSE(none["notes"].empty());
+  EXPECT_THAT(none["notes"][0].get<std::string>(), HasSubstr("share 0 seeds"));
+}
+
 TEST(Risk, AnAtFaultEstimateIsAPointOfTheBenchPagesChart) {
   const test::TempDir dir;
   RiskSpec s = short_spec(dir.path() / "fault");
