@@ -147,6 +147,7 @@ json compare_risk_folders(const std::filesystem::path& base,
                       b.j.value(key, json()).dump() + "): the rates are of different roads");
     }
   }
+  const bool same_roads = notes.empty();
   // Runs cut short by the planner's failure: the rate is one of the miles it could drive.
   for (const auto& [f, dir] : {std::pair{&a, &base}, std::pair{&b, &candidate}}) {
     const long ended = f->j.value("runs_ended_by_planner", 0L);
@@ -156,7 +157,7 @@ json compare_risk_folders(const std::filesystem::path& base,
                       " runs ended by the planner's failure (their miles until then counted)");
     }
   }
-  const json speed = speed_on_common_seeds(base, candidate, notes.empty(), notes);
+  const json speed = speed_on_common_seeds(base, candidate, same_roads, notes);
   const eval::RateRatio r = eval::rate_ratio(a.rate, b.rate);
   const auto side = [](const RiskFile& f, const std::filesystem::path& dir) {
     std::string who = f.j.value("policy", "");

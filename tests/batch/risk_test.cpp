@@ -303,12 +303,11 @@ TEST(Risk, APlannersFailureEndsItsRunThereAndIsNeverTheEvent) {
                           counter + "; if [ \"$n\" = 1 ]; then exec " + course_planner() +
                           " --crash-after 600; else exec " + course_planner() + "; fi";
   RiskSpec s = program_spec(dir.path() / "o", cmd);
-  s.max_runs = 3;
+  s.max_runs = 8;
   s.jobs = 1;
   const RiskOutcome o = run_risk(s, nullptr, {});
-  ASSERT_EQ(o.runs.size(), 3U);
-  EXPECT_FALSE(o.runs[0].base_failed());
-  EXPECT_FALSE(o.runs[2].base_failed());
+  ASSERT_EQ(o.runs.size(), 8U);
+  for (std::size_t k = 0; k < o.runs.size(); ++k) EXPECT_EQ(o.runs[k].base_failed(), k == 1) << k;
   ASSERT_TRUE(o.runs[1].base_failed());
   ASSERT_EQ(o.runs[1].failures.size(), 1U);
   const RiskFailure& f = o.runs[1].failures[0];
@@ -329,17 +328,19 @@ TEST(Risk, APlannersFailureEndsItsRunThereAndIsNeverTheEvent) {
   EXPECT_EQ(j["planner_failures"][0]["seed"], s.first_seed + 1);
   EXPECT_EQ(j["planner_failures"][0]["path"], 0);
   const std::string md = base::read_file(s.out / "summary.md");
-  EXPECT_THAT(md, HasSubstr("ended by the planner's failure | 1 of 3 runs"));
+  EXPECT_THAT(md, HasSubstr("ended by the planner's failure | 1 of 8 runs"));
   EXPECT_THAT(md, HasSubstr("run 1 (seed " + std::to_string(s.first_seed + 1) + ")"));
-  // A comparison says so.
+  // A comparison says so, and still compares the speeds (a failed run counts what it drove).
   const nlohmann::json c = compare_risk_folders(s.out, s.out);
   ASSERT_FALSE(c["notes"].empty());
-  EXPECT_THAT(c["notes"][0].get<std::string>(), HasSubstr("1 of 3 runs ended by the planner"));
+  EXPECT_THAT(c["notes"][0].get<std::string>(), HasSubstr("1 of 8 runs ended by the planner"));
+  ASSERT_TRUE(c["speed_on_common_seeds"].is_object()) << c.dump(2);
+  EXPECT_EQ(c["speed_on_common_seeds"]["seeds"], 8);
   // Kept through a resume.
   s.resume = true;
-  s.max_runs = 4;
+  s.max_runs = 9;
   const RiskOutcome again = run_risk(s, nullptr, {});
-  ASSERT_EQ(again.runs.size(), 4U);
+  ASSERT_EQ(again.runs.size(), 9U);
   EXPECT_EQ(again.runs[1].failures, o.runs[1].failures);
 }
 
