@@ -62,7 +62,11 @@ double finite_number(const json& j, double max_magnitude, const What& what) {
   if (!j.is_number()) reject(what() + " is " + describe(j) + ", not a number");
   const double v = j.get<double>();
   if (!std::isfinite(v)) reject(what() + " is not a finite number");
-  if (std::abs(v) > max_magnitude) reject(what() + " is out of range");
+  if (std::abs(v) > max_magnitude) {
+    char says[64];
+    std::snprintf(says, sizeof says, ": %g (the limit is %g either way)", v, max_magnitude);
+    reject(what() + " is out of range" + says);
+  }
   return v;
 }
 
