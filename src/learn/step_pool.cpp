@@ -1,4 +1,4 @@
-#include "step_pool.hpp"
+#include "overtake/learn/step_pool.hpp"
 
 #include <algorithm>
 
@@ -18,17 +18,16 @@ StepPool::~StepPool() {
   for (std::thread& t : workers_) t.join();
 }
 
-// Share `share` of count_ items among workers_.size() + 1 threads: contiguous, the first ones
-// one item longer when they do not divide.
-void StepPool::run_share(std::size_t share) {
-  const std::size_t shares = workers_.size() + 1;
-  const std::size_t base = count_ / shares;
-  const std::size_t extra = count_ % shares;
-  const std::size_t begin = share * base + std::min(share, extra);
-  const std::size_t end = begin + base + (share < extra ? 1 : 0);
+void StepPool::take_items(std::size_t worker) {
   try {
-    for (std::size_t i = begin; i < end; ++i) (*work_)(i);
+    for (;;) {
+      if (failed_.load(std::memory_order_relaxed)) return;
+      const std::size_t i = next_.fetch_add(1, std::memory_order_relaxed);
+      if (i >= count_) return;
+      (*work_)(i, worker);
+    }
   } catch (...) {
+    failed_.store(true, std::memory_order_relaxed);
     const std::lock_guard lock(mu_);
     if (!error_) error_ = std::current_exception();
   }
@@ -43,7 +42,7 @@ void StepPool::serve(std::size_t worker) {
       if (quit_) return;
       seen = generation_;
     }
-    run_share(worker);
+    take_items(worker);
     {
       const std::lock_guard lock(mu_);
       --busy_;
@@ -52,17 +51,19 @@ void StepPool::serve(std::size_t worker) {
   }
 }
 
-void StepPool::run(std::size_t count, const std::function<void(std::size_t)>& work) {
+void StepPool::run(std::size_t count, const std::function<void(std::size_t, std::size_t)>& work) {
   {
     const std::lock_guard lock(mu_);
     count_ = count;
     work_ = &work;
     error_ = nullptr;
+    next_.store(0, std::memory_order_relaxed);
+    failed_.store(false, std::memory_order_relaxed);
     busy_ = workers_.size();
     ++generation_;
   }
   wake_.notify_all();
-  run_share(0);
+  take_items(0);
   std::exception_ptr error;
   {
     std::unique_lock lock(mu_);

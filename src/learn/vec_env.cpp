@@ -3,13 +3,16 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <optional>
 #include <stdexcept>
 #include <thread>
+#include <utility>
 
 #include "overtake/core/cpu_clock.hpp"
 #include "overtake/core/plan.hpp"
 #include "overtake/learn/command.hpp"
 #include "overtake/learn/observation.hpp"
+#include "overtake/learn/step_pool.hpp"
 #include "overtake/planner/reference/reference_policy.hpp"
 #include "overtake/run/config.hpp"
 #include "overtake/run/drive.hpp"
@@ -17,7 +20,6 @@
 #include "overtake/sim/faithful_traffic.hpp"
 #include "overtake/sim/run.hpp"
 #include "overtake/sim/world.hpp"
-#include "step_pool.hpp"
 
 namespace overtake::learn {
 
@@ -60,6 +62,9 @@ struct Slot {
   std::unique_ptr<ReferencePolicy> executor;
   run::RunProvenance provenance;
   EgoContext ego;
+  // The telemetry read at the end of the last step, which the next one starts from (the world
+  // does not move between calls); none after a reset.
+  std::optional<core::Telemetry> telemetry;
   double last_speed_mps = 0.0;
   double last_distance_m = 0.0;
   std::size_t incidents_seen = 0;
@@ -81,6 +86,9 @@ struct VecEnv::Impl {
   std::shared_ptr<const planner::reference::ReferenceGeometry> geometry;
   std::vector<Slot> slots;
   std::unique_ptr<StepPool> pool;
+  // The executors' sample buffers, one set per thread of the pool: the worlds a thread steps
+  // in turn plan in the same memory, which stays in its core's cache.
+  std::vector<planner::reference::TrajectoryScratch> scratch;
   std::size_t obs_size = 0;
   bool reset_done = false;
 
@@ -93,14 +101,16 @@ struct VecEnv::Impl {
   void write_observation(Slot& s, const core::Telemetry& t, float* out) const;
   void check_actions(const Actions& a) const;
   [[nodiscard]] core::PlanResult decide(Slot& s, const Actions& a, std::size_t i,
-                                        const core::Telemetry& t, int& asked_lane);
-  void step_env(std::size_t i, const Actions& a, const StepOutputs& out);
+                                        const core::Telemetry& t, std::size_t worker,
+                                        int& asked_lane);
+  void step_env(std::size_t i, std::size_t worker, const Actions& a, const StepOutputs& out);
   [[nodiscard]] float reward_of(Slot& s, bool& collided);
 };
 
 void VecEnv::Impl::begin_episode(Slot& s, std::uint64_t seed) {
   const run::Track& track = *inputs.track;
   s.stepper.reset();
+  s.telemetry.reset();
   s.world =
       std::make_unique<sim::World>(track.map, track.line, config().world, profile, seed, open_road);
   sim::RunOptions run;
@@ -186,7 +196,8 @@ void VecEnv::Impl::check_actions(const Actions& a) const {
 // This decision's plan: the raw path, or the executor's plan of the agent's command.
 // `asked_lane`: the lane the agent asked for (-1 for a path).
 core::PlanResult VecEnv::Impl::decide(Slot& s, const Actions& a, std::size_t i,
-                                      const core::Telemetry& t, int& asked_lane) {
+                                      const core::Telemetry& t, std::size_t worker,
+                                      int& asked_lane) {
   asked_lane = -1;
   if (spec.actions == ActionKind::path) {
     std::vector<core::Vec2> points;
@@ -209,7 +220,7 @@ core::PlanResult VecEnv::Impl::decide(Slot& s, const Actions& a, std::size_t i,
   }
   asked_lane = e.target_lane;
   s.executor->set_command(DrivingCommand{e.target_lane, e.target_speed_mps});
-  return s.executor->plan(t);
+  return s.executor->plan(t, scratch[worker]);
 }
 
 // The reward of the decision just stepped, from the distance driven and the new incidents.
@@ -253,7 +264,8 @@ float VecEnv::Impl::reward_of(Slot& s, bool& collided) {
   return static_cast<float>(r);
 }
 
-void VecEnv::Impl::step_env(std::size_t i, const Actions& a, const StepOutputs& out) {
+void VecEnv::Impl::step_env(std::size_t i, std::size_t worker, const Actions& a,
+                            const StepOutputs& out) {
   Slot& s = slots[i];
   float* obs = out.observation + i * obs_size;
   if (s.pending_reset) {  // next-step autoreset: this call begins the next episode
@@ -265,14 +277,15 @@ void VecEnv::Impl::step_env(std::size_t i, const Actions& a, const StepOutputs& 
     return;
   }
   s.status.was_reset = false;
-  const core::Telemetry t = s.stepper->telemetry();
+  const core::Telemetry t =
+      s.telemetry ? *std::exchange(s.telemetry, std::nullopt) : s.stepper->telemetry();
   const int lane_before = s.status.target_lane;
   int asked_lane = -1;
   bool failed = false;
   const double c0 = core::thread_cpu_us();
   const auto w0 = std::chrono::steady_clock::now();
   try {
-    core::PlanResult plan = decide(s, a, i, t, asked_lane);
+    core::PlanResult plan = decide(s, a, i, t, worker, asked_lane);
     const double cycle_us = core::thread_cpu_us() - c0;
     const double wall_us =
         std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - w0).count();
@@ -290,7 +303,7 @@ void VecEnv::Impl::step_env(std::size_t i, const Actions& a, const StepOutputs& 
   }
   bool collided = false;
   float reward = reward_of(s, collided);
-  const core::Telemetry now = s.stepper->telemetry();
+  core::Telemetry now = s.stepper->telemetry();
   const double decision_s = params.decision_steps * config().world.step_s;
   s.ego.accel_mps2 = (now.ego.speed_mps - s.last_speed_mps) / decision_s;
   s.last_speed_mps = now.ego.speed_mps;
@@ -328,6 +341,8 @@ void VecEnv::Impl::step_env(std::size_t i, const Actions& a, const StepOutputs& 
   if (terminated || truncated) {
     s.last_report = run::report_to_json(s.stepper->report(), s.provenance);
     s.pending_reset = true;
+  } else {
+    s.telemetry = std::move(now);
   }
 }
 
@@ -378,6 +393,7 @@ VecEnv::VecEnv(const VecEnvSpec& spec) : impl_(std::make_unique<Impl>()) {
   const int threads = spec.threads > 0 ? spec.threads : hw;
   m.pool = std::make_unique<StepPool>(
       static_cast<int>(std::min<std::size_t>(static_cast<std::size_t>(threads), spec.num_envs)));
+  m.scratch.resize(m.pool->threads());
 }
 
 VecEnv::~VecEnv() = default;
@@ -406,7 +422,7 @@ void VecEnv::reset(std::optional<std::uint64_t> seed, float* observation) {
   if (seed) {
     for (std::size_t i = 0; i < m.slots.size(); ++i) m.slots[i].base_seed = *seed + i;
   }
-  m.pool->run(m.slots.size(), [&](std::size_t i) {
+  m.pool->run(m.slots.size(), [&](std::size_t i, std::size_t /*worker*/) {
     Slot& s = m.slots[i];
     s.status.episode = 0;
     m.begin_episode(s, s.base_seed);
@@ -419,7 +435,8 @@ void VecEnv::step(const Actions& actions, const StepOutputs& out) {
   Impl& m = *impl_;
   if (!m.reset_done) throw std::logic_error("step() before reset(): call reset() first");
   m.check_actions(actions);
-  m.pool->run(m.slots.size(), [&](std::size_t i) { m.step_env(i, actions, out); });
+  m.pool->run(m.slots.size(),
+              [&](std::size_t i, std::size_t worker) { m.step_env(i, worker, actions, out); });
 }
 
 const EnvStatus& VecEnv::status(std::size_t env) const {

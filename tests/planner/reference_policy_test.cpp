@@ -79,6 +79,37 @@ TEST_F(PolicyTest, APolicyOnASharedGeometryPlansAsOneThatBuildsItsOwn) {
   }
 }
 
+// Two policies planning in turn in buffers lent by the caller (as the learning environment's
+// worlds on one thread do) plan as each does in its own: what one leaves there, the other
+// never reads. The two are in different traffic, one among a file of cars, one alone.
+TEST_F(PolicyTest, PoliciesPlanningInTurnInLentBuffersPlanAsInTheirOwn) {
+  const auto geometry = make_reference_geometry(line_, params_);
+  ReferencePolicy own_a(line_, params_, geometry);
+  ReferencePolicy own_b(line_, params_, geometry);
+  ReferencePolicy lent_a(line_, params_, geometry);
+  ReferencePolicy lent_b(line_, params_, geometry);
+  TrajectoryScratch scratch;
+  core::Telemetry ta = test::ego_at(line_, 500.0, 6.0, 18.0);
+  for (int k = 0; k < 4; ++k)
+    ta.cars.push_back(
+        test::observed_car(line_, 3 + k, 470.0 + 25.0 * k, 2.0 + 4.0 * (k % 2), 15.0));
+  core::Telemetry tb = test::ego_at(line_, 1500.0, 2.0, 0.0);
+  std::vector<core::Vec2> pa = own_a.plan(ta).path;
+  std::vector<core::Vec2> pb = own_b.plan(tb).path;
+  ASSERT_EQ(lent_a.plan(ta, scratch).path, pa);
+  ASSERT_EQ(lent_b.plan(tb, scratch).path, pb);
+  ASSERT_FALSE(scratch.spare.empty());  // the buffers came back to the lender
+  for (int cycle = 0; cycle < 100; ++cycle) {
+    const auto k = 1 + static_cast<std::size_t>(cycle % 3);
+    ta = after(ta, pa, k);
+    tb = after(tb, pb, k);
+    pa = own_a.plan(ta).path;
+    pb = own_b.plan(tb).path;
+    ASSERT_EQ(lent_a.plan(ta, scratch).path, pa) << cycle;
+    ASSERT_EQ(lent_b.plan(tb, scratch).path, pb) << cycle;
+  }
+}
+
 TEST_F(PolicyTest, AGeometryOfAnotherLineSmoothingOrRoadIsRefused) {
   const auto geometry = make_reference_geometry(line_, params_);
   const core::ReferenceLine other(map_);

@@ -181,6 +181,10 @@ std::vector<FrenetState> ReferencePolicy::history_before(const std::vector<Frene
 }
 
 core::PlanResult ReferencePolicy::plan(const core::Telemetry& t) {
+  return plan(t, scratch_);
+}
+
+core::PlanResult ReferencePolicy::plan(const core::Telemetry& t, TrajectoryScratch& scratch) {
   const auto& tp = p_.trajectory;
   const double dt = step_s_;
 
@@ -243,7 +247,7 @@ core::PlanResult ReferencePolicy::plan(const core::Telemetry& t) {
   req.wanted_speed_mps = decision_.speed_mps;
   req.band_time_s = band_time;
   req.cars = &predictions_;
-  plan_ = plan_trajectory(frame_, req, p_, road_, car_, &scratch_);
+  plan_ = plan_trajectory(frame_, req, p_, road_, car_, &scratch);
   const TrajectoryPlan& chosen = plan_;
   status_ = chosen.status;
   if (chosen.trajectory.end_lane != behaviour_.target_lane) {

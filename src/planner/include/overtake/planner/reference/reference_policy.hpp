@@ -61,6 +61,10 @@ class ReferencePolicy final : public Policy {
   ReferencePolicy(const core::ReferenceLine& line, const PlannerParams& params,
                   std::shared_ptr<const ReferenceGeometry> geometry);
   [[nodiscard]] core::PlanResult plan(const core::Telemetry& telemetry) override;
+  /// The same with buffers lent by the caller instead of the policy's own: many policies
+  /// planned in turn on one thread (a learning environment's worlds) share one set, which
+  /// stays in the core's cache. The plan is the same either way (the buffers hold no state).
+  [[nodiscard]] core::PlanResult plan(const core::Telemetry& telemetry, TrajectoryScratch& scratch);
   /// What carries from one cycle to the next: the points sent and their states, the states
   /// driven, the cars' tracks and the behaviour's state.
   bool archive_state(core::StateArchive& ar) override;
