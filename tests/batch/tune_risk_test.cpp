@@ -14,6 +14,7 @@
 #include "overtake/base/io.hpp"
 #include "overtake/batch/risk.hpp"
 #include "overtake/batch/tune.hpp"
+#include "overtake/planner/reference/assertiveness.hpp"
 #include "overtake/run/config.hpp"
 #include "temp_dir.hpp"
 
@@ -168,7 +169,9 @@ TEST(TuneRisk, ATrialTurnsAKnobThatMovesTheKeysTheStartingFileLeavesAlone) {
   const run::Config defaults = run::default_config();
   EXPECT_EQ(c.planner.reference.assertiveness, 1.0);
   EXPECT_EQ(c.planner.reference.behaviour.min_gap_m, 3.5);
-  EXPECT_EQ(c.planner.reference.behaviour.change_front_factor, 0.2);
+  EXPECT_EQ(
+      c.planner.reference.behaviour.change_front_factor,
+      planner::with_assertiveness(defaults.planner.reference, 1.0).behaviour.change_front_factor);
   EXPECT_NE(c.planner.reference.behaviour.change_front_factor,
             defaults.planner.reference.behaviour.change_front_factor);
 }

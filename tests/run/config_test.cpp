@@ -4,6 +4,7 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <fstream>
 #include <sstream>
 
@@ -63,13 +64,50 @@ TEST(ConfigAssertiveness, TheKnobMovesItsKeysTogetherAndAKeySetByHandWins) {
   EXPECT_DOUBLE_EQ(half.behaviour.lead_brake_mps2, (d.behaviour.lead_brake_mps2 + 9.0) / 2);
   EXPECT_EQ(half.prediction, d.prediction);  // nothing else moves
   EXPECT_EQ(half.behaviour.cruise_speed_mps, d.behaviour.cruise_speed_mps);
-  // Every key it moves goes from the default towards the edge, and reaches it at 1.
+  // The car's own pace does not move before 0.75.
+  const planner::ReferenceParams three_quarters =
+      at(R"({"planner": {"reference": {"assertiveness": 0.75}}})");
+  EXPECT_DOUBLE_EQ(three_quarters.behaviour.min_gap_m,
+                   d.behaviour.min_gap_m + (1.0 - d.behaviour.min_gap_m) * 0.75);
+  EXPECT_EQ(three_quarters.trajectory.max_accel_mps2, d.trajectory.max_accel_mps2);
+  EXPECT_EQ(three_quarters.behaviour.passing_speed_mps, d.behaviour.passing_speed_mps);
+  // At 1 the pace is at its edge and the margins at 0.85 of their way.
   const planner::ReferenceParams edge = at(R"({"planner": {"reference": {"assertiveness": 1}}})");
   EXPECT_EQ(edge, planner::with_assertiveness(d, 1.0));
-  EXPECT_DOUBLE_EQ(edge.trajectory.proximity_weight, 0.0);
-  EXPECT_DOUBLE_EQ(edge.trajectory.lat_margin_m, 0.1);
-  EXPECT_DOUBLE_EQ(edge.behaviour.follower_brake_mps2, 9.0);
-  EXPECT_EQ(planner::assertiveness_keys().size(), 8U);
+  EXPECT_DOUBLE_EQ(edge.trajectory.proximity_weight, d.trajectory.proximity_weight * 0.15 * 0.15);
+  EXPECT_DOUBLE_EQ(edge.trajectory.lat_margin_m,
+                   d.trajectory.lat_margin_m + (0.1 - d.trajectory.lat_margin_m) * 0.85);
+  EXPECT_DOUBLE_EQ(
+      edge.behaviour.follower_brake_mps2,
+      d.behaviour.follower_brake_mps2 + (9.0 - d.behaviour.follower_brake_mps2) * 0.85);
+  EXPECT_DOUBLE_EQ(edge.trajectory.max_accel_mps2, 8.5);
+  EXPECT_DOUBLE_EQ(edge.trajectory.max_jerk_mps3, 9.0);
+  EXPECT_DOUBLE_EQ(edge.behaviour.passing_speed_mps, 12.0);
+  EXPECT_DOUBLE_EQ(edge.behaviour.hysteresis, 0.0);
+  // Every key moves one way only, from the default towards its edge, never past it.
+  EXPECT_EQ(planner::assertiveness_keys().size(), 16U);
+  for (const planner::AssertivenessKey& k : planner::assertiveness_keys()) {
+    planner::ReferenceParams at0 = d;
+    const double v0 = k.field(at0);
+    double last = v0;
+    for (int i = 1; i <= 20; ++i) {
+      planner::ReferenceParams p = planner::with_assertiveness(d, i / 20.0);
+      const double v = k.field(p);
+      EXPECT_LE(std::abs(v - k.edge), std::abs(last - k.edge) + 1e-12)
+          << k.key << " at " << i / 20.0;
+      EXPECT_LE(std::abs(v - v0), std::abs(k.edge - v0) + 1e-12) << k.key;
+      last = v;
+    }
+    EXPECT_NE(last, v0) << k.key << " does not move";
+    // Its name is the config key of its field: set by hand at 1, the field keeps that value.
+    const auto dot = k.key.find('.');
+    const json by_hand = {{"planner",
+                           {{"reference",
+                             {{"assertiveness", 1.0},
+                              {k.key.substr(0, dot), {{k.key.substr(dot + 1), v0 * 0.5}}}}}}}};
+    planner::ReferenceParams set = at(by_hand.dump());
+    EXPECT_DOUBLE_EQ(k.field(set), v0 * 0.5) << k.key;
+  }
   // A key set by hand keeps its value; the others move.
   const planner::ReferenceParams mixed =
       at(R"({"planner": {"reference": {"assertiveness": 0.5, "behaviour": {"min_gap_m": 3.5}}}})");

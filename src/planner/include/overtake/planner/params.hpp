@@ -212,8 +212,9 @@ struct ReferenceParams {
   /// (at the outer lane they made a steady drive jerk by 25 m/s^3). Its lateral frame is then
   /// aligned with the original's chords as before. 0: through the waypoints.
   double line_smoothing_m3 = 5000.0;
-  /// From 0 (the shipped defaults: the safe end) to 1 (the edge where contacts become
-  /// common): moves the soft costs, margins and gaps of reference/assertiveness.hpp together.
+  /// From 0 (the shipped defaults: the safe end) to 1 (the assertive end): moves the soft
+  /// costs, margins and gaps of reference/assertiveness.hpp together, and past 0.75 the car's
+  /// own pace (acceleration, jerk, passing).
   /// Applied where a config is read (run::apply_config_json), a key set by hand in the same
   /// file keeping its value; the fields below hold the values it gave.
   double assertiveness = 0.0;
