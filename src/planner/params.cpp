@@ -92,6 +92,8 @@ void validate_reference(const PlannerParams& all, std::vector<std::string>& out)
     c.require(std::isfinite(x), "trajectory.speed_offsets_mps", "must hold numbers");
   }
   c.non_negative("trajectory.line_band_m", t.line_band_m);
+  c.in_range("trajectory.crawl_heading_tolerance_rad", t.crawl_heading_tolerance_rad, 0.0, 1.5);
+  c.in_range("trajectory.crawl_max_lag_m", t.crawl_max_lag_m, 0.0, 0.5);
   c.positive("trajectory.max_band_time_s", t.max_band_time_s);
   c.non_negative("trajectory.linger_weight", t.linger_weight);
   c.positive("trajectory.band_incident_s", t.band_incident_s);

@@ -177,6 +177,61 @@ TEST_F(PolicyTest, TheJointWithTheKeptPathIsSmooth) {
   EXPECT_LT(peak_jerk, params_.reference.trajectory.max_jerk_mps3 + 1.0);
 }
 
+// Where the coordinates pass 1000 m the wire keeps 1 mm, and a car braking to a stand behind
+// a stopped one steps a few quanta at the end: facing its next point as read, it would face
+// tens of degrees off its lane (the simulator's rule, as the original's). With points held
+// (trajectory.crawl_max_lag_m) it stands facing along its lane, a few millimetres short.
+TEST_F(PolicyTest, BrakingToAStandItFacesItsLaneWhenPointsAreHeld) {
+  struct Stand {
+    double worst_turn_rad = 0.0;  // off the road's heading, below 1 m/s
+    double stand_s_m = 0.0;
+  };
+  const auto brake_behind_a_stopped_car = [&](double max_lag_m) {
+    PlannerParams params = params_;
+    params.reference.trajectory.crawl_max_lag_m = max_lag_m;
+    ReferencePolicy p(line_, params);
+    // s 300 to 340 lies where x and y are past 1000 m (the circle's first quarter).
+    core::Telemetry t = test::ego_at(line_, 300.0, 6.0, 8.0);
+    // A stopped car in each lane: nowhere to go but to a stand.
+    const std::vector<core::CarObservation> stopped = {
+        test::observed_car(line_, 7, 340.0, 2.0, 0.0),
+        test::observed_car(line_, 8, 340.0, 6.0, 0.0),
+        test::observed_car(line_, 9, 340.0, 10.0, 0.0)};
+    t.cars = stopped;
+    std::vector<core::Vec2> path = p.plan(t).path;
+    Stand out;
+    double heading = t.ego.yaw_rad;
+    for (int cycle = 0; cycle < 400; ++cycle) {
+      const std::size_t k = 1 + static_cast<std::size_t>(cycle % 3);
+      const auto sent = core::round_like_wire(path);
+      for (std::size_t i = 0; i < k; ++i) {
+        // The simulator's rule: onto point i, facing the next unless it is the same point.
+        if (!(sent[i + 1] == sent[i])) {
+          heading = std::atan2(sent[i + 1].y - sent[i].y, sent[i + 1].x - sent[i].x);
+        }
+        const double step_mps =
+            core::distance(sent[i], i == 0 ? t.ego.position : sent[i - 1]) / params.step_s;
+        const double road = line_.frame(line_.to_frenet(sent[i], t.ego.s_m).s_m).heading_rad;
+        if (step_mps < 1.0) {
+          out.worst_turn_rad = std::max(out.worst_turn_rad,
+                                        std::abs(std::remainder(heading - road, 2.0 * core::kPi)));
+        }
+      }
+      t = after(t, path, k);
+      t.cars = stopped;
+      path = p.plan(t).path;
+    }
+    out.stand_s_m = t.ego.s_m;
+    return out;
+  };
+  const Stand creeping = brake_behind_a_stopped_car(0.0);
+  const Stand held = brake_behind_a_stopped_car(0.006);
+  EXPECT_GT(creeping.worst_turn_rad, 0.4);  // 28 degrees: what the hold is for
+  EXPECT_LE(held.worst_turn_rad, params_.reference.trajectory.crawl_heading_tolerance_rad);
+  EXPECT_LT(held.stand_s_m, 340.0 - 4.7);                 // behind the stopped car ...
+  EXPECT_NEAR(held.stand_s_m, creeping.stand_s_m, 0.01);  // ... where it stood before, or near
+}
+
 TEST_F(PolicyTest, OddInputNeverThrowsAndAlwaysGivesAPath) {
   ReferencePolicy p(line_, params_);
   core::Telemetry empty;  // all zero: the ego at the map's origin, far off the road

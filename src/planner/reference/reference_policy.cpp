@@ -1,5 +1,7 @@
 #include "overtake/planner/reference/reference_policy.hpp"
 
+#include "overtake/core/wire_number.hpp"
+
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -29,6 +31,30 @@ double wire_speed_error_mps(const core::ReferenceLine& line, double step_s) {
   const double digits = std::floor(std::log10(std::max(reach, 1.0))) + 1.0;
   const double resolution = std::pow(10.0, digits - 7.0);
   return 2.0 * resolution / step_s;
+}
+
+/// The way a state moves on the map (unit), or its lane's way where it stands.
+core::Vec2 heading_of(const RoadPoint& at, const FrenetState& x) {
+  const core::Vec2 v = (at.along_scale * x.s_dot) * at.tangent + x.d_dot_mps * at.normal;
+  const double speed = core::norm(v);
+  return speed > 1e-9 ? (1.0 / speed) * v : at.tangent;
+}
+
+/// The point to send after `sent` where the plan is at `x` (at `at` on the map): the plan's
+/// point, or `sent` again while the car is less than crawl_max_lag_m behind the plan and the
+/// step to the plan's point, as the simulator reads both (rounded like the wire), would turn
+/// the car more than crawl_heading_tolerance_rad from the plan's way (a car facing its next
+/// point at a crawl of a few wire quanta a step faces noise, tens of degrees off its lane).
+core::Vec2 steady_point(core::Vec2 sent, const RoadPoint& at, const FrenetState& x,
+                        const ReferenceTrajectoryParams& tp) {
+  const core::Vec2 next = at.position;
+  if (core::distance_sq(sent, next) >= tp.crawl_max_lag_m * tp.crawl_max_lag_m) return next;
+  const core::Vec2 read_step = core::Vec2{core::wire_round(next.x), core::wire_round(next.y)} -
+                               core::Vec2{core::wire_round(sent.x), core::wire_round(sent.y)};
+  if (read_step == core::Vec2{}) return sent;
+  const core::Vec2 way = heading_of(at, x);
+  const double turn = std::abs(std::atan2(core::cross(way, read_step), core::dot(way, read_step)));
+  return turn <= tp.crawl_heading_tolerance_rad ? next : sent;
 }
 
 /// A check step within this many world steps of a whole number of them is one.
@@ -276,12 +302,14 @@ core::PlanResult ReferencePolicy::commit(std::vector<FrenetState> states,
                                          std::vector<core::Vec2> points, const FrenetState& car,
                                          std::size_t n_points) {
   const double dt = step_s_;
+  const auto& tp = p_.trajectory;
   const TrajectoryPlan& chosen = plan_;
   const std::size_t fresh = n_points - states.size();
   for (std::size_t i = 1; i <= fresh; ++i) {
     const FrenetState x = chosen.trajectory.at(static_cast<double>(i) * dt);
+    const RoadPoint at = road_point(frame_, x.s_m, x.d_m);
     states.push_back(x);
-    points.push_back(road_point(frame_, x.s_m, x.d_m).position);
+    points.push_back(points.empty() ? at.position : steady_point(points.back(), at, x, tp));
   }
   sent_.assign(points.begin(), points.end());
   sent_rounded_ = false;

@@ -201,6 +201,13 @@ struct ReferenceTrajectoryParams {
   double change_early_window_s = 2.0;
   double rear_weight = 80.0;      ///< for leaving a closing car behind too little room
   int max_kinematic_checks = 40;  ///< candidates checked in Cartesian per cycle
+  /// At a crawl a step is a few of the wire's quanta (1 mm on the course's map), and the car
+  /// faces its next point as read: tens of degrees off its lane. A point is held (sent again:
+  /// the car stands and keeps its heading) while the step to it as read would turn the car
+  /// more than this from the plan's direction of travel ...
+  double crawl_heading_tolerance_rad = 0.15;
+  /// ... and the car is less than this behind the plan (0, the default: never held).
+  double crawl_max_lag_m = 0.0;
   friend bool operator==(const ReferenceTrajectoryParams&,
                          const ReferenceTrajectoryParams&) = default;
 };
@@ -394,6 +401,8 @@ void describe(V& v, ReferenceTrajectoryParams& p) {
   v("change_early_window_s", p.change_early_window_s);
   v("rear_weight", p.rear_weight);
   v("max_kinematic_checks", p.max_kinematic_checks);
+  v("crawl_heading_tolerance_rad", p.crawl_heading_tolerance_rad);
+  v("crawl_max_lag_m", p.crawl_max_lag_m);
 }
 
 template <class V>
