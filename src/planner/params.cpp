@@ -110,6 +110,7 @@ void validate_reference(const PlannerParams& all, std::vector<std::string>& out)
   }
   c.positive("trajectory.brake_level_jerk_mps3", t.brake_level_jerk_mps3);
   c.non_negative("trajectory.ahead_collision_slack_s", t.ahead_collision_slack_s);
+  c.in_range("trajectory.unseen_guard_s", t.unseen_guard_s, 0.0, 10.0);
   for (const auto& [key, v] :
        {std::pair<const char*, double>{"trajectory.progress_weight", t.progress_weight},
         {"trajectory.lon_jerk_weight", t.lon_jerk_weight},

@@ -115,6 +115,33 @@ TEST_F(TrajectoryTest, ChangingLanesInFrontOfAFastCarFailsItsRoomToBrake) {
   EXPECT_TRUE(check_collisions(change(1, 0, 20.0, 4.0), slow, 0.0, 1.0, params_, road_, car_).ok);
 }
 
+// A plan that ends half across a lane leaves the car coming up that lane behind it unseen (its
+// sensor looks straight ahead from its middle): the car keeps coming, and the next plan
+// starts where this one ends. The guard asks for unseen_guard_s of closing to spare there.
+TEST_F(TrajectoryTest, APlanEndingAcrossTheWayOfAnUnseeingCarNeedsTimeToSpare) {
+  // The ego at 15 m/s drifts from lane 1 towards lane 0 over 10 s: at the horizon's end (5 s)
+  // its middle is on the line, 2 m beside the middle of a car coming up lane 0 at 20 m/s, 15 m
+  // behind then (centre to centre): 9.3 m beyond the margin, 1.86 s of closing at 5 m/s.
+  const Trajectory drift = change(1, 0, 15.0, 10.0);
+  ASSERT_NEAR(params_.trajectory.horizon_s, 5.0, 1e-12);
+  const std::vector<CarPrediction> cars = {test::lane_car(0, 960.0, 2.0, 20.0)};
+  // Off (the default), only the horizon is checked: the car is never within the margin.
+  EXPECT_TRUE(check_collisions(drift, cars, 0.0, 1.0, params_, road_, car_).ok);
+  ReferenceParams guarded = params_;
+  guarded.trajectory.unseen_guard_s = 3.0;
+  const CollisionReport r = check_collisions(drift, cars, 0.0, 1.0, guarded, road_, car_);
+  EXPECT_FALSE(r.ok);
+  EXPECT_EQ(r.car_id, 0);
+  EXPECT_TRUE(r.from_behind);
+  EXPECT_NEAR(r.first_collision_s, 5.0, 1e-9);
+  // 1.86 s to spare is enough for a guard of 1.5 s ...
+  guarded.trajectory.unseen_guard_s = 1.5;
+  EXPECT_TRUE(check_collisions(drift, cars, 0.0, 1.0, guarded, road_, car_).ok);
+  // ... and a change that is over by then leaves the car the seen follower's check alone.
+  guarded.trajectory.unseen_guard_s = 3.0;
+  EXPECT_TRUE(check_collisions(change(1, 0, 15.0, 4.0), cars, 0.0, 1.0, guarded, road_, car_).ok);
+}
+
 TEST_F(TrajectoryTest, TheBandAroundALaneLineIsKnown) {
   EXPECT_TRUE(in_line_band(4.5, 0.8, road_));
   EXPECT_TRUE(in_line_band(7.3, 0.8, road_));

@@ -75,6 +75,7 @@ CollisionReport collide(const Track1d& lon, const Track1d& lat, bool ego_changin
   const double lon_need = length + p.trajectory.lon_margin_m;
   const double lat_base = car.width_m + p.trajectory.lat_margin_m;
   const double react_gap = p.behaviour.follower_reaction_gap_m;
+  const double guard_s = p.trajectory.unseen_guard_s;
   const double lat_need_per_mps = 0.5 * length / kMinHeadingSpeedMps;
   CollisionReport r;
   for (const CarSamples& c : cars) {
@@ -143,6 +144,11 @@ CollisionReport collide(const Track1d& lon, const Track1d& lat, bool ego_changin
       if (-ahead < lon_need) {
         r = {false, t, c.id, true};
         break;
+      }
+      // The plan ends with the ego across its path, unseen: it keeps coming.
+      if (k == g.n && side_gap >= kSensorCoverM && closing > 0.0 &&
+          -ahead - lon_need < closing * guard_s) {
+        r = {false, t, c.id, true};
       }
     }
   }

@@ -190,6 +190,12 @@ struct ReferenceTrajectoryParams {
   /// than one with a car from behind (a car ahead is predicted braking its hardest, a car
   /// from behind may not see the ego at all).
   double ahead_collision_slack_s = 1.0;
+  /// A car behind that the ego still overlaps at the plan's end without being seen by it (the
+  /// ego's middle beside its sensor's line) keeps coming: it must be at least this many
+  /// seconds of closing away, beyond the margin, or the plan counts as colliding at its end
+  /// (0: off, only the horizon is checked). Without it a plan that lingers half across a
+  /// lane passes while the car behind is still far enough, and the next plan lingers on.
+  double unseen_guard_s = 0.0;
   // cost weights
   double progress_weight = 1.0;    ///< per metre short of cruising at the wanted speed
   double lon_jerk_weight = 0.05;   ///< per unit of the squared jerk of s(t) integrated (s units)
@@ -392,6 +398,7 @@ void describe(V& v, ReferenceTrajectoryParams& p) {
   v("brake_levels_mps2", p.brake_levels_mps2);
   v("brake_level_jerk_mps3", p.brake_level_jerk_mps3);
   v("ahead_collision_slack_s", p.ahead_collision_slack_s);
+  v("unseen_guard_s", p.unseen_guard_s);
   v("progress_weight", p.progress_weight);
   v("lon_jerk_weight", p.lon_jerk_weight);
   v("lat_jerk_weight", p.lat_jerk_weight);
